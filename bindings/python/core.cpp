@@ -1,0 +1,351 @@
+// pybind11 bindings: osteon._core. Thin: converts NumPy arrays to engine views and results back
+// to NumPy without copying, releases the GIL while the engine works. The public API is python/osteon.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "osteon/analysis.hpp"
+#include "osteon/correction.hpp"
+#include "osteon/section.hpp"
+#include "osteon/skinning.hpp"
+#include "osteon/slicer.hpp"
+
+namespace py = pybind11;
+using namespace osteon;
+
+namespace {
+
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Int32Array = py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>;
+using Int64Array = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+
+// Hands a vector's buffer to NumPy (no copy); the capsule frees it with the array.
+template <class T>
+py::array_t<T> to_numpy(std::vector<T>&& v) {
+  auto* owned = new std::vector<T>(std::move(v));
+  py::capsule free_when_done(owned, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  return py::array_t<T>({static_cast<py::ssize_t>(owned->size())}, {sizeof(T)}, owned->data(),
+                        free_when_done);
+}
+
+py::array_t<double> to_numpy(std::vector<Vec3>&& v) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be packed");
+  auto* owned = new std::vector<Vec3>(std::move(v));
+  py::capsule free_when_done(owned, [](void* p) { delete static_cast<std::vector<Vec3>*>(p); });
+  return py::array_t<double>({static_cast<py::ssize_t>(owned->size()), py::ssize_t(3)},
+                             {3 * sizeof(double), sizeof(double)},
+                             reinterpret_cast<double*>(owned->data()), free_when_done);
+}
+
+py::array_t<double> to_numpy_rows3(std::vector<double>&& v) {
+  auto* owned = new std::vector<double>(std::move(v));
+  py::capsule free_when_done(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  return py::array_t<double>({static_cast<py::ssize_t>(owned->size() / 3), py::ssize_t(3)},
+                             {3 * sizeof(double), sizeof(double)}, owned->data(), free_when_done);
+}
+
+py::array_t<bool> to_bool(const std::vector<std::uint8_t>& v) {
+  py::array_t<bool> out(static_cast<py::ssize_t>(v.size()));
+  auto m = out.mutable_unchecked<1>();
+  for (std::size_t i = 0; i < v.size(); ++i) m(i) = v[i] != 0;
+  return out;
+}
+
+void require_rows3(const py::array& a, const char* name) {
+  if (a.ndim() != 2 || a.shape(1) != 3)
+    throw std::invalid_argument(std::string(name) + " must have shape (N, 3)");
+}
+
+Skeleton make_skeleton(const DoubleArray& heads, const DoubleArray& tails, const Int32Array& parents,
+                       const std::vector<std::string>& names) {
+  require_rows3(heads, "heads");
+  require_rows3(tails, "tails");
+  if (parents.ndim() != 1) throw std::invalid_argument("parents must be a 1D array");
+  const py::ssize_t nb = heads.shape(0);
+  if (tails.shape(0) != nb || parents.shape(0) != nb)
+    throw std::invalid_argument("heads, tails and parents must have the same number of bones");
+  Skeleton s;
+  s.heads.resize(nb);
+  s.tails.resize(nb);
+  s.parents.resize(nb);
+  auto h = heads.unchecked<2>();
+  auto t = tails.unchecked<2>();
+  auto p = parents.unchecked<1>();
+  for (py::ssize_t b = 0; b < nb; ++b) {
+    s.heads[b] = Vec3(h(b, 0), h(b, 1), h(b, 2));
+    s.tails[b] = Vec3(t(b, 0), t(b, 1), t(b, 2));
+    s.parents[b] = p(b);
+  }
+  s.names = names;
+  return s;
+}
+
+// Weights arrive as None, a dense (V, B) array, or CSR triplets (indptr, indices, data).
+std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::object& csr,
+                                          Index num_vertices, int num_bones) {
+  if (!dense.is_none()) {
+    DoubleArray w = dense.cast<DoubleArray>();
+    if (w.ndim() != 2 || w.shape(0) != num_vertices || w.shape(1) != num_bones)
+      throw std::invalid_argument("weights must have shape (V, B) = (" +
+                                  std::to_string(num_vertices) + ", " + std::to_string(num_bones) +
+                                  ")");
+    return std::make_unique<BoneWeights>(BoneWeights::from_dense(w.data(), num_vertices, num_bones));
+  }
+  if (!csr.is_none()) {
+    auto parts = csr.cast<py::tuple>();
+    Int64Array indptr = parts[0].cast<Int64Array>();
+    Int64Array indices = parts[1].cast<Int64Array>();
+    DoubleArray data = parts[2].cast<DoubleArray>();
+    if (indptr.ndim() != 1 || indptr.shape(0) != num_vertices + 1)
+      throw std::invalid_argument("weights must have one row per vertex (" +
+                                  std::to_string(num_vertices) + ")");
+    if (indices.shape(0) != data.shape(0) || indptr.at(num_vertices) != indices.shape(0))
+      throw std::invalid_argument("weights: sparse indices and data do not match");
+    return std::make_unique<BoneWeights>(BoneWeights::from_csr(
+        indptr.data(), indices.data(), data.data(), num_vertices, num_bones));
+  }
+  return nullptr;
+}
+
+AnalysisOptions make_options(double force, double allowable_stress, double interval, int held_bone,
+                             double gap_tolerance, int threads) {
+  AnalysisOptions o;
+  o.force = force;
+  o.allowable_stress = allowable_stress;
+  o.interval = interval;
+  o.held_bone = held_bone;
+  o.gap_tolerance = gap_tolerance;
+  o.threads = threads;
+  return o;
+}
+
+py::dict result_to_dict(AnalysisResult&& r) {
+  py::dict d;
+  d["section_bone"] = to_numpy(std::move(r.section_bone));
+  d["section_kind"] = to_numpy(std::move(r.section_kind));
+  d["section_param"] = to_numpy(std::move(r.section_param));
+  d["section_point"] = to_numpy(std::move(r.section_point));
+  d["section_center"] = to_numpy(std::move(r.section_center));
+  d["section_normal"] = to_numpy(std::move(r.section_normal));
+  d["load_point"] = to_numpy(std::move(r.load_point));
+  d["section_area"] = to_numpy(std::move(r.section_area));
+  d["section_modulus"] = to_numpy(std::move(r.section_modulus));
+  d["moment_arm"] = to_numpy(std::move(r.moment_arm));
+  d["moment"] = to_numpy(std::move(r.moment));
+  d["stress"] = to_numpy(std::move(r.stress));
+  d["culled"] = to_bool(r.culled);
+  d["weak"] = to_bool(r.weak);
+  d["section_flags"] = to_numpy(std::move(r.section_flags));
+  d["max_moment"] = r.max_moment;
+  d["safe_modulus"] = r.safe_modulus;
+  d["max_stress"] = r.max_stress;
+  d["weakest_section"] = r.weakest_section;
+  d["held_bone"] = r.held_bone;
+  d["vertex_stress"] = to_numpy(std::move(r.vertex_stress));
+  d["vertex_culled"] = to_bool(r.vertex_culled);
+  d["vertex_bone"] = to_numpy(std::move(r.vertex_bone));
+  return d;
+}
+
+// Reusable analyzer holding faces and weights (live mode re-runs with new vertices / pose).
+class PyAnalyzer {
+ public:
+  PyAnalyzer(const Int32Array& faces, Index num_vertices, int num_bones, const py::object& dense,
+             const py::object& csr, double force, double allowable_stress, double interval,
+             int held_bone, double gap_tolerance, int threads) {
+    require_rows3(faces, "faces");
+    weights_ = make_weights(dense, csr, num_vertices, num_bones);
+    analyzer_ = std::make_unique<Analyzer>(
+        faces.data(), faces.shape(0), num_vertices, weights_.get(), num_bones,
+        make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads));
+    num_vertices_ = num_vertices;
+  }
+  py::dict run(const DoubleArray& vertices, const DoubleArray& heads, const DoubleArray& tails,
+               const Int32Array& parents, const std::vector<std::string>& names) {
+    require_rows3(vertices, "vertices");
+    if (vertices.shape(0) != num_vertices_)
+      throw std::invalid_argument("vertices has " + std::to_string(vertices.shape(0)) +
+                                  " rows but the analyzer was built for " +
+                                  std::to_string(num_vertices_));
+    const Skeleton s = make_skeleton(heads, tails, parents, names);
+    AnalysisResult r;
+    {
+      py::gil_scoped_release release;
+      r = analyzer_->run(vertices.data(), s);
+    }
+    return result_to_dict(std::move(r));
+  }
+
+ private:
+  std::unique_ptr<BoneWeights> weights_;
+  std::unique_ptr<Analyzer> analyzer_;
+  Index num_vertices_ = 0;
+};
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "osteon engine (C++): skeleton-sectional structural analysis; mm, N, MPa";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const std::invalid_argument& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    }
+  });
+
+  m.def(
+      "validate_skeleton",
+      [](const DoubleArray& heads, const DoubleArray& tails, const Int32Array& parents,
+         const std::vector<std::string>& names) {
+        validate_skeleton(make_skeleton(heads, tails, parents, names));
+      },
+      "Raises ValueError naming the problem with a skeleton (cycle, zero-length bone, ...).");
+
+  py::class_<PyAnalyzer>(m, "Analyzer", "Reusable analysis of one mesh topology.")
+      .def(py::init<const Int32Array&, Index, int, const py::object&, const py::object&, double,
+                    double, double, int, double, int>(),
+           py::arg("faces"), py::arg("num_vertices"), py::arg("num_bones"), py::arg("dense"),
+           py::arg("csr"), py::arg("force"), py::arg("allowable_stress"), py::arg("interval"),
+           py::arg("held_bone"), py::arg("gap_tolerance"), py::arg("threads"))
+      .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("heads"), py::arg("tails"),
+           py::arg("parents"), py::arg("names"), "Analyse vertices (V,3 mm) with a posed skeleton.");
+
+  m.def(
+      "correct",
+      [](const DoubleArray& vertices, const Int32Array& faces, const DoubleArray& heads,
+         const DoubleArray& tails, const Int32Array& parents, const std::vector<std::string>& names,
+         const py::object& dense, const py::object& csr, double force, double allowable_stress,
+         double interval, int held_bone, double gap_tolerance, int threads, double max_scale,
+         int max_rounds, double target_ratio) {
+        require_rows3(vertices, "vertices");
+        require_rows3(faces, "faces");
+        const Skeleton s = make_skeleton(heads, tails, parents, names);
+        auto weights = make_weights(dense, csr, vertices.shape(0), s.num_bones());
+        if (!weights) throw std::invalid_argument("correct() needs skinning weights");
+        const MeshView mesh{vertices.data(), vertices.shape(0), faces.data(), faces.shape(0)};
+        const AnalysisOptions o =
+            make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads);
+        CorrectionOptions co;
+        co.max_scale = max_scale;
+        co.max_rounds = max_rounds;
+        co.target_ratio = target_ratio;
+        CorrectionResult r;
+        {
+          py::gil_scoped_release release;
+          r = correct(mesh, s, *weights, o, co);
+        }
+        py::dict d;
+        d["bone_scale"] = to_numpy(std::move(r.bone_scale));
+        d["vertices"] = to_numpy_rows3(std::move(r.vertices));
+        py::list rounds;
+        for (const auto& rd : r.rounds) rounds.append(py::make_tuple(rd.bone, rd.factor, rd.max_stress_after));
+        d["rounds"] = rounds;
+        d["converged"] = r.converged;
+        d["reason"] = r.reason;
+        d["unfixed_sections"] = r.unfixed_sections;
+        d["max_displacement"] = r.max_displacement;
+        d["volume_change_percent"] = r.volume_change_percent;
+        d["before"] = result_to_dict(std::move(r.before));
+        d["after"] = result_to_dict(std::move(r.after));
+        return d;
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("heads"), py::arg("tails"), py::arg("parents"),
+      py::arg("names"), py::arg("dense"), py::arg("csr"), py::arg("force"),
+      py::arg("allowable_stress"), py::arg("interval"), py::arg("held_bone"),
+      py::arg("gap_tolerance"), py::arg("threads"), py::arg("max_scale"), py::arg("max_rounds"),
+      py::arg("target_ratio"), "Correction loop (paper §5); see osteon.correct.");
+
+  m.def(
+      "skin",
+      [](const DoubleArray& vertices, const DoubleArray& heads, const DoubleArray& tails,
+         const Int32Array& parents, const py::object& dense, const py::object& csr,
+         const std::vector<double>& bone_scale) {
+        require_rows3(vertices, "vertices");
+        const Skeleton s = make_skeleton(heads, tails, parents, {});
+        validate_skeleton(s);
+        auto weights = make_weights(dense, csr, vertices.shape(0), s.num_bones());
+        if (!weights) throw std::invalid_argument("skin() needs skinning weights");
+        validate_weights(*weights, vertices.shape(0), s.num_bones());
+        std::vector<double> out(vertices.size());
+        {
+          py::gil_scoped_release release;
+          skin_cross_section_scales(vertices.data(), vertices.shape(0), s, *weights, bone_scale,
+                                    out.data());
+        }
+        return to_numpy_rows3(std::move(out));
+      },
+      py::arg("vertices"), py::arg("heads"), py::arg("tails"), py::arg("parents"),
+      py::arg("dense"), py::arg("csr"), py::arg("bone_scale"),
+      "Linear blend skinning with per-bone cross-section scales.");
+
+  m.def(
+      "section_properties",
+      [](const DoubleArray& outer, const std::vector<DoubleArray>& holes) {
+        auto to_loop = [](const DoubleArray& a) {
+          if (a.ndim() != 2 || a.shape(1) != 2)
+            throw std::invalid_argument("a loop must have shape (N, 2)");
+          std::vector<Vec2> loop(a.shape(0));
+          auto u = a.unchecked<2>();
+          for (py::ssize_t i = 0; i < a.shape(0); ++i) loop[i] = Vec2(u(i, 0), u(i, 1));
+          return loop;
+        };
+        SectionPolygon poly;
+        poly.outer = to_loop(outer);
+        for (const auto& h : holes) poly.holes.push_back(to_loop(h));
+        const SectionProperties p = section_properties(poly);
+        py::dict d;
+        d["area"] = p.area;
+        d["centroid"] = py::make_tuple(p.centroid.x(), p.centroid.y());
+        d["second_moment"] = py::make_tuple(p.second_moment(0, 0), p.second_moment(0, 1),
+                                            p.second_moment(1, 1));
+        d["modulus"] = p.modulus;
+        d["valid"] = p.valid;
+        return d;
+      },
+      py::arg("outer"), py::arg("holes"),
+      "Exact area (mm^2), centroid, second moments (mm^4) and min section modulus (mm^3).");
+
+  m.def(
+      "slice_section",
+      [](const DoubleArray& vertices, const Int32Array& faces, const std::vector<double>& origin,
+         const std::vector<double>& normal, double gap_tolerance) {
+        require_rows3(vertices, "vertices");
+        require_rows3(faces, "faces");
+        if (origin.size() != 3 || normal.size() != 3)
+          throw std::invalid_argument("origin and normal must have 3 components");
+        const MeshView mesh{vertices.data(), vertices.shape(0), faces.data(), faces.shape(0)};
+        validate_mesh(mesh);
+        const PlaneFrame frame = PlaneFrame::make(Vec3(origin[0], origin[1], origin[2]),
+                                                  Vec3(normal[0], normal[1], normal[2]));
+        const SectionGeometry g = slice_section(mesh, frame, gap_tolerance);
+        auto loop3 = [&](const std::vector<Vec2>& loop) {
+          std::vector<Vec3> pts;
+          for (const Vec2& q : loop) pts.push_back(frame.to_world(q));
+          return to_numpy(std::move(pts));
+        };
+        py::dict d;
+        d["found"] = g.found;
+        d["flags"] = g.flags;
+        d["outer"] = loop3(g.polygon.outer);
+        py::list holes;
+        for (const auto& h : g.polygon.holes) holes.append(loop3(h));
+        d["holes"] = holes;
+        return d;
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("origin"), py::arg("normal"),
+      py::arg("gap_tolerance"), "The section region of one plane around its origin (3D loops, mm).");
+
+  m.attr("FLAG_GAP_CLOSED") = static_cast<int>(kFlagGapClosed);
+  m.attr("FLAG_OPEN") = static_cast<int>(kFlagOpen);
+  m.attr("FLAG_OUTSIDE") = static_cast<int>(kFlagOutside);
+  m.attr("FLAG_HOLLOW") = static_cast<int>(kFlagHollow);
+  m.attr("FLAG_EMPTY") = static_cast<int>(kFlagEmpty);
+  m.attr("FLAG_DEGENERATE") = static_cast<int>(kFlagDegenerate);
+  m.attr("FLAG_NON_MANIFOLD") = static_cast<int>(kFlagNonManifold);
+}

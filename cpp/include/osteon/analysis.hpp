@@ -1,0 +1,91 @@
+// Skeleton-sectional stress analysis (paper §4, SPEC §3-5): sections, loads, stress.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "osteon/mesh.hpp"
+#include "osteon/skeleton.hpp"
+#include "osteon/weights.hpp"
+
+namespace osteon {
+
+/// Settings of one analysis. Units: N, MPa, mm.
+struct AnalysisOptions {
+  double force = 20.0;             ///< force F on the worst point of each branch, N
+  double allowable_stress = 60.0;  ///< [sigma] = material strength / safety factor, MPa
+  double interval = 2.0;           ///< spacing h of the sections along each bone, mm
+  int held_bone = -1;              ///< bone held at its head; -1 = the main root bone
+  double gap_tolerance = -1.0;     ///< open cuts closed across gaps up to this, mm; <0: 1% of size
+  int threads = 0;                 ///< worker threads; 0 = all cores
+};
+
+/// Where a section sits on its bone.
+enum SectionKind : std::int8_t {
+  kInterior = 0,  ///< at k*interval along the bone
+  kJoint = 1,     ///< at a joint of two bones (one per pair at joints of more than two)
+  kEnd = 2,       ///< at a free bone end
+};
+
+/// Result of one analysis: one entry per section (S), per vertex (V). mm, N, MPa.
+struct AnalysisResult {
+  std::vector<int> section_bone;          ///< S bone each section belongs to
+  std::vector<std::int8_t> section_kind;  ///< S SectionKind
+  std::vector<double> section_param;      ///< S distance along the bone from its head, mm
+  std::vector<Vec3> section_point;        ///< S where the bone pierces the plane, mm
+  std::vector<Vec3> section_center;       ///< S centroid of the section region, mm
+  std::vector<Vec3> section_normal;       ///< S unit plane normal
+  std::vector<Vec3> load_point;           ///< S farthest downstream mesh point, mm
+  std::vector<double> section_area;       ///< S area, mm^2 (0 when skipped)
+  std::vector<double> section_modulus;    ///< S minimum section modulus W, mm^3 (NaN when skipped)
+  std::vector<double> moment_arm;         ///< S distance centroid -> load point d, mm
+  std::vector<double> moment;             ///< S bending moment M = F d, N mm
+  std::vector<double> stress;             ///< S peak bending stress M / W, MPa (NaN when skipped)
+  std::vector<std::uint8_t> culled;       ///< S W > safe modulus: safe for sure (drawn grey)
+  std::vector<std::uint8_t> weak;         ///< S stress > allowable stress
+  std::vector<std::uint32_t> section_flags;  ///< S SectionFlag bits
+  double max_moment = 0.0;                ///< M_gmax, N mm
+  double safe_modulus = 0.0;              ///< W_k = M_gmax / [sigma], mm^3
+  double max_stress = 0.0;                ///< largest section stress, MPa
+  int weakest_section = -1;               ///< index of the largest stress, -1 if none
+  int held_bone = -1;                     ///< bone the object was held by
+  std::vector<double> vertex_stress;      ///< V stress interpolated along the vertex's bone, MPa
+  std::vector<std::uint8_t> vertex_culled;  ///< V vertex lies among culled sections
+  std::vector<int> vertex_bone;           ///< V bone whose sections colour the vertex
+};
+
+/// Throws std::invalid_argument when an option is out of range (force, stress, interval <= 0...).
+void validate_options(const AnalysisOptions& options, const Skeleton& skeleton);
+
+/// Reusable analysis of one mesh topology (faces, weights and options fixed; vertices and
+/// skeleton pose may change between runs, as in live mode).
+class Analyzer {
+ public:
+  /// faces: #F by 3 row-major; weights may be null (each vertex bound to its nearest bone).
+  Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertices,
+           const BoneWeights* weights, int num_bones, const AnalysisOptions& options);
+  ~Analyzer();
+  Analyzer(const Analyzer&) = delete;
+  Analyzer& operator=(const Analyzer&) = delete;
+
+  /// Analyses vertices (#V by 3 row-major, mm) with the (posed) skeleton.
+  AnalysisResult run(const double* vertices, const Skeleton& skeleton);
+
+  /// Options in use.
+  const AnalysisOptions& options() const;
+
+  struct Impl;
+  /// Engine-internal state (used by the correction loop for partial re-analysis).
+  Impl& internals() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// One-off analysis of a mesh (see Analyzer).
+AnalysisResult analyze(const MeshView& mesh, const Skeleton& skeleton, const BoneWeights* weights,
+                       const AnalysisOptions& options);
+
+}  // namespace osteon

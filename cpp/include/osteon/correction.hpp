@@ -1,0 +1,45 @@
+// Local scaling correction (paper §5, SPEC §6): thicken weak bones until no section is weak.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "osteon/analysis.hpp"
+
+namespace osteon {
+
+/// Stop rules and targets of the correction loop.
+struct CorrectionOptions {
+  double max_scale = 3.0;     ///< largest cross-section scale of one bone
+  int max_rounds = 100;       ///< largest number of scaling rounds
+  double target_ratio = 0.99; ///< aim each scaled section at this fraction of the allowable stress
+};
+
+/// One scaling round: which bone, by what factor, and the largest stress after it.
+struct CorrectionRound {
+  int bone = -1;
+  double factor = 1.0;          ///< scale applied in this round (multiplied into the bone's scale)
+  double max_stress_after = 0;  ///< MPa, after the round
+};
+
+/// Result of a correction: per-bone scales, the corrected vertices, and analyses before/after.
+struct CorrectionResult {
+  std::vector<double> bone_scale;        ///< B cross-section scale per bone (1 = unchanged)
+  std::vector<double> vertices;          ///< #V by 3 row-major corrected vertices, mm
+  std::vector<CorrectionRound> rounds;   ///< the rounds taken, in order
+  bool converged = false;                ///< true when no section is weak after
+  std::string reason;                    ///< why the loop stopped
+  std::vector<int> unfixed_sections;     ///< sections still weak at the end (indices into after)
+  double max_displacement = 0.0;         ///< largest vertex displacement, mm
+  double volume_change_percent = 0.0;    ///< enclosed volume added, % of the original
+  AnalysisResult before, after;
+};
+
+/// Runs the correction loop on the rest mesh with the given skinning weights.
+CorrectionResult correct(const MeshView& mesh, const Skeleton& skeleton, const BoneWeights& weights,
+                         const AnalysisOptions& options, const CorrectionOptions& correction);
+
+/// Signed volume enclosed by a closed triangle mesh, mm^3.
+double enclosed_volume(const MeshView& mesh);
+
+}  // namespace osteon

@@ -1,0 +1,419 @@
+#include "osteon/analysis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "analysis_impl.hpp"
+#include "parallel.hpp"
+
+namespace osteon {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Number of interior planes k*h strictly inside a bone of length L.
+int interior_count(double length, double interval) {
+  const double n = std::ceil(length / interval * (1.0 - 1e-12)) - 1.0;
+  if (n <= 0) return 0;
+  if (n > 1e6) throw std::invalid_argument("interval too small: more than 10^6 sections on one bone");
+  return static_cast<int>(n);
+}
+
+// Does the plane (point, normal) pass through the box?
+bool plane_crosses_box(const Vec3& point, const Vec3& normal, const Box3& box) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner((c & 1) ? box.hi.x() : box.lo.x(), (c & 2) ? box.hi.y() : box.lo.y(),
+                      (c & 4) ? box.hi.z() : box.lo.z());
+    const double s = (corner - point).dot(normal);
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  return lo <= 0.0 && hi >= 0.0;
+}
+
+struct Endpoint {
+  int bone;
+  bool tail;
+  Vec3 position;
+};
+
+}  // namespace
+
+void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
+  if (!(o.force > 0) || !std::isfinite(o.force))
+    throw std::invalid_argument("force must be a positive finite number of newtons");
+  if (!(o.allowable_stress > 0) || !std::isfinite(o.allowable_stress))
+    throw std::invalid_argument("allowable_stress must be a positive finite stress in MPa");
+  if (!(o.interval > 0) || !std::isfinite(o.interval))
+    throw std::invalid_argument("interval must be a positive finite length in mm");
+  if (o.held_bone < -1 || o.held_bone >= skeleton.num_bones())
+    throw std::invalid_argument("root (held bone) index " + std::to_string(o.held_bone) +
+                                " out of range for " + std::to_string(skeleton.num_bones()) +
+                                " bones");
+  if (std::isnan(o.gap_tolerance)) throw std::invalid_argument("gap_tolerance must not be NaN");
+}
+
+Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertices,
+                   const BoneWeights* weights, int num_bones, const AnalysisOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  s.options = options;
+  s.num_vertices = num_vertices;
+  s.num_bones = num_bones;
+  if (num_vertices <= 0) throw std::invalid_argument("empty mesh: vertices has no rows");
+  if (num_faces <= 0 || faces == nullptr) throw std::invalid_argument("empty mesh: faces has no rows");
+  if (num_bones <= 0) throw std::invalid_argument("skeleton has no bones");
+  s.faces.assign(faces, faces + 3 * num_faces);
+  MeshView probe{nullptr, num_vertices, s.faces.data(), num_faces};
+  for (Index i = 0; i < 3 * num_faces; ++i) {
+    const std::int32_t f = s.faces[i];
+    if (f < 0 || f >= num_vertices)
+      throw std::invalid_argument("face index out of range: faces[" + std::to_string(i / 3) +
+                                  "] refers to vertex " + std::to_string(f) + " but there are " +
+                                  std::to_string(num_vertices) + " vertices");
+  }
+  (void)probe;
+  if (weights != nullptr) {
+    validate_weights(*weights, num_vertices, num_bones);
+    s.has_weights = true;
+    s.weights = *weights;
+    s.dominant = dominant_bones(s.weights);
+  }
+}
+
+Analyzer::~Analyzer() = default;
+
+const AnalysisOptions& Analyzer::options() const { return impl_->options; }
+
+AnalysisResult Analyzer::run(const double* vertices, const Skeleton& skeleton) {
+  return impl_->run(vertices, skeleton, nullptr);
+}
+
+AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, const Box3* dirty) {
+  validate_skeleton(sk);
+  if (sk.num_bones() != num_bones)
+    throw std::invalid_argument("skeleton has " + std::to_string(sk.num_bones()) +
+                                " bones but the analyzer was built for " +
+                                std::to_string(num_bones));
+  validate_options(options, sk);
+  const MeshView mesh{vertices, num_vertices, faces.data(), static_cast<Index>(faces.size() / 3)};
+  for (Index i = 0; i < 3 * num_vertices; ++i)
+    if (!std::isfinite(vertices[i]))
+      throw std::invalid_argument("vertices contain NaN or infinity (vertex " +
+                                  std::to_string(i / 3) + ")");
+  const int nb = num_bones;
+  const int threads = options.threads;
+  const double h = options.interval;
+  const double diag = bounding_diagonal(mesh);
+  const double gap = options.gap_tolerance >= 0 ? options.gap_tolerance : 0.01 * diag;
+
+  // 1. Which bone each vertex belongs to (dominant weight; nearest bone where it has none).
+  std::vector<int> vertex_bone;
+  if (has_weights) {
+    vertex_bone = dominant;
+    if (std::find(vertex_bone.begin(), vertex_bone.end(), -1) != vertex_bone.end()) {
+      const std::vector<int> nearest = nearest_bones(mesh, sk, threads);
+      for (Index v = 0; v < num_vertices; ++v)
+        if (vertex_bone[v] < 0) vertex_bone[v] = nearest[v];
+    }
+  } else {
+    vertex_bone = nearest_bones(mesh, sk, threads);
+  }
+  std::vector<Index> per_bone(nb, 0);
+  for (int b : vertex_bone) ++per_bone[b];
+
+  const bool partial = dirty != nullptr && !specs.empty();
+  if (!partial) {
+    tree = build_load_tree(sk, options.held_bone, per_bone);
+    // Vertices downstream of each bone's entry, for choosing which bone owns a joint section.
+    std::vector<Index> subtree_vertices(per_bone);
+    for (auto it = tree.order.rbegin(); it != tree.order.rend(); ++it)
+      if (tree.parent[*it] >= 0) subtree_vertices[tree.parent[*it]] += subtree_vertices[*it];
+
+    // 2. Sections: interior planes per bone, then joints and free ends.
+    specs.clear();
+    slab_params.assign(nb, {});
+    job_bone.clear();
+    job_section.clear();
+    std::vector<int> count(nb);
+    for (int b = 0; b < nb; ++b) {
+      const double L = sk.length(b);
+      count[b] = interior_count(L, h);
+      auto& p = slab_params[b];
+      p.push_back(0.0);
+      for (int k = 1; k <= count[b]; ++k) p.push_back(k * h);
+      p.push_back(L);
+      if (count[b] == 0) continue;
+      job_bone.push_back(b);
+      job_section.push_back(static_cast<int>(specs.size()));
+      const Vec3 d = sk.direction(b);
+      for (int k = 1; k <= count[b]; ++k) {
+        SectionSpec spec;
+        spec.bone = b;
+        spec.kind = kInterior;
+        spec.boundary = k;
+        spec.plus_side = k * h >= tree.entry_param[b];
+        spec.point = sk.heads[b] + (k * h) * d;
+        spec.normal = d;
+        spec.job = static_cast<int>(job_bone.size()) - 1;
+        specs.push_back(spec);
+      }
+    }
+    // Cluster bone ends into joints.
+    double extent = 0.0;
+    for (int b = 0; b < nb; ++b) extent = std::max(extent, sk.length(b));
+    const double tol = 1e-6 * extent;
+    std::vector<Endpoint> ends;
+    for (int b = 0; b < nb; ++b) {
+      ends.push_back({b, false, sk.heads[b]});
+      ends.push_back({b, true, sk.tails[b]});
+    }
+    std::vector<std::vector<int>> joints;
+    std::vector<Vec3> joint_pos;
+    for (int e = 0; e < static_cast<int>(ends.size()); ++e) {
+      int found = -1;
+      for (int j = 0; j < static_cast<int>(joints.size()); ++j)
+        if ((joint_pos[j] - ends[e].position).norm() <= tol) {
+          found = j;
+          break;
+        }
+      if (found < 0) {
+        joints.push_back({e});
+        joint_pos.push_back(ends[e].position);
+      } else {
+        joints[found].push_back(e);
+      }
+    }
+    auto add_single = [&](int bone, bool tail, const Vec3& normal, std::int8_t kind) {
+      SectionSpec spec;
+      spec.bone = bone;
+      spec.kind = kind;
+      spec.boundary = tail ? count[bone] + 1 : 0;
+      const double param = tail ? sk.length(bone) : 0.0;
+      spec.plus_side = param >= tree.entry_param[bone];
+      spec.point = tail ? sk.tails[bone] : sk.heads[bone];
+      spec.normal = normal.dot(sk.direction(bone)) < 0 ? Vec3(-normal) : normal;
+      job_bone.push_back(-1);
+      job_section.push_back(static_cast<int>(specs.size()));
+      spec.job = static_cast<int>(job_bone.size()) - 1;
+      specs.push_back(spec);
+    };
+    for (const auto& members : joints) {
+      if (members.size() == 1) {
+        const Endpoint& e = ends[members[0]];
+        add_single(e.bone, e.tail, sk.direction(e.bone), kEnd);
+        continue;
+      }
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        for (std::size_t j = i + 1; j < members.size(); ++j) {
+          const Endpoint& a = ends[members[i]];
+          const Endpoint& b = ends[members[j]];
+          if (a.bone == b.bone) continue;
+          // Mean direction of the path that enters the joint along a and leaves along b.
+          const Vec3 in = a.tail ? sk.direction(a.bone) : Vec3(-sk.direction(a.bone));
+          const Vec3 out = b.tail ? Vec3(-sk.direction(b.bone)) : sk.direction(b.bone);
+          Vec3 n = in + out;
+          if (n.norm() < 1e-6) n = out;
+          // Owner: the bone entered from the root side at this joint; if both, the smaller branch.
+          auto entered_here = [&](const Endpoint& e) {
+            const double param = e.tail ? sk.length(e.bone) : 0.0;
+            return std::abs(param - tree.entry_param[e.bone]) <= tol;
+          };
+          const bool ea = entered_here(a), eb = entered_here(b);
+          const Endpoint* owner = &a;
+          if (ea && eb) {
+            if (subtree_vertices[b.bone] < subtree_vertices[a.bone] ||
+                (subtree_vertices[b.bone] == subtree_vertices[a.bone] && b.bone > a.bone))
+              owner = &b;
+          } else if (eb) {
+            owner = &b;
+          }
+          add_single(owner->bone, owner->tail, n, kJoint);
+        }
+      }
+    }
+    states.assign(specs.size(), SectionState{});
+  }
+
+  // 3. Cut the planes (jobs in parallel: one per bone's family of parallel planes, one per joint).
+  const long jobs = static_cast<long>(job_bone.size());
+  std::vector<std::uint8_t> job_dirty(jobs, 1);
+  std::vector<std::uint8_t> section_dirty(specs.size(), 1);
+  if (partial) {
+    for (std::size_t i = 0; i < specs.size(); ++i)
+      section_dirty[i] = plane_crosses_box(specs[i].point, specs[i].normal, *dirty);
+    std::fill(job_dirty.begin(), job_dirty.end(), 0);
+    for (std::size_t i = 0; i < specs.size(); ++i)
+      if (section_dirty[i]) job_dirty[specs[i].job] = 1;
+  }
+  const int workers = detail::worker_count(threads, jobs);
+  std::vector<std::vector<std::int32_t>> scratch(workers);
+  std::vector<std::vector<std::vector<CutSegment>>> family_segments(workers);
+  std::vector<std::vector<CutSegment>> single_segments(workers);
+  auto finish = [&](int si, const PlaneFrame& frame, const std::vector<CutSegment>& segs) {
+    SectionState st;
+    const SectionGeometry geom = select_section(assemble_loops(segs, gap));
+    st.flags = geom.flags;
+    if (geom.found) {
+      const SectionProperties props = section_properties(geom.polygon);
+      if (props.valid) {
+        st.found = true;
+        st.area = props.area;
+        st.modulus = props.modulus;
+        st.center = frame.to_world(props.centroid);
+      } else {
+        st.flags |= kFlagDegenerate;
+      }
+    }
+    if (segs.empty()) st.flags |= kFlagEmpty;
+    states[si] = st;
+  };
+  detail::parallel_for(jobs, threads, [&](long job, int worker) {
+    if (!job_dirty[job]) return;
+    const int first = job_section[job];
+    const int b = job_bone[job];
+    if (b >= 0) {
+      const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
+      const int n = static_cast<int>(slab_params[b].size()) - 2;
+      auto& segs = family_segments[worker];
+      cut_mesh_parallel(mesh, base, h, n, segs, scratch[worker]);
+      for (int k = 1; k <= n; ++k) {
+        const int si = first + k - 1;
+        if (!section_dirty[si]) continue;
+        PlaneFrame frame = base;
+        frame.origin = specs[si].point;
+        finish(si, frame, segs[k - 1]);
+      }
+    } else {
+      const PlaneFrame frame = PlaneFrame::make(specs[first].point, specs[first].normal);
+      auto& segs = single_segments[worker];
+      segs.clear();
+      cut_mesh(mesh, frame, segs);
+      finish(first, frame, segs);
+    }
+  });
+
+  // 4. Loads: farthest downstream point of every section (paper §4.4), then stress.
+  const int ns = static_cast<int>(specs.size());
+  AnalysisResult r;
+  r.held_bone = tree.held_bone;
+  r.section_bone.resize(ns);
+  r.section_kind.resize(ns);
+  r.section_param.resize(ns);
+  r.section_point.resize(ns);
+  r.section_center.resize(ns);
+  r.section_normal.resize(ns);
+  r.load_point.resize(ns);
+  r.section_area.resize(ns);
+  r.section_modulus.resize(ns);
+  r.moment_arm.resize(ns);
+  r.moment.resize(ns);
+  r.stress.resize(ns);
+  r.culled.assign(ns, 0);
+  r.weak.assign(ns, 0);
+  r.section_flags.resize(ns);
+  const MomentArmIndex arms(mesh, sk, tree, vertex_bone, slab_params);
+  detail::parallel_for((ns + 63) / 64, threads, [&](long chunk, int) {
+    const int end = std::min(ns, static_cast<int>(chunk + 1) * 64);
+    for (int i = static_cast<int>(chunk) * 64; i < end; ++i) {
+      const SectionSpec& spec = specs[i];
+      const SectionState& st = states[i];
+      r.section_bone[i] = spec.bone;
+      r.section_kind[i] = spec.kind;
+      r.section_param[i] = slab_params[spec.bone][spec.boundary];
+      r.section_point[i] = spec.point;
+      r.section_normal[i] = spec.normal;
+      r.section_flags[i] = st.flags;
+      const Vec3 center = st.found ? st.center : spec.point;
+      r.section_center[i] = center;
+      const auto [arm, vertex] = arms.farthest(spec.bone, spec.boundary, spec.plus_side, center);
+      r.moment_arm[i] = arm;
+      r.load_point[i] = vertex >= 0 ? mesh.vertex(vertex) : center;
+      r.moment[i] = options.force * arm;
+      r.section_area[i] = st.found ? st.area : 0.0;
+      r.section_modulus[i] = st.found ? st.modulus : kNaN;
+      r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
+    }
+  });
+  for (int i = 0; i < ns; ++i) {
+    if (!states[i].found) continue;
+    r.max_moment = std::max(r.max_moment, r.moment[i]);
+    if (r.weakest_section < 0 || r.stress[i] > r.max_stress) {
+      r.max_stress = r.stress[i];
+      r.weakest_section = i;
+    }
+  }
+  r.safe_modulus = r.max_moment / options.allowable_stress;
+  for (int i = 0; i < ns; ++i) {
+    if (!states[i].found) continue;
+    r.culled[i] = r.section_modulus[i] > r.safe_modulus;
+    r.weak[i] = r.stress[i] > options.allowable_stress;
+  }
+
+  // 5. Per-vertex stress: linear along the vertex's bone between its sections.
+  std::vector<std::vector<int>> bone_sections(nb);
+  for (int i = 0; i < ns; ++i)
+    if (states[i].found) bone_sections[specs[i].bone].push_back(i);
+  std::vector<std::vector<double>> sp(nb), ss(nb);
+  std::vector<std::vector<std::uint8_t>> sc(nb);
+  for (int b = 0; b < nb; ++b) {
+    auto& list = bone_sections[b];
+    std::sort(list.begin(), list.end(), [&](int x, int y) {
+      return r.section_param[x] < r.section_param[y];
+    });
+    for (int i : list) {
+      const double p = r.section_param[i];
+      if (!sp[b].empty() && p - sp[b].back() <= 1e-9 * (1.0 + std::abs(p))) {
+        // Several joint sections at one point: show the worst.
+        ss[b].back() = std::max(ss[b].back(), r.stress[i]);
+        sc[b].back() = sc[b].back() && r.culled[i];
+        continue;
+      }
+      sp[b].push_back(p);
+      ss[b].push_back(r.stress[i]);
+      sc[b].push_back(r.culled[i]);
+    }
+  }
+  r.vertex_stress.assign(num_vertices, 0.0);
+  r.vertex_culled.assign(num_vertices, 0);
+  r.vertex_bone = vertex_bone;
+  const Index block = 8192;
+  detail::parallel_for(static_cast<long>((num_vertices + block - 1) / block), threads,
+                       [&](long chunk, int) {
+    const Index end = std::min(num_vertices, (chunk + 1) * block);
+    for (Index v = chunk * block; v < end; ++v) {
+      const int b = vertex_bone[v];
+      const auto& p = sp[b];
+      if (p.empty()) continue;
+      const double t = (mesh.vertex(v) - sk.heads[b]).dot(sk.direction(b));
+      const std::size_t j = std::upper_bound(p.begin(), p.end(), t) - p.begin();
+      if (j == 0) {
+        r.vertex_stress[v] = ss[b][0];
+        r.vertex_culled[v] = sc[b][0];
+      } else if (j == p.size()) {
+        r.vertex_stress[v] = ss[b].back();
+        r.vertex_culled[v] = sc[b].back();
+      } else {
+        const double w = (t - p[j - 1]) / (p[j] - p[j - 1]);
+        r.vertex_stress[v] = (1 - w) * ss[b][j - 1] + w * ss[b][j];
+        r.vertex_culled[v] = sc[b][j - 1] && sc[b][j];
+      }
+    }
+  });
+  return r;
+}
+
+AnalysisResult analyze(const MeshView& mesh, const Skeleton& skeleton, const BoneWeights* weights,
+                       const AnalysisOptions& options) {
+  validate_mesh(mesh);
+  validate_skeleton(skeleton);
+  Analyzer analyzer(mesh.faces, mesh.num_faces, mesh.num_vertices, weights, skeleton.num_bones(),
+                    options);
+  return analyzer.run(mesh.vertices, skeleton);
+}
+
+}  // namespace osteon

@@ -1,0 +1,164 @@
+#include "osteon/correction.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "analysis_impl.hpp"
+#include "osteon/skinning.hpp"
+
+namespace osteon {
+namespace {
+
+// The bone whose skinning domain holds a section: the largest weight sum over the vertices in a
+// thin slab around the section plane, near its centre (paper §5: the domain of the weakest section).
+int domain_bone(const MeshView& mesh, const BoneWeights& w, const AnalysisResult& a, int section,
+                double interval) {
+  const Vec3 c = a.section_center[section];
+  const Vec3 n = a.section_normal[section];
+  const double radius = 2.0 * std::sqrt(std::max(a.section_area[section], 0.0) / M_PI) + interval;
+  const double half = 0.5 * interval;
+  std::vector<double> sum(w.num_bones, 0.0);
+  bool any = false;
+  for (Index v = 0; v < mesh.num_vertices; ++v) {
+    const Vec3 p = mesh.vertex(v) - c;
+    if (std::abs(p.dot(n)) > half || p.squaredNorm() > radius * radius) continue;
+    const double total = w.row_sum(v);
+    if (!(total > 0)) continue;
+    for (Index k = w.row_start[v]; k < w.row_start[v + 1]; ++k) {
+      sum[w.bone[k]] += w.weight[k] / total;
+      any = true;
+    }
+  }
+  if (!any) return a.section_bone[section];
+  return static_cast<int>(std::max_element(sum.begin(), sum.end()) - sum.begin());
+}
+
+}  // namespace
+
+double enclosed_volume(const MeshView& mesh) {
+  double six_v = 0.0;
+  for (Index f = 0; f < mesh.num_faces; ++f) {
+    const Vec3 a = mesh.vertex(mesh.faces[3 * f]);
+    const Vec3 b = mesh.vertex(mesh.faces[3 * f + 1]);
+    const Vec3 c = mesh.vertex(mesh.faces[3 * f + 2]);
+    six_v += a.dot(b.cross(c));
+  }
+  return six_v / 6.0;
+}
+
+CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWeights& weights,
+                         const AnalysisOptions& options, const CorrectionOptions& co) {
+  validate_mesh(mesh);
+  validate_skeleton(sk);
+  if (!(co.max_scale >= 1.0) || !std::isfinite(co.max_scale))
+    throw std::invalid_argument("max_scale must be a finite number >= 1");
+  if (co.max_rounds < 0) throw std::invalid_argument("max_rounds must be >= 0");
+  if (!(co.target_ratio > 0 && co.target_ratio <= 1.0))
+    throw std::invalid_argument("target_ratio must be in (0, 1]");
+  const int nb = sk.num_bones();
+  Analyzer analyzer(mesh.faces, mesh.num_faces, mesh.num_vertices, &weights, nb, options);
+  Analyzer::Impl& impl = analyzer.internals();
+
+  CorrectionResult res;
+  res.bone_scale.assign(nb, 1.0);
+  res.vertices.assign(mesh.vertices, mesh.vertices + 3 * mesh.num_vertices);
+  res.before = impl.run(mesh.vertices, sk, nullptr);
+  AnalysisResult current = res.before;
+  const double allowable = options.allowable_stress;
+  std::vector<std::uint8_t> unfixable(current.stress.size(), 0);
+  std::vector<std::string> why(current.stress.size());
+  std::vector<double> next(3 * mesh.num_vertices);
+  std::vector<std::uint8_t> moved(mesh.num_vertices);
+  res.reason = "max_rounds reached";
+  for (int round = 0;; ++round) {
+    // Weakest section that scaling may still fix.
+    int worst = -1;
+    bool any_weak = false;
+    for (std::size_t i = 0; i < current.stress.size(); ++i) {
+      if (!current.weak[i]) continue;
+      any_weak = true;
+      if (unfixable[i]) continue;
+      if (worst < 0 || current.stress[i] > current.stress[worst]) worst = static_cast<int>(i);
+    }
+    if (!any_weak) {
+      res.reason = "no weak section";
+      break;
+    }
+    if (worst < 0) {
+      res.reason = "the remaining weak sections cannot be fixed by scaling";
+      break;
+    }
+    if (round >= co.max_rounds) break;
+    const MeshView current_mesh{res.vertices.data(), mesh.num_vertices, mesh.faces, mesh.num_faces};
+    const int bone = domain_bone(current_mesh, weights, current, worst, options.interval);
+    const double want = std::cbrt(current.stress[worst] / (co.target_ratio * allowable));
+    const double old_scale = res.bone_scale[bone];
+    const double new_scale = std::min(old_scale * want, co.max_scale);
+    if (new_scale <= old_scale * (1.0 + 1e-9)) {
+      unfixable[worst] = 1;
+      why[worst] = "bone '" + sk.name(bone) + "' already at max_scale";
+      continue;
+    }
+    std::vector<double> trial_scale = res.bone_scale;
+    trial_scale[bone] = new_scale;
+    skin_cross_section_scales(mesh.vertices, mesh.num_vertices, sk, weights, trial_scale, next.data());
+    // Box of every triangle touching a moved vertex, before and after: only planes through it
+    // can change (the paper's culling of unaffected domains).
+    Box3 dirty;
+    for (Index v = 0; v < mesh.num_vertices; ++v)
+      moved[v] = next[3 * v] != res.vertices[3 * v] || next[3 * v + 1] != res.vertices[3 * v + 1] ||
+                 next[3 * v + 2] != res.vertices[3 * v + 2];
+    for (Index f = 0; f < mesh.num_faces; ++f) {
+      const std::int32_t* tri = mesh.faces + 3 * f;
+      if (!moved[tri[0]] && !moved[tri[1]] && !moved[tri[2]]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Index v = tri[k];
+        dirty.add(Vec3(next[3 * v], next[3 * v + 1], next[3 * v + 2]));
+        dirty.add(Vec3(res.vertices[3 * v], res.vertices[3 * v + 1], res.vertices[3 * v + 2]));
+      }
+    }
+    const double before_stress = current.stress[worst];
+    res.vertices.swap(next);
+    res.bone_scale = trial_scale;
+    current = dirty.empty() ? current : impl.run(res.vertices.data(), sk, &dirty);
+    res.rounds.push_back({bone, new_scale / old_scale, current.max_stress});
+    // No progress on this section: its domain is not this bone's alone (blended joint weights).
+    if (!(current.stress[worst] < before_stress * 0.995)) {
+      unfixable[worst] = 1;
+      why[worst] = "scaling bone '" + sk.name(bone) +
+                   "' does not thicken it (blended weights at a joint?)";
+    }
+  }
+  res.after = impl.run(res.vertices.data(), sk, nullptr);
+  res.converged = true;
+  for (std::size_t i = 0; i < res.after.weak.size(); ++i) {
+    if (!res.after.weak[i]) continue;
+    res.converged = false;
+    res.unfixed_sections.push_back(static_cast<int>(i));
+  }
+  if (!res.converged) {
+    std::ostringstream msg;
+    msg << res.reason << "; " << res.unfixed_sections.size() << " section(s) stay weak";
+    for (std::size_t k = 0; k < std::min<std::size_t>(res.unfixed_sections.size(), 5); ++k) {
+      const int i = res.unfixed_sections[k];
+      msg << "; bone '" << sk.name(res.after.section_bone[i]) << "' at "
+          << res.after.section_param[i] << " mm: " << res.after.stress[i] << " MPa";
+      if (i < static_cast<int>(why.size()) && !why[i].empty()) msg << " (" << why[i] << ")";
+    }
+    res.reason = msg.str();
+  }
+  for (Index v = 0; v < mesh.num_vertices; ++v) {
+    const Vec3 d(res.vertices[3 * v] - mesh.vertices[3 * v],
+                 res.vertices[3 * v + 1] - mesh.vertices[3 * v + 1],
+                 res.vertices[3 * v + 2] - mesh.vertices[3 * v + 2]);
+    res.max_displacement = std::max(res.max_displacement, d.norm());
+  }
+  const double v0 = enclosed_volume(mesh);
+  const MeshView out{res.vertices.data(), mesh.num_vertices, mesh.faces, mesh.num_faces};
+  if (std::abs(v0) > 0) res.volume_change_percent = 100.0 * (enclosed_volume(out) - v0) / std::abs(v0);
+  return res;
+}
+
+}  // namespace osteon

@@ -1,0 +1,225 @@
+#include "osteon/loads.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <limits>
+#include <queue>
+#include <stdexcept>
+
+namespace osteon {
+
+LoadTree build_load_tree(const Skeleton& s, int held_bone,
+                         const std::vector<Index>& vertex_count_per_bone) {
+  const int nb = s.num_bones();
+  if (held_bone < -1 || held_bone >= nb)
+    throw std::invalid_argument("held bone index " + std::to_string(held_bone) +
+                                " out of range for " + std::to_string(nb) + " bones");
+  // Root of each bone's tree, and how many vertices/bones each tree carries.
+  std::vector<int> tree_root(nb);
+  for (int b = 0; b < nb; ++b) {
+    int r = b;
+    while (s.parents[r] >= 0) r = s.parents[r];
+    tree_root[b] = r;
+  }
+  std::vector<double> tree_weight(nb, 0.0);
+  for (int b = 0; b < nb; ++b) {
+    const double verts = vertex_count_per_bone.empty() ? 0.0 : double(vertex_count_per_bone[b]);
+    tree_weight[tree_root[b]] += verts * nb + 1.0;  // vertices first, then bone count
+  }
+  int main_root = held_bone >= 0 ? tree_root[held_bone] : -1;
+  if (main_root < 0) {
+    for (int r : root_bones(s))
+      if (main_root < 0 || tree_weight[r] > tree_weight[main_root]) main_root = r;
+  }
+  const int held = held_bone >= 0 ? held_bone : main_root;
+
+  // Undirected adjacency: (neighbour, connection param on this bone, param on the neighbour).
+  struct Link {
+    int other;
+    double here, there;
+  };
+  std::vector<std::vector<Link>> links(nb);
+  auto join = [&](int child, int parent) {
+    const double on_parent = project_onto_bone(s, parent, s.heads[child]);
+    links[parent].push_back({child, on_parent, 0.0});
+    links[child].push_back({parent, 0.0, on_parent});
+  };
+  LoadTree tree;
+  for (int b = 0; b < nb; ++b)
+    if (s.parents[b] >= 0) join(b, s.parents[b]);
+  // Extra roots (IK, props, the several root bones of joint-based rigs) join the main tree at
+  // the bone nearest their head.
+  for (int r : root_bones(s)) {
+    if (r == main_root) continue;
+    int nearest = -1;
+    double best = std::numeric_limits<double>::infinity();
+    for (int b = 0; b < nb; ++b) {
+      if (tree_root[b] != main_root) continue;
+      const double d = squared_distance_to_bone(s, b, s.heads[r]);
+      if (d < best) {
+        best = d;
+        nearest = b;
+      }
+    }
+    join(r, nearest);
+    tree.attached_roots.push_back(r);
+    // Later roots may attach to this tree too: treat it as part of the main tree from now on.
+    for (int b = 0; b < nb; ++b)
+      if (tree_root[b] == r) tree_root[b] = main_root;
+  }
+
+  tree.held_bone = held;
+  tree.parent.assign(nb, -1);
+  tree.entry_param.assign(nb, 0.0);
+  tree.children.assign(nb, {});
+  std::vector<std::uint8_t> seen(nb, 0);
+  std::queue<int> queue;
+  queue.push(held);
+  seen[held] = 1;
+  while (!queue.empty()) {
+    const int b = queue.front();
+    queue.pop();
+    tree.order.push_back(b);
+    for (const Link& l : links[b]) {
+      if (seen[l.other]) continue;
+      seen[l.other] = 1;
+      tree.parent[l.other] = b;
+      tree.entry_param[l.other] = l.there;
+      tree.children[b].push_back({l.other, l.here});
+      queue.push(l.other);
+    }
+  }
+  return tree;
+}
+
+MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const LoadTree& tree,
+                               const std::vector<int>& vertex_bone,
+                               const std::vector<std::vector<double>>& slab_params)
+    : tree_(&tree), slab_params_(slab_params) {
+  const int nb = s.num_bones();
+  // Slab j of bone b holds the vertices with params in [p[j-1], p[j]) (slab 0: below p[0],
+  // last slab: at or above the last param); a section at boundary i splits slabs <= i from > i.
+  group_offset_.assign(nb + 1, 0);
+  for (int b = 0; b < nb; ++b)
+    group_offset_[b + 1] = group_offset_[b] + static_cast<Index>(slab_params_[b].size()) + 1;
+  const Index ngroups = group_offset_[nb];
+  std::vector<Index> vertex_group(mesh.num_vertices);
+  std::vector<Index> count(ngroups + 1, 0);
+  for (Index v = 0; v < mesh.num_vertices; ++v) {
+    const int b = vertex_bone[v];
+    const auto& p = slab_params_[b];
+    const double t = (mesh.vertex(v) - s.heads[b]).dot(s.direction(b));
+    const Index j = std::upper_bound(p.begin(), p.end(), t) - p.begin();
+    vertex_group[v] = group_offset_[b] + j;
+    ++count[vertex_group[v] + 1];
+  }
+  for (Index g = 0; g < ngroups; ++g) count[g + 1] += count[g];
+  groups_.assign(ngroups, Group{});
+  const double inf = std::numeric_limits<double>::infinity();
+  for (Index g = 0; g < ngroups; ++g) {
+    groups_[g].begin = count[g];
+    groups_[g].end = count[g + 1];
+    groups_[g].lo = Vec3::Constant(inf);
+    groups_[g].hi = Vec3::Constant(-inf);
+  }
+  packed_xyz_.resize(3 * mesh.num_vertices);
+  packed_index_.resize(mesh.num_vertices);
+  std::vector<Index> fill(count.begin(), count.end() - 1);
+  for (Index v = 0; v < mesh.num_vertices; ++v) {
+    const Index g = vertex_group[v];
+    const Index k = fill[g]++;
+    const Vec3 p = mesh.vertex(v);
+    packed_xyz_[3 * k] = p.x();
+    packed_xyz_[3 * k + 1] = p.y();
+    packed_xyz_[3 * k + 2] = p.z();
+    packed_index_[k] = v;
+    groups_[g].lo = groups_[g].lo.cwiseMin(p);
+    groups_[g].hi = groups_[g].hi.cwiseMax(p);
+  }
+  // Subtree boxes, leaves first (reverse breadth-first order).
+  subtree_lo_.assign(nb, Vec3::Constant(inf));
+  subtree_hi_.assign(nb, Vec3::Constant(-inf));
+  for (auto it = tree.order.rbegin(); it != tree.order.rend(); ++it) {
+    const int b = *it;
+    for (Index g = group_offset_[b]; g < group_offset_[b + 1]; ++g) {
+      subtree_lo_[b] = subtree_lo_[b].cwiseMin(groups_[g].lo);
+      subtree_hi_[b] = subtree_hi_[b].cwiseMax(groups_[g].hi);
+    }
+    for (const auto& [child, param] : tree.children[b]) {
+      (void)param;
+      subtree_lo_[b] = subtree_lo_[b].cwiseMin(subtree_lo_[child]);
+      subtree_hi_[b] = subtree_hi_[b].cwiseMax(subtree_hi_[child]);
+    }
+  }
+}
+
+namespace {
+// Largest squared distance from c to any point of the box (its farthest corner); -1 if empty.
+inline double farthest_corner2(const Vec3& c, const Vec3& lo, const Vec3& hi) {
+  if (lo.x() > hi.x()) return -1.0;
+  double d = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double a = c[k] - lo[k], b = hi[k] - c[k];
+    d += std::max(a * a, b * b);
+  }
+  return d;
+}
+}  // namespace
+
+std::pair<double, Index> MomentArmIndex::farthest(int bone, int boundary, bool plus_side,
+                                                  const Vec3& c) const {
+  // Best-first branch and bound: items are slabs (>= 0) or whole subtrees (-1 - bone).
+  using Item = std::pair<double, Index>;
+  std::priority_queue<Item> heap;
+  auto push_slab = [&](Index g) {
+    const double ub = farthest_corner2(c, groups_[g].lo, groups_[g].hi);
+    if (ub >= 0) heap.push({ub, g});
+  };
+  auto push_subtree = [&](int b) {
+    const double ub = farthest_corner2(c, subtree_lo_[b], subtree_hi_[b]);
+    if (ub >= 0) heap.push({ub, -1 - static_cast<Index>(b)});
+  };
+  const auto& params = slab_params_[bone];
+  const double split = params[boundary];
+  const Index first = group_offset_[bone];
+  const Index slabs = group_offset_[bone + 1] - first;
+  if (plus_side) {
+    for (Index j = boundary + 1; j < slabs; ++j) push_slab(first + j);
+  } else {
+    for (Index j = 0; j <= boundary; ++j) push_slab(first + j);
+  }
+  for (const auto& [child, param] : tree_->children[bone]) {
+    if (plus_side ? param >= split : param <= split) push_subtree(child);
+  }
+  double best = -1.0;
+  Index best_vertex = -1;
+  while (!heap.empty()) {
+    const auto [ub, id] = heap.top();
+    heap.pop();
+    if (ub <= best) break;
+    if (id >= 0) {
+      const Group& g = groups_[id];
+      const double* p = packed_xyz_.data() + 3 * g.begin;
+      for (Index k = g.begin; k < g.end; ++k, p += 3) {
+        const double dx = p[0] - c.x(), dy = p[1] - c.y(), dz = p[2] - c.z();
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 > best) {
+          best = d2;
+          best_vertex = packed_index_[k];
+        }
+      }
+    } else {
+      const int b = static_cast<int>(-1 - id);
+      for (Index g = group_offset_[b]; g < group_offset_[b + 1]; ++g) push_slab(g);
+      for (const auto& [child, param] : tree_->children[b]) {
+        (void)param;
+        push_subtree(child);
+      }
+    }
+  }
+  if (best_vertex < 0) return {0.0, -1};
+  return {std::sqrt(best), best_vertex};
+}
+
+}  // namespace osteon

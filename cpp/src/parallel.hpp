@@ -1,0 +1,47 @@
+// Minimal parallel-for over independent jobs (std::thread, dynamic scheduling).
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace osteon::detail {
+
+/// Number of workers to use for `jobs` jobs when `requested` threads were asked for (0 = all cores).
+inline int worker_count(int requested, long jobs) {
+  int hw = static_cast<int>(std::thread::hardware_concurrency());
+  int n = requested > 0 ? requested : std::max(1, hw);
+  return static_cast<int>(std::max(1L, std::min<long>(n, jobs)));
+}
+
+/// Calls fn(job, worker) for job in [0, jobs) on up to `threads` workers; rethrows the first error.
+template <class Fn>
+void parallel_for(long jobs, int threads, Fn&& fn) {
+  const int workers = worker_count(threads, jobs);
+  if (workers <= 1) {
+    for (long j = 0; j < jobs; ++j) fn(j, 0);
+    return;
+  }
+  std::atomic<long> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto body = [&](int worker) {
+    try {
+      for (long j = next++; j < jobs; j = next++) fn(j, worker);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next = jobs;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < workers; ++w) pool.emplace_back(body, w);
+  body(0);
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace osteon::detail

@@ -1,0 +1,144 @@
+#include "osteon/weights.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "parallel.hpp"
+
+namespace osteon {
+
+BoneWeights BoneWeights::from_dense(const double* dense, Index num_vertices, int num_bones) {
+  BoneWeights w;
+  w.num_vertices = num_vertices;
+  w.num_bones = num_bones;
+  w.row_start.resize(num_vertices + 1);
+  w.row_start[0] = 0;
+  for (Index v = 0; v < num_vertices; ++v) {
+    const double* row = dense + v * num_bones;
+    for (int b = 0; b < num_bones; ++b) {
+      if (row[b] != 0.0) {
+        w.bone.push_back(b);
+        w.weight.push_back(row[b]);
+      }
+    }
+    w.row_start[v + 1] = static_cast<Index>(w.bone.size());
+  }
+  return w;
+}
+
+BoneWeights BoneWeights::from_csr(const Index* indptr, const Index* indices, const double* data,
+                                  Index num_vertices, int num_bones) {
+  BoneWeights w;
+  w.num_vertices = num_vertices;
+  w.num_bones = num_bones;
+  if (indptr[0] != 0) throw std::invalid_argument("weights: CSR indptr must start at 0");
+  for (Index v = 0; v < num_vertices; ++v)
+    if (indptr[v + 1] < indptr[v])
+      throw std::invalid_argument("weights: CSR indptr must not decrease");
+  const Index nnz = indptr[num_vertices];
+  w.row_start.assign(indptr, indptr + num_vertices + 1);
+  w.bone.resize(nnz);
+  w.weight.assign(data, data + nnz);
+  for (Index k = 0; k < nnz; ++k) {
+    if (indices[k] < 0 || indices[k] >= num_bones)
+      throw std::invalid_argument("weights: bone (column) index " + std::to_string(indices[k]) +
+                                  " out of range for " + std::to_string(num_bones) + " bones");
+    w.bone[k] = static_cast<int>(indices[k]);
+  }
+  return w;
+}
+
+double BoneWeights::row_sum(Index v) const {
+  double s = 0.0;
+  for (Index k = row_start[v]; k < row_start[v + 1]; ++k) s += weight[k];
+  return s;
+}
+
+void validate_weights(const BoneWeights& w, Index num_vertices, int num_bones) {
+  if (w.num_vertices != num_vertices)
+    throw std::invalid_argument("weights have " + std::to_string(w.num_vertices) +
+                                " rows but the mesh has " + std::to_string(num_vertices) +
+                                " vertices");
+  if (w.num_bones != num_bones)
+    throw std::invalid_argument("weights have " + std::to_string(w.num_bones) +
+                                " columns but the skeleton has " + std::to_string(num_bones) +
+                                " bones");
+  if (static_cast<Index>(w.row_start.size()) != num_vertices + 1)
+    throw std::invalid_argument("weights: row offsets do not match the vertex count");
+  for (std::size_t k = 0; k < w.weight.size(); ++k) {
+    if (!std::isfinite(w.weight[k]))
+      throw std::invalid_argument("weights contain NaN or infinity");
+    if (w.weight[k] < 0.0)
+      throw std::invalid_argument("weights must not be negative (found " +
+                                  std::to_string(w.weight[k]) + ")");
+    if (w.bone[k] < 0 || w.bone[k] >= num_bones)
+      throw std::invalid_argument("weights: bone index out of range");
+  }
+}
+
+std::vector<int> dominant_bones(const BoneWeights& w) {
+  std::vector<int> dom(w.num_vertices, -1);
+  for (Index v = 0; v < w.num_vertices; ++v) {
+    double best = 0.0;
+    for (Index k = w.row_start[v]; k < w.row_start[v + 1]; ++k) {
+      if (w.weight[k] > best) {
+        best = w.weight[k];
+        dom[v] = w.bone[k];
+      }
+    }
+  }
+  return dom;
+}
+
+std::vector<int> nearest_bones(const MeshView& mesh, const Skeleton& s, int threads) {
+  const int nb = s.num_bones();
+  std::vector<int> nearest(mesh.num_vertices, 0);
+  // Per-bone constants; the inner loop is branch-light so it vectorises.
+  std::vector<Vec3> head(nb), axis(nb);
+  std::vector<double> len(nb);
+  for (int b = 0; b < nb; ++b) {
+    head[b] = s.heads[b];
+    len[b] = s.length(b);
+    axis[b] = (s.tails[b] - s.heads[b]) / len[b];
+  }
+  const Index block = 4096;
+  const long jobs = static_cast<long>((mesh.num_vertices + block - 1) / block);
+  detail::parallel_for(jobs, threads, [&](long job, int) {
+    const Index begin = job * block;
+    const Index end = std::min(mesh.num_vertices, begin + block);
+    std::vector<double> best(end - begin, std::numeric_limits<double>::infinity());
+    for (int b = 0; b < nb; ++b) {
+      const double hx = head[b].x(), hy = head[b].y(), hz = head[b].z();
+      const double ax = axis[b].x(), ay = axis[b].y(), az = axis[b].z(), L = len[b];
+      for (Index v = begin; v < end; ++v) {
+        const double* p = mesh.vertices + 3 * v;
+        const double dx = p[0] - hx, dy = p[1] - hy, dz = p[2] - hz;
+        double t = dx * ax + dy * ay + dz * az;
+        t = t < 0.0 ? 0.0 : (t > L ? L : t);
+        const double ex = dx - t * ax, ey = dy - t * ay, ez = dz - t * az;
+        const double d2 = ex * ex + ey * ey + ez * ez;
+        if (d2 < best[v - begin]) {
+          best[v - begin] = d2;
+          nearest[v] = b;
+        }
+      }
+    }
+  });
+  return nearest;
+}
+
+BoneWeights nearest_bone_weights(const MeshView& mesh, const Skeleton& s, int threads) {
+  const std::vector<int> nearest = nearest_bones(mesh, s, threads);
+  BoneWeights w;
+  w.num_vertices = mesh.num_vertices;
+  w.num_bones = s.num_bones();
+  w.row_start.resize(mesh.num_vertices + 1);
+  for (Index v = 0; v <= mesh.num_vertices; ++v) w.row_start[v] = v;
+  w.bone = nearest;
+  w.weight.assign(mesh.num_vertices, 1.0);
+  return w;
+}
+
+}  // namespace osteon

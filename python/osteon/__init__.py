@@ -1,0 +1,35 @@
+"""osteon: find the parts of a rigged 3D model that will snap once printed, and thicken them.
+
+Skeleton-sectional structural analysis (Xu, Li, Liu) with a C++ engine. Units: millimetres of the
+printed object, newtons, MPa. See :func:`analyze`, :func:`correct`, :class:`Skeleton`.
+"""
+
+from ._api import (
+    SECTION_FLAGS,
+    SECTION_KINDS,
+    Analysis,
+    Analyzer,
+    Correction,
+    Skeleton,
+    analyze,
+    correct,
+    section_properties,
+    skin,
+    slice_section,
+)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "SECTION_FLAGS",
+    "SECTION_KINDS",
+    "Analysis",
+    "Analyzer",
+    "Correction",
+    "Skeleton",
+    "analyze",
+    "correct",
+    "section_properties",
+    "skin",
+    "slice_section",
+]

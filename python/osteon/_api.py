@@ -1,0 +1,549 @@
+"""Public Python API of osteon (SPEC §7). Units: millimetres, newtons, MPa.
+
+The heavy lifting happens in the C++ engine (``osteon._core``); this module checks and converts
+inputs (NumPy arrays, SciPy sparse weights) and wraps the results.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from . import _core
+
+__all__ = [
+    "Skeleton",
+    "Analysis",
+    "Correction",
+    "Analyzer",
+    "analyze",
+    "correct",
+    "skin",
+    "section_properties",
+    "slice_section",
+    "SECTION_FLAGS",
+    "SECTION_KINDS",
+]
+
+#: Names of the bits of ``Analysis.section_flags``.
+SECTION_FLAGS = {
+    "gap_closed": _core.FLAG_GAP_CLOSED,
+    "open": _core.FLAG_OPEN,
+    "outside": _core.FLAG_OUTSIDE,
+    "hollow": _core.FLAG_HOLLOW,
+    "empty": _core.FLAG_EMPTY,
+    "degenerate": _core.FLAG_DEGENERATE,
+    "non_manifold": _core.FLAG_NON_MANIFOLD,
+}
+#: Values of ``Analysis.section_kind``.
+SECTION_KINDS = {0: "interior", 1: "joint", 2: "end"}
+
+
+def _float_rows(a: Any, name: str, cols: int = 3) -> np.ndarray:
+    try:
+        arr = np.asarray(a)
+    except Exception as exc:  # ragged lists and the like
+        raise ValueError(f"{name} must be an array of shape (N, {cols}): {exc}") from None
+    if arr.dtype.kind not in "fiu":
+        raise ValueError(f"{name} must hold numbers, not dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[1] != cols:
+        raise ValueError(f"{name} must have shape (N, {cols}), got {arr.shape}")
+    arr = np.ascontiguousarray(arr, dtype=np.float64)
+    if not np.isfinite(arr).all():
+        bad = int(np.argwhere(~np.isfinite(arr))[0][0])
+        raise ValueError(f"{name} contain NaN or infinity (row {bad})")
+    return arr
+
+
+def _faces(a: Any, num_vertices: int) -> np.ndarray:
+    arr = np.asarray(a)
+    if arr.dtype.kind not in "iu":
+        raise ValueError(f"faces must be an integer array, got dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"faces must have shape (F, 3) (triangles), got {arr.shape}")
+    if arr.shape[0] == 0:
+        raise ValueError("empty mesh: faces has no rows")
+    lo, hi = int(arr.min()), int(arr.max())
+    if lo < 0:
+        raise ValueError(f"faces contain a negative vertex index ({lo})")
+    if hi >= num_vertices:
+        raise ValueError(
+            f"face index out of range: {hi} but there are {num_vertices} vertices"
+        )
+    return np.ascontiguousarray(arr, dtype=np.int32)
+
+
+class Skeleton:
+    """A bone skeleton: ``heads`` (B,3) and ``tails`` (B,3) in mm, ``parents`` (B,) int (-1 = root).
+
+    Several root bones are allowed (Blender rigs have IK/prop bones; TGF rigs have several bones
+    leaving the root joint): the analysis holds the main root (the root whose tree carries most of
+    the mesh) and joins every other root bone to the nearest bone of the main tree.
+    """
+
+    def __init__(
+        self,
+        heads: Any,
+        tails: Any,
+        parents: Any,
+        names: Sequence[str] | None = None,
+    ) -> None:
+        self.heads = _float_rows(heads, "heads")
+        self.tails = _float_rows(tails, "tails")
+        p = np.asarray(parents)
+        if p.ndim != 1:
+            raise ValueError(f"parents must be a 1D integer array, got shape {p.shape}")
+        if p.size and p.dtype.kind not in "iu":
+            if p.dtype.kind == "f" and np.all(np.isfinite(p)) and np.all(p == np.round(p)):
+                p = p.astype(np.int64)
+            else:
+                raise ValueError(f"parents must be integers, got dtype {p.dtype}")
+        if len(self.heads) == 0:
+            raise ValueError("skeleton has no bones")
+        if not (len(self.heads) == len(self.tails) == len(p)):
+            raise ValueError(
+                "heads, tails and parents must have the same length "
+                f"({len(self.heads)}, {len(self.tails)}, {len(p)})"
+            )
+        if p.size and (p.min() < -1 or p.max() >= len(p)):
+            bad = int(p[(p < -1) | (p >= len(p))][0])
+            raise ValueError(f"parent index {bad} out of range [-1, {len(p) - 1}]")
+        self.parents = np.ascontiguousarray(p, dtype=np.int32)
+        if names is None:
+            names = [f"bone_{i}" for i in range(len(self.heads))]
+        names = [str(n) for n in names]
+        if len(names) != len(self.heads):
+            raise ValueError(f"names has {len(names)} entries for {len(self.heads)} bones")
+        self.names = names
+        _core.validate_skeleton(self.heads, self.tails, self.parents, self.names)
+
+    @property
+    def num_bones(self) -> int:
+        """Number of bones B."""
+        return len(self.heads)
+
+    @property
+    def lengths(self) -> np.ndarray:
+        """(B,) bone lengths, mm."""
+        return np.linalg.norm(self.tails - self.heads, axis=1)
+
+    @property
+    def roots(self) -> list[int]:
+        """Indices of the root bones (parent -1)."""
+        return [int(i) for i in np.flatnonzero(self.parents < 0)]
+
+    def bone_index(self, bone: int | str) -> int:
+        """Index of a bone given by index or name; ValueError if there is none."""
+        if isinstance(bone, (int, np.integer)):
+            if not 0 <= int(bone) < self.num_bones:
+                raise ValueError(f"bone index {bone} out of range [0, {self.num_bones - 1}]")
+            return int(bone)
+        try:
+            return self.names.index(str(bone))
+        except ValueError:
+            raise ValueError(f"no bone named {bone!r}") from None
+
+    def scaled(self, factor: float) -> "Skeleton":
+        """The same skeleton with positions multiplied by ``factor`` (e.g. to mm of the print)."""
+        return Skeleton(self.heads * factor, self.tails * factor, self.parents, self.names)
+
+    def __repr__(self) -> str:
+        return f"Skeleton({self.num_bones} bones, roots={self.roots})"
+
+
+def _weights_args(weights: Any, num_vertices: int, num_bones: int):
+    """(dense, csr) arguments for the engine; weights: None, (V,B) array, or SciPy sparse."""
+    if weights is None:
+        return None, None
+    if hasattr(weights, "tocsr"):  # SciPy sparse matrix or array
+        if weights.shape != (num_vertices, num_bones):
+            raise ValueError(
+                f"weights must have shape (V, B) = ({num_vertices}, {num_bones}), "
+                f"got {weights.shape}"
+            )
+        csr = weights.tocsr()
+        data = np.asarray(csr.data, dtype=np.float64)
+        if not np.isfinite(data).all():
+            raise ValueError("weights contain NaN or infinity")
+        if (data < 0).any():
+            raise ValueError("weights must not be negative")
+        return None, (
+            np.ascontiguousarray(csr.indptr, dtype=np.int64),
+            np.ascontiguousarray(csr.indices, dtype=np.int64),
+            np.ascontiguousarray(data),
+        )
+    w = np.asarray(weights)
+    if w.dtype.kind not in "fiub":
+        raise ValueError(f"weights must be numeric, got dtype {w.dtype}")
+    if w.shape != (num_vertices, num_bones):
+        raise ValueError(
+            f"weights must have shape (V, B) = ({num_vertices}, {num_bones}), got {w.shape}"
+        )
+    w = np.ascontiguousarray(w, dtype=np.float64)
+    if not np.isfinite(w).all():
+        raise ValueError("weights contain NaN or infinity")
+    if (w < 0).any():
+        raise ValueError("weights must not be negative")
+    return w, None
+
+
+def _positive(value: float, name: str, unit: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number ({unit})") from None
+    if not (v > 0 and math.isfinite(v)):
+        raise ValueError(f"{name} must be a positive finite number ({unit}), got {value!r}")
+    return v
+
+
+def _held_bone(root: int | str | None, skeleton: Skeleton) -> int:
+    return -1 if root is None else skeleton.bone_index(root)
+
+
+@dataclass
+class Analysis:
+    """Result of :func:`analyze`: one row per section (S), one per vertex (V). mm, N, MPa.
+
+    Per section: ``section_bone`` (S,) int, ``section_kind`` (S,) int (0 interior, 1 joint,
+    2 end), ``section_param`` (S,) mm from the bone head, ``section_point`` (S,3) where the bone
+    pierces the plane, ``section_center`` (S,3) centroid, ``section_normal`` (S,3),
+    ``load_point`` (S,3) farthest downstream point, ``section_area`` (S,) mm², ``section_modulus``
+    (S,) mm³, ``moment_arm`` (S,) mm, ``moment`` (S,) N·mm, ``stress`` (S,) MPa, ``culled`` (S,)
+    bool (W > safe modulus: safe for sure), ``weak`` (S,) bool (stress > allowable),
+    ``section_flags`` (S,) bit mask (see ``SECTION_FLAGS``). Skipped sections (flag ``empty`` or
+    ``degenerate``) have NaN modulus and stress and are never weak or culled.
+    Per vertex: ``vertex_stress`` (V,) MPa, ``vertex_culled`` (V,) bool, ``vertex_bone`` (V,).
+    Scalars: ``max_moment`` N·mm, ``safe_modulus`` mm³, ``max_stress`` MPa, ``allowable_stress``
+    MPa, ``force`` N, ``interval`` mm, ``held_bone`` index.
+    """
+
+    section_bone: np.ndarray
+    section_kind: np.ndarray
+    section_param: np.ndarray
+    section_point: np.ndarray
+    section_center: np.ndarray
+    section_normal: np.ndarray
+    load_point: np.ndarray
+    section_area: np.ndarray
+    section_modulus: np.ndarray
+    moment_arm: np.ndarray
+    moment: np.ndarray
+    stress: np.ndarray
+    culled: np.ndarray
+    weak: np.ndarray
+    section_flags: np.ndarray
+    max_moment: float
+    safe_modulus: float
+    max_stress: float
+    weakest_section: int
+    held_bone: int
+    vertex_stress: np.ndarray
+    vertex_culled: np.ndarray
+    vertex_bone: np.ndarray
+    allowable_stress: float = 60.0
+    force: float = 20.0
+    interval: float = 2.0
+    bone_names: list = field(default_factory=list)
+
+    @classmethod
+    def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
+                   interval: float) -> "Analysis":
+        return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
+                   bone_names=list(skeleton.names))
+
+    @property
+    def num_sections(self) -> int:
+        """Number of sections S."""
+        return len(self.stress)
+
+    @property
+    def valid(self) -> np.ndarray:
+        """(S,) bool: sections that were computed (not skipped)."""
+        return np.isfinite(self.stress)
+
+    @property
+    def stress_ratio(self) -> np.ndarray:
+        """(S,) stress / allowable stress (> 1 means weak)."""
+        return self.stress / self.allowable_stress
+
+    def flag_names(self, section: int) -> list[str]:
+        """Names of the flags set on one section."""
+        f = int(self.section_flags[section])
+        return [name for name, bit in SECTION_FLAGS.items() if f & bit]
+
+    def bone_max_stress(self) -> np.ndarray:
+        """(B,) largest section stress per bone, MPa (0 for bones without valid sections)."""
+        out = np.zeros(len(self.bone_names))
+        ok = self.valid
+        np.maximum.at(out, self.section_bone[ok], self.stress[ok])
+        return out
+
+    def weak_bones(self) -> list[dict]:
+        """Bones with a weak section, worst first: ``{bone, index, max_stress_mpa, ratio}``."""
+        per_bone = self.bone_max_stress()
+        bones = sorted({int(b) for b in self.section_bone[self.weak]}, key=lambda b: -per_bone[b])
+        return [
+            {
+                "bone": self.bone_names[b],
+                "index": b,
+                "max_stress_mpa": float(per_bone[b]),
+                "ratio": float(per_bone[b] / self.allowable_stress),
+            }
+            for b in bones
+        ]
+
+    def summary(self) -> dict:
+        """JSON-ready summary (numbers in mm, N, MPa)."""
+        return {
+            "max_stress_mpa": float(self.max_stress),
+            "allowable_stress_mpa": float(self.allowable_stress),
+            "force_n": float(self.force),
+            "interval_mm": float(self.interval),
+            "max_moment_nmm": float(self.max_moment),
+            "safe_modulus_mm3": float(self.safe_modulus),
+            "held_bone": self.bone_names[self.held_bone] if self.held_bone >= 0 else None,
+            "sections": int(self.num_sections),
+            "weak_sections": int(self.weak.sum()),
+            "culled_sections": int(self.culled.sum()),
+            "skipped_sections": int((~self.valid).sum()),
+            "weak_bones": self.weak_bones(),
+        }
+
+    def __repr__(self) -> str:
+        return (
+            f"Analysis({self.num_sections} sections, max_stress={self.max_stress:.3g} MPa, "
+            f"allowable={self.allowable_stress:.3g} MPa, weak={int(self.weak.sum())}, "
+            f"culled={int(self.culled.sum())})"
+        )
+
+
+@dataclass
+class Correction:
+    """Result of :func:`correct`.
+
+    ``bone_scale`` (B,) cross-section scale per bone; ``vertices`` (V,3) corrected positions, mm;
+    ``rounds`` list of ``(bone index, factor, max stress after MPa)``; ``converged``; ``reason``;
+    ``unfixed_sections`` (indices into ``after``); ``max_displacement`` mm;
+    ``volume_change_percent``; ``before`` and ``after`` :class:`Analysis`.
+    """
+
+    bone_scale: np.ndarray
+    vertices: np.ndarray
+    rounds: list
+    converged: bool
+    reason: str
+    unfixed_sections: list
+    max_displacement: float
+    volume_change_percent: float
+    before: Analysis
+    after: Analysis
+
+    @property
+    def num_rounds(self) -> int:
+        """Number of scaling rounds taken."""
+        return len(self.rounds)
+
+    def scaled_bones(self) -> list[dict]:
+        """Bones whose scale changed: ``{bone, index, scale}``."""
+        names = self.before.bone_names
+        return [
+            {"bone": names[b], "index": int(b), "scale": float(self.bone_scale[b])}
+            for b in np.flatnonzero(self.bone_scale != 1.0)
+        ]
+
+    def __repr__(self) -> str:
+        return (
+            f"Correction(converged={self.converged}, rounds={len(self.rounds)}, "
+            f"max_stress {self.before.max_stress:.3g} -> {self.after.max_stress:.3g} MPa)"
+        )
+
+
+class Analyzer:
+    """Reusable analysis of one mesh topology: faces, weights and settings fixed; call
+    :meth:`run` with new vertex positions and a (posed) skeleton as often as needed (live mode).
+
+    ``faces`` (F,3) int; ``num_vertices`` V; ``weights`` None / (V,B) / SciPy sparse; ``force`` N;
+    ``allowable_stress`` MPa; ``interval`` mm; ``root`` bone index or name to hold;
+    ``gap_tolerance`` mm (None: 1 % of the model size); ``threads`` (0 = all cores).
+    """
+
+    def __init__(
+        self,
+        faces: Any,
+        num_vertices: int,
+        skeleton: Skeleton,
+        weights: Any = None,
+        *,
+        force: float = 20.0,
+        allowable_stress: float = 60.0,
+        interval: float = 2.0,
+        root: int | str | None = None,
+        gap_tolerance: float | None = None,
+        threads: int = 0,
+    ) -> None:
+        if not isinstance(skeleton, Skeleton):
+            raise ValueError("skeleton must be an osteon.Skeleton")
+        if int(num_vertices) <= 0:
+            raise ValueError("empty mesh: no vertices")
+        self.num_vertices = int(num_vertices)
+        self.faces = _faces(faces, self.num_vertices)
+        self.force = _positive(force, "force", "N")
+        self.allowable_stress = _positive(allowable_stress, "allowable_stress", "MPa")
+        self.interval = _positive(interval, "interval", "mm")
+        if gap_tolerance is not None and not (float(gap_tolerance) >= 0):
+            raise ValueError("gap_tolerance must be >= 0 mm")
+        dense, csr = _weights_args(weights, self.num_vertices, skeleton.num_bones)
+        self._skeleton = skeleton
+        self._core = _core.Analyzer(
+            self.faces, self.num_vertices, skeleton.num_bones, dense, csr, self.force,
+            self.allowable_stress, self.interval, _held_bone(root, skeleton),
+            -1.0 if gap_tolerance is None else float(gap_tolerance), int(threads),
+        )
+
+    def run(self, vertices: Any, skeleton: Skeleton | None = None) -> Analysis:
+        """Analyse ``vertices`` (V,3) mm with ``skeleton`` (default: the one given at creation)."""
+        sk = self._skeleton if skeleton is None else skeleton
+        if not isinstance(sk, Skeleton):
+            raise ValueError("skeleton must be an osteon.Skeleton")
+        if sk.num_bones != self._skeleton.num_bones:
+            raise ValueError(
+                f"skeleton has {sk.num_bones} bones, the analyzer was built for "
+                f"{self._skeleton.num_bones}"
+            )
+        v = _float_rows(vertices, "vertices")
+        if len(v) != self.num_vertices:
+            raise ValueError(
+                f"vertices has {len(v)} rows, the analyzer was built for {self.num_vertices}"
+            )
+        d = self._core.run(v, sk.heads, sk.tails, sk.parents, sk.names)
+        return Analysis._from_core(d, skeleton=sk, allowable_stress=self.allowable_stress,
+                                   force=self.force, interval=self.interval)
+
+
+def analyze(
+    vertices: Any,
+    faces: Any,
+    skeleton: Skeleton,
+    weights: Any = None,
+    *,
+    force: float = 20.0,
+    allowable_stress: float = 60.0,
+    interval: float = 2.0,
+    root: int | str | None = None,
+    gap_tolerance: float | None = None,
+    threads: int = 0,
+) -> Analysis:
+    """Skeleton-sectional stress analysis of a mesh.
+
+    ``vertices`` (V,3) mm, ``faces`` (F,3) int, ``skeleton`` :class:`Skeleton` (mm), ``weights``
+    None (each vertex bound to its nearest bone) or (V,B) dense / SciPy sparse; ``force`` N on the
+    worst point of each branch; ``allowable_stress`` MPa (strength / safety factor); ``interval``
+    mm between sections along each bone; ``root`` the bone (index or name) held at its head
+    (default: the main root bone). Raises ValueError on bad input.
+    """
+    v = _float_rows(vertices, "vertices")
+    if len(v) == 0:
+        raise ValueError("empty mesh: vertices has no rows")
+    analyzer = Analyzer(faces, len(v), skeleton, weights, force=force,
+                        allowable_stress=allowable_stress, interval=interval, root=root,
+                        gap_tolerance=gap_tolerance, threads=threads)
+    return analyzer.run(v)
+
+
+def correct(
+    vertices: Any,
+    faces: Any,
+    skeleton: Skeleton,
+    weights: Any,
+    *,
+    force: float = 20.0,
+    allowable_stress: float = 60.0,
+    interval: float = 2.0,
+    root: int | str | None = None,
+    max_scale: float = 3.0,
+    max_rounds: int = 100,
+    target_ratio: float = 0.99,
+    gap_tolerance: float | None = None,
+    threads: int = 0,
+) -> Correction:
+    """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
+
+    Each round scales the cross-section of the bone whose domain holds the weakest section by
+    ``cbrt(stress / (target_ratio * allowable_stress))`` (capped at ``max_scale`` per bone) and
+    re-skins the rest mesh (linear blend skinning, weights normalised per vertex). ``weights``
+    (V,B) dense or SciPy sparse is required (None binds each vertex to its nearest bone).
+    """
+    if not isinstance(skeleton, Skeleton):
+        raise ValueError("skeleton must be an osteon.Skeleton")
+    v = _float_rows(vertices, "vertices")
+    if len(v) == 0:
+        raise ValueError("empty mesh: vertices has no rows")
+    f = _faces(faces, len(v))
+    force = _positive(force, "force", "N")
+    allowable_stress = _positive(allowable_stress, "allowable_stress", "MPa")
+    interval = _positive(interval, "interval", "mm")
+    if not (float(max_scale) >= 1.0 and math.isfinite(float(max_scale))):
+        raise ValueError(f"max_scale must be a finite number >= 1, got {max_scale!r}")
+    if int(max_rounds) < 0:
+        raise ValueError(f"max_rounds must be >= 0, got {max_rounds!r}")
+    if weights is None:
+        from scipy import sparse
+
+        nearest = analyze(v, f, skeleton, None, force=force, allowable_stress=allowable_stress,
+                          interval=interval, root=root).vertex_bone
+        weights = sparse.csr_matrix(
+            (np.ones(len(v)), (np.arange(len(v)), nearest)), shape=(len(v), skeleton.num_bones)
+        )
+    dense, csr = _weights_args(weights, len(v), skeleton.num_bones)
+    d = _core.correct(
+        v, f, skeleton.heads, skeleton.tails, skeleton.parents, skeleton.names, dense, csr,
+        force, allowable_stress, interval, _held_bone(root, skeleton),
+        -1.0 if gap_tolerance is None else float(gap_tolerance), int(threads), float(max_scale),
+        int(max_rounds), float(target_ratio),
+    )
+    kw = dict(skeleton=skeleton, allowable_stress=allowable_stress, force=force,
+              interval=interval)
+    d["before"] = Analysis._from_core(d["before"], **kw)
+    d["after"] = Analysis._from_core(d["after"], **kw)
+    return Correction(**d)
+
+
+def skin(vertices: Any, skeleton: Skeleton, weights: Any, bone_scale: Any) -> np.ndarray:
+    """Linear blend skinning of rest ``vertices`` (V,3) mm with per-bone cross-section scales
+    ``bone_scale`` (B,): each bone scales the two axes across itself about its own axis."""
+    v = _float_rows(vertices, "vertices")
+    dense, csr = _weights_args(weights, len(v), skeleton.num_bones)
+    if dense is None and csr is None:
+        raise ValueError("skin() needs weights")
+    s = np.asarray(bone_scale, dtype=np.float64)
+    if s.shape != (skeleton.num_bones,):
+        raise ValueError(f"bone_scale must have shape ({skeleton.num_bones},), got {s.shape}")
+    if not np.isfinite(s).all() or (s <= 0).any():
+        raise ValueError("bone_scale must be positive and finite")
+    return _core.skin(v, skeleton.heads, skeleton.tails, skeleton.parents, dense, csr, list(s))
+
+
+def section_properties(outer: Any, holes: Sequence[Any] = ()) -> dict:
+    """Exact properties of a polygon with holes (2D, mm): ``area`` mm², ``centroid``,
+    ``second_moment`` (Juu, Juv, Jvv) mm⁴ about the centroid, ``modulus`` (minimum section
+    modulus over all bending directions) mm³, ``valid``."""
+    return _core.section_properties(
+        _float_rows(outer, "outer", 2), [_float_rows(h, "hole", 2) for h in holes]
+    )
+
+
+def slice_section(vertices: Any, faces: Any, origin: Any, normal: Any,
+                  gap_tolerance: float = 0.0) -> dict:
+    """The section of the mesh by the plane (origin, normal) around ``origin``: ``outer`` (N,3)
+    and ``holes`` (list of (M,3)) loops in mm, ``found``, ``flags``."""
+    v = _float_rows(vertices, "vertices")
+    f = _faces(faces, len(v))
+    o = np.asarray(origin, dtype=float).ravel()
+    n = np.asarray(normal, dtype=float).ravel()
+    if o.shape != (3,) or n.shape != (3,) or not np.linalg.norm(n) > 0:
+        raise ValueError("origin and normal must be 3-vectors, normal non-zero")
+    return _core.slice_section(v, f, list(o), list(n), float(gap_tolerance))
