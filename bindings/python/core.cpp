@@ -113,8 +113,9 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
 }
 
 AnalysisOptions make_options(double force, double allowable_stress, double interval, int held_bone,
-                             double gap_tolerance, int threads) {
+                             double gap_tolerance, int threads, bool local_cuts = true) {
   AnalysisOptions o;
+  o.local_cuts = local_cuts;
   o.force = force;
   o.allowable_stress = allowable_stress;
   o.interval = interval;
@@ -157,12 +158,13 @@ class PyAnalyzer {
  public:
   PyAnalyzer(const Int32Array& faces, Index num_vertices, int num_bones, const py::object& dense,
              const py::object& csr, double force, double allowable_stress, double interval,
-             int held_bone, double gap_tolerance, int threads) {
+             int held_bone, double gap_tolerance, int threads, bool local_cuts) {
     require_rows3(faces, "faces");
     weights_ = make_weights(dense, csr, num_vertices, num_bones);
     analyzer_ = std::make_unique<Analyzer>(
         faces.data(), faces.shape(0), num_vertices, weights_.get(), num_bones,
-        make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads));
+        make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads,
+                     local_cuts));
     num_vertices_ = num_vertices;
   }
   py::dict run(const DoubleArray& vertices, const DoubleArray& heads, const DoubleArray& tails,
@@ -209,10 +211,11 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<PyAnalyzer>(m, "Analyzer", "Reusable analysis of one mesh topology.")
       .def(py::init<const Int32Array&, Index, int, const py::object&, const py::object&, double,
-                    double, double, int, double, int>(),
+                    double, double, int, double, int, bool>(),
            py::arg("faces"), py::arg("num_vertices"), py::arg("num_bones"), py::arg("dense"),
            py::arg("csr"), py::arg("force"), py::arg("allowable_stress"), py::arg("interval"),
-           py::arg("held_bone"), py::arg("gap_tolerance"), py::arg("threads"))
+           py::arg("held_bone"), py::arg("gap_tolerance"), py::arg("threads"),
+           py::arg("local_cuts") = true)
       .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("heads"), py::arg("tails"),
            py::arg("parents"), py::arg("names"), "Analyse vertices (V,3 mm) with a posed skeleton.");
 

@@ -6,6 +6,11 @@
 #include <stdexcept>
 #include <string>
 
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+
 #include "analysis_impl.hpp"
 #include "parallel.hpp"
 
@@ -34,6 +39,19 @@ bool plane_crosses_box(const Vec3& point, const Vec3& normal, const Box3& box) {
   }
   return lo <= 0.0 && hi >= 0.0;
 }
+
+// Stage timer: OSTEON_PROFILE=1 prints the time of each stage of a run to stderr.
+struct StageTimer {
+  bool on = std::getenv("OSTEON_PROFILE") != nullptr;
+  std::chrono::steady_clock::time_point last = std::chrono::steady_clock::now();
+  void lap(const char* stage) {
+    if (!on) return;
+    const auto now = std::chrono::steady_clock::now();
+    std::fprintf(stderr, "osteon %-14s %8.3f ms\n", stage,
+                 std::chrono::duration<double, std::milli>(now - last).count());
+    last = now;
+  }
+};
 
 struct Endpoint {
   int bone;
@@ -94,6 +112,7 @@ AnalysisResult Analyzer::run(const double* vertices, const Skeleton& skeleton) {
 }
 
 AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, const Box3* dirty) {
+  StageTimer timer;
   validate_skeleton(sk);
   if (sk.num_bones() != num_bones)
     throw std::invalid_argument("skeleton has " + std::to_string(sk.num_bones()) +
@@ -111,6 +130,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   const double diag = bounding_diagonal(mesh);
   const double gap = options.gap_tolerance >= 0 ? options.gap_tolerance : 0.01 * diag;
 
+  timer.lap("validate");
   // 1. Which bone each vertex belongs to (dominant weight; nearest bone where it has none).
   std::vector<int> vertex_bone;
   if (has_weights) {
@@ -126,6 +146,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   std::vector<Index> per_bone(nb, 0);
   for (int b : vertex_bone) ++per_bone[b];
 
+  timer.lap("vertex bones");
   const bool partial = dirty != nullptr && !specs.empty();
   if (!partial) {
     tree = build_load_tree(sk, options.held_bone, per_bone);
@@ -251,12 +272,69 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       if (section_dirty[i]) job_dirty[specs[i].job] = 1;
   }
   const int workers = detail::worker_count(threads, jobs);
-  std::vector<std::vector<std::int32_t>> scratch(workers);
+  timer.lap("sections");
+  FaceGrid grid;
+  grid.build(mesh);
+  timer.lap("grid");
+  // Cuts are first made locally, inside a cylinder (joints: a ball) around the bone that holds
+  // the bone's own vertices; the local section is used only when it is provably the one the whole
+  // plane gives: no open polyline, and the loops around the bone point agree in parity with a 3D
+  // inside test along the bone's axis (so no far loop, e.g. a hollow body's wall, encloses it).
+  // Otherwise the whole plane is cut.
+  std::vector<double> reach(nb, 0.0);
+  for (Index v = 0; v < num_vertices; ++v) {
+    const int b = vertex_bone[v];
+    const Vec3 rel = mesh.vertex(v) - sk.heads[b];
+    const Vec3 d = sk.direction(b);
+    reach[b] = std::max(reach[b], (rel - rel.dot(d) * d).squaredNorm());
+  }
+  for (int b = 0; b < nb; ++b) reach[b] = 1.5 * std::sqrt(reach[b]) + 2.0 * h;
+  std::vector<std::vector<double>> crossings(nb);
+  std::vector<std::uint8_t> need_crossings(nb, 0);
+  for (std::size_t i = 0; i < specs.size(); ++i)
+    if (job_dirty[specs[i].job]) need_crossings[specs[i].bone] = 1;
+  detail::parallel_for(nb, threads, [&](long b, int) {
+    if (options.local_cuts && need_crossings[b])
+      crossings[b] = line_crossings(mesh, grid, sk.heads[b], sk.direction(b));
+  });
+  auto inside_at = [&](int b, double param) {
+    const auto& c = crossings[b];
+    return (c.end() - std::upper_bound(c.begin(), c.end(), param)) % 2 == 1;
+  };
+  // A loop clipped by the region (an open polyline here) cannot lie inside a closed local loop
+  // (the region is convex), so it can only matter if it reaches the chosen outer boundary's box
+  // (a hole of it) or encloses the point (then the parity test fails or it comes with a partner).
+  std::atomic<int> local_used{0}, local_failed{0};
+  auto local_ok = [&](const PlaneCut& cut, const SectionGeometry& geom, bool inside) {
+    bool ok = !(cut.flags & kFlagNonManifold) && geom.found && geom.containing >= 1 &&
+              (geom.containing % 2 == 1) == inside;
+    if (ok && !cut.open_chains.empty()) {
+      Vec2 lo = geom.polygon.outer[0], hi = lo;
+      for (const Vec2& p : geom.polygon.outer) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      for (const auto& chain : cut.open_chains)
+        for (const Vec2& p : chain)
+          if (p.x() >= lo.x() && p.x() <= hi.x() && p.y() >= lo.y() && p.y() <= hi.y()) ok = false;
+    }
+    ++(ok ? local_used : local_failed);
+    if (!ok && timer.on)
+      std::fprintf(stderr, "  fallback: open=%zu found=%d containing=%d inside=%d\n",
+                   cut.open_chains.size(), int(geom.found), geom.containing, int(inside));
+    return ok;
+  };
   std::vector<std::vector<std::vector<CutSegment>>> family_segments(workers);
   std::vector<std::vector<CutSegment>> single_segments(workers);
-  auto finish = [&](int si, const PlaneFrame& frame, const std::vector<CutSegment>& segs) {
+  auto whole_plane = [&](const PlaneFrame& frame, std::vector<CutSegment>& segs) {
+    segs.clear();
+    cut_mesh(mesh, frame, segs, &grid, nullptr);
+    SectionGeometry geom = select_section(assemble_loops(segs, gap));
+    if (segs.empty()) geom.flags |= kFlagEmpty;
+    return geom;
+  };
+  auto finish = [&](int si, const PlaneFrame& frame, const SectionGeometry& geom) {
     SectionState st;
-    const SectionGeometry geom = select_section(assemble_loops(segs, gap));
     st.flags = geom.flags;
     if (geom.found) {
       const SectionProperties props = section_properties(geom.polygon);
@@ -269,34 +347,72 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
         st.flags |= kFlagDegenerate;
       }
     }
-    if (segs.empty()) st.flags |= kFlagEmpty;
     states[si] = st;
+  };
+  // Local cut in a ball around the plane origin, growing 3x while the loop around the bone point
+  // is clipped, up to the model size; true when the section was found locally.
+  auto grow_local = [&](int si, const PlaneFrame& frame, double radius, bool inside,
+                        std::vector<CutSegment>& segs) {
+    for (; radius < diag; radius *= 3.0) {
+      const CutRegion ball{frame.origin, Vec3::Zero(), radius};
+      segs.clear();
+      cut_mesh(mesh, frame, segs, &grid, &ball);
+      const PlaneCut cut = assemble_loops(segs, 0.0);
+      const SectionGeometry geom = select_section(cut);
+      if (local_ok(cut, geom, inside)) {
+        finish(si, frame, geom);
+        return true;
+      }
+      if (geom.found) return false;  // found but not provably right: cut the whole plane
+    }
+    return false;
   };
   detail::parallel_for(jobs, threads, [&](long job, int worker) {
     if (!job_dirty[job]) return;
     const int first = job_section[job];
     const int b = job_bone[job];
+    auto& single = single_segments[worker];
     if (b >= 0) {
       const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
       const int n = static_cast<int>(slab_params[b].size()) - 2;
       auto& segs = family_segments[worker];
-      cut_mesh_parallel(mesh, base, h, n, segs, scratch[worker]);
+      const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
+      cut_mesh_parallel(mesh, base, h, n, segs, &grid, options.local_cuts ? &region : nullptr);
       for (int k = 1; k <= n; ++k) {
         const int si = first + k - 1;
         if (!section_dirty[si]) continue;
         PlaneFrame frame = base;
         frame.origin = specs[si].point;
-        finish(si, frame, segs[k - 1]);
+        if (options.local_cuts) {
+          const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
+          const SectionGeometry geom = select_section(cut);
+          if (local_ok(cut, geom, inside_at(b, k * h))) {
+            finish(si, frame, geom);
+            continue;
+          }
+          if (!geom.found && grow_local(si, frame, 3.0 * reach[b], inside_at(b, k * h), single))
+            continue;
+          finish(si, frame, whole_plane(frame, single));
+        } else {
+          SectionGeometry geom = select_section(assemble_loops(segs[k - 1], gap));
+          if (segs[k - 1].empty()) geom.flags |= kFlagEmpty;
+          finish(si, frame, geom);
+        }
       }
     } else {
-      const PlaneFrame frame = PlaneFrame::make(specs[first].point, specs[first].normal);
-      auto& segs = single_segments[worker];
-      segs.clear();
-      cut_mesh(mesh, frame, segs);
-      finish(first, frame, segs);
+      const SectionSpec& spec = specs[first];
+      const PlaneFrame frame = PlaneFrame::make(spec.point, spec.normal);
+      if (options.local_cuts) {
+        double radius = reach[spec.bone];
+        if (sk.parents[spec.bone] >= 0) radius = std::max(radius, reach[sk.parents[spec.bone]]);
+        const double param = slab_params[spec.bone][spec.boundary];
+        if (grow_local(first, frame, radius, inside_at(spec.bone, param), single)) return;
+      }
+      finish(first, frame, whole_plane(frame, single));
     }
   });
-
+  if (timer.on) std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(local_used), int(local_failed));
+  timer.lap("slicing");
   // 4. Loads: farthest downstream point of every section (paper §4.4), then stress.
   const int ns = static_cast<int>(specs.size());
   AnalysisResult r;
@@ -317,6 +433,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   r.weak.assign(ns, 0);
   r.section_flags.resize(ns);
   const MomentArmIndex arms(mesh, sk, tree, vertex_bone, slab_params);
+  timer.lap("moment index");
   detail::parallel_for((ns + 63) / 64, threads, [&](long chunk, int) {
     const int end = std::min(ns, static_cast<int>(chunk + 1) * 64);
     for (int i = static_cast<int>(chunk) * 64; i < end; ++i) {
@@ -354,6 +471,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     r.weak[i] = r.stress[i] > options.allowable_stress;
   }
 
+  timer.lap("moment arms");
   // 5. Per-vertex stress: linear along the vertex's bone between its sections.
   std::vector<std::vector<int>> bone_sections(nb);
   for (int i = 0; i < ns; ++i)
@@ -404,6 +522,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       }
     }
   });
+  timer.lap("vertex stress");
   return r;
 }
 

@@ -12,12 +12,12 @@ struct LoopIntegrals {
   double a = 0, sx = 0, sy = 0, ixx = 0, iyy = 0, ixy = 0;
 };
 
-LoopIntegrals integrate(const std::vector<Vec2>& loop) {
+LoopIntegrals integrate(const std::vector<Vec2>& loop, const Vec2& ref) {
   LoopIntegrals r;
   const std::size_t n = loop.size();
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec2& p = loop[i];
-    const Vec2& q = loop[(i + 1) % n];
+    const Vec2 p = loop[i] - ref;
+    const Vec2 q = loop[i + 1 == n ? 0 : i + 1] - ref;
     const double cr = p.x() * q.y() - q.x() * p.y();
     r.a += cr;
     r.sx += (p.x() + q.x()) * cr;
@@ -76,17 +76,12 @@ SectionProperties section_properties(const SectionPolygon& polygon) {
   if (polygon.outer.size() < 3) return props;
   // Integrate about a point of the section itself so that far-away coordinates lose no digits.
   const Vec2 ref = polygon.outer[0];
-  auto shifted = [&](const std::vector<Vec2>& loop) {
-    std::vector<Vec2> s(loop.size());
-    for (std::size_t i = 0; i < loop.size(); ++i) s[i] = loop[i] - ref;
-    return s;
-  };
   LoopIntegrals total;
-  const LoopIntegrals outer = integrate(shifted(polygon.outer));
+  const LoopIntegrals outer = integrate(polygon.outer, ref);
   accumulate(total, outer, outer.a >= 0 ? 1.0 : -1.0);
   for (const auto& hole : polygon.holes) {
     if (hole.size() < 3) continue;
-    const LoopIntegrals h = integrate(shifted(hole));
+    const LoopIntegrals h = integrate(hole, ref);
     accumulate(total, h, h.a >= 0 ? -1.0 : 1.0);
   }
   if (!(total.a > 0)) return props;

@@ -18,7 +18,7 @@ void skin_cross_section_scales(const double* rest, Index num_vertices, const Ske
     double total = 0.0;
     bool moves = false;
     for (Index k = w.row_start[v]; k < w.row_start[v + 1]; ++k) {
-      total += w.weight[k];
+      total += std::max(w.weight[k], 0.0);
       moves |= w.weight[k] > 0 && bone_scale[w.bone[k]] != 1.0;
     }
     if (!moves || !(total > 0)) continue;  // unweighted or only unscaled bones: bitwise unchanged
@@ -26,7 +26,7 @@ void skin_cross_section_scales(const double* rest, Index num_vertices, const Ske
     Vec3 delta = Vec3::Zero();
     for (Index k = w.row_start[v]; k < w.row_start[v + 1]; ++k) {
       const int b = w.bone[k];
-      if (bone_scale[b] == 1.0 || w.weight[k] == 0.0) continue;
+      if (bone_scale[b] == 1.0 || !(w.weight[k] > 0.0)) continue;
       const Vec3 rel = p - s.heads[b];
       const Vec3 across = rel - rel.dot(axis[b]) * axis[b];
       delta += (w.weight[k] / total) * (bone_scale[b] - 1.0) * across;

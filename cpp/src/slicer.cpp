@@ -129,11 +129,129 @@ PlaneFrame PlaneFrame::make(const Vec3& origin, const Vec3& normal) {
   return f;
 }
 
-void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out) {
+void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
+  const Index nf = mesh.num_faces;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (Index i = 0; i < mesh.num_vertices; ++i) {
+    const Vec3 p = mesh.vertex(i);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-12 * (1.0 + (hi - lo).norm())));
+  // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
+  // sample) so that a non-empty cell holds about faces_per_cell triangles.
+  const Index step = std::max<Index>(1, nf / 2048);
+  double area = 0.0;
+  Index sampled = 0;
+  for (Index f = 0; f < nf; f += step, ++sampled) {
+    const std::int32_t* t = mesh.faces + 3 * f;
+    area += 0.5 * (mesh.vertex(t[1]) - mesh.vertex(t[0]))
+                      .cross(mesh.vertex(t[2]) - mesh.vertex(t[0]))
+                      .norm();
+  }
+  const double mean_area = area / std::max<Index>(1, sampled);
+  double cell = std::sqrt(std::max(mean_area, 1e-300) * faces_per_cell);
+  cell = std::max(cell, extent.maxCoeff() / 256.0);
+  // Never more (volume) cells than 4 per face, so the counting arrays stay O(F).
+  cell = std::max(cell, std::cbrt(extent.prod() / (4.0 * double(std::max<Index>(nf, 1)))));
+  if (!(cell > 0) || !std::isfinite(cell)) cell = extent.maxCoeff();
+  constexpr int kBlock = 4;  // cells per block edge
+  Eigen::Array3i dims;
+  for (int k = 0; k < 3; ++k) {
+    dims[k] = static_cast<int>(std::clamp(std::ceil(extent[k] / cell), 1.0, 256.0));
+    dims[k] = (dims[k] + kBlock - 1) / kBlock * kBlock;
+  }
+  const Vec3 inv(dims[0] / extent.x(), dims[1] / extent.y(), dims[2] / extent.z());
+  const Eigen::Array3i bdims = dims / kBlock;
+  // Cell ids ordered block by block so that a block's cells are contiguous.
+  auto cell_id = [&](const Vec3& c) {
+    int x[3];
+    for (int k = 0; k < 3; ++k)
+      x[k] = std::clamp(static_cast<int>((c[k] - lo[k]) * inv[k]), 0, dims[k] - 1);
+    const Index block = (Index(x[0] / kBlock) * bdims[1] + x[1] / kBlock) * bdims[2] + x[2] / kBlock;
+    const Index inner = ((x[0] % kBlock) * kBlock + x[1] % kBlock) * kBlock + x[2] % kBlock;
+    return block * (kBlock * kBlock * kBlock) + inner;
+  };
+  const Index total = Index(dims[0]) * dims[1] * dims[2];
+  std::vector<std::int32_t> cell_of(nf);
+  std::vector<Index> count(total + 1, 0);
+  for (Index f = 0; f < nf; ++f) {
+    const std::int32_t* t = mesh.faces + 3 * f;
+    const Index id = cell_id((mesh.vertex(t[0]) + mesh.vertex(t[1]) + mesh.vertex(t[2])) / 3.0);
+    cell_of[f] = static_cast<std::int32_t>(id);
+    ++count[id + 1];
+  }
+  for (Index c = 0; c < total; ++c) count[c + 1] += count[c];
+  faces_.resize(3 * nf);
+  std::vector<Index> fill(count.begin(), count.end() - 1);
+  for (Index f = 0; f < nf; ++f) {
+    const Index k = fill[cell_of[f]]++;
+    std::copy(mesh.faces + 3 * f, mesh.faces + 3 * f + 3, faces_.begin() + 3 * k);
+  }
+  // Keep the non-empty cells only, each with the box of its triangles (they may stick out),
+  // and the non-empty blocks with the box of their cells.
+  center_.clear();
+  half_.clear();
+  start_.clear();
+  block_center_.clear();
+  block_half_.clear();
+  block_start_.clear();
+  const Index per_block = kBlock * kBlock * kBlock;
+  const double inf = std::numeric_limits<double>::infinity();
+  for (Index b0 = 0; b0 < total; b0 += per_block) {
+    Vec3 klo = Vec3::Constant(inf), khi = -klo;
+    const Index cells_before = static_cast<Index>(center_.size());
+    for (Index c = b0; c < b0 + per_block; ++c) {
+      if (count[c + 1] == count[c]) continue;
+      Vec3 clo = Vec3::Constant(inf), chi = -clo;
+      for (Index i = 3 * count[c]; i < 3 * count[c + 1]; ++i) {
+        const Vec3 p = mesh.vertex(faces_[i]);
+        clo = clo.cwiseMin(p);
+        chi = chi.cwiseMax(p);
+      }
+      center_.push_back(0.5 * (clo + chi));
+      half_.push_back(0.5 * (chi - clo));
+      start_.push_back(count[c]);
+      klo = klo.cwiseMin(clo);
+      khi = khi.cwiseMax(chi);
+    }
+    if (static_cast<Index>(center_.size()) == cells_before) continue;
+    block_center_.push_back(0.5 * (klo + khi));
+    block_half_.push_back(0.5 * (khi - klo));
+    block_start_.push_back(cells_before);
+  }
+  start_.push_back(nf);
+  block_start_.push_back(static_cast<Index>(center_.size()));
+}
+
+namespace {
+
+// Visits the triangles (vertex index triples) of the cells meeting a slab, or all triangles.
+template <class Fn>
+void for_faces_in_slab(const MeshView& mesh, const FaceGrid* grid, const Vec3& n, double lo,
+                       double hi, const CutRegion* region, Fn&& fn) {
+  if (grid == nullptr) {
+    for (Index f = 0; f < mesh.num_faces; ++f) fn(mesh.faces + 3 * f);
+    return;
+  }
+  for (Index k = 0; k < grid->num_blocks(); ++k) {
+    if (!grid->block_meets(k, n, lo, hi, region)) continue;
+    for (Index c = grid->block_begin(k); c < grid->block_end(k); ++c) {
+      if (!grid->meets(c, n, lo, hi, region)) continue;
+      const std::int32_t* t = grid->faces() + 3 * grid->begin(c);
+      for (Index f = grid->begin(c); f < grid->end(c); ++f, t += 3) fn(t);
+    }
+  }
+}
+
+}  // namespace
+
+void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
+              const FaceGrid* grid, const CutRegion* region) {
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
-  for (Index fi = 0; fi < mesh.num_faces; ++fi) {
-    const std::int32_t* f = mesh.faces + 3 * fi;
+  for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region,
+                    [&](const std::int32_t* f) {
     double height[3];
     bool above[3];
     for (int k = 0; k < 3; ++k) {
@@ -141,43 +259,37 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
       height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
       above[k] = height[k] >= 0.0;
     }
-    if (above[0] == above[1] && above[1] == above[2]) continue;
+    if (above[0] == above[1] && above[1] == above[2]) return;
     CutSegment seg;
     emit_segment(mesh, plane, f, above, height, seg);
     out.push_back(seg);
-  }
+  });
 }
 
 void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spacing, int count,
-                       std::vector<std::vector<CutSegment>>& out, std::vector<std::int32_t>& scratch) {
+                       std::vector<std::vector<CutSegment>>& out, const FaceGrid* grid,
+                       const CutRegion* region) {
   out.resize(count);
   for (auto& o : out) o.clear();
   if (count <= 0) return;
-  // Bucket index of every vertex: number of planes at or below it (0..count). A triangle crosses
-  // plane k exactly when its vertices' buckets straddle k, so one pass finds every cut.
-  scratch.resize(mesh.num_vertices);
+  // Bucket of a vertex: the number of planes at or below it (clamped to 0..count). A triangle
+  // crosses plane k exactly when its vertices' buckets straddle k.
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
   const double inv = 1.0 / spacing;
   const double top = static_cast<double>(count);
-  std::int32_t* bucket = scratch.data();
-  for (Index i = 0; i < mesh.num_vertices; ++i) {
-    const double* p = mesh.vertices + 3 * i;
-    double q = std::floor((p[0] * nx + p[1] * ny + p[2] * nz - offset) * inv);
-    q = q < 0.0 ? 0.0 : (q > top ? top : q);
-    bucket[i] = static_cast<std::int32_t>(q);
-  }
-  for (Index fi = 0; fi < mesh.num_faces; ++fi) {
-    const std::int32_t* f = mesh.faces + 3 * fi;
-    const std::int32_t b0 = bucket[f[0]], b1 = bucket[f[1]], b2 = bucket[f[2]];
-    const std::int32_t lo = std::min({b0, b1, b2}), hi = std::max({b0, b1, b2});
-    if (lo == hi) continue;
+  for_faces_in_slab(mesh, grid, plane.normal, offset + spacing, offset + count * spacing, region,
+                    [&](const std::int32_t* f) {
     double t[3];
+    std::int32_t b[3];
     for (int k = 0; k < 3; ++k) {
       const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
       t[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
+      double q = std::floor(t[k] * inv);
+      q = q < 0.0 ? 0.0 : (q > top ? top : q);
+      b[k] = static_cast<std::int32_t>(q);
     }
-    const std::int32_t b[3] = {b0, b1, b2};
+    const std::int32_t lo = std::min({b[0], b[1], b[2]}), hi = std::max({b[0], b[1], b[2]});
     for (std::int32_t k = lo + 1; k <= hi; ++k) {
       const double c = k * spacing;
       bool above[3];
@@ -190,7 +302,35 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
       emit_segment(mesh, plane, f, above, height, seg);
       out[k - 1].push_back(seg);
     }
+  });
+}
+
+std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,
+                                   const Vec3& dir) {
+  std::vector<double> hits;
+  const CutRegion line{point, dir, 0.0};
+  for (Index c = 0; c < grid.num_cells(); ++c) {
+    if (!grid.near(c, line)) continue;
+    const std::int32_t* t = grid.faces() + 3 * grid.begin(c);
+    for (Index f = grid.begin(c); f < grid.end(c); ++f, t += 3) {
+      // Moller-Trumbore for the infinite line.
+      const Vec3 a = mesh.vertex(t[0]);
+      const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
+      const Vec3 p = dir.cross(e2);
+      const double det = e1.dot(p);
+      if (det == 0.0) continue;
+      const double inv = 1.0 / det;
+      const Vec3 s = point - a;
+      const double u = s.dot(p) * inv;
+      if (u < 0.0 || u > 1.0) continue;
+      const Vec3 q = s.cross(e1);
+      const double v = dir.dot(q) * inv;
+      if (v < 0.0 || u + v > 1.0) continue;
+      hits.push_back(e2.dot(q) * inv);
+    }
   }
+  std::sort(hits.begin(), hits.end());
+  return hits;
 }
 
 PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tolerance) {
@@ -257,7 +397,8 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tole
       chain.insert(chain.end(), forward.begin(), forward.end());
       cut.open_chains.push_back(std::move(chain));
     } else {
-      cut.loops.push_back(forward);
+      cut.loops.push_back(std::move(forward));
+      forward = {};
     }
   }
   // Close small gaps: repeatedly join the closest pair of open ends within the tolerance
@@ -339,6 +480,7 @@ SectionGeometry select_section(const PlaneCut& cut) {
     std::sort(containing.begin(), containing.end(),
               [&](int a, int b) { return area[a] > area[b]; });
     const std::size_t count = containing.size();
+    geom.containing = static_cast<int>(count);
     if (count % 2 == 1) {
       outer = containing[count - 1];
     } else {
@@ -391,7 +533,7 @@ SectionGeometry select_section(const PlaneCut& cut) {
 
 SectionGeometry slice_section(const MeshView& mesh, const PlaneFrame& plane, double gap_tolerance) {
   std::vector<CutSegment> segments;
-  cut_mesh(mesh, plane, segments);
+  cut_mesh(mesh, plane, segments, nullptr);
   return select_section(assemble_loops(segments, gap_tolerance));
 }
 

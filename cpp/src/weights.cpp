@@ -70,7 +70,7 @@ void validate_weights(const BoneWeights& w, Index num_vertices, int num_bones) {
   for (std::size_t k = 0; k < w.weight.size(); ++k) {
     if (!std::isfinite(w.weight[k]))
       throw std::invalid_argument("weights contain NaN or infinity");
-    if (w.weight[k] < 0.0)
+    if (w.weight[k] < -1e-6)  // solver round-off (~-1e-9) is tolerated and reads as 0
       throw std::invalid_argument("weights must not be negative (found " +
                                   std::to_string(w.weight[k]) + ")");
     if (w.bone[k] < 0 || w.bone[k] >= num_bones)
@@ -81,7 +81,7 @@ void validate_weights(const BoneWeights& w, Index num_vertices, int num_bones) {
 std::vector<int> dominant_bones(const BoneWeights& w) {
   std::vector<int> dom(w.num_vertices, -1);
   for (Index v = 0; v < w.num_vertices; ++v) {
-    double best = 0.0;
+    double best = 1e-12;  // round-off weights never make a bone dominant
     for (Index k = w.row_start[v]; k < w.row_start[v + 1]; ++k) {
       if (w.weight[k] > best) {
         best = w.weight[k];

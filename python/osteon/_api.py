@@ -154,6 +154,22 @@ class Skeleton:
         return f"Skeleton({self.num_bones} bones, roots={self.roots})"
 
 
+#: Weights down to this are solver round-off (bounded biharmonic weights have ~-1e-9) and read as 0.
+NEGATIVE_WEIGHT_TOLERANCE = 1e-6
+
+
+def _clean_negative(w: np.ndarray) -> np.ndarray:
+    """Zero round-off negatives; ValueError for a truly negative weight."""
+    if w.size == 0:
+        return w
+    lowest = float(w.min())
+    if lowest < -NEGATIVE_WEIGHT_TOLERANCE:
+        raise ValueError(f"weights must not be negative (found {lowest:g})")
+    if lowest < 0:
+        w = np.where(w < 0, 0.0, w)
+    return w
+
+
 def _weights_args(weights: Any, num_vertices: int, num_bones: int):
     """(dense, csr) arguments for the engine; weights: None, (V,B) array, or SciPy sparse."""
     if weights is None:
@@ -168,8 +184,7 @@ def _weights_args(weights: Any, num_vertices: int, num_bones: int):
         data = np.asarray(csr.data, dtype=np.float64)
         if not np.isfinite(data).all():
             raise ValueError("weights contain NaN or infinity")
-        if (data < 0).any():
-            raise ValueError("weights must not be negative")
+        data = _clean_negative(data)
         return None, (
             np.ascontiguousarray(csr.indptr, dtype=np.int64),
             np.ascontiguousarray(csr.indices, dtype=np.int64),
@@ -185,9 +200,7 @@ def _weights_args(weights: Any, num_vertices: int, num_bones: int):
     w = np.ascontiguousarray(w, dtype=np.float64)
     if not np.isfinite(w).all():
         raise ValueError("weights contain NaN or infinity")
-    if (w < 0).any():
-        raise ValueError("weights must not be negative")
-    return w, None
+    return _clean_negative(w), None
 
 
 def _positive(value: float, name: str, unit: str) -> float:
@@ -368,7 +381,9 @@ class Analyzer:
 
     ``faces`` (F,3) int; ``num_vertices`` V; ``weights`` None / (V,B) / SciPy sparse; ``force`` N;
     ``allowable_stress`` MPa; ``interval`` mm; ``root`` bone index or name to hold;
-    ``gap_tolerance`` mm (None: 1 % of the model size); ``threads`` (0 = all cores).
+    ``gap_tolerance`` mm (None: 1 % of the model size); ``threads`` (0 = all cores);
+    ``local_cuts`` cut near each bone first and fall back to the whole plane only when needed
+    (same result, faster; False always cuts whole planes).
     """
 
     def __init__(
@@ -384,6 +399,7 @@ class Analyzer:
         root: int | str | None = None,
         gap_tolerance: float | None = None,
         threads: int = 0,
+        local_cuts: bool = True,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")
@@ -402,6 +418,7 @@ class Analyzer:
             self.faces, self.num_vertices, skeleton.num_bones, dense, csr, self.force,
             self.allowable_stress, self.interval, _held_bone(root, skeleton),
             -1.0 if gap_tolerance is None else float(gap_tolerance), int(threads),
+            bool(local_cuts),
         )
 
     def run(self, vertices: Any, skeleton: Skeleton | None = None) -> Analysis:
@@ -436,6 +453,7 @@ def analyze(
     root: int | str | None = None,
     gap_tolerance: float | None = None,
     threads: int = 0,
+    local_cuts: bool = True,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -450,7 +468,7 @@ def analyze(
         raise ValueError("empty mesh: vertices has no rows")
     analyzer = Analyzer(faces, len(v), skeleton, weights, force=force,
                         allowable_stress=allowable_stress, interval=interval, root=root,
-                        gap_tolerance=gap_tolerance, threads=threads)
+                        gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts)
     return analyzer.run(v)
 
 

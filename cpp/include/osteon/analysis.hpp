@@ -20,6 +20,7 @@ struct AnalysisOptions {
   int held_bone = -1;              ///< bone held at its head; -1 = the main root bone
   double gap_tolerance = -1.0;     ///< open cuts closed across gaps up to this, mm; <0: 1% of size
   int threads = 0;                 ///< worker threads; 0 = all cores
+  bool local_cuts = true;          ///< cut near the bone first (same result, faster); false: whole planes
 };
 
 /// Where a section sits on its bone.

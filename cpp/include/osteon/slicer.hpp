@@ -53,16 +53,83 @@ struct SectionGeometry {
   SectionPolygon polygon;  ///< outer boundary + holes, plane coordinates (mm)
   std::uint32_t flags = 0; ///< SectionFlag bits
   bool found = false;      ///< false when the section had to be skipped
+  int containing = 0;      ///< number of closed loops around the bone point
 };
 
-/// Cuts every triangle of the mesh that crosses the plane (O(V + F)); appends to `out`.
-void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out);
+/// A region (mm) a cut may be restricted to: the cylinder of `radius` around the line through
+/// `point` along unit `axis`, or the ball of `radius` around `point` when `axis` is zero.
+struct CutRegion {
+  Vec3 point = Vec3::Zero();
+  Vec3 axis = Vec3::Zero();
+  double radius = 0.0;
+  /// True when a box (center, half extents) may reach into the region.
+  bool meets_box(const Vec3& center, const Vec3& half) const {
+    Vec3 d = center - point;
+    d -= d.dot(axis) * axis;
+    const double reach = radius + half.norm();
+    return d.squaredNorm() <= reach * reach;
+  }
+};
+
+/// Triangles bucketed into a uniform grid of cells, each with the bounding box of its triangles,
+/// so that a plane (or a slab of parallel planes) visits only the cells it passes through.
+class FaceGrid {
+ public:
+  /// Buckets the faces of `mesh` (about faces_per_cell triangles per non-empty cell).
+  void build(const MeshView& mesh, int faces_per_cell = 12);
+  /// Number of non-empty cells.
+  Index num_cells() const { return static_cast<Index>(center_.size()); }
+  /// Cell c's faces are faces()[3*begin(c) .. 3*end(c)) (vertex indices, reordered copy).
+  Index begin(Index c) const { return start_[c]; }
+  Index end(Index c) const { return start_[c + 1]; }
+  const std::int32_t* faces() const { return faces_.data(); }
+  /// True when cell c's box meets the slab lo <= dot(n, x) <= hi (and the region, if any).
+  bool meets(Index c, const Vec3& n, double lo, double hi, const CutRegion* region = nullptr) const {
+    const double mid = n.dot(center_[c]);
+    const double r = n.cwiseAbs().dot(half_[c]);
+    if (mid + r < lo || mid - r > hi) return false;
+    return region == nullptr || region->meets_box(center_[c], half_[c]);
+  }
+  /// True when cell c's box may be touched by the region.
+  bool near(Index c, const CutRegion& region) const {
+    return region.meets_box(center_[c], half_[c]);
+  }
+  /// Blocks group neighbouring cells: block k holds cells block_begin(k) .. block_end(k).
+  Index num_blocks() const { return static_cast<Index>(block_center_.size()); }
+  Index block_begin(Index k) const { return block_start_[k]; }
+  Index block_end(Index k) const { return block_start_[k + 1]; }
+  /// True when block k's box meets the slab lo <= dot(n, x) <= hi (and the region, if any).
+  bool block_meets(Index k, const Vec3& n, double lo, double hi,
+                   const CutRegion* region = nullptr) const {
+    const double mid = n.dot(block_center_[k]);
+    const double r = n.cwiseAbs().dot(block_half_[k]);
+    if (mid + r < lo || mid - r > hi) return false;
+    return region == nullptr || region->meets_box(block_center_[k], block_half_[k]);
+  }
+
+ private:
+  std::vector<Vec3> center_, half_;
+  std::vector<Index> start_;
+  std::vector<std::int32_t> faces_;
+  std::vector<Vec3> block_center_, block_half_;
+  std::vector<Index> block_start_;
+};
+
+/// Cuts every triangle of the mesh that crosses the plane; appends to `out`. With a grid only
+/// the cells the plane passes through are visited; with a region only cells near it.
+void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
+              const FaceGrid* grid = nullptr, const CutRegion* region = nullptr);
 
 /// Cuts the mesh by `count` parallel planes base + k*spacing*normal, k = 1..count, in one pass.
 /// out[k-1] receives plane k's segments, in coordinates of the frame `plane` (whose origin is base).
-/// `scratch` is reused between calls to avoid allocation.
 void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spacing, int count,
-                       std::vector<std::vector<CutSegment>>& out, std::vector<std::int32_t>& scratch);
+                       std::vector<std::vector<CutSegment>>& out, const FaceGrid* grid = nullptr,
+                       const CutRegion* region = nullptr);
+
+/// Sorted parameters s (mm) where the line point + s*dir (dir unit) crosses mesh triangles; a
+/// point of the line is inside a closed mesh when an odd number of crossings lie beyond it.
+std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,
+                                   const Vec3& dir);
 
 /// Links cut segments into loops by shared mesh edges; joins open ends closer than gap_tolerance (mm).
 PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tolerance);

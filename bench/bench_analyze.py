@@ -1,0 +1,66 @@
+"""Analysis speed vs one NumPy face-area pass over the same mesh, in the same process.
+
+    python bench/bench_analyze.py [--repeat 9] [--quick]
+
+For each model and interval h (2 mm, 8 mm) prints the median time of ``osteon.analyze`` and of
+the NumPy baseline (gather the triangles, cross product, norm, sum), run interleaved, and their
+ratio (analysis / NumPy; the target is <= 1.0 for the ~100k and 1M+ face models).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import osteon  # noqa: E402
+from models import load  # noqa: E402
+
+
+def numpy_face_area(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """The baseline: total surface area, mm^2, the way a NumPy user writes it."""
+    tri = vertices[faces]
+    return 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+
+
+def median_interleaved(fns, repeat: int) -> list[float]:
+    times = [[] for _ in fns]
+    for _ in range(repeat):
+        for i, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            fn()
+            times[i].append(time.perf_counter() - t0)
+    return [statistics.median(t) for t in times]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=9)
+    ap.add_argument("--quick", action="store_true", help="skip the 1M+ face model")
+    args = ap.parse_args(argv)
+    cases = [("rignet2982", 0), ("arm", 0), ("cow", 1), ("cow", 3)]
+    if args.quick:
+        cases = cases[:3]
+    print("| model | faces | bones | h (mm) | sections | osteon median (ms) | NumPy face-area median (ms) | ratio |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, subdiv in cases:
+        v, f, sk, w = load(name, subdivisions=subdiv)
+        label = name if subdiv == 0 else f"{name} x{4 ** subdiv}"
+        for h in (2.0, 8.0):
+            res = osteon.analyze(v, f, sk, w, interval=h)  # warm up
+            t_osteon, t_numpy = median_interleaved(
+                [lambda: osteon.analyze(v, f, sk, w, interval=h),
+                 lambda: numpy_face_area(v, f)], args.repeat)
+            print(f"| {label} | {len(f)} | {sk.num_bones} | {h:g} | {res.num_sections} | "
+                  f"{t_osteon * 1e3:.2f} | {t_numpy * 1e3:.2f} | {t_osteon / t_numpy:.2f} |",
+                  flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
