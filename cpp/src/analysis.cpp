@@ -217,7 +217,8 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       const double param = tail ? sk.length(bone) : 0.0;
       spec.plus_side = param >= tree.entry_param[bone];
       spec.point = tail ? sk.tails[bone] : sk.heads[bone];
-      spec.normal = normal.dot(sk.direction(bone)) < 0 ? Vec3(-normal) : normal;
+      const Vec3 unit = normal.normalized();
+      spec.normal = unit.dot(sk.direction(bone)) < 0 ? Vec3(-unit) : unit;
       job_bone.push_back(-1);
       job_section.push_back(static_cast<int>(specs.size()));
       spec.job = static_cast<int>(job_bone.size()) - 1;

@@ -1,0 +1,18 @@
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parents[1] / "bench"))
+
+DATA = Path(os.environ.get("OSTEON_DATA", HERE.parents[2] / "shared" / "data"))
+
+
+@pytest.fixture(scope="session")
+def data_dir():
+    if not DATA.is_dir():
+        pytest.fail(f"shared data not found at {DATA} (set OSTEON_DATA)")
+    return DATA

@@ -1,0 +1,124 @@
+"""Correction (SPEC §6, paper §5): per-bone cross-section scaling with linear blend skinning."""
+
+import numpy as np
+import pytest
+from models import load
+from scipy import sparse
+from shapes import circle, cylinder_along, merge, prism, revolve
+
+import osteon
+
+
+def bar():
+    v, f = prism(circle(5.0, 96), 100.0)
+    sk = osteon.Skeleton([[0, 0, 0]], [[100, 0, 0]], [-1], ["bar"])
+    return v, f, sk, np.ones((len(v), 1))
+
+
+def test_bar_at_twice_the_allowable_is_fixed_in_one_round_by_cbrt_2():
+    v, f, sk, w = bar()
+    before = osteon.analyze(v, f, sk, w, force=10.0)
+    allowable = before.max_stress / 2
+    fix = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable)
+    assert fix.converged and len(fix.rounds) == 1
+    assert fix.bone_scale[0] == pytest.approx(2 ** (1 / 3), rel=0.02)
+    assert not fix.after.weak.any()
+    # length kept: x is along the bone and untouched; radius scaled
+    assert np.array_equal(fix.vertices[:, 0], v[:, 0])
+    r0 = np.linalg.norm(v[:, 1:], axis=1)
+    r1 = np.linalg.norm(fix.vertices[:, 1:], axis=1)
+    assert np.allclose(r1, fix.bone_scale[0] * r0)
+    assert fix.volume_change_percent == pytest.approx(100 * (fix.bone_scale[0] ** 2 - 1), rel=1e-6)
+
+
+def limb_on_body():
+    body = revolve(np.linspace(0, 60, 31), np.full(31, 15.0), 64)
+    limb = cylinder_along([62, 0, 0], [140, 0, 0], 2.0)
+    v, f = merge(body, limb)
+    nb = len(body[0])
+    sk = osteon.Skeleton([[0, 0, 0], [60, 0, 0]], [[60, 0, 0], [140, 0, 0]], [-1, 0],
+                         ["body", "limb"])
+    w = np.zeros((len(v), 2))
+    w[:nb, 0] = 1
+    w[nb:, 1] = 1
+    return v, f, sk, w, nb
+
+
+def test_thin_limb_is_fixed_and_the_body_does_not_move():
+    v, f, sk, w, nb = limb_on_body()
+    fix = osteon.correct(v, f, sk, sparse.csr_matrix(w), force=5.0, allowable_stress=30.0)
+    assert fix.before.weak.any()
+    assert fix.converged and not fix.after.weak.any()
+    assert fix.bone_scale[0] == 1.0 and fix.bone_scale[1] > 1.0
+    assert np.array_equal(fix.vertices[:nb], v[:nb])  # bitwise: no weight on a scaled bone
+    assert np.array_equal(fix.vertices[nb:, 0], v[nb:, 0])  # limb length kept
+    assert fix.max_displacement > 0
+
+
+def test_reanalysing_the_corrected_mesh_gives_after():
+    v, f, sk, w, nb = limb_on_body()
+    fix = osteon.correct(v, f, sk, w, force=5.0, allowable_stress=30.0)
+    again = osteon.analyze(fix.vertices, f, sk, w, force=5.0, allowable_stress=30.0)
+    assert np.array_equal(again.stress, fix.after.stress, equal_nan=True)
+    assert np.array_equal(again.weak, fix.after.weak)
+
+
+def test_skin_matches_the_correction_vertices():
+    v, f, sk, w, nb = limb_on_body()
+    fix = osteon.correct(v, f, sk, w, force=5.0, allowable_stress=30.0)
+    assert np.allclose(osteon.skin(v, sk, w, fix.bone_scale), fix.vertices, atol=1e-12)
+
+
+def test_blended_weights_scale_by_the_weighted_mean():
+    v, f, sk, w = bar()
+    two = osteon.Skeleton([[0, 0, 0], [0, 0, 0]], [[100, 0, 0], [100, 0, 0]], [-1, 0])
+    weights = np.column_stack([np.full(len(v), 0.25), np.full(len(v), 0.75)]) * 3  # unnormalised
+    out = osteon.skin(v, two, weights, [1.0, 2.0])
+    r0 = np.linalg.norm(v[:, 1:], axis=1)
+    r1 = np.linalg.norm(out[:, 1:], axis=1)
+    assert np.allclose(r1, (0.25 * 1 + 0.75 * 2) * r0)
+
+
+def test_max_scale_stops_the_loop_with_a_reason():
+    v, f, sk, w, nb = limb_on_body()
+    fix = osteon.correct(v, f, sk, w, force=50.0, allowable_stress=30.0, max_scale=1.1,
+                         max_rounds=50)
+    assert not fix.converged
+    assert fix.bone_scale.max() <= 1.1 + 1e-12
+    assert "max_scale" in fix.reason and "limb" in fix.reason
+    assert len(fix.rounds) <= 50
+    assert len(fix.unfixed_sections) == int(fix.after.weak.sum()) > 0
+
+
+def test_unweighted_part_cannot_be_fixed_and_the_loop_ends():
+    v, f, sk, w, nb = limb_on_body()
+    w[nb:] = 0.0  # the limb follows no bone: scaling cannot thicken it
+    fix = osteon.correct(v, f, sk, w, force=5.0, allowable_stress=30.0, max_rounds=20)
+    assert not fix.converged
+    assert np.array_equal(fix.vertices[nb:], v[nb:])
+    assert "stay weak" in fix.reason
+    assert len(fix.rounds) <= 20
+
+
+def test_max_rounds_zero_changes_nothing():
+    v, f, sk, w, nb = limb_on_body()
+    fix = osteon.correct(v, f, sk, w, force=5.0, allowable_stress=30.0, max_rounds=0)
+    assert not fix.converged and len(fix.rounds) == 0
+    assert np.array_equal(fix.vertices, v)
+
+
+@pytest.mark.parametrize("name", ["arm", "elephant", "cheburashka", "cow", "rignet2982",
+                                  "rignet11814"])
+def test_real_models_converge_under_a_load_that_makes_them_weak(name, data_dir):
+    v, f, sk, w = load(name, height_mm=120.0)
+    before = osteon.analyze(v, f, sk, w, force=20.0)
+    allowable = before.max_stress / 2  # twice over the limit somewhere
+    fix = osteon.correct(v, f, sk, w, force=20.0, allowable_stress=allowable)
+    assert fix.before.weak.any()
+    assert fix.converged, fix.reason
+    assert not fix.after.weak.any()
+    assert fix.after.max_stress <= allowable
+    # only vertices with weight on a scaled bone moved
+    scaled = np.flatnonzero(fix.bone_scale != 1.0)
+    touched = np.asarray(w[:, scaled].sum(axis=1)).ravel() > 0
+    assert np.array_equal(fix.vertices[~touched], v[~touched])
