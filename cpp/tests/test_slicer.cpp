@@ -1,0 +1,121 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "osteon/section.hpp"
+#include "osteon/slicer.hpp"
+#include "test_helpers.hpp"
+
+using namespace osteon;
+using osteon::testing::prism;
+using osteon::testing::rectangle;
+using osteon::testing::regular_polygon;
+
+TEST(Slicer, PrismCutGivesTheProfile) {
+  const auto m = prism(rectangle(8, 4), 50);
+  const PlaneFrame plane = PlaneFrame::make(Vec3(23.3, 0, 0), Vec3::UnitX());
+  const SectionGeometry g = slice_section(m.view(), plane, 0.0);
+  ASSERT_TRUE(g.found);
+  EXPECT_EQ(g.flags, 0u);
+  EXPECT_EQ(g.containing, 1);
+  const SectionProperties p = section_properties(g.polygon);
+  EXPECT_NEAR(p.area, 32.0, 1e-9);
+  EXPECT_NEAR(p.modulus, 64.0 * 16.0 / (6 * std::sqrt(80.0)), 1e-9);
+}
+
+TEST(Slicer, ParallelPlanesMatchSinglePlanes) {
+  const auto m = prism(regular_polygon(5, 40), 60);
+  const PlaneFrame base = PlaneFrame::make(Vec3::Zero(), Vec3(1, 0, 0));
+  std::vector<std::vector<CutSegment>> family;
+  FaceGrid grid;
+  grid.build(m.view());
+  cut_mesh_parallel(m.view(), base, 2.5, 23, family, &grid);
+  ASSERT_EQ(family.size(), 23u);
+  for (int k = 1; k <= 23; ++k) {
+    PlaneFrame plane = base;
+    plane.origin = Vec3(2.5 * k, 0, 0);
+    std::vector<CutSegment> single;
+    cut_mesh(m.view(), plane, single, nullptr);
+    EXPECT_EQ(family[k - 1].size(), single.size()) << k;
+    const double a1 = section_properties(select_section(assemble_loops(family[k - 1], 0)).polygon).area;
+    const double a2 = section_properties(select_section(assemble_loops(single, 0)).polygon).area;
+    EXPECT_NEAR(a1, a2, 1e-9);
+  }
+}
+
+TEST(Slicer, PointInAHoleTakesTheWall) {
+  // Two concentric square loops: the origin lies in the hole.
+  PlaneCut cut;
+  cut.loops = {rectangle(10, 10), rectangle(6, 6)};
+  const SectionGeometry g = select_section(cut);
+  ASSERT_TRUE(g.found);
+  EXPECT_TRUE(g.flags & kFlagHollow);
+  EXPECT_EQ(g.polygon.holes.size(), 1u);
+  EXPECT_NEAR(section_properties(g.polygon).area, 100 - 36, 1e-12);
+}
+
+TEST(Slicer, IslandsInsideHolesAreNotPartOfTheSection) {
+  PlaneCut cut;
+  std::vector<Vec2> island = rectangle(2, 2);
+  for (auto& p : island) p += Vec2(0, 0);
+  cut.loops = {rectangle(20, 20), rectangle(14, 14), island};  // origin in the island
+  const SectionGeometry g = select_section(cut);
+  EXPECT_EQ(g.containing, 3);
+  EXPECT_NEAR(section_properties(g.polygon).area, 4.0, 1e-12);  // the island itself
+}
+
+TEST(Slicer, OtherLoopsInThePlaneAreIgnored) {
+  PlaneCut cut;
+  std::vector<Vec2> far = rectangle(3, 3);
+  for (auto& p : far) p += Vec2(50, 0);
+  cut.loops = {far, rectangle(4, 4)};
+  const SectionGeometry g = select_section(cut);
+  EXPECT_NEAR(section_properties(g.polygon).area, 16.0, 1e-12);
+  EXPECT_TRUE(g.polygon.holes.empty());
+}
+
+TEST(Slicer, OutsideBoneUsesNearestLoopAndFlags) {
+  PlaneCut cut;
+  std::vector<Vec2> a = rectangle(2, 2), b = rectangle(2, 2);
+  for (auto& p : a) p += Vec2(5, 0);
+  for (auto& p : b) p += Vec2(-9, 0);
+  cut.loops = {b, a};
+  const SectionGeometry g = select_section(cut);
+  ASSERT_TRUE(g.found);
+  EXPECT_TRUE(g.flags & kFlagOutside);
+  EXPECT_NEAR(section_properties(g.polygon).centroid.x(), 5.0, 1e-12);
+}
+
+TEST(Slicer, SmallGapsAreClosedLargeOnesSkip) {
+  // A square loop cut open by removing one side's segment: an open chain with a 4 mm gap.
+  std::vector<CutSegment> segs;
+  const std::vector<Vec2> sq = rectangle(4, 4);
+  for (int i = 0; i < 3; ++i) {
+    CutSegment s;
+    s.edge[0] = 100 + i;
+    s.edge[1] = 101 + i;
+    s.point[0] = sq[i];
+    s.point[1] = sq[i + 1];
+    segs.push_back(s);
+  }
+  const PlaneCut closed = assemble_loops(segs, 5.0);
+  EXPECT_EQ(closed.loops.size(), 1u);
+  EXPECT_TRUE(closed.flags & kFlagGapClosed);
+  const PlaneCut open = assemble_loops(segs, 1.0);
+  EXPECT_EQ(open.loops.size(), 0u);
+  EXPECT_EQ(open.open_chains.size(), 1u);
+  const SectionGeometry g = select_section(open);
+  EXPECT_FALSE(g.found);
+  EXPECT_TRUE(g.flags & kFlagEmpty);
+}
+
+TEST(Slicer, LineCrossingsOfAClosedPrism) {
+  const auto m = prism(regular_polygon(5, 32), 40);
+  FaceGrid grid;
+  grid.build(m.view());
+  // The x axis enters at x=0 and leaves at x=40: two crossings.
+  const auto hits = line_crossings(m.view(), grid, Vec3(-10, 0.1, 0.2), Vec3::UnitX());
+  ASSERT_EQ(hits.size(), 2u);
+  EXPECT_NEAR(hits[0], 10.0, 1e-9);
+  EXPECT_NEAR(hits[1], 50.0, 1e-9);
+}
