@@ -289,7 +289,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     const Vec3 d = sk.direction(b);
     reach[b] = std::max(reach[b], (rel - rel.dot(d) * d).squaredNorm());
   }
-  for (int b = 0; b < nb; ++b) reach[b] = 1.5 * std::sqrt(reach[b]) + 2.0 * h;
+  for (int b = 0; b < nb; ++b) reach[b] = 2.5 * std::sqrt(reach[b]) + 2.0 * h;
   std::vector<std::vector<double>> crossings(nb);
   std::vector<std::uint8_t> need_crossings(nb, 0);
   for (std::size_t i = 0; i < specs.size(); ++i)
