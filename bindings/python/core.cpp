@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -178,6 +179,8 @@ class PyAnalyzer {
     AnalysisResult r;
     {
       py::gil_scoped_release release;
+      // One analyzer keeps per-run state: concurrent calls on the same object take turns.
+      std::lock_guard<std::mutex> lock(mutex_);
       r = analyzer_->run(vertices.data(), s);
     }
     return result_to_dict(std::move(r));
@@ -187,6 +190,7 @@ class PyAnalyzer {
   std::unique_ptr<BoneWeights> weights_;
   std::unique_ptr<Analyzer> analyzer_;
   Index num_vertices_ = 0;
+  std::mutex mutex_;
 };
 
 }  // namespace

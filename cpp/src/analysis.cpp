@@ -266,8 +266,19 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   std::vector<std::uint8_t> job_dirty(jobs, 1);
   std::vector<std::uint8_t> section_dirty(specs.size(), 1);
   if (partial) {
-    for (std::size_t i = 0; i < specs.size(); ++i)
-      section_dirty[i] = plane_crosses_box(specs[i].point, specs[i].normal, *dirty);
+    // A section changes only if the moved triangles cross its plane inside the region its cut
+    // was proven in (and, for a ball, away from its bone's axis: the inside test uses that line).
+    const Vec3 center = 0.5 * (dirty->lo + dirty->hi), half = 0.5 * (dirty->hi - dirty->lo);
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      const SectionState& st = states[i];
+      bool touched = plane_crosses_box(specs[i].point, specs[i].normal, *dirty);
+      if (touched && !st.whole_plane) {
+        const int b = specs[i].bone;
+        const CutRegion axis_line{sk.heads[b], sk.direction(b), 0.0};
+        touched = st.region.meets_box(center, half) || axis_line.meets_box(center, half);
+      }
+      section_dirty[i] = touched;
+    }
     std::fill(job_dirty.begin(), job_dirty.end(), 0);
     for (std::size_t i = 0; i < specs.size(); ++i)
       if (section_dirty[i]) job_dirty[specs[i].job] = 1;
@@ -334,9 +345,12 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     if (segs.empty()) geom.flags |= kFlagEmpty;
     return geom;
   };
-  auto finish = [&](int si, const PlaneFrame& frame, const SectionGeometry& geom) {
+  auto finish = [&](int si, const PlaneFrame& frame, const SectionGeometry& geom,
+                    const CutRegion* region) {
     SectionState st;
     st.flags = geom.flags;
+    st.whole_plane = region == nullptr;
+    if (region != nullptr) st.region = *region;
     if (geom.found) {
       const SectionProperties props = section_properties(geom.polygon);
       if (props.valid) {
@@ -361,7 +375,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       const PlaneCut cut = assemble_loops(segs, 0.0);
       const SectionGeometry geom = select_section(cut);
       if (local_ok(cut, geom, inside)) {
-        finish(si, frame, geom);
+        finish(si, frame, geom, &ball);
         return true;
       }
       if (geom.found) return false;  // found but not provably right: cut the whole plane
@@ -388,16 +402,16 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
           const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
           const SectionGeometry geom = select_section(cut);
           if (local_ok(cut, geom, inside_at(b, k * h))) {
-            finish(si, frame, geom);
+            finish(si, frame, geom, &region);
             continue;
           }
           if (!geom.found && grow_local(si, frame, 3.0 * reach[b], inside_at(b, k * h), single))
             continue;
-          finish(si, frame, whole_plane(frame, single));
+          finish(si, frame, whole_plane(frame, single), nullptr);
         } else {
           SectionGeometry geom = select_section(assemble_loops(segs[k - 1], gap));
           if (segs[k - 1].empty()) geom.flags |= kFlagEmpty;
-          finish(si, frame, geom);
+          finish(si, frame, geom, nullptr);
         }
       }
     } else {
@@ -409,7 +423,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
         const double param = slab_params[spec.bone][spec.boundary];
         if (grow_local(first, frame, radius, inside_at(spec.bone, param), single)) return;
       }
-      finish(first, frame, whole_plane(frame, single));
+      finish(first, frame, whole_plane(frame, single), nullptr);
     }
   });
   if (timer.on) std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(local_used), int(local_failed));

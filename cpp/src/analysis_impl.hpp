@@ -35,6 +35,8 @@ struct SectionSpec {
 /// Geometry of a computed section, kept between runs for partial re-analysis.
 struct SectionState {
   bool found = false;
+  bool whole_plane = true;  // false: the cut was proven inside `region` alone
+  CutRegion region;         // where the cut was made (a cylinder or a ball), mm
   std::uint32_t flags = 0;
   double area = 0.0;
   double modulus = 0.0;

@@ -71,6 +71,7 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
   std::vector<std::string> why(current.stress.size());
   std::vector<double> next(3 * mesh.num_vertices);
   std::vector<std::uint8_t> moved(mesh.num_vertices);
+  const double move_tolerance2 = std::pow(1e-6 * bounding_diagonal(mesh), 2);
   res.reason = "max_rounds reached";
   for (int round = 0;; ++round) {
     // Weakest section that scaling may still fix.
@@ -106,10 +107,14 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     skin_cross_section_scales(mesh.vertices, mesh.num_vertices, sk, weights, trial_scale, next.data());
     // Box of every triangle touching a moved vertex, before and after: only planes through it
     // can change (the paper's culling of unaffected domains).
+    // Smooth weights (e.g. bounded biharmonic) reach everywhere with ~1e-10: displacements below
+    // 1e-6 of the model size do not make a plane dirty (the final `after` is a full analysis).
     Box3 dirty;
-    for (Index v = 0; v < mesh.num_vertices; ++v)
-      moved[v] = next[3 * v] != res.vertices[3 * v] || next[3 * v + 1] != res.vertices[3 * v + 1] ||
-                 next[3 * v + 2] != res.vertices[3 * v + 2];
+    for (Index v = 0; v < mesh.num_vertices; ++v) {
+      const double dx = next[3 * v] - res.vertices[3 * v], dy = next[3 * v + 1] - res.vertices[3 * v + 1],
+                   dz = next[3 * v + 2] - res.vertices[3 * v + 2];
+      moved[v] = dx * dx + dy * dy + dz * dz > move_tolerance2;
+    }
     for (Index f = 0; f < mesh.num_faces; ++f) {
       const std::int32_t* tri = mesh.faces + 3 * f;
       if (!moved[tri[0]] && !moved[tri[1]] && !moved[tri[2]]) continue;
