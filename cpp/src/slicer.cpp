@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
+#include <utility>
 
 namespace osteon {
 namespace {
@@ -138,6 +140,10 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
     hi = hi.cwiseMax(p);
   }
   const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-12 * (1.0 + (hi - lo).norm())));
+  // Boxes are widened by a few ulps of the coordinates so that a plane through a box's face is
+  // never rounded out of it (the plane tests compute n.center +- |n|.half).
+  const double slack = 64 * std::numeric_limits<double>::epsilon() *
+                       std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
   // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
   // sample) so that a non-empty cell holds about faces_per_cell triangles.
   const Index step = std::max<Index>(1, nf / 2048);
@@ -210,14 +216,14 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
         chi = chi.cwiseMax(p);
       }
       center_.push_back(0.5 * (clo + chi));
-      half_.push_back(0.5 * (chi - clo));
+      half_.push_back(0.5 * (chi - clo) + Vec3::Constant(slack));
       start_.push_back(count[c]);
       klo = klo.cwiseMin(clo);
       khi = khi.cwiseMax(chi);
     }
     if (static_cast<Index>(center_.size()) == cells_before) continue;
     block_center_.push_back(0.5 * (klo + khi));
-    block_half_.push_back(0.5 * (khi - klo));
+    block_half_.push_back(0.5 * (khi - klo) + Vec3::Constant(2 * slack));
     block_start_.push_back(cells_before);
   }
   start_.push_back(nf);
@@ -333,19 +339,54 @@ std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, c
   return hits;
 }
 
-PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tolerance) {
+namespace {
+// Unordered pair of the two edge keys of a segment: identical for a doubled triangle.
+std::pair<std::uint64_t, std::uint64_t> segment_key(const CutSegment& s) {
+  return s.edge[0] < s.edge[1] ? std::make_pair(s.edge[0], s.edge[1])
+                               : std::make_pair(s.edge[1], s.edge[0]);
+}
+}  // namespace
+
+PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_tolerance) {
   PlaneCut cut;
-  const std::size_t m = segments.size();
-  if (m == 0) return cut;
+  if (input.empty()) return cut;
   // Pair the two endpoints that lie on the same mesh edge; orientation-agnostic so that
-  // inconsistently wound meshes still give loops.
+  // inconsistently wound meshes still give loops. An edge with more than two endpoints is first
+  // explained by exact duplicate segments (doubled triangles), which are dropped; whatever is
+  // still non-manifold after that is flagged.
+  const std::vector<CutSegment>* source = &input;
+  std::vector<CutSegment> deduplicated;
   EdgeTable table;
-  table.reset(2 * m);
-  std::vector<std::int32_t> partner(2 * m, -1);
-  for (std::size_t s = 0; s < m; ++s)
-    for (int e = 0; e < 2; ++e)
-      if (!table.insert(segments[s].edge[e], static_cast<std::int32_t>(2 * s + e)))
-        cut.flags |= kFlagNonManifold;
+  std::vector<std::int32_t> partner;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const std::vector<CutSegment>& segs = *source;
+    const std::size_t count = segs.size();
+    table.reset(2 * count);
+    partner.assign(2 * count, -1);
+    bool crowded = false;
+    for (std::size_t s = 0; s < count; ++s)
+      for (int e = 0; e < 2; ++e)
+        if (!table.insert(segs[s].edge[e], static_cast<std::int32_t>(2 * s + e))) crowded = true;
+    if (crowded && attempt == 0) {
+      deduplicated = input;
+      std::sort(deduplicated.begin(), deduplicated.end(), [](const CutSegment& x, const CutSegment& y) {
+        return segment_key(x) < segment_key(y);
+      });
+      const auto last = std::unique(deduplicated.begin(), deduplicated.end(),
+                                    [](const CutSegment& x, const CutSegment& y) {
+                                      return segment_key(x) == segment_key(y);
+                                    });
+      if (last != deduplicated.end()) {
+        deduplicated.erase(last, deduplicated.end());
+        source = &deduplicated;
+        continue;
+      }
+    }
+    if (crowded) cut.flags |= kFlagNonManifold;
+    break;
+  }
+  const std::vector<CutSegment>& segments = *source;
+  const std::size_t m = segments.size();
   for (std::size_t h = 0; h < table.keys.size(); ++h) {
     if (table.second[h] >= 0) {
       partner[table.first[h]] = table.second[h];
@@ -401,47 +442,110 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tole
       forward = {};
     }
   }
-  // Close small gaps: repeatedly join the closest pair of open ends within the tolerance
-  // (a chain's own two ends closes it into a loop).
+  // Close small gaps: join open ends closer than the tolerance, closest pairs first (a chain's
+  // own two ends close it into a loop). Ends are bucketed on a grid of the tolerance's size, so
+  // this stays linear even for triangle soups where every triangle is its own chain.
   auto& chains = cut.open_chains;
-  if (!chains.empty() && gap_tolerance > 0 && chains.size() <= 256) {
+  if (!chains.empty() && gap_tolerance > 0) {
+    const std::size_t c = chains.size();
+    // End 2i is chain i's front, 2i+1 its back.
+    auto end_point = [&](std::size_t end) -> const Vec2& {
+      return end % 2 == 0 ? chains[end / 2].front() : chains[end / 2].back();
+    };
+    const double cell = gap_tolerance;
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> buckets;
+    auto cell_of = [&](const Vec2& p, int dx, int dy) {
+      const std::int64_t x = static_cast<std::int64_t>(std::floor(p.x() / cell)) + dx;
+      const std::int64_t y = static_cast<std::int64_t>(std::floor(p.y() / cell)) + dy;
+      return (static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull) ^ static_cast<std::uint64_t>(y);
+    };
+    for (std::size_t end = 0; end < 2 * c; ++end)
+      buckets[cell_of(end_point(end), 0, 0)].push_back(static_cast<std::uint32_t>(end));
+    struct Pair {
+      double d2;
+      std::uint32_t a, b;
+    };
+    std::vector<Pair> pairs;
     const double tol2 = gap_tolerance * gap_tolerance;
-    while (!chains.empty()) {
-      double best = tol2;
-      int bi = -1, bj = -1;
-      bool flip = false;  // join back of i to back of j (reverse j)
-      for (std::size_t i = 0; i < chains.size(); ++i) {
-        for (std::size_t j = 0; j < chains.size(); ++j) {
-          const double d_front = (chains[i].back() - chains[j].front()).squaredNorm();
-          if (d_front <= best) {
-            best = d_front;
-            bi = static_cast<int>(i);
-            bj = static_cast<int>(j);
-            flip = false;
-          }
-          if (i != j) {
-            const double d_back = (chains[i].back() - chains[j].back()).squaredNorm();
-            if (d_back < best) {
-              best = d_back;
-              bi = static_cast<int>(i);
-              bj = static_cast<int>(j);
-              flip = true;
-            }
+    for (std::size_t end = 0; end < 2 * c; ++end) {
+      const Vec2& p = end_point(end);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy) {
+          auto it = buckets.find(cell_of(p, dx, dy));
+          if (it == buckets.end()) continue;
+          for (std::uint32_t other : it->second) {
+            if (other <= end) continue;
+            const double d2 = (end_point(other) - p).squaredNorm();
+            if (d2 <= tol2) pairs.push_back({d2, static_cast<std::uint32_t>(end), other});
           }
         }
-      }
-      if (bi < 0) break;
-      cut.flags |= kFlagGapClosed;
-      if (bi == bj) {
-        if (chains[bi].size() >= 3) cut.loops.push_back(std::move(chains[bi]));
-        chains.erase(chains.begin() + bi);
-        continue;
-      }
-      std::vector<Vec2> tail = std::move(chains[bj]);
-      if (flip) std::reverse(tail.begin(), tail.end());
-      chains[bi].insert(chains[bi].end(), tail.begin(), tail.end());
-      chains.erase(chains.begin() + bj);
     }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+      return x.d2 < y.d2 || (x.d2 == y.d2 && (x.a < y.a || (x.a == y.a && x.b < y.b)));
+    });
+    // Join ends greedily; `link[end]` is the end it is joined to. Chains then form paths and
+    // cycles of chains; a cycle is a closed loop.
+    std::vector<std::int64_t> link(2 * c, -1);
+    std::vector<std::size_t> group(c);
+    for (std::size_t i = 0; i < c; ++i) group[i] = i;
+    auto root = [&](std::size_t i) {
+      while (group[i] != i) i = group[i] = group[group[i]];
+      return i;
+    };
+    std::vector<std::uint8_t> closed_group(c, 0);
+    for (const Pair& pr : pairs) {
+      if (link[pr.a] >= 0 || link[pr.b] >= 0) continue;
+      const std::size_t ra = root(pr.a / 2), rb = root(pr.b / 2);
+      if (ra == rb) {
+        if (closed_group[ra]) continue;
+        closed_group[ra] = 1;  // joining the two free ends of one path closes it
+      } else {
+        group[ra] = rb;
+        closed_group[rb] = closed_group[ra] || closed_group[rb];
+      }
+      link[pr.a] = pr.b;
+      link[pr.b] = pr.a;
+      cut.flags |= kFlagGapClosed;
+    }
+    // Walk each joined group from a free end (paths) or any end (cycles).
+    std::vector<std::uint8_t> done(c, 0);
+    std::vector<std::vector<Vec2>> remaining;
+    auto walk = [&](std::size_t start_end, bool cycle) {
+      std::vector<Vec2> pts;
+      std::size_t end = start_end;
+      while (true) {
+        const std::size_t chain = end / 2;
+        if (done[chain]) break;
+        done[chain] = 1;
+        // Enter the chain at `end`, traverse to its other end.
+        if (end % 2 == 0) pts.insert(pts.end(), chains[chain].begin(), chains[chain].end());
+        else pts.insert(pts.end(), chains[chain].rbegin(), chains[chain].rend());
+        const std::size_t exit_end = end ^ 1u;
+        if (link[exit_end] < 0) break;
+        end = static_cast<std::size_t>(link[exit_end]);
+      }
+      if (cycle) {
+        if (pts.size() >= 3) cut.loops.push_back(std::move(pts));
+      } else {
+        remaining.push_back(std::move(pts));
+      }
+    };
+    for (std::size_t i = 0; i < c; ++i) {
+      if (done[i]) continue;
+      // Find a free end of this group by walking backwards from chain i's front.
+      std::size_t end = 2 * i;
+      bool cycle = false;
+      for (std::size_t steps = 0; steps <= 2 * c; ++steps) {
+        if (link[end] < 0) break;
+        end = static_cast<std::size_t>(link[end]) ^ 1u;  // the other end of the linked chain
+        if (end == 2 * i) {
+          cycle = true;
+          break;
+        }
+      }
+      walk(end, cycle);
+    }
+    chains.swap(remaining);
   }
   // Drop degenerate loops (fewer than three points cannot bound area).
   cut.loops.erase(std::remove_if(cut.loops.begin(), cut.loops.end(),
