@@ -158,8 +158,8 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
   const double mean_area = area / std::max<Index>(1, sampled);
   double cell = std::sqrt(std::max(mean_area, 1e-300) * faces_per_cell);
   cell = std::max(cell, extent.maxCoeff() / 256.0);
-  // Never more (volume) cells than 4 per face, so the counting arrays stay O(F).
-  cell = std::max(cell, std::cbrt(extent.prod() / (4.0 * double(std::max<Index>(nf, 1)))));
+  // Never more (volume) cells than a quarter of the faces, so the counting arrays stay small.
+  cell = std::max(cell, std::cbrt(extent.prod() / (0.25 * double(std::max<Index>(nf, 4)))));
   if (!(cell > 0) || !std::isfinite(cell)) cell = extent.maxCoeff();
   constexpr int kBlock = 4;  // cells per block edge
   Eigen::Array3i dims;
@@ -179,13 +179,23 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
     return block * (kBlock * kBlock * kBlock) + inner;
   };
   const Index total = Index(dims[0]) * dims[1] * dims[2];
+  // One pass over the triangles: cell of the centroid, and how far each cell's triangles stick
+  // out of it (so that a cell's box = its grid box widened by that, without a second pass).
   std::vector<std::int32_t> cell_of(nf);
   std::vector<Index> count(total + 1, 0);
+  std::vector<float> overhang(total, 0.0f);
+  const Vec3 size(extent.x() / dims[0], extent.y() / dims[1], extent.z() / dims[2]);
   for (Index f = 0; f < nf; ++f) {
     const std::int32_t* t = mesh.faces + 3 * f;
-    const Index id = cell_id((mesh.vertex(t[0]) + mesh.vertex(t[1]) + mesh.vertex(t[2])) / 3.0);
+    const Vec3 a = mesh.vertex(t[0]), b = mesh.vertex(t[1]), c = mesh.vertex(t[2]);
+    const Vec3 centroid = (a + b + c) / 3.0;
+    const Index id = cell_id(centroid);
     cell_of[f] = static_cast<std::int32_t>(id);
     ++count[id + 1];
+    const double reach = std::max({(a - centroid).cwiseAbs().maxCoeff(),
+                                   (b - centroid).cwiseAbs().maxCoeff(),
+                                   (c - centroid).cwiseAbs().maxCoeff()});
+    overhang[id] = std::max(overhang[id], static_cast<float>(reach * (1 + 1e-6)));
   }
   for (Index c = 0; c < total; ++c) count[c + 1] += count[c];
   faces_.resize(3 * nf);
@@ -194,8 +204,8 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
     const Index k = fill[cell_of[f]]++;
     std::copy(mesh.faces + 3 * f, mesh.faces + 3 * f + 3, faces_.begin() + 3 * k);
   }
-  // Keep the non-empty cells only, each with the box of its triangles (they may stick out),
-  // and the non-empty blocks with the box of their cells.
+  // Keep the non-empty cells only, each with its grid box widened by its triangles' overhang
+  // (centroids lie inside the grid box), and the non-empty blocks with the box of their cells.
   center_.clear();
   half_.clear();
   start_.clear();
@@ -207,23 +217,28 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
   for (Index b0 = 0; b0 < total; b0 += per_block) {
     Vec3 klo = Vec3::Constant(inf), khi = -klo;
     const Index cells_before = static_cast<Index>(center_.size());
+    const Index block = b0 / per_block;
+    const int bx = static_cast<int>(block / (Index(bdims[1]) * bdims[2]));
+    const int by = static_cast<int>((block / bdims[2]) % bdims[1]);
+    const int bz = static_cast<int>(block % bdims[2]);
     for (Index c = b0; c < b0 + per_block; ++c) {
       if (count[c + 1] == count[c]) continue;
-      Vec3 clo = Vec3::Constant(inf), chi = -clo;
-      for (Index i = 3 * count[c]; i < 3 * count[c + 1]; ++i) {
-        const Vec3 p = mesh.vertex(faces_[i]);
-        clo = clo.cwiseMin(p);
-        chi = chi.cwiseMax(p);
-      }
-      center_.push_back(0.5 * (clo + chi));
-      half_.push_back(0.5 * (chi - clo) + Vec3::Constant(slack));
+      const Index inner = c - b0;
+      const int ix = bx * kBlock + static_cast<int>(inner / (kBlock * kBlock));
+      const int iy = by * kBlock + static_cast<int>((inner / kBlock) % kBlock);
+      const int iz = bz * kBlock + static_cast<int>(inner % kBlock);
+      const Vec3 clo = lo + Vec3(ix * size.x(), iy * size.y(), iz * size.z());
+      const Vec3 half = 0.5 * size + Vec3::Constant(double(overhang[c]) + slack);
+      const Vec3 center = clo + 0.5 * size;
+      center_.push_back(center);
+      half_.push_back(half);
       start_.push_back(count[c]);
-      klo = klo.cwiseMin(clo);
-      khi = khi.cwiseMax(chi);
+      klo = klo.cwiseMin(center - half);
+      khi = khi.cwiseMax(center + half);
     }
     if (static_cast<Index>(center_.size()) == cells_before) continue;
     block_center_.push_back(0.5 * (klo + khi));
-    block_half_.push_back(0.5 * (khi - klo) + Vec3::Constant(2 * slack));
+    block_half_.push_back(0.5 * (khi - klo) + Vec3::Constant(slack));
     block_start_.push_back(cells_before);
   }
   start_.push_back(nf);

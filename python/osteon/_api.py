@@ -214,7 +214,20 @@ def _positive(value: float, name: str, unit: str) -> float:
 
 
 def _held_bone(root: int | str | None, skeleton: Skeleton) -> int:
-    return -1 if root is None else skeleton.bone_index(root)
+    if root is None:
+        return -1
+    if isinstance(root, (bool, np.bool_)) or not isinstance(root, (int, np.integer, str)):
+        raise ValueError(f"root must be a bone index or name, got {root!r}")  # noqa: TRY004
+    return skeleton.bone_index(root)
+
+
+def _count(value: Any, name: str) -> int:
+    """A non-negative integer setting (threads, max_rounds) that fits the engine's int."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an integer >= 0, got {value!r}")  # noqa: TRY004
+    if not 0 <= int(value) <= 2**31 - 1:
+        raise ValueError(f"{name} must be an integer >= 0 (at most 2^31 - 1), got {value!r}")
+    return int(value)
 
 
 @dataclass
@@ -417,7 +430,7 @@ class Analyzer:
         self._core = _core.Analyzer(
             self.faces, self.num_vertices, skeleton.num_bones, dense, csr, self.force,
             self.allowable_stress, self.interval, _held_bone(root, skeleton),
-            -1.0 if gap_tolerance is None else float(gap_tolerance), int(threads),
+            -1.0 if gap_tolerance is None else float(gap_tolerance), _count(threads, "threads"),
             bool(local_cuts),
         )
 
@@ -506,8 +519,8 @@ def correct(
     interval = _positive(interval, "interval", "mm")
     if not (float(max_scale) >= 1.0 and math.isfinite(float(max_scale))):
         raise ValueError(f"max_scale must be a finite number >= 1, got {max_scale!r}")
-    if int(max_rounds) < 0:
-        raise ValueError(f"max_rounds must be >= 0, got {max_rounds!r}")
+    max_rounds = _count(max_rounds, "max_rounds")
+    threads = _count(threads, "threads")
     if weights is None:
         from scipy import sparse
 
@@ -520,8 +533,8 @@ def correct(
     d = _core.correct(
         v, f, skeleton.heads, skeleton.tails, skeleton.parents, skeleton.names, dense, csr,
         force, allowable_stress, interval, _held_bone(root, skeleton),
-        -1.0 if gap_tolerance is None else float(gap_tolerance), int(threads), float(max_scale),
-        int(max_rounds), float(target_ratio),
+        -1.0 if gap_tolerance is None else float(gap_tolerance), threads, float(max_scale),
+        max_rounds, float(target_ratio),
     )
     kw = dict(skeleton=skeleton, allowable_stress=allowable_stress, force=force,
               interval=interval)
@@ -562,6 +575,7 @@ def slice_section(vertices: Any, faces: Any, origin: Any, normal: Any,
     f = _faces(faces, len(v))
     o = np.asarray(origin, dtype=float).ravel()
     n = np.asarray(normal, dtype=float).ravel()
-    if o.shape != (3,) or n.shape != (3,) or not np.linalg.norm(n) > 0:
-        raise ValueError("origin and normal must be 3-vectors, normal non-zero")
+    if (o.shape != (3,) or n.shape != (3,) or not np.isfinite(o).all()
+            or not np.isfinite(n).all() or not np.linalg.norm(n) > 0):
+        raise ValueError("origin and normal must be finite 3-vectors, normal non-zero")
     return _core.slice_section(v, f, list(o), list(n), float(gap_tolerance))

@@ -1,0 +1,19 @@
+import bpy
+
+from . import common
+from ._base import OsteonOperator
+
+
+class OSTEON_OT_apply(OsteonOperator, bpy.types.Operator):
+    """Bake the correction into the mesh: thicken the rest shape, then restore the pose scales.
+    This is the only osteon action that modifies the mesh data"""
+
+    bl_idname = "osteon.apply"
+    bl_label = "Apply Correction to Mesh"
+
+    def invoke(self, context, event):
+        return context.window_manager.invoke_confirm(self, event)
+
+    def run(self, context):
+        report = common.run_apply(context)
+        return "osteon: correction applied to the mesh; " + common.summary(report)

@@ -1,0 +1,261 @@
+"""Shared steps of the operators and the batch script: gather the inputs from
+Blender (through the bridge), call the engine, publish the results.
+
+Nothing here writes to Blender until the engine has answered, so a failing
+operator leaves the scene as it was."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import bridge, core
+from ..core import OsteonError
+
+# last results per scene (by scene name): the report dict and the Analysis, for the
+# batch script, the UI and the coming live mode / overlay (issue 7)
+LAST: dict[str, dict] = {}
+WEIGHTS = bridge.WeightCache()
+
+
+@dataclass
+class Inputs:
+    obj: object
+    arm: object
+    skeleton: bridge.SkeletonArrays
+    vertices_mm: np.ndarray
+    faces: np.ndarray
+    csr: tuple
+    weights: object
+    mm_per_unit: float
+    root: int | None
+    params: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+
+def settings_dict(s) -> dict:
+    return {
+        "material": s.material,
+        "strength_mpa": float(s.strength_mpa),
+        "safety_factor": float(s.safety_factor),
+        "force_n": float(s.force_n),
+        "size_mode": s.size_mode,
+        "print_size_mm": float(s.print_size_mm),
+        "interval_mm": float(s.interval_mm),
+        "held_bone": s.held_bone,
+        "max_scale": float(s.max_scale),
+        "max_rounds": int(s.max_rounds),
+    }
+
+
+def gather(context, use_weight_cache: bool = False, mm_per_unit: float | None = None) -> Inputs:
+    """Read the active rigged mesh (posed, evaluated, world space) in mm.  ``mm_per_unit``
+    fixes the scale (after a correction, so that the thicker model keeps its scale)."""
+    s = context.scene.osteon
+    t0 = time.perf_counter()
+    obj, arm = bridge.find_target(context)
+    allowable = core.allowable_stress(s.strength_mpa, s.safety_factor)
+    if not (s.force_n > 0.0):
+        raise OsteonError(f"force must be > 0 N, got {s.force_n}")
+    if not (s.interval_mm > 0.0):
+        raise OsteonError(f"section interval must be > 0 mm, got {s.interval_mm}")
+    sk = bridge.skeleton_arrays(arm)
+    csr = (WEIGHTS.get(obj, sk.names) if use_weight_cache
+           else bridge.vertex_weights_csr(obj, sk.names))
+    t1 = time.perf_counter()
+    depsgraph = context.evaluated_depsgraph_get()
+    verts = bridge.evaluated_positions(obj, depsgraph)
+    faces = bridge.triangles(obj.data)
+    if len(faces) == 0:
+        raise OsteonError(f"Mesh '{obj.name}' has no faces")
+    extent = verts.max(axis=0) - verts.min(axis=0)
+    try:
+        k = mm_per_unit if mm_per_unit is not None else core.mm_per_unit(s.size_mode, s.print_size_mm, extent,
+                             context.scene.unit_settings.scale_length)
+    except ValueError as e:
+        raise OsteonError(str(e)) from e
+    root = None
+    if s.held_bone:
+        if s.held_bone not in sk.names:
+            raise OsteonError(f"Held bone '{s.held_bone}' is not a deform bone of '{arm.name}'")
+        root = sk.names.index(s.held_bone)
+    t2 = time.perf_counter()
+    return Inputs(
+        obj=obj, arm=arm, skeleton=sk, vertices_mm=verts * k, faces=faces, csr=csr,
+        weights=bridge.sparse_weights(csr, len(sk.names)), mm_per_unit=k, root=root,
+        params={"force": float(s.force_n), "allowable_stress": allowable,
+                "interval": float(s.interval_mm), "root": root},
+        timings={"read_weights_s": t1 - t0, "read_mesh_s": t2 - t1},
+    )
+
+
+def engine_skeleton(osteon, inp: Inputs):
+    sk = inp.skeleton
+    try:
+        return osteon.Skeleton(sk.heads * inp.mm_per_unit, sk.tails * inp.mm_per_unit,
+                               sk.parents, names=list(sk.names))
+    except ValueError as e:
+        raise OsteonError(f"osteon rejected the skeleton of '{inp.arm.name}': {e}") from e
+
+
+def analyze_inputs(osteon, inp: Inputs, skeleton=None):
+    skeleton = skeleton if skeleton is not None else engine_skeleton(osteon, inp)
+    try:
+        return osteon.analyze(inp.vertices_mm, inp.faces, skeleton, inp.weights, **inp.params)
+    except ValueError as e:
+        raise OsteonError(f"osteon could not analyse '{inp.obj.name}': {e}") from e
+
+
+def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None) -> dict:
+    """Write the stress layer and the results list; remember the report."""
+    s = context.scene.osteon
+    allowable = inp.params["allowable_stress"]
+    culled = getattr(analysis, "vertex_culled", None)
+    rgba = core.stress_colors(analysis.vertex_stress, allowable, culled)
+    bridge.write_point_colors(inp.obj.data, rgba)
+    bridge.show_colors_in_viewports()
+    report = core.build_report(
+        object_name=inp.obj.name, armature_name=inp.arm.name, bone_names=inp.skeleton.names,
+        analysis=first_analysis if first_analysis is not None else analysis,
+        corrected_analysis=analysis if correction is not None else None,
+        allowable_mpa=allowable, settings=settings_dict(s), mm_per_unit=inp.mm_per_unit,
+        correction=correction)
+    s.weak_bones.clear()
+    for row in report["weak_bones"]:
+        item = s.weak_bones.add()
+        item.name = row["bone"]
+        item.max_stress_mpa = row["max_stress_mpa"]
+        item.ratio = row["ratio"]
+        item.scale = row["scale"]
+        item.weak = row["weak"]
+    s.weak_bones_index = -1
+    s.has_result = True
+    s.result_object = inp.obj.name
+    s.result_armature = inp.arm.name
+    s.max_stress_mpa = report["max_stress_mpa"]
+    s.allowable_mpa = allowable
+    s.sections = report["sections"]
+    s.weak_sections = report["weak_sections"]
+    s.converged = report["converged"]
+    LAST[context.scene.name] = {"report": report, "analysis": analysis, "inputs": inp,
+                                "correction": correction}
+    return report
+
+
+def clear_results(context):
+    s = context.scene.osteon
+    s.weak_bones.clear()
+    s.weak_bones_index = -1
+    s.has_result = False
+    s.max_stress_mpa = 0.0
+    s.sections = 0
+    s.weak_sections = 0
+    LAST.pop(context.scene.name, None)
+
+
+def summary(report: dict) -> str:
+    weak = [r["bone"] for r in report["weak_bones"] if r.get("weak", True)]
+    n = len(weak)
+    msg = (f"osteon: max stress {report['max_stress_mpa']:.1f} MPa, allowable "
+           f"{report['allowable_stress_mpa']:.1f} MPa, {report['sections']} sections, "
+           f"{n} weak bone{'s' if n != 1 else ''}")
+    if n:
+        msg += " (" + ", ".join(weak[:5]) + ")"
+    return msg
+
+
+def _no_progress(_fraction: float) -> None:
+    pass
+
+
+def run_analyze(context, use_weight_cache: bool = False, progress=_no_progress) -> dict:
+    osteon = core.import_engine()
+    inp = gather(context, use_weight_cache)
+    progress(0.4)
+    analysis = analyze_inputs(osteon, inp)
+    progress(0.9)
+    return publish(context, inp, analysis)
+
+
+def run_correct(context, progress=_no_progress) -> dict:
+    """engine correction -> pose-bone scales -> re-analysis of Blender's own result."""
+    osteon = core.import_engine()
+    s = context.scene.osteon
+    # analyse from the user's own pose: undo a previous correction first (restored on error)
+    obj, arm = bridge.find_target(context)
+    had_previous = bridge.has_saved_pose(arm)
+    prev_ratios = bridge.correction_ratios(arm)
+    bridge.restore_pose(context, arm)
+    try:
+        inp = gather(context)
+        progress(0.2)
+        skeleton = engine_skeleton(osteon, inp)
+        try:
+            fix = osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
+                                 max_scale=float(s.max_scale), max_rounds=int(s.max_rounds),
+                                 **inp.params)
+        except ValueError as e:
+            raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
+        scales = {n: float(x) for n, x in zip(inp.skeleton.names, np.asarray(fix.bone_scale))}
+        bridge.apply_bone_scales(context, arm, scales)
+        progress(0.7)
+        after_inp = gather(context, mm_per_unit=inp.mm_per_unit)
+        after = analyze_inputs(osteon, after_inp, skeleton=None)
+    except Exception:  # leave the pose as it was before this call
+        bridge.restore_pose(context, arm)
+        if had_previous:
+            bridge.apply_bone_scales(context, arm, prev_ratios)
+        raise
+    report = publish(context, after_inp, after, correction=fix, first_analysis=fix.before)
+    report["warnings"] = correction_warnings(context, obj, arm)
+    return report
+
+
+def correction_warnings(context, obj, arm) -> list[str]:
+    """Cases where Blender's deformation of the pose scales differs from the engine's."""
+    out = []
+    for mod in obj.modifiers:
+        if mod.type == "ARMATURE" and mod.object is arm:
+            if mod.use_deform_preserve_volume:
+                out.append(f"'{obj.name}': the Armature modifier uses Preserve Volume (dual "
+                           "quaternions); the engine assumed linear blend skinning")
+            if not mod.use_vertex_groups:
+                out.append(f"'{obj.name}': the Armature modifier does not use vertex groups")
+            break
+    others = [o.name for o in bridge.meshes_of_armature(arm, context.scene) if o is not obj]
+    if others:
+        out.append(f"the pose scales also thicken {', '.join(sorted(others))}")
+    return out
+
+
+def run_reset(context) -> bool:
+    obj, arm = bridge.find_target(context)
+    restored = bridge.restore_pose(context, arm)
+    removed = bridge.remove_point_colors(obj.data)
+    clear_results(context)
+    return restored or removed
+
+
+def run_apply(context) -> dict:
+    """Bake the correction's pose scales into the mesh (the only step that edits the
+    mesh), restore the pose, and analyse the result."""
+    obj, arm = bridge.find_target(context)
+    ratios = bridge.correction_ratios(arm)
+    if not ratios:
+        raise OsteonError(f"Nothing to apply: armature '{arm.name}' carries no osteon correction "
+                          "(run Correct first)")
+    if obj.data.shape_keys is not None:
+        raise OsteonError(f"Mesh '{obj.name}' has shape keys: Apply would not update them; "
+                          "apply or remove the shape keys first")
+    if obj.data.users > 1:
+        raise OsteonError(f"Mesh data '{obj.data.name}' is shared by {obj.data.users} users; "
+                          "make it single-user first")
+    sk = bridge.skeleton_arrays(arm)
+    csr = bridge.vertex_weights_csr(obj, sk.names)
+    co = bridge.bake_scales_into_mesh(obj, arm, ratios, sk.names, csr)
+    bridge.set_local_positions(obj.data, co)
+    bridge.restore_pose(context, arm)
+    WEIGHTS.clear()
+    return run_analyze(context)

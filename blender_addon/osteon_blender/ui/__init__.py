@@ -1,0 +1,3 @@
+from . import panel, properties
+
+classes = properties.classes + panel.classes

@@ -1,0 +1,88 @@
+"""scene.osteon: the add-on's settings and last results (units in every name)."""
+
+import bpy
+from bpy.props import (
+    BoolProperty,
+    CollectionProperty,
+    EnumProperty,
+    FloatProperty,
+    IntProperty,
+    StringProperty,
+)
+
+from .. import core
+
+_MATERIAL_ITEMS = [(m.key, m.label, f"{m.note}; strength {m.strength_mpa:g} MPa")
+                   for m in core.MATERIALS]
+
+
+def _on_material(self, _context):
+    m = core.MATERIAL_BY_KEY.get(self.material)
+    if m is not None and m.key != "CUSTOM":
+        self.strength_mpa = m.strength_mpa
+
+
+def _on_bone_row(self, context):
+    """Clicking a row of the weak-bone list selects that bone."""
+    i = self.weak_bones_index
+    if not (0 <= i < len(self.weak_bones)):
+        return
+    arm = context.scene.objects.get(self.result_armature)
+    if arm is None or arm.type != "ARMATURE":
+        return
+    from ..ops.select_bone import select_bone
+
+    if self.weak_bones[i].name in arm.data.bones:
+        select_bone(context, arm, self.weak_bones[i].name)
+
+
+class OsteonBoneResult(bpy.types.PropertyGroup):
+    # name (StringProperty) comes with PropertyGroup: the bone name
+    max_stress_mpa: FloatProperty(name="Max stress (MPa)", description="Highest section stress "
+                                  "along the bone, MPa")
+    ratio: FloatProperty(name="Stress ratio", description="Max stress / allowable stress "
+                         "(> 1 = weak)")
+    weak: BoolProperty(name="Weak", description="Stress above the allowable stress now")
+    scale: FloatProperty(name="Scale", default=1.0, description="Cross-section scale applied by "
+                         "Correct (1 = unchanged)")
+
+
+class OsteonSettings(bpy.types.PropertyGroup):
+    material: EnumProperty(name="Material", items=_MATERIAL_ITEMS, default="PLA",
+                           update=_on_material, description="Print material preset: sets the "
+                           "strength (MPa)")
+    strength_mpa: FloatProperty(name="Strength (MPa)", default=60.0, min=0.001, soft_max=200.0,
+                                description="Tensile strength of the printed material, MPa")
+    safety_factor: FloatProperty(name="Safety factor", default=core.DEFAULT_SAFETY_FACTOR,
+                                 min=0.01, soft_max=10.0, description="Allowable stress = "
+                                 "strength / safety factor")
+    force_n: FloatProperty(name="Force (N)", default=20.0, min=0.0, soft_max=500.0,
+                           description="Force on the worst point of each branch, newtons")
+    size_mode: EnumProperty(name="Print size", items=core.SIZE_MODES, default="HEIGHT",
+                            description="How Blender units become mm of the printed object")
+    print_size_mm: FloatProperty(name="Printed size (mm)", default=120.0, min=0.001,
+                                 soft_max=1000.0, description="Printed height (or largest "
+                                 "dimension) of the model, mm")
+    interval_mm: FloatProperty(name="Section interval (mm)", default=2.0, min=0.01,
+                               soft_max=20.0, description="Distance between sections along a "
+                               "bone, mm of the printed object")
+    held_bone: StringProperty(name="Held bone", default="", description="Bone where the object "
+                              "is held (empty = the root bone)")
+    max_scale: FloatProperty(name="Max scale", default=3.0, min=1.0, soft_max=10.0,
+                             description="Largest cross-section scale Correct may give a bone")
+    max_rounds: IntProperty(name="Max rounds", default=100, min=1, soft_max=1000,
+                            description="Largest number of correction rounds")
+    # results of the last run
+    weak_bones: CollectionProperty(type=OsteonBoneResult)
+    weak_bones_index: IntProperty(default=-1, update=_on_bone_row)
+    has_result: BoolProperty(default=False)
+    result_object: StringProperty()
+    result_armature: StringProperty()
+    max_stress_mpa: FloatProperty(name="Max stress (MPa)")
+    allowable_mpa: FloatProperty(name="Allowable stress (MPa)")
+    sections: IntProperty(name="Sections")
+    weak_sections: IntProperty(name="Weak sections")
+    converged: BoolProperty(name="Converged")
+
+
+classes = (OsteonBoneResult, OsteonSettings)

@@ -1,0 +1,534 @@
+"""The ``osteon`` command: analyse, correct and validate rigged models from files.
+
+Units everywhere: millimetres of the printed object, newtons, MPa.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+#: Material presets: typical yield/tensile strength of printed parts, MPa (XY direction,
+#: manufacturers' data sheets; layer adhesion (Z) is often half of this — use --safety-factor).
+MATERIALS = {
+    "PLA": 60.0,
+    "PETG": 50.0,
+    "ABS": 40.0,
+    "resin": 45.0,
+    "nylon": 70.0,
+}
+DEFAULT_SAFETY_FACTOR = 1.0  # like the paper: the allowable stress is the material strength
+
+EXAMPLES = """\
+examples:
+  osteon analyze arm.obj --skeleton arm.tgf --weights arm-weights.dmat --height-mm 120 \\
+      --force 20 --material PLA --json report.json --png stress.png
+  osteon analyze Fox.glb --height-mm 80 --material PETG --safety-factor 2
+  osteon correct 2982_ori.obj --skeleton 2982_ori_rig.txt --force 30 --out fixed.obj
+  osteon validate elephant.obj --skeleton elephant.tgf --fem --sections 4 --json fem.json
+
+Model files: OBJ/OFF/PLY/STL with a TGF skeleton (+ DMAT weights) or a RigNet _rig.txt, or a
+skinned glTF/GLB. Sidecar files next to the mesh (NAME.tgf, NAME.dmat, NAME-weights.dmat,
+NAME_rig.txt) are found automatically.
+"""
+
+
+class CliError(Exception):
+    pass
+
+
+def _add_common(p: argparse.ArgumentParser):
+    g = p.add_argument_group("model")
+    g.add_argument("model", help="mesh (OBJ/OFF/PLY/STL) or skinned glTF/GLB file")
+    g.add_argument("--skeleton", metavar="FILE",
+                   help="skeleton: libigl TGF or RigNet _rig.txt (default: sidecar next to MODEL)")
+    g.add_argument("--weights", metavar="FILE",
+                   help="skinning weights, DMAT (columns = TGF bones); default: sidecar, else "
+                        "each vertex is bound to its nearest bone")
+    g.add_argument("--height-mm", type=float, default=120.0, metavar="MM",
+                   help="printed size in mm of the model's largest bounding-box side "
+                        "(default 120)")
+    g.add_argument("--axis", choices=["longest", "x", "y", "z"], default="longest",
+                   help="which model extent --height-mm sets (default: longest)")
+    a = p.add_argument_group("loads and material")
+    a.add_argument("--force", type=float, default=20.0, metavar="N",
+                   help="force in newtons on the worst point of each branch (default 20)")
+    a.add_argument("--material", default="PLA", metavar="NAME",
+                   help="material preset: " + ", ".join(f"{k} {v:g} MPa"
+                                                        for k, v in MATERIALS.items())
+                        + " (default PLA)")
+    a.add_argument("--strength-mpa", type=float, metavar="MPA",
+                   help="material strength in MPa (overrides the preset)")
+    a.add_argument("--safety-factor", type=float, default=DEFAULT_SAFETY_FACTOR, metavar="K",
+                   help="allowable stress = strength / K (default 1, as in the paper)")
+    a.add_argument("--interval", type=float, default=2.0, metavar="MM",
+                   help="distance in mm between sections along each bone (default 2)")
+    a.add_argument("--root", metavar="BONE",
+                   help="bone (name or index) held at its head (default: the main root bone)")
+    o = p.add_argument_group("output")
+    o.add_argument("--json", metavar="FILE", help="write a JSON report")
+    o.add_argument("--png", metavar="FILE", help="write a PNG of the stress map and chain plot")
+    o.add_argument("--top", type=int, default=10, metavar="K",
+                   help="bones listed in the terminal table (default 10)")
+    o.add_argument("-q", "--quiet", action="store_true", help="no table, no progress bars")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="osteon",
+        description="Find the parts of a rigged 3D model that will break once printed, and "
+                    "thicken them (skeleton-sectional analysis; mm, N, MPa).",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--version", action="version", version=f"osteon {_version()}")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    pa = sub.add_parser("analyze", help="section stresses, weak bones, report and picture",
+                        description="Analyse a rigged model: stress in every section along the "
+                                    "bones under a force on each branch, held at the root.")
+    _add_common(pa)
+    pc = sub.add_parser("correct", help="thicken weak bones until no section is weak",
+                        description="Analyse, then scale the cross-sections of weak bones "
+                                    "(their length kept) and write the corrected mesh in mm.")
+    _add_common(pc)
+    pc.add_argument("--out", metavar="FILE", required=True,
+                    help="corrected mesh (OBJ/OFF/PLY/STL), in mm at the printed size")
+    pc.add_argument("--max-scale", type=float, default=3.0, metavar="S",
+                    help="largest cross-section scale per bone (default 3)")
+    pc.add_argument("--max-rounds", type=int, default=100, metavar="N",
+                    help="most scaling rounds (default 100)")
+    pv = sub.add_parser("validate", help="check the input; with --fem compare with a FEM solve",
+                        description="Check the model (closed mesh, weights, bones inside); with "
+                                    "--fem cross-check section stresses with gmsh + CalculiX.")
+    _add_common(pv)
+    pv.add_argument("--fem", action="store_true",
+                    help="run the FEM cross-check (needs the gmsh and ccx programs)")
+    pv.add_argument("--sections", type=int, default=4, metavar="N",
+                    help="sections tested with FEM, at most one per bone (default 4)")
+    pv.add_argument("--mesh-size", type=float, metavar="MM",
+                    help="FEM element size away from the tested sections, mm "
+                         "(default: 1/40 of the model's diagonal)")
+    pv.add_argument("--threads", type=int, default=2, metavar="N",
+                    help="threads for gmsh and CalculiX (default 2)")
+    return p
+
+
+def _version():
+    try:
+        from importlib.metadata import version
+
+        return version("osteon")
+    except Exception:  # noqa: BLE001 - not installed as a distribution
+        return "unknown"
+
+
+def _allowable(args):
+    if args.strength_mpa is not None:
+        strength = args.strength_mpa
+        material = "custom"
+    else:
+        key = {k.lower(): k for k in MATERIALS}.get(args.material.lower())
+        if key is None:
+            raise ValueError(
+                f"unknown material {args.material!r}; choose one of {', '.join(MATERIALS)} "
+                "or give --strength-mpa"
+            )
+        strength, material = MATERIALS[key], key
+    if not (strength > 0 and np.isfinite(strength)):
+        raise ValueError(f"--strength-mpa must be a positive number of MPa, got {strength}")
+    if not (args.safety_factor > 0 and np.isfinite(args.safety_factor)):
+        raise ValueError(f"--safety-factor must be positive, got {args.safety_factor}")
+    return material, strength, strength / args.safety_factor
+
+
+class _Progress:
+    """A stage bar on stderr (tqdm), silent when quiet or not a terminal."""
+
+    def __init__(self, stages, quiet):
+        self.bar = None
+        if not quiet:
+            try:
+                from tqdm import tqdm
+
+                self.bar = tqdm(total=len(stages), desc=stages[0], unit="step", leave=False,
+                                disable=None, file=sys.stderr)
+            except ImportError:
+                self.bar = None
+        self.stages = stages
+        self.k = 0
+
+    def next(self, note=None):
+        self.k += 1
+        if self.bar is not None:
+            self.bar.update(1)
+            if self.k < len(self.stages):
+                self.bar.set_description(note or self.stages[self.k])
+
+    def write(self, msg):
+        if self.bar is not None:
+            self.bar.set_description(msg[:60])
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _load(args):
+    from .io import load_model
+
+    axis = None if args.axis == "longest" else args.axis
+    return load_model(args.model, skeleton=args.skeleton, weights=args.weights,
+                      height_mm=args.height_mm, axis=axis)
+
+
+def _root(args, model):
+    if args.root is None:
+        return None
+    if args.root.lstrip("-").isdigit():
+        return int(args.root)
+    if args.root not in model.bone_names:
+        raise ValueError(f"--root: no bone named {args.root!r}; bones: "
+                         + ", ".join(model.bone_names[:12]))
+    return args.root
+
+
+def _positive(v, name, unit):
+    if not (v > 0 and np.isfinite(v)):
+        raise ValueError(f"{name} must be a positive number of {unit}, got {v}")
+
+
+def bone_table(analysis, top=10, scales=None):
+    """Rows (worst first) of per-bone results: name, max stress, ratio, weak sections."""
+    names = analysis.bone_names
+    ok = np.isfinite(analysis.stress)
+    per = np.full(len(names), np.nan)
+    for b in range(len(names)):
+        sel = ok & (analysis.section_bone == b)
+        if sel.any():
+            per[b] = np.max(analysis.stress[sel])
+    order = [b for b in np.argsort(-np.nan_to_num(per, nan=-1.0)) if np.isfinite(per[b])]
+    rows = []
+    for b in order[:top]:
+        sel = analysis.section_bone == b
+        rows.append({
+            "bone": names[b],
+            "index": int(b),
+            "max_stress_mpa": float(per[b]),
+            "ratio": float(per[b] / analysis.allowable_stress),
+            "weak_sections": int(np.sum(analysis.weak & sel)),
+            "sections": int(np.sum(sel)),
+            **({"scale": float(scales[b])} if scales is not None else {}),
+        })
+    return rows
+
+
+def format_table(rows, allowable, scales=False):
+    head = f"{'bone':<28} {'max σ MPa':>10} {'σ/[σ]':>7} {'weak':>9}"
+    if scales:
+        head += f" {'scale':>6}"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        flag = "  WEAK" if r["ratio"] > 1 else ""
+        line = (f"{r['bone'][:28]:<28} {r['max_stress_mpa']:>10.2f} {r['ratio']:>7.2f} "
+                f"{r['weak_sections']:>4}/{r['sections']:<4}")
+        if scales:
+            line += f" {r['scale']:>6.3f}"
+        lines.append(line + flag)
+    lines.append(f"(allowable stress [σ] = {allowable:g} MPa)")
+    return "\n".join(lines)
+
+
+def _section_rows(a):
+    rows = []
+    for i in range(len(a.stress)):
+        rows.append({
+            "bone": a.bone_names[int(a.section_bone[i])],
+            "bone_index": int(a.section_bone[i]),
+            "param_mm": _f(getattr(a, "section_param", [np.nan] * (i + 1))[i]),
+            "center_mm": [_f(x) for x in a.section_center[i]],
+            "normal": [_f(x) for x in a.section_normal[i]],
+            "area_mm2": _f(a.section_area[i]),
+            "modulus_mm3": _f(a.section_modulus[i]),
+            "moment_arm_mm": _f(a.moment_arm[i]),
+            "moment_nmm": _f(a.moment[i]),
+            "stress_mpa": _f(a.stress[i]),
+            "culled": bool(a.culled[i]),
+            "weak": bool(a.weak[i]),
+        })
+    return rows
+
+
+def _f(x):
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def _report(args, model, material, strength, allowable, analysis, seconds):
+    return {
+        "model": str(args.model),
+        "units": {"length": "mm", "force": "N", "stress": "MPa"},
+        "height_mm": args.height_mm,
+        "scale_mm_per_file_unit": model.scale,
+        "vertices": len(model.vertices),
+        "faces": len(model.faces),
+        "bones": model.bone_names,
+        "material": material,
+        "strength_mpa": strength,
+        "safety_factor": args.safety_factor,
+        "allowable_stress_mpa": allowable,
+        "force_n": args.force,
+        "interval_mm": args.interval,
+        "max_stress_mpa": _f(analysis.max_stress),
+        "safe_modulus_mm3": _f(analysis.safe_modulus),
+        "sections": int(len(analysis.stress)),
+        "weak_sections": int(np.sum(analysis.weak)),
+        "culled_sections": int(np.sum(analysis.culled)),
+        "weak_bones": [
+            {k: r[k] for k in ("bone", "index", "max_stress_mpa", "ratio")}
+            for r in bone_table(analysis, top=10**9) if r["ratio"] > 1
+        ],
+        "bone_results": bone_table(analysis, top=10**9),
+        "analysis_seconds": seconds,
+        "section_table": _section_rows(analysis),
+    }
+
+
+def _write_json(path, data):
+    Path(path).write_text(json.dumps(data, indent=1, allow_nan=False))
+
+
+def _png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title=""):
+    from .plots import save_stress_png
+
+    save_stress_png(args.png, model.vertices if vertices is None else vertices, model.faces,
+                    analysis, model.heads, model.tails, model.parents, model.bone_names,
+                    allowable, title=title, before=before, marks=marks)
+
+
+def cmd_analyze(args, out):
+    import osteon
+
+    prog = _Progress(["reading model", "analysing", "writing outputs"], args.quiet)
+    try:
+        material, strength, allowable = _allowable(args)
+        _positive(args.force, "--force", "N")
+        _positive(args.interval, "--interval", "mm")
+        model = _load(args)
+        prog.next()
+        t = time.perf_counter()
+        a = osteon.analyze(model.vertices, model.faces, model.skeleton, model.weights,
+                           force=args.force, allowable_stress=allowable,
+                           interval=args.interval, root=_root(args, model))
+        secs = time.perf_counter() - t
+        prog.next()
+        rep = _report(args, model, material, strength, allowable, a, secs)
+        if args.json:
+            _write_json(args.json, rep)
+        if args.png:
+            _png(args, model, a, allowable,
+                 title=f"{Path(args.model).name}: F = {args.force:g} N, {material} "
+                       f"[σ] = {allowable:g} MPa")
+        prog.next()
+    finally:
+        prog.close()
+    if not args.quiet:
+        print(f"{Path(args.model).name}: {len(model.vertices)} vertices, {len(model.faces)} "
+              f"faces, {model.n_bones} bones, size {args.height_mm:g} mm", file=out)
+        print(f"{len(a.stress)} sections in {1000 * secs:.1f} ms; max stress "
+              f"{a.max_stress:.2f} MPa; {int(np.sum(a.weak))} weak, {int(np.sum(a.culled))} "
+              "culled (safe for sure)", file=out)
+        print(format_table(bone_table(a, args.top), allowable), file=out)
+    return 0
+
+
+def cmd_correct(args, out):
+    import osteon
+
+    from .io import write_mesh
+
+    prog = _Progress(["reading model", "correcting", "writing outputs"], args.quiet)
+    try:
+        material, strength, allowable = _allowable(args)
+        _positive(args.force, "--force", "N")
+        _positive(args.interval, "--interval", "mm")
+        if not (args.max_scale >= 1):
+            raise ValueError(f"--max-scale must be >= 1, got {args.max_scale}")
+        if Path(args.out).suffix.lower() not in (".obj", ".off", ".ply", ".stl"):
+            raise ValueError(f"--out {args.out}: use an .obj, .off, .ply or .stl file name")
+        model = _load(args)
+        prog.next()
+        t = time.perf_counter()
+        fix = osteon.correct(model.vertices, model.faces, model.skeleton, model.weights,
+                             force=args.force, allowable_stress=allowable,
+                             interval=args.interval, root=_root(args, model),
+                             max_scale=args.max_scale, max_rounds=args.max_rounds)
+        secs = time.perf_counter() - t
+        prog.next()
+        write_mesh(args.out, fix.vertices, model.faces)
+        rounds = fix.rounds if isinstance(fix.rounds, int) else len(fix.rounds)
+        if args.json:
+            rep = _report(args, model, material, strength, allowable, fix.after, secs)
+            rep.update({
+                "converged": bool(fix.converged),
+                "rounds": rounds,
+                "reason": getattr(fix, "reason", ""),
+                "bone_scale": [float(s) for s in fix.bone_scale],
+                "max_stress_before_mpa": _f(fix.before.max_stress),
+                "output": str(args.out),
+                "before": {"max_stress_mpa": _f(fix.before.max_stress),
+                           "weak_sections": int(np.sum(fix.before.weak)),
+                           "bone_results": bone_table(fix.before, 10**9)},
+            })
+            before_tab = {r["bone"]: r["max_stress_mpa"] for r in bone_table(fix.before, 10**9)}
+            rep["weak_bones"] = [
+                {"bone": model.bone_names[b], "index": int(b),
+                 "max_stress_mpa": before_tab.get(model.bone_names[b]),
+                 "scale": float(fix.bone_scale[b])}
+                for b in np.flatnonzero(np.asarray(fix.bone_scale) != 1.0)
+            ]
+            _write_json(args.json, rep)
+        if args.png:
+            _png(args, model, fix.after, allowable, before=fix.before, vertices=fix.vertices,
+                 title=f"{Path(args.model).name} corrected: F = {args.force:g} N, "
+                       f"[σ] = {allowable:g} MPa")
+        prog.next()
+    finally:
+        prog.close()
+    if not args.quiet:
+        status = "converged" if fix.converged else "NOT converged"
+        print(f"{Path(args.model).name}: max stress {fix.before.max_stress:.2f} -> "
+              f"{fix.after.max_stress:.2f} MPa ([σ] = {allowable:g} MPa); {rounds} rounds, "
+              f"{status} in {1000 * secs:.1f} ms", file=out)
+        reason = getattr(fix, "reason", "")
+        if reason and not fix.converged:
+            print(f"why: {reason}", file=out)
+        print(format_table(bone_table(fix.after, args.top, scales=fix.bone_scale), allowable,
+                           scales=True), file=out)
+        print(f"corrected mesh written to {args.out}", file=out)
+    return 0 if fix.converged else 1
+
+
+def cmd_validate(args, out):
+    import osteon
+
+    stages = ["reading model", "analysing"] + (["meshing + solving (FEM)"] if args.fem else [])
+    prog = _Progress(stages + ["writing outputs"], args.quiet)
+    try:
+        material, strength, allowable = _allowable(args)
+        _positive(args.force, "--force", "N")
+        model = _load(args)
+        checks = model_checks(model)
+        prog.next()
+        t = time.perf_counter()
+        a = osteon.analyze(model.vertices, model.faces, model.skeleton, model.weights,
+                           force=args.force, allowable_stress=allowable,
+                           interval=args.interval, root=_root(args, model))
+        secs = time.perf_counter() - t
+        prog.next()
+        rep = {"model": str(args.model), "checks": checks, "analysis_seconds": secs,
+               "max_stress_mpa": _f(a.max_stress), "allowable_stress_mpa": allowable,
+               "force_n": args.force, "sections": int(len(a.stress))}
+        fem_rep = None
+        if args.fem:
+            from . import fem
+
+            if not checks["watertight"]:
+                raise ValueError(f"{args.model}: the mesh is not closed; FEM needs a closed mesh")
+            tools = fem.find_tools()
+            missing = [k for k, v in tools.items() if v is None]
+            if missing:
+                raise ValueError("--fem needs the programs " + " and ".join(missing)
+                                 + " (apt-get install gmsh calculix-ccx)")
+            secs_list = fem.pick_sections(a, model.heads, model.tails, n=args.sections)
+            if not secs_list:
+                raise ValueError("no section suitable for the FEM check (all near joints, the "
+                                 "held region or too stubby)")
+            t = time.perf_counter()
+            fem_rep = fem.cross_check(model.vertices, model.faces, secs_list, force=args.force,
+                                      hold_point=fem.hold_point(a, model.heads),
+                                      mesh_size=args.mesh_size, threads=args.threads,
+                                      progress=prog.write)
+            rep["fem"] = fem_rep.as_dict()
+            rep["fem"]["seconds"] = time.perf_counter() - t
+            prog.next()
+        if args.json:
+            _write_json(args.json, rep)
+        if args.png:
+            marks = None if fem_rep is None else [s.center for s in fem_rep.sections]
+            _png(args, model, a, allowable, marks=marks,
+                 title=f"{Path(args.model).name}: F = {args.force:g} N")
+            if fem_rep is not None:
+                from .plots import save_fem_png
+
+                p = Path(args.png)
+                save_fem_png(p.with_name(p.stem + "_fem" + p.suffix), fem_rep)
+        prog.next()
+    finally:
+        prog.close()
+    if not args.quiet:
+        for k, v in checks.items():
+            print(f"{k:<24} {v}", file=out)
+        print(f"analysis: {len(a.stress)} sections in {1000 * secs:.1f} ms", file=out)
+        if fem_rep is not None:
+            print(format_fem_table(fem_rep, a.bone_names), file=out)
+    return 0
+
+
+def format_fem_table(rep, bone_names):
+    head = (f"{'#':>2} {'bone':<22} {'arm mm':>7} {'osteon MPa':>11} {'FEM MPa':>9} "
+            f"{'error':>7}")
+    lines = [head, "-" * len(head)]
+    for i, s in enumerate(rep.sections, 1):
+        name = bone_names[s.bone] if 0 <= s.bone < len(bone_names) else str(s.bone)
+        lines.append(f"{i:>2} {name[:22]:<22} {s.moment_arm_mm:>7.1f} {s.osteon_stress_mpa:>11.2f} "
+                     f"{s.fem_stress_mpa:>9.2f} {100 * s.rel_error:>+6.1f}%")
+    lines.append(f"median |error| {100 * rep.median_error:.1f} %, worst {100 * rep.worst_error:.1f} %"
+                 f"; FEM {rep.nodes} nodes, {rep.elements} C3D10 tets, mesh "
+                 f"{rep.mesh_seconds:.1f} s + solve {rep.solve_seconds:.1f} s")
+    return "\n".join(lines)
+
+
+def model_checks(model):
+    """Cheap input checks: closed mesh, pieces, weights, bones inside the bounding box."""
+    import trimesh
+
+    m = trimesh.Trimesh(model.vertices, model.faces, process=False)
+    res = {
+        "vertices": len(model.vertices),
+        "faces": len(model.faces),
+        "bones": model.n_bones,
+        "watertight": bool(m.is_watertight),
+        "pieces": int(m.body_count),
+        "size_mm": [round(float(x), 3) for x in model.vertices.max(0) - model.vertices.min(0)],
+    }
+    if model.weights is not None:
+        s = np.asarray(model.weights.sum(axis=1)).ravel()
+        res["unweighted_vertices"] = int(np.sum(s == 0))
+        res["weight_rows_sum_to_1"] = bool(np.allclose(s[s > 0], 1.0))
+    else:
+        res["weights"] = "none (nearest bone)"
+    return res
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate}
+    try:
+        return handler[args.command](args, sys.stdout)
+    except (ValueError, FileNotFoundError, RuntimeError) as e:
+        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        print(f"osteon: error: {msg}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("osteon: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

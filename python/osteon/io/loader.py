@@ -1,0 +1,143 @@
+"""Mesh reading/writing (trimesh) and :func:`load_model`, the one-call reader."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+from .libigl import read_dmat, read_tgf
+from .model import RiggedModel, normalize_rows
+
+MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl")
+GLTF_EXTENSIONS = (".gltf", ".glb")
+
+
+def _exists(path, what):
+    p = Path(os.fspath(path))
+    if not p.is_file():
+        raise ValueError(f"{what} not found: {p}")
+    return p
+
+
+def read_mesh(path):
+    """Read a triangle mesh (OBJ/OFF/PLY/STL) → ``(vertices (V,3) float64, faces (F,3) int32)``.
+
+    The file's vertex order is kept (no merging or reordering) so that skinning weights given
+    per vertex still line up; polygons are triangulated by trimesh.
+    """
+    p = _exists(path, "mesh file")
+    ext = p.suffix.lower()
+    if ext not in MESH_EXTENSIONS:
+        raise ValueError(
+            f"{p}: unknown mesh format {ext!r}; supported: "
+            + ", ".join(MESH_EXTENSIONS + GLTF_EXTENSIONS)
+        )
+    import trimesh
+
+    try:
+        m = trimesh.load(str(p), file_type=ext[1:], process=False, maintain_order=True,
+                         force="mesh")
+    except Exception as e:  # noqa: BLE001 - trimesh loaders raise many kinds
+        raise ValueError(f"{p}: cannot read mesh ({type(e).__name__}: {e})") from None
+    if not isinstance(m, trimesh.Trimesh) or len(m.faces) == 0:
+        raise ValueError(f"{p}: no triangles found in the mesh file")
+    return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int32)
+
+
+def write_mesh(path, vertices, faces):
+    """Write a triangle mesh; the format follows the extension (OBJ/OFF/PLY/STL)."""
+    import trimesh
+
+    ext = Path(path).suffix.lower()
+    if ext not in MESH_EXTENSIONS:
+        raise ValueError(f"{path}: cannot write mesh format {ext!r}; use one of {MESH_EXTENSIONS}")
+    m = trimesh.Trimesh(np.asarray(vertices), np.asarray(faces), process=False)
+    m.export(str(path), file_type=ext[1:])
+
+
+def _sidecar(mesh: Path, suffixes):
+    stem = mesh.with_suffix("")
+    folder = mesh.parent
+    names = {f.name.lower(): f for f in folder.iterdir()} if folder.is_dir() else {}
+    for s in suffixes:
+        cand = (stem.name + s).lower()
+        if cand in names:
+            return names[cand]
+    return None
+
+
+def load_model(path, skeleton=None, weights=None, height_mm: float | None = 120.0,
+               axis=None) -> RiggedModel:
+    """Read a rigged model and scale it to a printed size in millimetres.
+
+    Parameters
+    ----------
+    path : mesh file (OBJ/OFF/PLY/STL) or skinned glTF (.gltf/.glb).
+    skeleton : TGF or RigNet ``_rig.txt`` file. If omitted for a mesh file, ``NAME.tgf`` or
+        ``NAME_rig.txt`` next to the mesh is used.
+    weights : DMAT file (columns = TGF bones). If omitted with a TGF skeleton, ``NAME.dmat``,
+        ``NAME-weights.dmat`` or ``NAME_weights.dmat`` next to the mesh is used; without any
+        weights the model has ``weights=None`` (osteon then binds each vertex to its nearest bone).
+    height_mm : printed size in mm of the model's largest bounding-box extent (or of its extent
+        along ``axis``: 'x', 'y' or 'z'); ``None`` keeps the file's units.
+
+    Raises ValueError naming the problem for missing files, unknown formats, bad skeleton files
+    and weights that do not match the vertex or bone count.
+    """
+    p = _exists(path, "model file")
+    ext = p.suffix.lower()
+    notes = []
+    if ext in GLTF_EXTENSIONS:
+        if skeleton is not None or weights is not None:
+            raise ValueError(f"{p}: a glTF file carries its own skin; do not pass a skeleton or "
+                             "weights file")
+        from .gltf import read_gltf
+
+        V, F, heads, tails, parents, names, W = read_gltf(p)
+        m = RiggedModel(V, F, heads, tails, parents, names, W, source=str(p), notes=notes)
+        return m.scaled_to(height_mm, axis)
+    V, F = read_mesh(p)
+    if skeleton is None:
+        skeleton = _sidecar(p, [".tgf", "_rig.txt"])
+        if skeleton is None:
+            raise ValueError(
+                f"{p}: no skeleton given and no {p.stem}.tgf or {p.stem}_rig.txt next to it; "
+                "pass a skeleton file (TGF or RigNet _rig.txt)"
+            )
+        notes.append(f"skeleton: {skeleton}")
+    sk = _exists(skeleton, "skeleton file")
+    sname = sk.name.lower()
+    if sname.endswith(".tgf"):
+        _, _, heads, tails, parents = read_tgf(sk)
+        names = [f"bone_{i}" for i in range(len(parents))]
+        W = None
+        if weights is None:
+            weights = _sidecar(p, [".dmat", "-weights.dmat", "_weights.dmat"])
+            if weights is not None:
+                notes.append(f"weights: {weights}")
+        if weights is not None:
+            wp = _exists(weights, "weights file")
+            if not wp.name.lower().endswith(".dmat"):
+                raise ValueError(f"{wp}: weights must be a DMAT file")
+            Wd = read_dmat(wp)
+            if Wd.shape != (len(V), len(parents)):
+                raise ValueError(
+                    f"{wp}: weights are {Wd.shape[0]} rows x {Wd.shape[1]} columns but the mesh "
+                    f"has {len(V)} vertices and the skeleton {len(parents)} bones"
+                )
+            W = normalize_rows(sp.csr_matrix(Wd))
+    elif sname.endswith(".txt"):
+        if weights is not None:
+            raise ValueError(f"{sk}: a RigNet rig carries its own skin weights; do not pass a "
+                             "weights file")
+        from .rignet import read_rignet_rig, rignet_skeleton
+
+        rig = read_rignet_rig(sk)
+        heads, tails, parents, names, W = rignet_skeleton(rig, V)
+    else:
+        raise ValueError(f"{sk}: unknown skeleton format; use a .tgf or a RigNet _rig.txt file")
+    m = RiggedModel(V, F, heads, tails, parents, names, W, source=str(p), notes=notes)
+    return m.scaled_to(height_mm, axis)

@@ -1,0 +1,290 @@
+"""The :class:`RiggedModel` dataclass shared by all readers, and the joint-tree → bone mapping.
+
+Units: whatever the file uses until :meth:`RiggedModel.scaled_to` is called; after that,
+millimetres of the printed object.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+
+@dataclass
+class RiggedModel:
+    """A triangle mesh with a skeleton and skinning weights.
+
+    Attributes
+    ----------
+    vertices : (V, 3) float64 — positions (mm after scaling).
+    faces : (F, 3) int32 — triangle vertex indices, 0-based.
+    heads, tails : (B, 3) float64 — bone head / tail positions, same units as ``vertices``.
+    parents : (B,) int64 — parent bone index, -1 for a root bone.
+    bone_names : list of B str.
+    weights : scipy.sparse.csr_matrix (V, B) or None — rows sum to 1 (rows of unweighted
+        vertices are all zero).
+    scale : float — factor applied to the file's coordinates (mm per file unit), 1.0 if unscaled.
+    source : str — path of the file the model was read from.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    heads: np.ndarray
+    tails: np.ndarray
+    parents: np.ndarray
+    bone_names: list[str]
+    weights: sp.csr_matrix | None = None
+    scale: float = 1.0
+    source: str = ""
+    notes: list[str] = field(default_factory=list)
+
+    def __post_init__(self):
+        self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64).reshape(-1, 3)
+        self.faces = np.ascontiguousarray(self.faces, dtype=np.int32).reshape(-1, 3)
+        self.heads = np.ascontiguousarray(self.heads, dtype=np.float64).reshape(-1, 3)
+        self.tails = np.ascontiguousarray(self.tails, dtype=np.float64).reshape(-1, 3)
+        self.parents = np.ascontiguousarray(self.parents, dtype=np.int64).reshape(-1)
+        self.bone_names = [str(n) for n in self.bone_names]
+        validate_model(self)
+
+    @property
+    def n_bones(self) -> int:
+        return len(self.parents)
+
+    @property
+    def skeleton(self):
+        """The skeleton as an ``osteon.Skeleton`` (built on first use)."""
+        import osteon
+
+        return osteon.Skeleton(self.heads, self.tails, self.parents, names=list(self.bone_names))
+
+    def scaled_to(self, height_mm: float | None = 120.0, axis: str | int | None = None):
+        """Return a copy scaled uniformly (about the origin) so that the model's size is
+        ``height_mm`` millimetres.
+
+        The size is the largest bounding-box extent of the mesh, or its extent along ``axis``
+        (0/1/2 or 'x'/'y'/'z') if given. ``height_mm=None`` returns the model unchanged.
+        """
+        if height_mm is None:
+            return self
+        if not np.isfinite(height_mm) or height_mm <= 0:
+            raise ValueError(f"height_mm must be a positive number of millimetres, got {height_mm}")
+        ext = self.vertices.max(axis=0) - self.vertices.min(axis=0)
+        if axis is None or axis == "longest":
+            size = float(ext.max())
+        else:
+            ax = {"x": 0, "y": 1, "z": 2}.get(axis, axis)
+            if ax not in (0, 1, 2):
+                raise ValueError(f"axis must be one of x, y, z or longest, got {axis!r}")
+            size = float(ext[ax])
+        if size <= 0:
+            raise ValueError("mesh has zero size along the requested axis; cannot scale it")
+        s = float(height_mm) / size
+        return replace(
+            self,
+            vertices=self.vertices * s,
+            heads=self.heads * s,
+            tails=self.tails * s,
+            scale=self.scale * s,
+            notes=list(self.notes),
+        )
+
+
+def validate_model(m: RiggedModel) -> None:
+    """Raise ValueError naming the problem if the arrays do not fit together."""
+    V, B = len(m.vertices), len(m.parents)
+    if V == 0 or len(m.faces) == 0:
+        raise ValueError(f"{m.source or 'model'}: empty mesh ({V} vertices, {len(m.faces)} faces)")
+    if not np.all(np.isfinite(m.vertices)):
+        raise ValueError(f"{m.source or 'model'}: vertex coordinates contain NaN or inf")
+    if m.faces.min() < 0 or m.faces.max() >= V:
+        raise ValueError(f"{m.source or 'model'}: face index out of range 0..{V - 1}")
+    if len(m.heads) != B or len(m.tails) != B or len(m.bone_names) != B:
+        raise ValueError(
+            f"{m.source or 'model'}: skeleton arrays disagree: {len(m.heads)} heads, "
+            f"{len(m.tails)} tails, {B} parents, {len(m.bone_names)} names"
+        )
+    if B and (m.parents.min() < -1 or m.parents.max() >= B):
+        raise ValueError(f"{m.source or 'model'}: bone parent index out of range")
+    if m.weights is not None:
+        w = m.weights
+        if w.shape != (V, B):
+            raise ValueError(
+                f"{m.source or 'model'}: weights have shape {w.shape[0]}x{w.shape[1]} but the "
+                f"mesh has {V} vertices and the skeleton {B} bones"
+            )
+
+
+def normalize_rows(w) -> sp.csr_matrix:
+    """CSR copy of ``w`` with negative/NaN entries dropped and each non-empty row summing to 1."""
+    w = sp.csr_matrix(w, dtype=np.float64)
+    w.data[~np.isfinite(w.data)] = 0.0
+    w.data[w.data < 0] = 0.0
+    w.eliminate_zeros()
+    s = np.asarray(w.sum(axis=1)).ravel()
+    inv = np.zeros_like(s)
+    inv[s > 0] = 1.0 / s[s > 0]
+    w = sp.diags(inv) @ w
+    return sp.csr_matrix(w)
+
+
+def bones_from_joint_tree(
+    positions: np.ndarray,
+    joint_parent: np.ndarray,
+    joint_names: list[str],
+    degenerate: np.ndarray | None = None,
+    rel_eps: float = 1e-6,
+):
+    """Turn a joint tree into bones and a joint → bone weight map.
+
+    Mapping (used for RigNet ``_rig.txt`` and glTF skins, where weights belong to joints):
+
+    * one bone per tree edge parent joint → child joint, head at the parent, tail at the child;
+    * an edge whose child coincides with its parent (distance below ``rel_eps`` × joint
+      bounding-box diagonal, or flagged in ``degenerate``, e.g. RigNet ``root_dup_*`` joints) is
+      not a bone: the child is merged into the parent, and the child's own outgoing bones start
+      at the child's position;
+    * the bone's parent is the bone that ends at its head joint (through merged joints),
+      -1 if none;
+    * a joint's skin weight drives the region *after* the joint (the way FBX/glTF/Blender skins
+      work: a joint's transform moves the limb segment from that joint to its child), so the
+      weight of joint j goes to the bone(s) leaving j; if several bones leave j, each vertex's
+      weight goes to the nearest of those bones; a leaf joint (no bone leaves it) gives its
+      weight to the bone ending at it.
+
+    Returns ``heads, tails, parents, names, joint_targets`` where ``joint_targets[j]`` is the list
+    of bone indices that joint j's weight may go to.
+    """
+    P = np.asarray(positions, dtype=np.float64)
+    J = len(P)
+    jp = np.asarray(joint_parent, dtype=np.int64)
+    diag = float(np.linalg.norm(P.max(0) - P.min(0))) if J else 0.0
+    eps = rel_eps * max(diag, 1e-300)
+    if degenerate is None:
+        degenerate = np.zeros(J, dtype=bool)
+    # An edge p -> j is degenerate when j is flagged or coincides with p.
+    degen_edge = np.zeros(J, dtype=bool)
+    for j in range(J):
+        p = jp[j]
+        if p >= 0 and (degenerate[j] or np.linalg.norm(P[j] - P[p]) <= eps):
+            degen_edge[j] = True
+    children = [[] for _ in range(J)]
+    for j in range(J):
+        if jp[j] >= 0:
+            children[jp[j]].append(j)
+    # bones: non-degenerate edges
+    edge_child = [j for j in range(J) if jp[j] >= 0 and not degen_edge[j]]
+    bone_of_child = {j: b for b, j in enumerate(edge_child)}
+
+    def outgoing(j):
+        """Non-degenerate edges leaving j or joints merged into j."""
+        out, stack = [], [j]
+        while stack:
+            k = stack.pop()
+            for c in children[k]:
+                if degen_edge[c]:
+                    stack.append(c)
+                else:
+                    out.append(bone_of_child[c])
+        return out
+
+    def incoming(j):
+        """The bone ending at j (following merged joints up)."""
+        k = j
+        while k >= 0 and degen_edge[k]:
+            k = jp[k]
+        if k >= 0 and jp[k] >= 0:
+            return bone_of_child[k]
+        return -1
+
+    heads = np.array([P[jp[c]] for c in edge_child]).reshape(-1, 3)
+    tails = np.array([P[c] for c in edge_child]).reshape(-1, 3)
+    parents = np.array([incoming(jp[c]) for c in edge_child], dtype=np.int64)
+    names = []
+    for c in edge_child:
+        start = jp[c]
+        if len(outgoing(start)) == 1:
+            names.append(joint_names[start])
+        else:
+            names.append(f"{joint_names[start]}->{joint_names[c]}")
+    if len(set(names)) != len(names):  # fall back to edge names, always unique in a tree
+        names = [f"{joint_names[jp[c]]}->{joint_names[c]}" for c in edge_child]
+    targets = []
+    for j in range(J):
+        # a dup/merged joint drives only its own outgoing bones
+        out = outgoing(j)
+        if out:
+            targets.append(out)
+        else:
+            b = incoming(j)
+            targets.append([b] if b >= 0 else [])
+    return heads, tails, parents, names, targets
+
+
+def joint_weights_to_bones(
+    vertices: np.ndarray,
+    rows: np.ndarray,
+    joints: np.ndarray,
+    values: np.ndarray,
+    targets: list[list[int]],
+    heads: np.ndarray,
+    tails: np.ndarray,
+    joint_names: list[str] | None = None,
+) -> sp.csr_matrix:
+    """Map per-joint weights (COO triplets) to per-bone weights with ``targets`` from
+    :func:`bones_from_joint_tree`; a joint with several target bones gives each vertex's weight
+    to the nearest of them (distance from the vertex to the bone segment)."""
+    V, B = len(vertices), len(heads)
+    rows = np.asarray(rows, dtype=np.int64)
+    joints = np.asarray(joints, dtype=np.int64)
+    values = np.asarray(values, dtype=np.float64)
+    out_bone = np.full(len(rows), -1, dtype=np.int64)
+    for j in np.unique(joints):
+        sel = np.nonzero(joints == j)[0]
+        tg = targets[j]
+        if not tg:
+            name = joint_names[j] if joint_names else str(j)
+            raise ValueError(f"joint {name!r} has skin weights but no bone starts or ends at it")
+        if len(tg) == 1:
+            out_bone[sel] = tg[0]
+            continue
+        x = vertices[rows[sel]]
+        d = np.empty((len(sel), len(tg)))
+        for k, b in enumerate(tg):
+            a, e = heads[b], tails[b]
+            ab = e - a
+            t = np.clip(((x - a) @ ab) / max(ab @ ab, 1e-300), 0.0, 1.0)
+            d[:, k] = np.linalg.norm(x - (a + t[:, None] * ab), axis=1)
+        out_bone[sel] = np.asarray(tg)[np.argmin(d, axis=1)]
+    w = sp.coo_matrix((values, (rows, out_bone)), shape=(V, B)).tocsr()
+    w.sum_duplicates()
+    return normalize_rows(w)
+
+
+def drop_unweighted_roots(heads, tails, parents, names, weights):
+    """Remove root bones that carry no skin weight at all (e.g. a glTF ``Root`` bone running
+    from the floor to the hips), repeatedly; their children become roots. Returns the reduced
+    ``heads, tails, parents, names, weights, dropped_names``."""
+    parents = np.asarray(parents).copy()
+    B = len(parents)
+    colsum = np.asarray(abs(weights).sum(axis=0)).ravel()
+    keep = np.ones(B, dtype=bool)
+    changed = True
+    while changed:
+        changed = False
+        for b in range(B):
+            if keep[b] and colsum[b] == 0 and (parents[b] < 0 or not keep[parents[b]]):
+                if keep.sum() <= 1:
+                    break
+                keep[b] = False
+                changed = True
+    idx = np.nonzero(keep)[0]
+    new_of_old = np.full(B, -1, dtype=np.int64)
+    new_of_old[idx] = np.arange(len(idx))
+    newp = np.array([new_of_old[parents[b]] if parents[b] >= 0 else -1 for b in idx],
+                    dtype=np.int64)
+    dropped = [names[b] for b in range(B) if not keep[b]]
+    return (heads[idx], tails[idx], newp, [names[b] for b in idx],
+            sp.csr_matrix(weights)[:, idx], dropped)

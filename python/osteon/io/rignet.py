@@ -1,0 +1,118 @@
+"""RigNet ``*_rig.txt`` rigs (ModelsResource-RigNetv1).
+
+Lines: ``joints NAME x y z``, ``root NAME``, ``hier PARENT CHILD``,
+``skin VERTEX_ID J1 W1 J2 W2 …`` (0-based vertex ids in the ``v`` order of the matching OBJ).
+
+Joints become bones as described in :func:`osteon.io.model.bones_from_joint_tree`: one bone per
+``hier`` edge, head at the parent joint; duplicated joints (``NAME_dup_K``, at nearly the position
+of their parent, RigNet's way of giving a branching joint one bone per child) are merged into
+their parent, so each ``X_dup_K`` starts the bone towards its own child and is named after it;
+a joint's skin weight goes to the bone leaving it (nearest of several if it branches), a leaf
+joint's weight to the bone ending at it.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+
+import numpy as np
+
+from .model import bones_from_joint_tree, drop_unweighted_roots, joint_weights_to_bones
+
+_DUP = re.compile(r"_dup_\d+$")
+
+
+def read_rignet_rig(path):
+    """Parse a RigNet rig file → dict with joint names, positions, parent per joint, root name and
+    skin triplets (rows, joint indices, values)."""
+    path = os.fspath(path)
+    names, pos, hier, root = [], [], [], None
+    rows, jn, vals = [], [], []
+    index: dict[str, int] = {}
+    try:
+        with open(path) as f:
+            text = f.read()
+    except (OSError, UnicodeDecodeError) as e:
+        raise ValueError(f"{path}: cannot read rig file ({e})") from None
+    for ln, line in enumerate(text.splitlines(), 1):
+        t = line.split()
+        if not t:
+            continue
+        try:
+            key = t[0]
+            if key == "joints":
+                if t[1] not in index:  # RigNet files list the joints twice
+                    index[t[1]] = len(names)
+                    names.append(t[1])
+                    pos.append([float(t[2]), float(t[3]), float(t[4])])
+            elif key == "root":
+                root = t[1]
+            elif key == "hier":
+                hier.append((t[1], t[2]))
+            elif key == "skin":
+                v = int(t[1])
+                if (len(t) - 2) % 2:
+                    raise ValueError
+                for k in range(2, len(t), 2):
+                    rows.append(v)
+                    jn.append(t[k])
+                    vals.append(float(t[k + 1]))
+            else:
+                raise ValueError
+        except (ValueError, IndexError):
+            raise ValueError(
+                f"{path}:{ln}: not a RigNet rig line (joints/root/hier/skin): {line.strip()[:60]!r}"
+            ) from None
+    if not names:
+        raise ValueError(f"{path}: no 'joints' lines (not a RigNet _rig.txt file?)")
+    parent = np.full(len(names), -1, dtype=np.int64)
+    for p, c in hier:
+        if p not in index or c not in index:
+            raise ValueError(f"{path}: 'hier {p} {c}' names an undeclared joint")
+        if parent[index[c]] >= 0:
+            raise ValueError(f"{path}: joint {c!r} has two parents")
+        parent[index[c]] = index[p]
+    for k in range(len(names)):  # cycle check
+        j, steps = k, 0
+        while j >= 0:
+            j = parent[j]
+            steps += 1
+            if steps > len(names):
+                raise ValueError(f"{path}: the joint hierarchy has a cycle")
+    if root is not None and root not in index:
+        raise ValueError(f"{path}: root joint {root!r} is not declared")
+    unknown = sorted({j for j in jn if j not in index})
+    if unknown:
+        raise ValueError(f"{path}: skin lines name undeclared joints {unknown[:5]}")
+    return {
+        "names": names,
+        "positions": np.asarray(pos, dtype=np.float64),
+        "parent": parent,
+        "root": root,
+        "skin_rows": np.asarray(rows, dtype=np.int64),
+        "skin_joints": np.asarray([index[j] for j in jn], dtype=np.int64),
+        "skin_values": np.asarray(vals, dtype=np.float64),
+    }
+
+
+def rignet_skeleton(rig, vertices):
+    """Bones and (V, B) bone weights from a parsed rig and the mesh vertices."""
+    names = rig["names"]
+    dup = np.array([bool(_DUP.search(n)) for n in names])
+    heads, tails, parents, bnames, targets = bones_from_joint_tree(
+        rig["positions"], rig["parent"], names, degenerate=dup
+    )
+    if len(heads) == 0:
+        raise ValueError("RigNet rig has no bones (a single joint or only duplicated joints)")
+    V = len(vertices)
+    r = rig["skin_rows"]
+    if len(r) and (r.min() < 0 or r.max() >= V):
+        raise ValueError(
+            f"RigNet skin line refers to vertex {int(r.max())} but the mesh has {V} vertices"
+        )
+    w = joint_weights_to_bones(
+        vertices, r, rig["skin_joints"], rig["skin_values"], targets, heads, tails, names
+    )
+    heads, tails, parents, bnames, w, _ = drop_unweighted_roots(heads, tails, parents, bnames, w)
+    return heads, tails, parents, bnames, w

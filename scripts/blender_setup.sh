@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# Prepares both Blenders for the osteon add-on (idempotent; used by blender_tests.sh, demo.sh
+# and CI):
+#  1. apt: Debian's blender and the system-Python modules it imports (python3-numpy,
+#     python3-scipy, python3-pytest): Debian's Blender 3.4.1 runs on the system Python 3.11.
+#  2. the engine wheel and the add-on zips in dist/ (scripts/build_addon.py), rebuilt only
+#     when engine sources are newer than the wheel.
+#  3. Debian's Blender imports the engine from /usr/local/lib/python3.X/dist-packages, which is
+#     on its sys.path: `pip install --no-deps --target` of the wheel there.
+#  4. the bpy 4.5 wheel in its own venv (.venv-bpy: bpy==4.5.*, pytest, scipy, osteon wheel).
+# Env: OSTEON_PYTHON (builds the wheel; default .venv/bin/python), OSTEON_BPY_VENV,
+#      OSTEON_BLENDER_SITE (where Debian's Blender gets the engine), OSTEON_SKIP_BPY=1.
+set -euo pipefail
+ROOT="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$ROOT"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+log() { echo "[blender_setup] $*"; }
+
+# 1. Debian packages ---------------------------------------------------------------------
+missing=()
+for p in blender python3-numpy python3-scipy python3-pytest; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  log "apt-get install ${missing[*]}"
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+# 2. engine wheel + add-on zips ----------------------------------------------------------
+PY="${OSTEON_PYTHON:-$ROOT/.venv/bin/python}"
+if [ ! -x "$PY" ]; then
+  log "no $PY: run scripts/setup.sh first (or set OSTEON_PYTHON)"; exit 1
+fi
+TAG="$("$PY" -c 'import sys; print(f"cp{sys.version_info[0]}{sys.version_info[1]}")')"
+WHEEL="$(ls -t dist/osteon-*-"$TAG"-*.whl 2>/dev/null | head -1 || true)"
+newer_than() {  # newer_than FILE PATHS...: prints the first source file newer than FILE
+  local ref="$1"; shift
+  find "$@" -type f -newer "$ref" -not -name '*.pyc' -not -path '*/__pycache__/*' \
+    2>/dev/null | head -1
+}
+if [ -z "$WHEEL" ] || [ -n "$(newer_than "$WHEEL" cpp bindings python CMakeLists.txt pyproject.toml)" ]; then
+  log "building the osteon wheel and the add-on zips"
+  "$PY" scripts/build_addon.py --out dist
+  WHEEL="$(ls -t dist/osteon-*-"$TAG"-*.whl | head -1)"
+else
+  ZIP="$(ls -t dist/osteon_blender-*-legacy.zip 2>/dev/null | head -1 || true)"
+  if [ -z "$ZIP" ] || [ -n "$(newer_than "$ZIP" blender_addon "$WHEEL")" ]; then
+    log "rebuilding the add-on zips"
+    "$PY" scripts/build_addon.py --out dist --wheel "$WHEEL"
+  fi
+fi
+log "engine wheel: $WHEEL"
+
+# 3. Debian's Blender ----------------------------------------------------------------------
+BPYVER="$(blender -b --factory-startup --python-expr \
+  'import sys; print("PYVER=%d.%d" % sys.version_info[:2])' 2>/dev/null | sed -n 's/^PYVER=//p')"
+if [ "cp${BPYVER/./}" != "$TAG" ]; then
+  log "Debian's Blender runs Python $BPYVER but the wheel is $TAG: set OSTEON_PYTHON"; exit 1
+fi
+SITE="${OSTEON_BLENDER_SITE:-/usr/local/lib/python$BPYVER/dist-packages}"
+$SUDO mkdir -p "$SITE"
+$SUDO "$PY" -m pip install -q --no-deps --upgrade --target "$SITE" "$WHEEL"
+blender -b --factory-startup --python-exit-code 1 --python-expr \
+  'import osteon, numpy; print("[blender_setup] Debian Blender imports", osteon.__file__)' \
+  2>&1 | grep 'blender_setup'
+
+# 4. bpy 4.5 wheel -----------------------------------------------------------------------------
+if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
+  BPY_VENV="${OSTEON_BPY_VENV:-$ROOT/.venv-bpy}"
+  if [ ! -x "$BPY_VENV/bin/python" ]; then
+    log "creating $BPY_VENV"
+    BASE="$("$PY" -c 'import sys; print(sys._base_executable)')"
+    "$BASE" -m venv "$BPY_VENV"
+  fi
+  "$BPY_VENV/bin/python" -c 'import bpy, pytest, scipy' >/dev/null 2>&1 ||
+    "$BPY_VENV/bin/python" -m pip install -q "bpy==4.5.*" pytest scipy
+  "$BPY_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL"
+  log "bpy wheel ready in $BPY_VENV"
+fi

@@ -1,0 +1,93 @@
+"""Fixtures for the add-on tests, run inside real Blender:
+
+* Debian's Blender 3.4.1:  blender -b --factory-startup --python-exit-code 1 \
+      --python tests/blender/run_in_blender.py -- tests/blender
+* the bpy 4.5 wheel:       .venv-bpy/bin/python -m pytest tests/blender
+
+See scripts/blender_tests.sh, which wires both.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
+    if p not in sys.path:
+        sys.path.insert(0, p)
+
+bpy = pytest.importorskip("bpy")
+
+DATA = os.environ.get("OSTEON_DATA", os.path.join(os.path.dirname(ROOT), "shared", "data"))
+if not os.path.isdir(DATA):
+    DATA = "/work/shared/data"
+
+
+@pytest.fixture(scope="session")
+def addon():
+    import osteon_blender
+
+    if not hasattr(bpy.types.Scene, "osteon"):
+        osteon_blender.register()
+    yield osteon_blender
+    if hasattr(bpy.types.Scene, "osteon"):
+        osteon_blender.unregister()
+
+
+@pytest.fixture(scope="session")
+def engine():
+    """The real osteon engine (tests that need it fail loudly when it is missing)."""
+    import osteon
+
+    return osteon
+
+
+def empty_scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    return bpy.context.scene
+
+
+@pytest.fixture
+def sample(addon):
+    """A fresh scene with the bundled sample figurine (mesh active), default settings."""
+    import make_sample_rig
+
+    empty_scene()
+    obj, arm = make_sample_rig.build()
+    return obj, arm
+
+
+def import_rignet(model: str):
+    """Import a RigNet FBX from shared data into an empty scene -> (mesh, armature)."""
+    import addon_utils
+
+    path = os.path.join(DATA, "RigNet", f"{model}_ori.fbx")
+    if not os.path.isfile(path):
+        pytest.fail(f"missing test data {path}")
+    empty_scene()
+    addon_utils.enable("io_scene_fbx", default_set=True)
+    bpy.ops.import_scene.fbx(filepath=path)
+    meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
+    arms = [o for o in bpy.context.scene.objects if o.type == "ARMATURE"]
+    assert len(meshes) == 1 and len(arms) == 1
+    return meshes[0], arms[0]
+
+
+def activate(obj):
+    vl = bpy.context.view_layer
+    for o in bpy.context.scene.objects:
+        o.select_set(False)
+    if obj is not None:
+        obj.select_set(True)
+    vl.objects.active = obj
+
+
+def run_op(op, capfd) -> tuple[set, str]:
+    """Call an operator; return (result set, the report text Blender printed)."""
+    capfd.readouterr()
+    result = op()
+    out, err = capfd.readouterr()
+    return result, out + err
