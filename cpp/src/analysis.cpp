@@ -148,6 +148,16 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
 
   timer.lap("vertex bones");
   const bool partial = dirty != nullptr && !specs.empty();
+  // Live mode: keep the last run's sections to reuse the ones nothing has changed.
+  std::vector<SectionSpec> prev_specs;
+  std::vector<SectionState> prev_states;
+  const bool may_reuse = !partial && options.reuse_sections && !specs.empty() &&
+                         last_vertices.size() == static_cast<std::size_t>(3 * num_vertices) &&
+                         last_parents == sk.parents;
+  if (may_reuse) {
+    prev_specs = specs;
+    prev_states = states;
+  }
   if (!partial) {
     tree = build_load_tree(sk, options.held_bone, per_bone);
     // Vertices downstream of each bone's entry, for choosing which bone owns a joint section.
@@ -283,10 +293,57 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     for (std::size_t i = 0; i < specs.size(); ++i)
       if (section_dirty[i]) job_dirty[specs[i].job] = 1;
   }
+  if (may_reuse && prev_specs.size() == specs.size()) {
+    // Exact reuse: a section keeps its geometry when its bone, plane and downstream side are
+    // bitwise the same and no moved triangle reaches the region its cut was proven in.
+    Box3 moved_box;
+    std::vector<std::uint8_t> moved(num_vertices, 0);
+    bool any_moved = false;
+    for (Index v = 0; v < num_vertices; ++v) {
+      const double* a = vertices + 3 * v;
+      const double* b = last_vertices.data() + 3 * v;
+      moved[v] = a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
+      any_moved |= moved[v] != 0;
+    }
+    if (any_moved) {
+      for (std::size_t f = 0; f < faces.size(); f += 3) {
+        if (!moved[faces[f]] && !moved[faces[f + 1]] && !moved[faces[f + 2]]) continue;
+        for (int k = 0; k < 3; ++k) {
+          const Index v = faces[f + k];
+          moved_box.add(mesh.vertex(v));
+          moved_box.add(Vec3(last_vertices[3 * v], last_vertices[3 * v + 1], last_vertices[3 * v + 2]));
+        }
+      }
+    }
+    const Vec3 center = 0.5 * (moved_box.lo + moved_box.hi), half = 0.5 * (moved_box.hi - moved_box.lo);
+    std::fill(job_dirty.begin(), job_dirty.end(), 0);
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      const SectionSpec& a = specs[i];
+      const SectionSpec& b = prev_specs[i];
+      const int bone = a.bone;
+      bool same = a.bone == b.bone && a.kind == b.kind && a.boundary == b.boundary &&
+                  a.plus_side == b.plus_side && a.point == b.point && a.normal == b.normal &&
+                  sk.heads[bone] == last_heads[bone] && sk.tails[bone] == last_tails[bone] &&
+                  !(prev_states[i].whole_plane && gap != last_gap);  // gap closing applies there
+      if (same && any_moved && plane_crosses_box(a.point, a.normal, moved_box)) {
+        const SectionState& st = prev_states[i];
+        const CutRegion axis_line{sk.heads[bone], sk.direction(bone), 0.0};
+        same = !st.whole_plane && !st.region.meets_box(center, half) &&
+               !axis_line.meets_box(center, half);
+      }
+      if (same) {
+        states[i] = prev_states[i];
+        section_dirty[i] = 0;
+      } else {
+        section_dirty[i] = 1;
+        job_dirty[a.job] = 1;
+      }
+    }
+  }
   const int workers = detail::worker_count(threads, jobs);
   timer.lap("sections");
   FaceGrid grid;
-  grid.build(mesh);
+  if (std::find(job_dirty.begin(), job_dirty.end(), 1) != job_dirty.end()) grid.build(mesh);
   timer.lap("grid");
   // Cuts are first made locally, inside a cylinder (joints: a ball) around the bone that holds
   // the bone's own vertices; the local section is used only when it is provably the one the whole
@@ -538,6 +595,11 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     }
   });
   timer.lap("vertex stress");
+  last_vertices.assign(vertices, vertices + 3 * num_vertices);
+  last_heads = sk.heads;
+  last_tails = sk.tails;
+  last_parents = sk.parents;
+  last_gap = gap;
   return r;
 }
 

@@ -60,6 +60,12 @@ struct Analyzer::Impl {
   std::vector<int> job_section;  // first section of the job
   LoadTree tree;
 
+  // Inputs of the last run, so that the next run re-cuts only what changed (live mode).
+  std::vector<double> last_vertices;
+  std::vector<Vec3> last_heads, last_tails;
+  std::vector<int> last_parents;
+  double last_gap = -1.0;
+
   /// Full or partial run: with `dirty` set, only sections whose plane crosses the box are re-cut
   /// (the skeleton must be the one of the previous run).
   AnalysisResult run(const double* vertices, const Skeleton& skeleton, const Box3* dirty);

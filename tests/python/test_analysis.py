@@ -275,3 +275,29 @@ def test_several_roots_are_joined_to_the_main_tree():
     # joined where their heads lie on the trunk: the same tree, the same moment arms
     assert res.held_bone == 0
     assert np.allclose(res.moment_arm, ref.moment_arm)
+
+
+def test_analyzer_reuses_unchanged_sections_exactly(data_dir):
+    """Live mode: after posing one limb, a re-run equals a fresh analysis of the posed mesh."""
+    from models import load
+    from scipy import sparse
+
+    v, f, sk, w = load("elephant")
+    an = osteon.Analyzer(f, len(v), sk, w)
+    an.run(v)
+    b = sk.num_bones - 1
+    moving = np.asarray(sparse.csr_matrix(w).argmax(axis=1)).ravel() == b
+    c, s = np.cos(0.3), np.sin(0.3)
+    rot = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    posed = v.copy()
+    posed[moving] = (v[moving] - sk.heads[b]) @ rot.T + sk.heads[b]
+    tails = sk.tails.copy()
+    tails[b] = (sk.tails[b] - sk.heads[b]) @ rot.T + sk.heads[b]
+    posed_sk = osteon.Skeleton(sk.heads, tails, sk.parents, sk.names)
+    again = an.run(posed, posed_sk)
+    fresh = osteon.analyze(posed, f, posed_sk, w)
+    assert np.array_equal(again.valid, fresh.valid)
+    assert np.allclose(again.stress, fresh.stress, rtol=1e-12, equal_nan=True)
+    assert np.allclose(again.vertex_stress, fresh.vertex_stress, rtol=1e-12)
+    # and the pose really changed the result
+    assert not np.allclose(again.stress, an.run(v, sk).stress, equal_nan=True)

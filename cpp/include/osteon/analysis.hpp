@@ -21,6 +21,7 @@ struct AnalysisOptions {
   double gap_tolerance = -1.0;     ///< open cuts closed across gaps up to this, mm; <0: 1% of size
   int threads = 0;                 ///< worker threads; 0 = all cores
   bool local_cuts = true;          ///< cut near the bone first (same result, faster); false: whole planes
+  bool reuse_sections = true;      ///< Analyzer::run re-cuts only sections a change can reach (exact)
 };
 
 /// Where a section sits on its bone.
