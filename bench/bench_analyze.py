@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import osteon  # noqa: E402
-from models import load  # noqa: E402
+import osteon
+from models import load
 
 
 def numpy_face_area(vertices: np.ndarray, faces: np.ndarray) -> float:
@@ -54,8 +54,8 @@ def main(argv=None) -> int:
         for h in (2.0, 8.0):
             res = osteon.analyze(v, f, sk, w, interval=h)  # warm up
             t_osteon, t_numpy = median_interleaved(
-                [lambda: osteon.analyze(v, f, sk, w, interval=h),
-                 lambda: numpy_face_area(v, f)], args.repeat)
+                [lambda v=v, f=f, sk=sk, w=w, h=h: osteon.analyze(v, f, sk, w, interval=h),
+                 lambda v=v, f=f: numpy_face_area(v, f)], args.repeat)
             print(f"| {label} | {len(f)} | {sk.num_bones} | {h:g} | {res.num_sections} | "
                   f"{t_osteon * 1e3:.2f} | {t_numpy * 1e3:.2f} | {t_osteon / t_numpy:.2f} |",
                   flush=True)

@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import osteon  # noqa: E402
-from models import load  # noqa: E402
+import osteon
+from models import load
 
 
 def median_time(fn, repeat: int) -> float:
@@ -39,10 +39,11 @@ def main(argv=None) -> int:
         v, f, sk, w = load(name, subdivisions=subdiv)
         allowable = osteon.analyze(v, f, sk, w, force=20.0).max_stress / 2
         fix = osteon.correct(v, f, sk, w, force=20.0, allowable_stress=allowable)
-        t_fix = median_time(lambda: osteon.correct(v, f, sk, w, force=20.0,
-                                                   allowable_stress=allowable), args.repeat)
-        t_an = median_time(lambda: osteon.analyze(v, f, sk, w, force=20.0,
-                                                  allowable_stress=allowable), args.repeat)
+        kw = {"force": 20.0, "allowable_stress": allowable}
+        t_fix = median_time(lambda v=v, f=f, sk=sk, w=w, kw=kw: osteon.correct(v, f, sk, w, **kw),
+                            args.repeat)
+        t_an = median_time(lambda v=v, f=f, sk=sk, w=w, kw=kw: osteon.analyze(v, f, sk, w, **kw),
+                           args.repeat)
         label = name if subdiv == 0 else f"{name} x{4 ** subdiv}"
         print(f"| {label} | {len(f)} | {len(fix.rounds)} | {fix.converged} | {t_fix * 1e3:.1f} | "
               f"{t_an * 1e3:.1f} | {t_fix / t_an:.1f} |", flush=True)

@@ -7,10 +7,9 @@ import os
 from pathlib import Path
 
 import numpy as np
-from scipy import sparse
-
 import osteon
 from osteon.io import load_model
+from scipy import sparse
 
 DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
 

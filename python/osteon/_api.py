@@ -7,25 +7,26 @@ inputs (NumPy arrays, SciPy sparse weights) and wraps the results.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
 from . import _core
 
 __all__ = [
-    "Skeleton",
-    "Analysis",
-    "Correction",
-    "Analyzer",
-    "analyze",
-    "correct",
-    "skin",
-    "section_properties",
-    "slice_section",
     "SECTION_FLAGS",
     "SECTION_KINDS",
+    "Analysis",
+    "Analyzer",
+    "Correction",
+    "Skeleton",
+    "analyze",
+    "correct",
+    "section_properties",
+    "skin",
+    "slice_section",
 ]
 
 #: Names of the bits of ``Analysis.section_flags``.
@@ -45,7 +46,7 @@ SECTION_KINDS = {0: "interior", 1: "joint", 2: "end"}
 def _float_rows(a: Any, name: str, cols: int = 3) -> np.ndarray:
     try:
         arr = np.asarray(a)
-    except Exception as exc:  # ragged lists and the like
+    except (TypeError, ValueError) as exc:  # ragged lists and the like
         raise ValueError(f"{name} must be an array of shape (N, {cols}): {exc}") from None
     if arr.dtype.kind not in "fiu":
         raise ValueError(f"{name} must hold numbers, not dtype {arr.dtype}")
@@ -146,7 +147,7 @@ class Skeleton:
         except ValueError:
             raise ValueError(f"no bone named {bone!r}") from None
 
-    def scaled(self, factor: float) -> "Skeleton":
+    def scaled(self, factor: float) -> Skeleton:
         """The same skeleton with positions multiplied by ``factor`` (e.g. to mm of the print)."""
         return Skeleton(self.heads * factor, self.tails * factor, self.parents, self.names)
 
@@ -277,7 +278,7 @@ class Analysis:
 
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
-                   interval: float) -> "Analysis":
+                   interval: float) -> Analysis:
         return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
                    bone_names=list(skeleton.names))
 
@@ -415,7 +416,7 @@ class Analyzer:
         local_cuts: bool = True,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
-            raise ValueError("skeleton must be an osteon.Skeleton")
+            raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
         if int(num_vertices) <= 0:
             raise ValueError("empty mesh: no vertices")
         self.num_vertices = int(num_vertices)
@@ -438,7 +439,7 @@ class Analyzer:
         """Analyse ``vertices`` (V,3) mm with ``skeleton`` (default: the one given at creation)."""
         sk = self._skeleton if skeleton is None else skeleton
         if not isinstance(sk, Skeleton):
-            raise ValueError("skeleton must be an osteon.Skeleton")
+            raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
         if sk.num_bones != self._skeleton.num_bones:
             raise ValueError(
                 f"skeleton has {sk.num_bones} bones, the analyzer was built for "
@@ -509,7 +510,7 @@ def correct(
     (V,B) dense or SciPy sparse is required (None binds each vertex to its nearest bone).
     """
     if not isinstance(skeleton, Skeleton):
-        raise ValueError("skeleton must be an osteon.Skeleton")
+        raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
         raise ValueError("empty mesh: vertices has no rows")
@@ -536,8 +537,8 @@ def correct(
         -1.0 if gap_tolerance is None else float(gap_tolerance), threads, float(max_scale),
         max_rounds, float(target_ratio),
     )
-    kw = dict(skeleton=skeleton, allowable_stress=allowable_stress, force=force,
-              interval=interval)
+    kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
+              "interval": interval}
     d["before"] = Analysis._from_core(d["before"], **kw)
     d["after"] = Analysis._from_core(d["after"], **kw)
     return Correction(**d)

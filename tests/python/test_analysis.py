@@ -1,10 +1,9 @@
 """Analysis physics (SPEC §3-5) on procedural meshes with closed-form answers."""
 
 import numpy as np
+import osteon
 import pytest
 from shapes import circle, cylinder_along, l_section, merge, prism, rectangle, revolve
-
-import osteon
 
 F = 10.0
 
@@ -198,7 +197,7 @@ def test_weights_dense_sparse_and_nearest_agree():
 
 
 def test_threads_and_local_cuts_do_not_change_results():
-    v, f, sk, part = branching()
+    v, f, sk, _part = branching()
     ref = osteon.analyze(v, f, sk, threads=1, local_cuts=False)
     for threads, local in [(1, True), (2, True), (2, False)]:
         other = osteon.analyze(v, f, sk, threads=threads, local_cuts=local)
@@ -207,7 +206,7 @@ def test_threads_and_local_cuts_do_not_change_results():
 
 
 def test_analyzer_reuse_matches_one_off_analysis():
-    v, f, sk, part = branching()
+    v, f, sk, _part = branching()
     an = osteon.Analyzer(f, len(v), sk, force=F)
     moved = v + [1.0, 2.0, 3.0]
     sk2 = osteon.Skeleton(sk.heads + [1, 2, 3], sk.tails + [1, 2, 3], sk.parents, sk.names)
@@ -229,20 +228,20 @@ def test_force_scales_stress_linearly():
 @pytest.mark.parametrize(
     "bad,match",
     [
-        (dict(vertices=np.zeros((0, 3))), "empty"),
-        (dict(vertices=np.full((3, 3), np.nan)), "NaN"),
-        (dict(faces=np.array([[0, 1, 7]])), "out of range"),
-        (dict(faces=np.array([[0, 1, -1]])), "negative"),
-        (dict(faces=np.array([[0.0, 1.0, 2.0]])), "integer"),
-        (dict(vertices=np.zeros((3, 2))), r"shape \(N, 3\)"),
-        (dict(force=0.0), "force"),
-        (dict(allowable_stress=-1.0), "allowable_stress"),
-        (dict(interval=0.0), "interval"),
-        (dict(root="nope"), "no bone named"),
+        ({"vertices": np.zeros((0, 3))}, "empty"),
+        ({"vertices": np.full((3, 3), np.nan)}, "NaN"),
+        ({"faces": np.array([[0, 1, 7]])}, "out of range"),
+        ({"faces": np.array([[0, 1, -1]])}, "negative"),
+        ({"faces": np.array([[0.0, 1.0, 2.0]])}, "integer"),
+        ({"vertices": np.zeros((3, 2))}, r"shape \(N, 3\)"),
+        ({"force": 0.0}, "force"),
+        ({"allowable_stress": -1.0}, "allowable_stress"),
+        ({"interval": 0.0}, "interval"),
+        ({"root": "nope"}, "no bone named"),
     ],
 )
 def test_bad_input_raises_value_error(bad, match):
-    args = dict(vertices=np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]), faces=np.array([[0, 1, 2]]))
+    args = {"vertices": np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]), "faces": np.array([[0, 1, 2]])}
     kwargs = {k: bad.pop(k) for k in list(bad) if k not in args}
     args.update(bad)
     sk = osteon.Skeleton([[0, 0, 0]], [[1, 0, 0]], [-1], ["bone"])

@@ -1,12 +1,11 @@
 """Correction (SPEC §6, paper §5): per-bone cross-section scaling with linear blend skinning."""
 
 import numpy as np
+import osteon
 import pytest
 from models import load
 from scipy import sparse
 from shapes import circle, cylinder_along, merge, prism, revolve
-
-import osteon
 
 
 def bar():
@@ -56,7 +55,7 @@ def test_thin_limb_is_fixed_and_the_body_does_not_move():
 
 
 def test_reanalysing_the_corrected_mesh_gives_after():
-    v, f, sk, w, nb = limb_on_body()
+    v, f, sk, w, _nb = limb_on_body()
     fix = osteon.correct(v, f, sk, w, force=5.0, allowable_stress=30.0)
     again = osteon.analyze(fix.vertices, f, sk, w, force=5.0, allowable_stress=30.0)
     assert np.array_equal(again.stress, fix.after.stress, equal_nan=True)
@@ -64,13 +63,13 @@ def test_reanalysing_the_corrected_mesh_gives_after():
 
 
 def test_skin_matches_the_correction_vertices():
-    v, f, sk, w, nb = limb_on_body()
+    v, f, sk, w, _nb = limb_on_body()
     fix = osteon.correct(v, f, sk, w, force=5.0, allowable_stress=30.0)
     assert np.allclose(osteon.skin(v, sk, w, fix.bone_scale), fix.vertices, atol=1e-12)
 
 
 def test_blended_weights_scale_by_the_weighted_mean():
-    v, f, sk, w = bar()
+    v, _f, _sk, _w = bar()
     two = osteon.Skeleton([[0, 0, 0], [0, 0, 0]], [[100, 0, 0], [100, 0, 0]], [-1, 0])
     weights = np.column_stack([np.full(len(v), 0.25), np.full(len(v), 0.75)]) * 3  # unnormalised
     out = osteon.skin(v, two, weights, [1.0, 2.0])
@@ -80,7 +79,7 @@ def test_blended_weights_scale_by_the_weighted_mean():
 
 
 def test_max_scale_stops_the_loop_with_a_reason():
-    v, f, sk, w, nb = limb_on_body()
+    v, f, sk, w, _nb = limb_on_body()
     fix = osteon.correct(v, f, sk, w, force=50.0, allowable_stress=30.0, max_scale=1.1,
                          max_rounds=50)
     assert not fix.converged
@@ -101,7 +100,7 @@ def test_unweighted_part_cannot_be_fixed_and_the_loop_ends():
 
 
 def test_max_rounds_zero_changes_nothing():
-    v, f, sk, w, nb = limb_on_body()
+    v, f, sk, w, _nb = limb_on_body()
     fix = osteon.correct(v, f, sk, w, force=5.0, allowable_stress=30.0, max_rounds=0)
     assert not fix.converged and len(fix.rounds) == 0
     assert np.array_equal(fix.vertices, v)

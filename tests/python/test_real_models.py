@@ -1,10 +1,9 @@
 """Every closed rigged model of ../shared/data analyses with finite results (SPEC §9)."""
 
 import numpy as np
+import osteon
 import pytest
 from models import load
-
-import osteon
 
 CLOSED = ["elephant", "arm", "cheburashka", "cow", "rignet2982", "rignet11814"]
 

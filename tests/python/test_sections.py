@@ -2,10 +2,9 @@
 modulus over all bending directions with unsymmetric bending."""
 
 import numpy as np
+import osteon
 import pytest
 from shapes import circle, l_section, rectangle
-
-import osteon
 
 
 def rel(a, b):
