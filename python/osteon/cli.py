@@ -45,36 +45,81 @@ class CliError(Exception):
 def _add_common(p: argparse.ArgumentParser):
     g = p.add_argument_group("model")
     g.add_argument("model", help="mesh (OBJ/OFF/PLY/STL) or skinned glTF/GLB file")
-    g.add_argument("--skeleton", metavar="FILE",
-                   help="skeleton: libigl TGF or RigNet _rig.txt (default: sidecar next to MODEL)")
-    g.add_argument("--weights", metavar="FILE",
-                   help="skinning weights, DMAT (columns = TGF bones); default: sidecar, else "
-                        "each vertex is bound to its nearest bone")
-    g.add_argument("--height-mm", type=float, default=120.0, metavar="MM",
-                   help="printed size in mm of the model's largest bounding-box side "
-                        "(default 120)")
-    g.add_argument("--axis", choices=["longest", "x", "y", "z"], default="longest",
-                   help="which model extent --height-mm sets (default: longest)")
+    g.add_argument(
+        "--skeleton",
+        metavar="FILE",
+        help="skeleton: libigl TGF or RigNet _rig.txt (default: sidecar next to MODEL)",
+    )
+    g.add_argument(
+        "--weights",
+        metavar="FILE",
+        help="skinning weights, DMAT (columns = TGF bones); default: sidecar, else "
+        "each vertex is bound to its nearest bone",
+    )
+    g.add_argument(
+        "--height-mm",
+        type=float,
+        default=120.0,
+        metavar="MM",
+        help="printed size in mm of the model's largest bounding-box side (default 120)",
+    )
+    g.add_argument(
+        "--axis",
+        choices=["longest", "x", "y", "z"],
+        default="longest",
+        help="which model extent --height-mm sets (default: longest)",
+    )
     a = p.add_argument_group("loads and material")
-    a.add_argument("--force", type=float, default=20.0, metavar="N",
-                   help="force in newtons on the worst point of each branch (default 20)")
-    a.add_argument("--material", default="PLA", metavar="NAME",
-                   help="material preset: " + ", ".join(f"{k} {v:g} MPa"
-                                                        for k, v in MATERIALS.items())
-                        + " (default PLA)")
-    a.add_argument("--strength-mpa", type=float, metavar="MPA",
-                   help="material strength in MPa (overrides the preset)")
-    a.add_argument("--safety-factor", type=float, default=DEFAULT_SAFETY_FACTOR, metavar="K",
-                   help="allowable stress = strength / K (default 1, as in the paper)")
-    a.add_argument("--interval", type=float, default=2.0, metavar="MM",
-                   help="distance in mm between sections along each bone (default 2)")
-    a.add_argument("--root", metavar="BONE",
-                   help="bone (name or index) held at its head (default: the main root bone)")
+    a.add_argument(
+        "--force",
+        type=float,
+        default=20.0,
+        metavar="N",
+        help="force in newtons on the worst point of each branch (default 20)",
+    )
+    a.add_argument(
+        "--material",
+        default="PLA",
+        metavar="NAME",
+        help="material preset: "
+        + ", ".join(f"{k} {v:g} MPa" for k, v in MATERIALS.items())
+        + " (default PLA)",
+    )
+    a.add_argument(
+        "--strength-mpa",
+        type=float,
+        metavar="MPA",
+        help="material strength in MPa (overrides the preset)",
+    )
+    a.add_argument(
+        "--safety-factor",
+        type=float,
+        default=DEFAULT_SAFETY_FACTOR,
+        metavar="K",
+        help="allowable stress = strength / K (default 1, as in the paper)",
+    )
+    a.add_argument(
+        "--interval",
+        type=float,
+        default=2.0,
+        metavar="MM",
+        help="distance in mm between sections along each bone (default 2)",
+    )
+    a.add_argument(
+        "--root",
+        metavar="BONE",
+        help="bone (name or index) held at its head (default: the main root bone)",
+    )
     o = p.add_argument_group("output")
     o.add_argument("--json", metavar="FILE", help="write a JSON report")
     o.add_argument("--png", metavar="FILE", help="write a PNG of the stress map and chain plot")
-    o.add_argument("--top", type=int, default=10, metavar="K",
-                   help="bones listed in the terminal table (default 10)")
+    o.add_argument(
+        "--top",
+        type=int,
+        default=10,
+        metavar="K",
+        help="bones listed in the terminal table (default 10)",
+    )
     o.add_argument("-q", "--quiet", action="store_true", help="no table, no progress bars")
 
 
@@ -82,39 +127,75 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="osteon",
         description="Find the parts of a rigged 3D model that will break once printed, and "
-                    "thicken them (skeleton-sectional analysis; mm, N, MPa).",
+        "thicken them (skeleton-sectional analysis; mm, N, MPa).",
         epilog=EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"osteon {_version()}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    pa = sub.add_parser("analyze", help="section stresses, weak bones, report and picture",
-                        description="Analyse a rigged model: stress in every section along the "
-                                    "bones under a force on each branch, held at the root.")
+    pa = sub.add_parser(
+        "analyze",
+        help="section stresses, weak bones, report and picture",
+        description="Analyse a rigged model: stress in every section along the "
+        "bones under a force on each branch, held at the root.",
+    )
     _add_common(pa)
-    pc = sub.add_parser("correct", help="thicken weak bones until no section is weak",
-                        description="Analyse, then scale the cross-sections of weak bones "
-                                    "(their length kept) and write the corrected mesh in mm.")
+    pc = sub.add_parser(
+        "correct",
+        help="thicken weak bones until no section is weak",
+        description="Analyse, then scale the cross-sections of weak bones "
+        "(their length kept) and write the corrected mesh in mm.",
+    )
     _add_common(pc)
-    pc.add_argument("--out", metavar="FILE", required=True,
-                    help="corrected mesh (OBJ/OFF/PLY/STL), in mm at the printed size")
-    pc.add_argument("--max-scale", type=float, default=3.0, metavar="S",
-                    help="largest cross-section scale per bone (default 3)")
-    pc.add_argument("--max-rounds", type=int, default=100, metavar="N",
-                    help="most scaling rounds (default 100)")
-    pv = sub.add_parser("validate", help="check the input; with --fem compare with a FEM solve",
-                        description="Check the model (closed mesh, weights, bones inside); with "
-                                    "--fem cross-check section stresses with gmsh + CalculiX.")
+    pc.add_argument(
+        "--out",
+        metavar="FILE",
+        required=True,
+        help="corrected mesh (OBJ/OFF/PLY/STL), in mm at the printed size",
+    )
+    pc.add_argument(
+        "--max-scale",
+        type=float,
+        default=3.0,
+        metavar="S",
+        help="largest cross-section scale per bone (default 3)",
+    )
+    pc.add_argument(
+        "--max-rounds", type=int, default=100, metavar="N", help="most scaling rounds (default 100)"
+    )
+    pv = sub.add_parser(
+        "validate",
+        help="check the input; with --fem compare with a FEM solve",
+        description="Check the model (closed mesh, weights, bones inside); with "
+        "--fem cross-check section stresses with gmsh + CalculiX.",
+    )
     _add_common(pv)
-    pv.add_argument("--fem", action="store_true",
-                    help="run the FEM cross-check (needs the gmsh and ccx programs)")
-    pv.add_argument("--sections", type=int, default=4, metavar="N",
-                    help="sections tested with FEM, at most one per bone (default 4)")
-    pv.add_argument("--mesh-size", type=float, metavar="MM",
-                    help="FEM element size away from the tested sections, mm "
-                         "(default: 1/40 of the model's diagonal)")
-    pv.add_argument("--threads", type=int, default=2, metavar="N",
-                    help="threads for gmsh and CalculiX (default 2)")
+    pv.add_argument(
+        "--fem",
+        action="store_true",
+        help="run the FEM cross-check (needs the gmsh and ccx programs)",
+    )
+    pv.add_argument(
+        "--sections",
+        type=int,
+        default=4,
+        metavar="N",
+        help="sections tested with FEM, at most one per bone (default 4)",
+    )
+    pv.add_argument(
+        "--mesh-size",
+        type=float,
+        metavar="MM",
+        help="FEM element size away from the tested sections, mm "
+        "(default: 1/40 of the model's diagonal)",
+    )
+    pv.add_argument(
+        "--threads",
+        type=int,
+        default=2,
+        metavar="N",
+        help="threads for gmsh and CalculiX (default 2)",
+    )
     return p
 
 
@@ -155,8 +236,14 @@ class _Progress:
             try:
                 from tqdm import tqdm
 
-                self.bar = tqdm(total=len(stages), desc=stages[0], unit="step", leave=False,
-                                disable=None, file=sys.stderr)
+                self.bar = tqdm(
+                    total=len(stages),
+                    desc=stages[0],
+                    unit="step",
+                    leave=False,
+                    disable=None,
+                    file=sys.stderr,
+                )
             except ImportError:
                 self.bar = None
         self.stages = stages
@@ -182,8 +269,13 @@ def _load(args):
     from .io import load_model
 
     axis = None if args.axis == "longest" else args.axis
-    return load_model(args.model, skeleton=args.skeleton, weights=args.weights,
-                      height_mm=args.height_mm, axis=axis)
+    return load_model(
+        args.model,
+        skeleton=args.skeleton,
+        weights=args.weights,
+        height_mm=args.height_mm,
+        axis=axis,
+    )
 
 
 def _root(args, model):
@@ -192,8 +284,9 @@ def _root(args, model):
     if args.root.lstrip("-").isdigit():
         return int(args.root)
     if args.root not in model.bone_names:
-        raise ValueError(f"--root: no bone named {args.root!r}; bones: "
-                         + ", ".join(model.bone_names[:12]))
+        raise ValueError(
+            f"--root: no bone named {args.root!r}; bones: " + ", ".join(model.bone_names[:12])
+        )
     return args.root
 
 
@@ -215,15 +308,17 @@ def bone_table(analysis, top=10, scales=None):
     rows = []
     for b in order[:top]:
         sel = analysis.section_bone == b
-        rows.append({
-            "bone": names[b],
-            "index": int(b),
-            "max_stress_mpa": float(per[b]),
-            "ratio": float(per[b] / analysis.allowable_stress),
-            "weak_sections": int(np.sum(analysis.weak & sel)),
-            "sections": int(np.sum(sel)),
-            **({"scale": float(scales[b])} if scales is not None else {}),
-        })
+        rows.append(
+            {
+                "bone": names[b],
+                "index": int(b),
+                "max_stress_mpa": float(per[b]),
+                "ratio": float(per[b] / analysis.allowable_stress),
+                "weak_sections": int(np.sum(analysis.weak & sel)),
+                "sections": int(np.sum(sel)),
+                **({"scale": float(scales[b])} if scales is not None else {}),
+            }
+        )
     return rows
 
 
@@ -234,8 +329,10 @@ def format_table(rows, allowable, scales=False):
     lines = [head, "-" * len(head)]
     for r in rows:
         flag = "  WEAK" if r["ratio"] > 1 else ""
-        line = (f"{r['bone'][:28]:<28} {r['max_stress_mpa']:>10.2f} {r['ratio']:>7.2f} "
-                f"{r['weak_sections']:>4}/{r['sections']:<4}")
+        line = (
+            f"{r['bone'][:28]:<28} {r['max_stress_mpa']:>10.2f} {r['ratio']:>7.2f} "
+            f"{r['weak_sections']:>4}/{r['sections']:<4}"
+        )
         if scales:
             line += f" {r['scale']:>6.3f}"
         lines.append(line + flag)
@@ -246,20 +343,22 @@ def format_table(rows, allowable, scales=False):
 def _section_rows(a):
     rows = []
     for i in range(len(a.stress)):
-        rows.append({
-            "bone": a.bone_names[int(a.section_bone[i])],
-            "bone_index": int(a.section_bone[i]),
-            "param_mm": _f(getattr(a, "section_param", [np.nan] * (i + 1))[i]),
-            "center_mm": [_f(x) for x in a.section_center[i]],
-            "normal": [_f(x) for x in a.section_normal[i]],
-            "area_mm2": _f(a.section_area[i]),
-            "modulus_mm3": _f(a.section_modulus[i]),
-            "moment_arm_mm": _f(a.moment_arm[i]),
-            "moment_nmm": _f(a.moment[i]),
-            "stress_mpa": _f(a.stress[i]),
-            "culled": bool(a.culled[i]),
-            "weak": bool(a.weak[i]),
-        })
+        rows.append(
+            {
+                "bone": a.bone_names[int(a.section_bone[i])],
+                "bone_index": int(a.section_bone[i]),
+                "param_mm": _f(getattr(a, "section_param", [np.nan] * (i + 1))[i]),
+                "center_mm": [_f(x) for x in a.section_center[i]],
+                "normal": [_f(x) for x in a.section_normal[i]],
+                "area_mm2": _f(a.section_area[i]),
+                "modulus_mm3": _f(a.section_modulus[i]),
+                "moment_arm_mm": _f(a.moment_arm[i]),
+                "moment_nmm": _f(a.moment[i]),
+                "stress_mpa": _f(a.stress[i]),
+                "culled": bool(a.culled[i]),
+                "weak": bool(a.weak[i]),
+            }
+        )
     return rows
 
 
@@ -285,12 +384,13 @@ def _report(args, model, material, strength, allowable, analysis, seconds):
         "interval_mm": args.interval,
         "max_stress_mpa": _f(analysis.max_stress),
         "safe_modulus_mm3": _f(analysis.safe_modulus),
-        "sections": int(len(analysis.stress)),
+        "sections": len(analysis.stress),
         "weak_sections": int(np.sum(analysis.weak)),
         "culled_sections": int(np.sum(analysis.culled)),
         "weak_bones": [
             {k: r[k] for k in ("bone", "index", "max_stress_mpa", "ratio")}
-            for r in bone_table(analysis, top=10**9) if r["ratio"] > 1
+            for r in bone_table(analysis, top=10**9)
+            if r["ratio"] > 1
         ],
         "bone_results": bone_table(analysis, top=10**9),
         "analysis_seconds": seconds,
@@ -305,9 +405,20 @@ def _write_json(path, data):
 def _png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title=""):
     from .plots import save_stress_png
 
-    save_stress_png(args.png, model.vertices if vertices is None else vertices, model.faces,
-                    analysis, model.heads, model.tails, model.parents, model.bone_names,
-                    allowable, title=title, before=before, marks=marks)
+    save_stress_png(
+        args.png,
+        model.vertices if vertices is None else vertices,
+        model.faces,
+        analysis,
+        model.heads,
+        model.tails,
+        model.parents,
+        model.bone_names,
+        allowable,
+        title=title,
+        before=before,
+        marks=marks,
+    )
 
 
 def cmd_analyze(args, out):
@@ -321,27 +432,45 @@ def cmd_analyze(args, out):
         model = _load(args)
         prog.next()
         t = time.perf_counter()
-        a = osteon.analyze(model.vertices, model.faces, model.skeleton, model.weights,
-                           force=args.force, allowable_stress=allowable,
-                           interval=args.interval, root=_root(args, model))
+        a = osteon.analyze(
+            model.vertices,
+            model.faces,
+            model.skeleton,
+            model.weights,
+            force=args.force,
+            allowable_stress=allowable,
+            interval=args.interval,
+            root=_root(args, model),
+        )
         secs = time.perf_counter() - t
         prog.next()
         rep = _report(args, model, material, strength, allowable, a, secs)
         if args.json:
             _write_json(args.json, rep)
         if args.png:
-            _png(args, model, a, allowable,
-                 title=f"{Path(args.model).name}: F = {args.force:g} N, {material} "
-                       f"[σ] = {allowable:g} MPa")
+            _png(
+                args,
+                model,
+                a,
+                allowable,
+                title=f"{Path(args.model).name}: F = {args.force:g} N, {material} "
+                f"[σ] = {allowable:g} MPa",
+            )
         prog.next()
     finally:
         prog.close()
     if not args.quiet:
-        print(f"{Path(args.model).name}: {len(model.vertices)} vertices, {len(model.faces)} "
-              f"faces, {model.n_bones} bones, size {args.height_mm:g} mm", file=out)
-        print(f"{len(a.stress)} sections in {1000 * secs:.1f} ms; max stress "
-              f"{a.max_stress:.2f} MPa; {int(np.sum(a.weak))} weak, {int(np.sum(a.culled))} "
-              "culled (safe for sure)", file=out)
+        print(
+            f"{Path(args.model).name}: {len(model.vertices)} vertices, {len(model.faces)} "
+            f"faces, {model.n_bones} bones, size {args.height_mm:g} mm",
+            file=out,
+        )
+        print(
+            f"{len(a.stress)} sections in {1000 * secs:.1f} ms; max stress "
+            f"{a.max_stress:.2f} MPa; {int(np.sum(a.weak))} weak, {int(np.sum(a.culled))} "
+            "culled (safe for sure)",
+            file=out,
+        )
         print(format_table(bone_table(a, args.top), allowable), file=out)
     return 0
 
@@ -363,52 +492,81 @@ def cmd_correct(args, out):
         model = _load(args)
         prog.next()
         t = time.perf_counter()
-        fix = osteon.correct(model.vertices, model.faces, model.skeleton, model.weights,
-                             force=args.force, allowable_stress=allowable,
-                             interval=args.interval, root=_root(args, model),
-                             max_scale=args.max_scale, max_rounds=args.max_rounds)
+        fix = osteon.correct(
+            model.vertices,
+            model.faces,
+            model.skeleton,
+            model.weights,
+            force=args.force,
+            allowable_stress=allowable,
+            interval=args.interval,
+            root=_root(args, model),
+            max_scale=args.max_scale,
+            max_rounds=args.max_rounds,
+        )
         secs = time.perf_counter() - t
         prog.next()
         write_mesh(args.out, fix.vertices, model.faces)
         rounds = fix.rounds if isinstance(fix.rounds, int) else len(fix.rounds)
         if args.json:
             rep = _report(args, model, material, strength, allowable, fix.after, secs)
-            rep.update({
-                "converged": bool(fix.converged),
-                "rounds": rounds,
-                "reason": getattr(fix, "reason", ""),
-                "bone_scale": [float(s) for s in fix.bone_scale],
-                "max_stress_before_mpa": _f(fix.before.max_stress),
-                "output": str(args.out),
-                "before": {"max_stress_mpa": _f(fix.before.max_stress),
-                           "weak_sections": int(np.sum(fix.before.weak)),
-                           "bone_results": bone_table(fix.before, 10**9)},
-            })
+            rep.update(
+                {
+                    "converged": bool(fix.converged),
+                    "rounds": rounds,
+                    "reason": getattr(fix, "reason", ""),
+                    "bone_scale": [float(s) for s in fix.bone_scale],
+                    "max_stress_before_mpa": _f(fix.before.max_stress),
+                    "output": str(args.out),
+                    "before": {
+                        "max_stress_mpa": _f(fix.before.max_stress),
+                        "weak_sections": int(np.sum(fix.before.weak)),
+                        "bone_results": bone_table(fix.before, 10**9),
+                    },
+                }
+            )
             before_tab = {r["bone"]: r["max_stress_mpa"] for r in bone_table(fix.before, 10**9)}
             rep["weak_bones"] = [
-                {"bone": model.bone_names[b], "index": int(b),
-                 "max_stress_mpa": before_tab.get(model.bone_names[b]),
-                 "scale": float(fix.bone_scale[b])}
+                {
+                    "bone": model.bone_names[b],
+                    "index": int(b),
+                    "max_stress_mpa": before_tab.get(model.bone_names[b]),
+                    "scale": float(fix.bone_scale[b]),
+                }
                 for b in np.flatnonzero(np.asarray(fix.bone_scale) != 1.0)
             ]
             _write_json(args.json, rep)
         if args.png:
-            _png(args, model, fix.after, allowable, before=fix.before, vertices=fix.vertices,
-                 title=f"{Path(args.model).name} corrected: F = {args.force:g} N, "
-                       f"[σ] = {allowable:g} MPa")
+            _png(
+                args,
+                model,
+                fix.after,
+                allowable,
+                before=fix.before,
+                vertices=fix.vertices,
+                title=f"{Path(args.model).name} corrected: F = {args.force:g} N, "
+                f"[σ] = {allowable:g} MPa",
+            )
         prog.next()
     finally:
         prog.close()
     if not args.quiet:
         status = "converged" if fix.converged else "NOT converged"
-        print(f"{Path(args.model).name}: max stress {fix.before.max_stress:.2f} -> "
-              f"{fix.after.max_stress:.2f} MPa ([σ] = {allowable:g} MPa); {rounds} rounds, "
-              f"{status} in {1000 * secs:.1f} ms", file=out)
+        print(
+            f"{Path(args.model).name}: max stress {fix.before.max_stress:.2f} -> "
+            f"{fix.after.max_stress:.2f} MPa ([σ] = {allowable:g} MPa); {rounds} rounds, "
+            f"{status} in {1000 * secs:.1f} ms",
+            file=out,
+        )
         reason = getattr(fix, "reason", "")
         if reason and not fix.converged:
             print(f"why: {reason}", file=out)
-        print(format_table(bone_table(fix.after, args.top, scales=fix.bone_scale), allowable,
-                           scales=True), file=out)
+        print(
+            format_table(
+                bone_table(fix.after, args.top, scales=fix.bone_scale), allowable, scales=True
+            ),
+            file=out,
+        )
         print(f"corrected mesh written to {args.out}", file=out)
     return 0 if fix.converged else 1
 
@@ -419,20 +577,33 @@ def cmd_validate(args, out):
     stages = ["reading model", "analysing"] + (["meshing + solving (FEM)"] if args.fem else [])
     prog = _Progress(stages + ["writing outputs"], args.quiet)
     try:
-        material, strength, allowable = _allowable(args)
+        _material, _strength, allowable = _allowable(args)
         _positive(args.force, "--force", "N")
         model = _load(args)
         checks = model_checks(model)
         prog.next()
         t = time.perf_counter()
-        a = osteon.analyze(model.vertices, model.faces, model.skeleton, model.weights,
-                           force=args.force, allowable_stress=allowable,
-                           interval=args.interval, root=_root(args, model))
+        a = osteon.analyze(
+            model.vertices,
+            model.faces,
+            model.skeleton,
+            model.weights,
+            force=args.force,
+            allowable_stress=allowable,
+            interval=args.interval,
+            root=_root(args, model),
+        )
         secs = time.perf_counter() - t
         prog.next()
-        rep = {"model": str(args.model), "checks": checks, "analysis_seconds": secs,
-               "max_stress_mpa": _f(a.max_stress), "allowable_stress_mpa": allowable,
-               "force_n": args.force, "sections": int(len(a.stress))}
+        rep = {
+            "model": str(args.model),
+            "checks": checks,
+            "analysis_seconds": secs,
+            "max_stress_mpa": _f(a.max_stress),
+            "allowable_stress_mpa": allowable,
+            "force_n": args.force,
+            "sections": len(a.stress),
+        }
         fem_rep = None
         if args.fem:
             from . import fem
@@ -442,26 +613,45 @@ def cmd_validate(args, out):
             tools = fem.find_tools()
             missing = [k for k, v in tools.items() if v is None]
             if missing:
-                raise ValueError("--fem needs the programs " + " and ".join(missing)
-                                 + " (apt-get install gmsh calculix-ccx)")
+                raise ValueError(
+                    "--fem needs the programs "
+                    + " and ".join(missing)
+                    + " (apt-get install gmsh calculix-ccx)"
+                )
             secs_list = fem.pick_sections(a, model.heads, model.tails, n=args.sections)
             if not secs_list:
-                raise ValueError("no section suitable for the FEM check (all near joints, the "
-                                 "held region or too stubby)")
+                raise ValueError(
+                    "no section suitable for the FEM check (all near joints, the "
+                    "held region or too stubby)"
+                )
             t = time.perf_counter()
-            fem_rep = fem.cross_check(model.vertices, model.faces, secs_list, force=args.force,
-                                      hold_point=fem.hold_point(a, model.heads),
-                                      mesh_size=args.mesh_size, threads=args.threads,
-                                      progress=prog.write)
+            fem_rep = fem.cross_check(
+                model.vertices,
+                model.faces,
+                secs_list,
+                force=args.force,
+                hold_point=fem.hold_point(a, model.heads),
+                mesh_size=args.mesh_size,
+                threads=args.threads,
+                progress=prog.write,
+            )
             rep["fem"] = fem_rep.as_dict()
+            for row in rep["fem"]["sections"] + rep["fem"]["failed_sections"]:
+                row["bone_name"] = model.bone_names[row["bone"]] if row["bone"] >= 0 else None
             rep["fem"]["seconds"] = time.perf_counter() - t
             prog.next()
         if args.json:
             _write_json(args.json, rep)
         if args.png:
             marks = None if fem_rep is None else [s.center for s in fem_rep.sections]
-            _png(args, model, a, allowable, marks=marks,
-                 title=f"{Path(args.model).name}: F = {args.force:g} N")
+            _png(
+                args,
+                model,
+                a,
+                allowable,
+                marks=marks,
+                title=f"{Path(args.model).name}: F = {args.force:g} N",
+            )
             if fem_rep is not None:
                 from .plots import save_fem_png
 
@@ -480,16 +670,22 @@ def cmd_validate(args, out):
 
 
 def format_fem_table(rep, bone_names):
-    head = (f"{'#':>2} {'bone':<22} {'arm mm':>7} {'osteon MPa':>11} {'FEM MPa':>9} "
-            f"{'error':>7}")
+    head = f"{'#':>2} {'bone':<22} {'arm mm':>7} {'osteon MPa':>11} {'FEM MPa':>9} {'error':>7}"
     lines = [head, "-" * len(head)]
     for i, s in enumerate(rep.sections, 1):
         name = bone_names[s.bone] if 0 <= s.bone < len(bone_names) else str(s.bone)
-        lines.append(f"{i:>2} {name[:22]:<22} {s.moment_arm_mm:>7.1f} {s.osteon_stress_mpa:>11.2f} "
-                     f"{s.fem_stress_mpa:>9.2f} {100 * s.rel_error:>+6.1f}%")
-    lines.append(f"median |error| {100 * rep.median_error:.1f} %, worst {100 * rep.worst_error:.1f} %"
-                 f"; FEM {rep.nodes} nodes, {rep.elements} C3D10 tets, mesh "
-                 f"{rep.mesh_seconds:.1f} s + solve {rep.solve_seconds:.1f} s")
+        lines.append(
+            f"{i:>2} {name[:22]:<22} {s.moment_arm_mm:>7.1f} {s.osteon_stress_mpa:>11.2f} "
+            f"{s.fem_stress_mpa:>9.2f} {100 * s.rel_error:>+6.1f}%"
+        )
+    for f in rep.failed:
+        name = bone_names[f["bone"]] if 0 <= f["bone"] < len(bone_names) else str(f["bone"])
+        lines.append(f" - {name[:22]:<22} FEM meshing failed: {f['reason'][:60]}")
+    lines.append(
+        f"median |error| {100 * rep.median_error:.1f} %, worst {100 * rep.worst_error:.1f} %"
+        f"; FEM {rep.nodes} nodes, {rep.elements} C3D10 tets, mesh "
+        f"{rep.mesh_seconds:.1f} s + solve {rep.solve_seconds:.1f} s"
+    )
     return "\n".join(lines)
 
 

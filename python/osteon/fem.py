@@ -60,8 +60,7 @@ def _require_tools():
 # ----------------------------------------------------------------------------- meshing
 
 
-def tet_mesh(vertices, faces, mesh_size, workdir, threads=2, timeout=600, refine=(),
-             remesh=True):
+def tet_mesh(vertices, faces, mesh_size, workdir, threads=2, timeout=600, refine=(), remesh=True):
     """Quadratic tet mesh of a closed triangle surface → ``(nodes (N,3), tets (T,10))``,
     tets in CalculiX C3D10 node order, 0-based.
 
@@ -83,10 +82,13 @@ def tet_mesh(vertices, faces, mesh_size, workdir, threads=2, timeout=600, refine
     with open(geo, "w") as f:
         f.write(
             f'Merge "{stl}";\n'
-            + ("ClassifySurfaces{40*Pi/180, 1, 1, Pi};\nCreateGeometry;\n"
-               "Surface Loop(1) = Surface{:};\n" if remesh else "Surface Loop(1) = {1};\n")
-            +
-            "Volume(1) = {1};\n"
+            + (
+                "ClassifySurfaces{40*Pi/180, 1, 1, Pi};\nCreateGeometry;\n"
+                "Surface Loop(1) = Surface{:};\n"
+                if remesh
+                else "Surface Loop(1) = {1};\n"
+            )
+            + "Volume(1) = {1};\n"
             "Physical Volume(1) = {1};\n"
             f"Mesh.CharacteristicLengthMax = {float(mesh_size)};\n"
             "Mesh.CharacteristicLengthFromCurvature = 0;\n"
@@ -190,8 +192,11 @@ def _ear_clip(P):
                 found = True
                 break
         if not found:  # numerically degenerate: clip the flattest vertex
-            k = int(np.argmin([abs(cross(P[idx[k - 1]], P[idx[k]], P[idx[(k + 1) % m]]))
-                               for k in range(m)]))
+            k = int(
+                np.argmin(
+                    [abs(cross(P[idx[k - 1]], P[idx[k]], P[idx[(k + 1) % m]])) for k in range(m)]
+                )
+            )
             idx.pop(k)
     if len(idx) == 3:
         tris.append(tuple(idx))
@@ -297,8 +302,9 @@ def crop_mesh(vertices, faces, origin, normal, keep_point):
 # ----------------------------------------------------------------------------- solving
 
 
-def solve(nodes, tets, fixed, load_cases, workdir, young=3500.0, poisson=0.35, threads=2,
-          timeout=1800):
+def solve(
+    nodes, tets, fixed, load_cases, workdir, young=3500.0, poisson=0.35, threads=2, timeout=1800
+):
     """Linear static solve with CalculiX, one step per load case.
 
     ``fixed``: node indices held in x, y, z. ``load_cases``: list of ``(node_ids, forces (k,3))``
@@ -314,11 +320,14 @@ def solve(nodes, tets, fixed, load_cases, workdir, young=3500.0, poisson=0.35, t
         ids = np.arange(1, len(nodes) + 1)
         np.savetxt(f, np.column_stack([ids, nodes]), fmt="%d, %.9g, %.9g, %.9g")
         f.write("*ELEMENT, TYPE=C3D10, ELSET=EALL\n")
-        np.savetxt(f, np.column_stack([np.arange(1, len(tets) + 1), tets + 1]), fmt="%d",
-                   delimiter=", ")
+        np.savetxt(
+            f, np.column_stack([np.arange(1, len(tets) + 1), tets + 1]), fmt="%d", delimiter=", "
+        )
         f.write("*NSET, NSET=HELD\n")
-        for k in range(0, len(fixed), 16):
-            f.write(", ".join(str(x + 1) for x in fixed[k : k + 16]) + "\n")
+        f.writelines(
+            ", ".join(str(x + 1) for x in fixed[k : k + 16]) + "\n"
+            for k in range(0, len(fixed), 16)
+        )
         f.write(f"*BOUNDARY\nHELD, 1, 3, 0.\n*MATERIAL, NAME=MAT\n*ELASTIC\n{young}, {poisson}\n")
         f.write("*SOLID SECTION, ELSET=EALL, MATERIAL=MAT\n")
         for node_ids, forces in load_cases:
@@ -328,11 +337,22 @@ def solve(nodes, tets, fixed, load_cases, workdir, young=3500.0, poisson=0.35, t
                     if fv[d] != 0.0:
                         f.write(f"{nid + 1}, {d + 1}, {fv[d]:.12g}\n")
             f.write("*NODE FILE\nU\n*EL FILE\nS\n*END STEP\n")
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads), CCX_NPROC_EQUATION_SOLVER=str(threads),
-               CCX_NPROC_STIFFNESS=str(threads), CCX_NPROC_RESULTS=str(threads))
-    p = subprocess.run(["ccx", "-i", "job"] if tools["ccx"] is None else [tools["ccx"], "-i", "job"],
-                       cwd=workdir, capture_output=True, text=True, timeout=timeout, env=env,
-                       check=False)
+    env = dict(
+        os.environ,
+        OMP_NUM_THREADS=str(threads),
+        CCX_NPROC_EQUATION_SOLVER=str(threads),
+        CCX_NPROC_STIFFNESS=str(threads),
+        CCX_NPROC_RESULTS=str(threads),
+    )
+    p = subprocess.run(
+        ["ccx", "-i", "job"] if tools["ccx"] is None else [tools["ccx"], "-i", "job"],
+        cwd=workdir,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+        check=False,
+    )
     frd = os.path.join(workdir, "job.frd")
     if p.returncode != 0 or not os.path.exists(frd) or "*ERROR" in p.stdout:
         tail = [ln for ln in (p.stdout + p.stderr).splitlines() if ln.strip()][-6:]
@@ -391,8 +411,9 @@ def section_cut(nodes, tets, center, normal, stresses, max_dist=None):
     T = tets[cut]
     # connected pieces of the cut tets (sharing a node)
     rows = np.repeat(np.arange(len(T)), 4)
-    inc = coo_matrix((np.ones(rows.size), (rows, T[:, :4].ravel())),
-                     shape=(len(T), len(nodes))).tocsr()
+    inc = coo_matrix(
+        (np.ones(rows.size), (rows, T[:, :4].ravel())), shape=(len(T), len(nodes))
+    ).tocsr()
     adj = inc @ inc.T
     _, lab = connected_components(adj, directed=False)
     cen = nodes[T[:, :4]].mean(1)
@@ -424,8 +445,12 @@ def section_cut(nodes, tets, center, normal, stresses, max_dist=None):
 def _sigma_nn(stresses, n):
     S = np.asarray(stresses)
     xx, yy, zz, xy, yz, zx = (S[..., k] for k in range(6))
-    return (xx * n[0] ** 2 + yy * n[1] ** 2 + zz * n[2] ** 2
-            + 2 * (xy * n[0] * n[1] + yz * n[1] * n[2] + zx * n[2] * n[0]))
+    return (
+        xx * n[0] ** 2
+        + yy * n[1] ** 2
+        + zz * n[2] ** 2
+        + 2 * (xy * n[0] * n[1] + yz * n[1] * n[2] + zx * n[2] * n[0])
+    )
 
 
 # ----------------------------------------------------------------------------- cross-check
@@ -468,7 +493,9 @@ class FemSection:
             # end of what beam theory predicts for an oblique load point (see docs/validation.md)
             "osteon_axial_arm_stress_mpa": float(
                 self.osteon_stress_mpa * self.axial_arm_mm / self.moment_arm_mm
-            ) if self.moment_arm_mm > 0 else None,
+            )
+            if self.moment_arm_mm > 0
+            else None,
             "cut_points": int(self.cut_points),
             **self.extra,
         }
@@ -486,6 +513,7 @@ class FemReport:
     hold_radius_mm: float = 0.0
     mesh_seconds: float = 0.0
     solve_seconds: float = 0.0
+    failed: list = field(default_factory=list)
 
     @property
     def errors(self):
@@ -506,7 +534,8 @@ class FemReport:
             "nodes": self.nodes,
             "elements": self.elements,
             "mesh_size_mm": self.mesh_size_mm,
-            "hold_point_mm": None if self.hold_point_mm is None
+            "hold_point_mm": None
+            if self.hold_point_mm is None
             else [float(x) for x in self.hold_point_mm],
             "hold_radius_mm": self.hold_radius_mm,
             "mesh_seconds": self.mesh_seconds,
@@ -514,6 +543,7 @@ class FemReport:
             "median_abs_rel_error": self.median_error,
             "worst_abs_rel_error": self.worst_error,
             "sections": [s.as_dict() for s in self.sections],
+            "failed_sections": self.failed,
         }
 
 
@@ -572,8 +602,19 @@ def _finish_section(rep, k, s, nodes, tets, S3, force):
             osteon_stress_mpa=float(s["osteon_stress"]),
             fem_stress_mpa=fem,
             cut_points=int(G.shape[1]),
-            extra={k2: s[k2] for k2 in ("tier", "slenderness", "end_distance", "nodes",
-                                          "elements", "surface") if k2 in s},
+            extra={
+                k2: s[k2]
+                for k2 in (
+                    "tier",
+                    "slenderness",
+                    "end_distance",
+                    "nodes",
+                    "elements",
+                    "surface",
+                    "clamp_distance",
+                )
+                if k2 in s
+            },
         )
     )
 
@@ -589,10 +630,26 @@ def _unit_cases(nodes, tets, point, radius):
     return cases
 
 
-def cross_check(vertices, faces, sections, force=20.0, hold_point=None, hold_radius=None,
-                mesh_size=None, workdir=None, threads=2, young=3500.0, poisson=0.35,
-                hold_plane=None, progress=None, keep_files=False, fine_factor=3.0,
-                mode="crop", clamp_distance=4.0, max_surface_triangles=12000):
+def cross_check(
+    vertices,
+    faces,
+    sections,
+    force=20.0,
+    hold_point=None,
+    hold_radius=None,
+    mesh_size=None,
+    workdir=None,
+    threads=2,
+    young=3500.0,
+    poisson=0.35,
+    hold_plane=None,
+    progress=None,
+    keep_files=False,
+    fine_factor=3.0,
+    mode="crop",
+    clamp_distance=4.0,
+    max_surface_triangles=12000,
+):
     """Run the FEM cross-check; returns a :class:`FemReport`.
 
     ``sections``: list of dicts with ``center``, ``normal``, ``load_point`` (mm),
@@ -625,11 +682,40 @@ def cross_check(vertices, faces, sections, force=20.0, hold_point=None, hold_rad
     rep = FemReport(force_n=float(force), mode=mode)
     try:
         if mode == "crop":
-            _cross_check_crop(rep, V, F, sections, force, wd, threads, young, poisson, progress,
-                              fine_factor, clamp_distance, max_surface_triangles)
+            _cross_check_crop(
+                rep,
+                V,
+                F,
+                sections,
+                force,
+                wd,
+                threads,
+                young,
+                poisson,
+                progress,
+                fine_factor,
+                clamp_distance,
+                max_surface_triangles,
+            )
         elif mode == "full":
-            _cross_check_full(rep, V, F, sections, force, wd, threads, young, poisson, progress,
-                              fine_factor, hold_point, hold_radius, hold_plane, mesh_size, ext)
+            _cross_check_full(
+                rep,
+                V,
+                F,
+                sections,
+                force,
+                wd,
+                threads,
+                young,
+                poisson,
+                progress,
+                fine_factor,
+                hold_point,
+                hold_radius,
+                hold_plane,
+                mesh_size,
+                ext,
+            )
         else:
             raise ValueError(f"FEM mode must be 'crop' or 'full', got {mode!r}")
         return rep
@@ -638,8 +724,21 @@ def cross_check(vertices, faces, sections, force=20.0, hold_point=None, hold_rad
             shutil.rmtree(wd, ignore_errors=True)
 
 
-def _cross_check_crop(rep, V, F, sections, force, wd, threads, young, poisson, progress,
-                      fine_factor, clamp_distance, max_tris):
+def _cross_check_crop(
+    rep,
+    V,
+    F,
+    sections,
+    force,
+    wd,
+    threads,
+    young,
+    poisson,
+    progress,
+    fine_factor,
+    clamp_distance,
+    max_tris,
+):
     for k, sec in enumerate(sections):
         c = np.asarray(sec["center"], float)
         n = np.asarray(sec["normal"], float)
@@ -649,23 +748,55 @@ def _cross_check_crop(rep, V, F, sections, force, wd, threads, young, poisson, p
             n = -n
         area = float(sec.get("area") or 0.0)
         r = np.sqrt(area / np.pi) if area > 0 else 0.02 * float(np.ptp(V, axis=0).max())
-        origin = c - clamp_distance * r * n
         sub = os.path.join(wd, f"s{k}")
         os.makedirs(sub, exist_ok=True)
         t0 = time.perf_counter()
-        Vc, Fc = crop_mesh(V, F, origin, n, c)
         h = r / fine_factor
-        # element size away from the section: coarser, but bounded by the piece's size
-        coarse = min(4.0 * h, 0.1 * float(np.ptp(Vc, axis=0).max()))
-        coarse = max(coarse, h)
-        if progress:
-            progress(f"section {k + 1}/{len(sections)}: meshing")
-        try:  # re-mesh the cropped piece's surface: fine at the section, coarse elsewhere
-            nodes, tets = tet_mesh(Vc, Fc, coarse, sub, threads=threads,
-                                   refine=[(c, 3.0 * r, h)], remesh=True)
-        except RuntimeError:  # keep its triangles (only the interior is meshed)
-            nodes, tets = tet_mesh(Vc, Fc, coarse, sub, threads=threads, remesh=False)
-            sec = dict(sec, surface="original triangles")
+        nodes = None
+        errors = []
+        # gmsh fails on some cut surfaces: try a few clamp distances, re-meshed surface first,
+        # then the original triangles
+        for cd in (clamp_distance, 1.25 * clamp_distance, 0.8 * clamp_distance):
+            origin = c - cd * r * n
+            try:
+                Vc, Fc = crop_mesh(V, F, origin, n, c)
+            except ValueError as e:
+                errors.append(str(e))
+                continue
+            coarse = max(min(4.0 * h, 0.1 * float(np.ptp(Vc, axis=0).max())), h)
+            if progress:
+                progress(f"section {k + 1}/{len(sections)}: meshing")
+            for remesh in (True, False):
+                try:
+                    nodes, tets = tet_mesh(
+                        Vc,
+                        Fc,
+                        coarse,
+                        sub,
+                        threads=threads,
+                        refine=[(c, 3.0 * r, h)] if remesh else (),
+                        remesh=remesh,
+                    )
+                    sec = dict(
+                        sec,
+                        surface="re-meshed" if remesh else "original triangles",
+                        clamp_distance=cd,
+                    )
+                    break
+                except RuntimeError as e:
+                    errors.append(str(e)[:120])
+            if nodes is not None:
+                break
+        if nodes is None:
+            rep.failed.append(
+                {
+                    "index": int(sec.get("index", k)),
+                    "bone": int(sec.get("bone", -1)),
+                    "reason": "; ".join(errors[-2:]),
+                }
+            )
+            rep.mesh_seconds += time.perf_counter() - t0
+            continue
         rep.mesh_seconds += time.perf_counter() - t0
         rep.nodes += len(nodes)
         rep.elements += len(tets)
@@ -681,8 +812,24 @@ def _cross_check_crop(rep, V, F, sections, force, wd, threads, young, poisson, p
         rep.mesh_size_mm = max(rep.mesh_size_mm, float(h))
 
 
-def _cross_check_full(rep, V, F, sections, force, wd, threads, young, poisson, progress,
-                      fine_factor, hold_point, hold_radius, hold_plane, mesh_size, ext):
+def _cross_check_full(
+    rep,
+    V,
+    F,
+    sections,
+    force,
+    wd,
+    threads,
+    young,
+    poisson,
+    progress,
+    fine_factor,
+    hold_point,
+    hold_radius,
+    hold_plane,
+    mesh_size,
+    ext,
+):
     if mesh_size is None:
         mesh_size = ext / 40.0
     refine = []
@@ -739,8 +886,9 @@ def hold_point(analysis, heads):
     return np.asarray(heads, float)[max(b, 0)]
 
 
-def pick_sections(analysis, heads, tails, n=4, vertices=None, per_bone=1,
-                  tiers=((1.5, 3.0), (0.75, 2.0))):
+def pick_sections(
+    analysis, heads, tails, n=4, vertices=None, per_bone=1, tiers=((1.5, 3.0), (0.75, 2.0))
+):
     """Choose up to ``n`` sections for the FEM check, at most ``per_bone`` per bone, highest
     stress first, where beam theory is meant to hold: interior sections (not at joints or bone
     ends, no flags) whose centre is outside the held region. ``tiers`` are tried in turn,
@@ -789,19 +937,21 @@ def pick_sections(analysis, heads, tails, n=4, vertices=None, per_bone=1,
                 continue
             count[b] = count.get(b, 0) + 1
             taken.add(int(i))
-            out.append({
-                "index": int(i),
-                "bone": b,
-                "center": centers[i],
-                "normal": np.asarray(a.section_normal[i], float),
-                "load_point": np.asarray(a.load_point[i], float),
-                "moment_arm": float(arm[i]),
-                "osteon_stress": float(stress[i]),
-                "area": float(area[i]),
-                "tier": tier,
-                "slenderness": float(arm[i] / r[i]),
-                "end_distance": float(end[i] / r[i]),
-            })
+            out.append(
+                {
+                    "index": int(i),
+                    "bone": b,
+                    "center": centers[i],
+                    "normal": np.asarray(a.section_normal[i], float),
+                    "load_point": np.asarray(a.load_point[i], float),
+                    "moment_arm": float(arm[i]),
+                    "osteon_stress": float(stress[i]),
+                    "area": float(area[i]),
+                    "tier": tier,
+                    "slenderness": float(arm[i] / r[i]),
+                    "end_distance": float(end[i] / r[i]),
+                }
+            )
             if len(out) >= n:
                 return out
     return out

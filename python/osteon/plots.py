@@ -98,8 +98,9 @@ def section_params(analysis, heads, tails):
     return np.einsum("ij,ij->i", np.asarray(analysis.section_center) - heads[b], u)
 
 
-def plot_chains(ax, analysis, heads, tails, parents, names, allowable, label_prefix="",
-                style="-", max_legend=12):
+def plot_chains(
+    ax, analysis, heads, tails, parents, names, allowable, label_prefix="", style="-", max_legend=12
+):
     """Stress along each root→leaf bone chain (x: mm along the chain) with the allowable line."""
     heads, tails = np.asarray(heads, float), np.asarray(tails, float)
     lengths = np.linalg.norm(tails - heads, axis=1)
@@ -126,8 +127,21 @@ def plot_chains(ax, analysis, heads, tails, parents, names, allowable, label_pre
     ax.legend(fontsize=6, ncol=2, loc="upper left")
 
 
-def save_stress_png(path, vertices, faces, analysis, heads, tails, parents, names, allowable,
-                    title="", before=None, marks=None, dpi=90):
+def save_stress_png(
+    path,
+    vertices,
+    faces,
+    analysis,
+    heads,
+    tails,
+    parents,
+    names,
+    allowable,
+    title="",
+    before=None,
+    marks=None,
+    dpi=90,
+):
     """Write a PNG: two orthographic views coloured by per-vertex stress and the chain plot.
 
     ``before``: an earlier Analysis drawn dashed in the chain plot (correction);
@@ -146,7 +160,7 @@ def save_stress_png(path, vertices, faces, analysis, heads, tails, parents, name
     others = [a for a in range(3) if a != up]
     ext = V.max(0) - V.min(0)
     others.sort(key=lambda a: -ext[a])
-    fig = plt.figure(figsize=(13, 4.6))
+    fig = plt.figure(figsize=(13, 4.8), layout="constrained")
     gs = fig.add_gridspec(1, 3, width_ratios=[1, 1, 1.35])
     ax1, ax2, ax3 = (fig.add_subplot(gs[0, i]) for i in range(3))
     # views: look along the shorter horizontal axis, then along the longer one
@@ -157,16 +171,22 @@ def save_stress_png(path, vertices, faces, analysis, heads, tails, parents, name
         for ax, axes in ((ax1, [others[0], up]), (ax2, [others[1], up])):
             ax.plot(mk[:, axes[0]], mk[:, axes[1]], "k+", ms=9, mew=1.5)
             for i, p in enumerate(mk):
-                ax.annotate(str(i + 1), (p[axes[0]], p[axes[1]]), fontsize=7,
-                            xytext=(3, 3), textcoords="offset points")
+                ax.annotate(
+                    str(i + 1),
+                    (p[axes[0]], p[axes[1]]),
+                    fontsize=7,
+                    xytext=(3, 3),
+                    textcoords="offset points",
+                )
     import matplotlib as mpl
 
     sm = mpl.cm.ScalarMappable(cmap="jet", norm=mpl.colors.Normalize(0, allowable))
-    cb = fig.colorbar(sm, ax=[ax1, ax2], fraction=0.03, pad=0.02)
+    cb = fig.colorbar(sm, ax=[ax1, ax2], location="bottom", fraction=0.05, shrink=0.6)
     cb.set_label("stress (MPa); grey = safe for sure (culled)", fontsize=8)
     if before is not None:
-        plot_chains(ax3, before, heads, tails, parents, names, allowable, "before: ", ":",
-                    max_legend=0)
+        plot_chains(
+            ax3, before, heads, tails, parents, names, allowable, "before: ", ":", max_legend=0
+        )
     plot_chains(ax3, analysis, heads, tails, parents, names, allowable)
     ax3.set_title("stress along each bone chain", fontsize=9)
     if title:

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from osteon.cli import MATERIALS, main
 
 DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
@@ -32,14 +31,38 @@ def _png_ok(path):
 @needs_data
 def test_analyze_arm(tmp_path, capsys):
     js, png = tmp_path / "r.json", tmp_path / "r.png"
-    rc = main(["analyze", str(ARM), "--height-mm", "120", "--force", "20", "--material",
-               "PLA", "--interval", "2", "--json", str(js), "--png", str(png)])
+    rc = main(
+        [
+            "analyze",
+            str(ARM),
+            "--height-mm",
+            "120",
+            "--force",
+            "20",
+            "--material",
+            "PLA",
+            "--interval",
+            "2",
+            "--json",
+            str(js),
+            "--png",
+            str(png),
+        ]
+    )
     assert rc == 0
     out = capsys.readouterr().out
     assert "max σ MPa" in out and "bone_" in out
     rep = json.loads(js.read_text())
-    for key in ("max_stress_mpa", "allowable_stress_mpa", "weak_bones", "sections",
-                "bone_results", "section_table", "force_n", "units"):
+    for key in (
+        "max_stress_mpa",
+        "allowable_stress_mpa",
+        "weak_bones",
+        "sections",
+        "bone_results",
+        "section_table",
+        "force_n",
+        "units",
+    ):
         assert key in rep
     assert rep["allowable_stress_mpa"] == MATERIALS["PLA"]
     assert rep["sections"] == len(rep["section_table"]) > 0
@@ -57,8 +80,24 @@ def test_analyze_arm(tmp_path, capsys):
 def test_force_scales_stress_and_safety_factor(tmp_path):
     a, b = tmp_path / "a.json", tmp_path / "b.json"
     assert main(["analyze", str(ARM), "-q", "--force", "10", "--json", str(a)]) == 0
-    assert main(["analyze", str(ARM), "-q", "--force", "30", "--material", "ABS",
-                 "--safety-factor", "2", "--json", str(b)]) == 0
+    assert (
+        main(
+            [
+                "analyze",
+                str(ARM),
+                "-q",
+                "--force",
+                "30",
+                "--material",
+                "ABS",
+                "--safety-factor",
+                "2",
+                "--json",
+                str(b),
+            ]
+        )
+        == 0
+    )
     ra, rb = json.loads(a.read_text()), json.loads(b.read_text())
     assert rb["max_stress_mpa"] == pytest.approx(3 * ra["max_stress_mpa"], rel=1e-9)
     assert rb["allowable_stress_mpa"] == pytest.approx(MATERIALS["ABS"] / 2)
@@ -67,8 +106,20 @@ def test_force_scales_stress_and_safety_factor(tmp_path):
 @needs_data
 def test_correct_dog(tmp_path, capsys):
     out, js, png = tmp_path / "fixed.obj", tmp_path / "c.json", tmp_path / "c.png"
-    rc = main(["correct", str(DOG), "--force", "40", "--out", str(out), "--json", str(js),
-               "--png", str(png)])
+    rc = main(
+        [
+            "correct",
+            str(DOG),
+            "--force",
+            "40",
+            "--out",
+            str(out),
+            "--json",
+            str(js),
+            "--png",
+            str(png),
+        ]
+    )
     rep = json.loads(js.read_text())
     assert rc == (0 if rep["converged"] else 1)
     assert rep["max_stress_before_mpa"] > rep["allowable_stress_mpa"]  # there was work to do
@@ -132,8 +183,9 @@ def test_weights_mismatch_error(tmp_path, capsys):
 
     w = tmp_path / "w.dmat"
     write_dmat(w, np.full((5, 4), 0.25))
-    rc = main(["analyze", str(ARM), "--skeleton", str(ARM.with_suffix(".tgf")),
-               "--weights", str(w)])
+    rc = main(
+        ["analyze", str(ARM), "--skeleton", str(ARM.with_suffix(".tgf")), "--weights", str(w)]
+    )
     assert rc == 2
     assert "vertices" in capsys.readouterr().err
 

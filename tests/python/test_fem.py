@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from osteon import fem
 
 tools = fem.find_tools()
@@ -35,8 +34,9 @@ def _bar():
 def _worst_eb(arm):
     """Euler–Bernoulli worst normal stress over all force directions at the tip centre:
     at a corner, sqrt((F·arm·c_z/I_y)² + (F·arm·c_y/I_z)² + (F/A)²)."""
-    return np.sqrt((F * arm * (H / 2) / I_Y) ** 2 + (F * arm * (B / 2) / I_Z) ** 2
-                   + (F / (B * H)) ** 2)
+    return np.sqrt(
+        (F * arm * (H / 2) / I_Y) ** 2 + (F * arm * (B / 2) / I_Z) ** 2 + (F / (B * H)) ** 2
+    )
 
 
 @needs_tools
@@ -68,10 +68,24 @@ def test_cantilever_worst_direction(tmp_path, mode):
     whole bar held at x=0 ('full') or cropped 4 r upstream of the section ('crop')."""
     V, Fc = _bar()
     arm = L - X
-    sec = {"center": [X, 0, 0], "normal": [1, 0, 0], "load_point": [L, 0, 0],
-           "osteon_stress": _worst_eb(arm), "area": B * H, "moment_arm": arm}
-    rep = fem.cross_check(V, Fc, [sec], force=F, mode=mode, hold_plane=([0, 0, 0], [1, 0, 0]),
-                          mesh_size=2.5, workdir=str(tmp_path))
+    sec = {
+        "center": [X, 0, 0],
+        "normal": [1, 0, 0],
+        "load_point": [L, 0, 0],
+        "osteon_stress": _worst_eb(arm),
+        "area": B * H,
+        "moment_arm": arm,
+    }
+    rep = fem.cross_check(
+        V,
+        Fc,
+        [sec],
+        force=F,
+        mode=mode,
+        hold_plane=([0, 0, 0], [1, 0, 0]),
+        mesh_size=2.5,
+        workdir=str(tmp_path),
+    )
     s = rep.sections[0]
     assert s.fem_stress_mpa == pytest.approx(_worst_eb(arm), rel=0.05)
     assert abs(s.rel_error) < 0.05
@@ -126,16 +140,18 @@ def test_validate_fem_cli_on_arm(tmp_path, capsys):
 
     from osteon.cli import main
 
-    data = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[3] / "shared"
-                               / "data"))
+    data = Path(
+        os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[3] / "shared" / "data")
+    )
     if not data.is_dir():
         data = Path("/work/shared/data")
     arm = data / "libigl-tutorial-data" / "arm.obj"
     if not arm.is_file():
         pytest.skip("shared data absent")
     js, png = tmp_path / "v.json", tmp_path / "v.png"
-    rc = main(["validate", str(arm), "--fem", "--sections", "1", "--json", str(js),
-               "--png", str(png)])
+    rc = main(
+        ["validate", str(arm), "--fem", "--sections", "1", "--json", str(js), "--png", str(png)]
+    )
     assert rc == 0
     rep = json.loads(js.read_text())["fem"]
     assert len(rep["sections"]) == 1

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from osteon.io import (
     RiggedModel,
     load_model,
@@ -91,7 +90,7 @@ def test_tgf_dmat_models(mesh, tgf, dmat):
     assert m.faces.shape == (_count(mesh, "f "), 3)
     nj, nb = _tgf_counts(tgf)
     assert m.n_bones == nb
-    joints, E, heads, tails, parents = read_tgf(tgf)
+    joints, E, _heads, _tails, _parents = read_tgf(tgf)
     assert len(joints) == nj
     np.testing.assert_allclose(m.heads / m.scale, joints[E[:, 0]], rtol=1e-12, atol=1e-12)
     # a bone's parent ends where it starts
@@ -134,10 +133,10 @@ def test_binary_and_ascii_dmat_agree(tmp_path):
 
 @needs_data
 def test_tgf_round_trip(tmp_path):
-    joints, E, heads, tails, parents = read_tgf(LIBIGL / "elephant.tgf")
+    joints, E, _heads, _tails, parents = read_tgf(LIBIGL / "elephant.tgf")
     p = tmp_path / "e.tgf"
     write_tgf(p, joints, E)
-    j2, E2, h2, t2, p2 = read_tgf(p)
+    j2, E2, _h2, _t2, p2 = read_tgf(p)
     np.testing.assert_array_equal(j2, joints)
     np.testing.assert_array_equal(E2, E)
     np.testing.assert_array_equal(p2, parents)
@@ -238,8 +237,10 @@ def test_gltf_fox():
         g.binary_blob(),
         dtype="<f4",
         count=16 * len(g.skins[0].joints),
-        offset=(g.bufferViews[g.accessors[g.skins[0].inverseBindMatrices].bufferView].byteOffset
-                or 0) + (g.accessors[g.skins[0].inverseBindMatrices].byteOffset or 0),
+        offset=(
+            g.bufferViews[g.accessors[g.skins[0].inverseBindMatrices].bufferView].byteOffset or 0
+        )
+        + (g.accessors[g.skins[0].inverseBindMatrices].byteOffset or 0),
     ).reshape(-1, 4, 4)
     joint_pos = np.array([np.linalg.inv(M.T)[:3, 3] for M in ibm]) * m.scale
     for p in np.vstack([m.heads, m.tails]):
@@ -251,7 +252,7 @@ def test_gltf_fox():
 def test_weld_merges_duplicates():
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]])
     F = np.array([[0, 1, 2], [3, 5, 4]])
-    V2, F2, o2n = weld(V, F)
+    V2, F2, _o2n = weld(V, F)
     assert len(V2) == 4
     np.testing.assert_array_equal(V2[F2], V[F])
 

@@ -18,8 +18,14 @@ import numpy as np
 
 from .model import bones_from_joint_tree, joint_weights_to_bones
 
-_CT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32,
-       5126: np.float32}
+_CT = {
+    5120: np.int8,
+    5121: np.uint8,
+    5122: np.int16,
+    5123: np.uint16,
+    5125: np.uint32,
+    5126: np.float32,
+}
 _NC = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 
 
@@ -66,8 +72,9 @@ class _Reader:
                 out = np.frombuffer(data, dtype=dt, count=a.count * nc, offset=start)
                 out = out.reshape(a.count, nc).copy()
             else:
-                raw = np.frombuffer(data, dtype=np.uint8, count=stride * (a.count - 1) + item,
-                                    offset=start)
+                raw = np.frombuffer(
+                    data, dtype=np.uint8, count=stride * (a.count - 1) + item, offset=start
+                )
                 idx = np.arange(a.count)[:, None] * stride + np.arange(item)[None, :]
                 out = raw[idx].copy().view(dt).reshape(a.count, nc)
         if a.sparse is not None:
@@ -89,11 +96,13 @@ def _node_matrix(n):
         M = np.diag([*n.scale, 1.0]) @ M
     if n.rotation is not None:
         x, y, z, w = n.rotation
-        R = np.array([
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ])
+        R = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+            ]
+        )
         T = np.eye(4)
         T[:3, :3] = R
         M = T @ M
@@ -154,8 +163,11 @@ def read_gltf(path):
             at = prim.attributes
             pos = r.accessor(at.POSITION)
             n = len(pos)
-            idx = (r.accessor(prim.indices).astype(np.int64) if prim.indices is not None
-                   else np.arange(n))
+            idx = (
+                r.accessor(prim.indices).astype(np.int64)
+                if prim.indices is not None
+                else np.arange(n)
+            )
             faces.append(_triangles(idx, prim.mode) + off)
             verts.append(pos)
             for k in range(4):

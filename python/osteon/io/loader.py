@@ -38,8 +38,9 @@ def read_mesh(path):
     import trimesh
 
     try:
-        m = trimesh.load(str(p), file_type=ext[1:], process=False, maintain_order=True,
-                         force="mesh")
+        m = trimesh.load(
+            str(p), file_type=ext[1:], process=False, maintain_order=True, force="mesh"
+        )
     except Exception as e:  # noqa: BLE001 - trimesh loaders raise many kinds
         raise ValueError(f"{p}: cannot read mesh ({type(e).__name__}: {e})") from None
     if not isinstance(m, trimesh.Trimesh) or len(m.faces) == 0:
@@ -69,8 +70,9 @@ def _sidecar(mesh: Path, suffixes):
     return None
 
 
-def load_model(path, skeleton=None, weights=None, height_mm: float | None = 120.0,
-               axis=None) -> RiggedModel:
+def load_model(
+    path, skeleton=None, weights=None, height_mm: float | None = 120.0, axis=None
+) -> RiggedModel:
     """Read a rigged model and scale it to a printed size in millimetres.
 
     Parameters
@@ -92,8 +94,9 @@ def load_model(path, skeleton=None, weights=None, height_mm: float | None = 120.
     notes = []
     if ext in GLTF_EXTENSIONS:
         if skeleton is not None or weights is not None:
-            raise ValueError(f"{p}: a glTF file carries its own skin; do not pass a skeleton or "
-                             "weights file")
+            raise ValueError(
+                f"{p}: a glTF file carries its own skin; do not pass a skeleton or weights file"
+            )
         from .gltf import read_gltf
 
         V, F, heads, tails, parents, names, W = read_gltf(p)
@@ -131,8 +134,9 @@ def load_model(path, skeleton=None, weights=None, height_mm: float | None = 120.
             W = normalize_rows(sp.csr_matrix(Wd))
     elif sname.endswith(".txt"):
         if weights is not None:
-            raise ValueError(f"{sk}: a RigNet rig carries its own skin weights; do not pass a "
-                             "weights file")
+            raise ValueError(
+                f"{sk}: a RigNet rig carries its own skin weights; do not pass a weights file"
+            )
         from .rignet import read_rignet_rig, rignet_skeleton
 
         rig = read_rignet_rig(sk)

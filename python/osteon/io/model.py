@@ -283,8 +283,15 @@ def drop_unweighted_roots(heads, tails, parents, names, weights):
     idx = np.nonzero(keep)[0]
     new_of_old = np.full(B, -1, dtype=np.int64)
     new_of_old[idx] = np.arange(len(idx))
-    newp = np.array([new_of_old[parents[b]] if parents[b] >= 0 else -1 for b in idx],
-                    dtype=np.int64)
+    newp = np.array(
+        [new_of_old[parents[b]] if parents[b] >= 0 else -1 for b in idx], dtype=np.int64
+    )
     dropped = [names[b] for b in range(B) if not keep[b]]
-    return (heads[idx], tails[idx], newp, [names[b] for b in idx],
-            sp.csr_matrix(weights)[:, idx], dropped)
+    return (
+        heads[idx],
+        tails[idx],
+        newp,
+        [names[b] for b in idx],
+        sp.csr_matrix(weights)[:, idx],
+        dropped,
+    )
