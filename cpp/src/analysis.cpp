@@ -388,9 +388,6 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
           if (p.x() >= lo.x() && p.x() <= hi.x() && p.y() >= lo.y() && p.y() <= hi.y()) ok = false;
     }
     ++(ok ? local_used : local_failed);
-    if (!ok && timer.on)
-      std::fprintf(stderr, "  fallback: open=%zu found=%d containing=%d inside=%d\n",
-                   cut.open_chains.size(), int(geom.found), geom.containing, int(inside));
     return ok;
   };
   std::vector<std::vector<std::vector<CutSegment>>> family_segments(workers);
@@ -439,51 +436,76 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     }
     return false;
   };
+  // Phase 1 (parallel over bones and joints): one local cut per family of parallel planes, and
+  // the local attempt of every joint. Sections whose local cut is not provably right are queued.
+  // Phase 2 (parallel over those sections): grow the region, or cut the whole plane. Two phases
+  // keep one hard bone (a body cut by every plane) from holding up the other core.
+  enum Retry : std::uint8_t { kNone = 0, kGrowFamily = 1, kWholePlane = 2, kGrowJoint = 3 };
+  std::vector<std::uint8_t> retry(specs.size(), kNone);
   detail::parallel_for(jobs, threads, [&](long job, int worker) {
     if (!job_dirty[job]) return;
     const int first = job_section[job];
     const int b = job_bone[job];
-    auto& single = single_segments[worker];
-    if (b >= 0) {
-      const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
-      const int n = static_cast<int>(slab_params[b].size()) - 2;
-      auto& segs = family_segments[worker];
-      const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
-      cut_mesh_parallel(mesh, base, h, n, segs, &grid, options.local_cuts ? &region : nullptr);
-      for (int k = 1; k <= n; ++k) {
-        const int si = first + k - 1;
-        if (!section_dirty[si]) continue;
-        PlaneFrame frame = base;
-        frame.origin = specs[si].point;
-        if (options.local_cuts) {
-          const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
-          const SectionGeometry geom = select_section(cut);
-          if (local_ok(cut, geom, inside_at(b, k * h))) {
-            finish(si, frame, geom, &region);
-            continue;
-          }
-          if (!geom.found && grow_local(si, frame, 3.0 * reach[b], inside_at(b, k * h), single))
-            continue;
-          finish(si, frame, whole_plane(frame, single), nullptr);
-        } else {
-          SectionGeometry geom = select_section(assemble_loops(segs[k - 1], gap));
-          if (segs[k - 1].empty()) geom.flags |= kFlagEmpty;
-          finish(si, frame, geom, nullptr);
-        }
-      }
-    } else {
-      const SectionSpec& spec = specs[first];
-      const PlaneFrame frame = PlaneFrame::make(spec.point, spec.normal);
+    if (b < 0) {
+      retry[first] = options.local_cuts ? kGrowJoint : kWholePlane;
+      return;
+    }
+    const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
+    const int n = static_cast<int>(slab_params[b].size()) - 2;
+    auto& segs = family_segments[worker];
+    const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
+    cut_mesh_parallel(mesh, base, h, n, segs, &grid, options.local_cuts ? &region : nullptr);
+    for (int k = 1; k <= n; ++k) {
+      const int si = first + k - 1;
+      if (!section_dirty[si]) continue;
+      PlaneFrame frame = base;
+      frame.origin = specs[si].point;
       if (options.local_cuts) {
-        double radius = reach[spec.bone];
-        if (sk.parents[spec.bone] >= 0) radius = std::max(radius, reach[sk.parents[spec.bone]]);
-        const double param = slab_params[spec.bone][spec.boundary];
-        if (grow_local(first, frame, radius, inside_at(spec.bone, param), single)) return;
+        const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
+        const SectionGeometry geom = select_section(cut);
+        if (local_ok(cut, geom, inside_at(b, k * h))) {
+          finish(si, frame, geom, &region);
+          continue;
+        }
+        retry[si] = geom.found ? kWholePlane : kGrowFamily;
+      } else {
+        SectionGeometry geom = select_section(assemble_loops(segs[k - 1], gap));
+        if (segs[k - 1].empty()) geom.flags |= kFlagEmpty;
+        finish(si, frame, geom, nullptr);
       }
-      finish(first, frame, whole_plane(frame, single), nullptr);
     }
   });
-  if (timer.on) std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(local_used), int(local_failed));
+  timer.lap("slicing phase 1");
+  std::vector<int> retries;
+  for (std::size_t i = 0; i < specs.size(); ++i)
+    if (retry[i] != kNone) retries.push_back(static_cast<int>(i));
+  detail::parallel_for(static_cast<long>(retries.size()), threads, [&](long r, int worker) {
+    const int si = retries[r];
+    const SectionSpec& spec = specs[si];
+    const int b = spec.bone;
+    auto& single = single_segments[worker];
+    PlaneFrame frame;
+    if (spec.kind == kInterior) {
+      frame = PlaneFrame::make(sk.heads[b], sk.direction(b));  // the family's frame
+      frame.origin = spec.point;
+    } else {
+      frame = PlaneFrame::make(spec.point, spec.normal);
+    }
+    const double param = slab_params[b][spec.boundary];
+    if (retry[si] == kGrowFamily && grow_local(si, frame, 3.0 * reach[b], inside_at(b, param), single))
+      return;
+    if (retry[si] == kGrowJoint) {
+      double radius = reach[b];
+      if (sk.parents[b] >= 0) radius = std::max(radius, reach[sk.parents[b]]);
+      if (grow_local(si, frame, radius, inside_at(b, param), single)) return;
+    }
+    finish(si, frame, whole_plane(frame, single), nullptr);
+  });
+  if (timer.on) {
+    std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(local_used), int(local_failed));
+    std::fprintf(stderr, "sections retried %zu\n", retries.size());
+
+  }
   timer.lap("slicing");
   // 4. Loads: farthest downstream point of every section (paper §4.4), then stress.
   const int ns = static_cast<int>(specs.size());
