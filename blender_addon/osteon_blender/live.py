@@ -19,8 +19,11 @@ Pieces, and who runs them:
   benchmark, and the first run when Live is switched on.
 
 Handlers are added when Live is switched on and removed when it is switched off, on
-unregister and when a file is loaded (``load_post`` is the one ``persistent`` handler,
-on purpose: it is what ends a session when another file replaces the scene).
+unregister and when a file is loaded.  ``persistent`` is used twice, on purpose: the
+``load_post`` handler (registered with the add-on) is what ends a session when another
+file replaces the scene, and the timer is registered persistent so that it is that
+handler, not Blender, which removes it (a timer dropped by a file load makes the bpy 4.5
+wheel hang at exit).
 """
 
 from __future__ import annotations
@@ -36,32 +39,6 @@ from bpy.props import BoolProperty, IntProperty
 
 from . import bridge, core, overlay
 from .core import OsteonError
-
-# --------------------------------------------------------------------------- colours (no bpy)
-
-_LUT_SIZE = 1024
-_LUT = None
-
-
-def stress_colors_fast(vertex_stress: np.ndarray, allowable_mpa: float,
-                       vertex_culled: np.ndarray | None = None) -> np.ndarray:
-    """:func:`core.stress_colors` through a 1024-entry table of :func:`core.ramp`
-    (same colours within 1/1000 of the ramp, ~10x faster on 100k vertices)."""
-    global _LUT
-    if _LUT is None:
-        lut = np.ones((_LUT_SIZE + 1, 4), dtype=np.float32)
-        lut[:_LUT_SIZE, :3] = core.ramp(np.linspace(0.0, 1.0, _LUT_SIZE))
-        lut[_LUT_SIZE] = core.GREY
-        _LUT = lut
-    x = np.asarray(vertex_stress, dtype=np.float64) * ((_LUT_SIZE - 1) / float(allowable_mpa))
-    np.nan_to_num(x, copy=False, nan=0.0, posinf=_LUT_SIZE - 1, neginf=0.0)
-    np.clip(x, 0.0, _LUT_SIZE - 1, out=x)
-    x += 0.5
-    idx = x.astype(np.int64)
-    if vertex_culled is not None:
-        idx[np.asarray(vertex_culled, dtype=bool)] = _LUT_SIZE
-    return _LUT[idx]
-
 
 # --------------------------------------------------------------------------- session state
 
@@ -198,6 +175,7 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
     t0 = time.perf_counter()
     scene, obj, arm = _objects(sess)
     if obj.mode == "EDIT" or arm.mode == "EDIT":
+        sess.weights_stale = True       # faces / weights may change there: rebuild after
         raise Paused("Edit Mode")
     if depsgraph is None:
         if bpy.context.scene is None or bpy.context.scene.name != sess.scene_name:
@@ -253,14 +231,17 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
     osteon = core.import_engine()
     t0 = time.perf_counter()
     m = inp.matrix
-    world = inp.co @ m[:3, :3].T.astype(np.float64)
-    world += m[:3, 3]
-    extent = world.max(axis=0) - world.min(axis=0)
+    w = inp.co                                      # float32, object space (Blender's own)
+    if not np.array_equal(m, np.eye(4)):            # rigged meshes mostly sit at identity
+        w = w @ m[:3, :3].T.astype(np.float32)
+        w += m[:3, 3].astype(np.float32)
+    # per column: a strided axis-0 reduction over (V, 3) is ~20x slower in NumPy
+    extent = np.array([float(c.max()) - float(c.min()) for c in w.T])
     try:
         k = core.mm_per_unit(inp.size_mode, inp.print_size_mm, extent, inp.unit_scale)
     except ValueError as e:
         raise OsteonError(str(e)) from e
-    world *= k
+    world = np.multiply(w, k, dtype=np.float64)    # world mm, one pass
     if inp.faces is not None:
         sess.faces = inp.faces
         sess.analyzer = None
@@ -277,7 +258,7 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
         sess.analyzer_key = None
         raise OsteonError(f"osteon could not analyse '{sess.obj_name}': {e}") from e
     t2 = time.perf_counter()
-    rgba = stress_colors_fast(analysis.vertex_stress, inp.params["allowable_stress"],
+    rgba = core.stress_colors(analysis.vertex_stress, inp.params["allowable_stress"],
                               analysis.vertex_culled)
     t3 = time.perf_counter()
     return LiveResult(analysis=analysis, rgba=rgba, vertices_mm=world, mm_per_unit=k,
@@ -408,6 +389,7 @@ def _tick():
                 overlay.set_outlines(sess.scene_name, analysis, out)
                 sess.outlined = analysis
         # 3. something changed and the throttle allows: read and start an analysis
+        still = not sess.dirty
         if sess.dirty and sess.outline_future is None and now >= sess.next_allowed:
             sess.dirty = False
             sess.started = now
@@ -416,9 +398,10 @@ def _tick():
                 sess.readout.status = "live"
                 sess.future = _pool().submit(compute, sess, inp)
                 return _POLL_S
+            still = True                # noted, but nothing moved (e.g. our colour write)
         # 4. the pose is still: outlines of the latest result (lower priority)
         res = sess.last_result
-        if (res is not None and not sess.dirty and sess.outline_future is None
+        if (res is not None and still and sess.outline_future is None
                 and sess.outlined is not res.analysis
                 and _want_outlines(bpy.data.scenes.get(sess.scene_name))):
             sess.outline_future = _pool().submit(lambda r=res: (r.analysis, outlines_of(sess, r)))
@@ -498,7 +481,9 @@ def _add_handlers() -> None:
     if _on_frame not in bpy.app.handlers.frame_change_post:
         bpy.app.handlers.frame_change_post.append(_on_frame)
     if not bpy.app.timers.is_registered(_tick):
-        bpy.app.timers.register(_tick, first_interval=_POLL_S)
+        # persistent on purpose: Blender must not drop the timer behind our back at a file
+        # load (the bpy 4.5 wheel then hangs at exit); our load_post handler removes it.
+        bpy.app.timers.register(_tick, first_interval=_POLL_S, persistent=True)
 
 
 def unregister_handlers() -> None:

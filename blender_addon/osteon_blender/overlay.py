@@ -4,8 +4,9 @@ The outlines are computed OUTSIDE the draw callback, right after an analysis (by
 mode, or once after the Analyze button when the overlay is on), as world-space line
 segments in NumPy arrays; the draw callback only uploads them once per new result and
 draws them with the ``gpu`` module (no ``bgl``).  Weak sections (stress > allowable) are
-drawn red and thicker, culled (surely safe) ones grey, the others blue -> red by
-stress / allowable like the ``osteon_stress`` colour layer.
+drawn thick and magenta-red, culled (surely safe) ones dark grey, the others blue -> red
+by stress / allowable like the ``osteon_stress`` colour layer (darkened so that the lines
+stand out on the coloured surface).  Lines are drawn without depth test (X-ray like).
 
 Nothing is drawn, and no draw handler is ever added, in background mode.
 """
@@ -22,8 +23,9 @@ from . import core
 
 WIDTH = 2.0        # px, ordinary sections
 WEAK_WIDTH = 5.0   # px, weak sections
-WEAK_RGBA = (1.0, 0.0, 0.0, 1.0)
-CULLED_RGBA = (0.55, 0.55, 0.55, 0.8)
+WEAK_RGBA = (1.0, 0.0, 0.75, 1.0)      # magenta-red: stands out on the red (weak) surface
+CULLED_RGBA = (0.25, 0.25, 0.25, 0.9)
+SHADE = 0.55   # ordinary outlines: the stress colour darkened, to stand out on the surface
 
 _versions = itertools.count(1)
 
@@ -120,7 +122,8 @@ def compute_outlines(analysis, vertices_mm: np.ndarray, faces: np.ndarray,
     ratio = stress / float(analysis.allowable_stress)
     valid = np.isfinite(stress)
     if gap_tolerance is None:
-        gap_tolerance = 0.01 * float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
+        extent = [float(c.max()) - float(c.min()) for c in v.T]   # per column: fast
+        gap_tolerance = 0.01 * float(np.linalg.norm(extent))
     doms = (domains or DomainCache()).get(analysis.vertex_bone, faces, parents)
     sb = np.asarray(analysis.section_bone)
     points = np.asarray(analysis.section_point, dtype=np.float64)
@@ -190,7 +193,7 @@ def compute_outlines(analysis, vertices_mm: np.ndarray, faces: np.ndarray,
                 ids.append(s)
                 segs.append(seg)
                 rgba = (CULLED_RGBA if culled[s]
-                        else (*core.ramp(np.array([ratio[s]]))[0].tolist(), 1.0))
+                        else (*(SHADE * core.ramp(np.array([ratio[s]]))[0]).tolist(), 1.0))
                 cols.append(np.broadcast_to(np.float32(rgba), (len(seg), 4)))
 
     k = float(mm_per_unit)

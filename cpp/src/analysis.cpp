@@ -422,7 +422,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   // is clipped, up to the model size; true when the section was found locally.
   auto grow_local = [&](int si, const PlaneFrame& frame, double radius, bool inside,
                         std::vector<CutSegment>& segs) {
-    for (; radius < diag; radius *= 3.0) {
+    for (int step = 0; step < 2 && radius < diag; ++step, radius *= 3.0) {
       const CutRegion ball{frame.origin, Vec3::Zero(), radius};
       segs.clear();
       cut_mesh(mesh, frame, segs, &grid, &ball);
