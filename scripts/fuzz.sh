@@ -8,7 +8,8 @@
 #
 # Needs clang with libFuzzer (Debian: apt-get install clang libclang-rt-14-dev), cmake, Eigen.
 # Corpus: build-fuzz/corpus (kept between runs); crashes: build-fuzz/crash-* (reproduce with
-# build-fuzz/fuzz_section build-fuzz/crash-<hash>). Exit code non-zero when a crash was found.
+# build-fuzz/fuzz_section build-fuzz/crash-<hash>; FUZZ_DUMP=1 prints the decoded mesh/plane).
+# Exit code non-zero when a crash was found.
 set -euo pipefail
 RUNS="${1:-1000000}"
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -27,4 +28,5 @@ if [[ "${JOBS:-1}" -gt 1 ]]; then
   ARGS=(-runs="$((RUNS / JOBS))" -jobs="$JOBS" -workers="$JOBS" -max_len=512 -timeout=10
         -rss_limit_mb=2048 -print_final_stats=1)
 fi
-exec ./fuzz_section "${ARGS[@]}" corpus
+# cpp/fuzz/regressions: inputs that once failed (run first as seeds; new units go to corpus/).
+exec ./fuzz_section "${ARGS[@]}" corpus "$ROOT/cpp/fuzz/regressions"

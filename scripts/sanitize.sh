@@ -10,7 +10,7 @@
 # staged next to a copy of python/osteon in build-asan/stage/. A separate venv (.venv-asan, made
 # once) sees the packages of .venv through a .pth path line but not .venv's editable hook, so
 # `import osteon` picks the staged, sanitized package. CPython itself is not instrumented, so
-# libasan is LD_PRELOADed and leak detection is off (the interpreter keeps memory until exit).
+# libasan (and libstdc++) are LD_PRELOADed and leak detection is off (the interpreter keeps memory until exit).
 # UBSan errors abort (-fno-sanitize-recover=undefined); ASan errors abort. Needs: gcc/g++ with
 # libasan/libubsan (Debian: build-essential), cmake, ninja, Eigen, GoogleTest, and .venv
 # (scripts/setup.sh).
@@ -47,8 +47,11 @@ fi
 SITE_MAIN="$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
 SITE_ASAN="$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
 echo "$SITE_MAIN" > "$SITE_ASAN/osteon_main_venv.pth"
+# libstdc++ must be loaded when ASan starts, or its __cxa_throw interceptor finds no real
+# __cxa_throw ("CHECK failed: real___cxa_throw != 0") on the first C++ exception.
 LIBASAN="$(${CXX:-g++} -print-file-name=libasan.so)"
-export LD_PRELOAD="$LIBASAN"
+LIBSTDCXX="$(${CXX:-g++} -print-file-name=libstdc++.so)"
+export LD_PRELOAD="$LIBASAN $LIBSTDCXX"
 export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:detect_odr_violation=0"
 export PYTHONPATH="$STAGE"
 "$VENV/bin/python" -c 'import osteon._core as c, sys; print("[sanitize] using", c.__file__)' \

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Installs what osteon needs on a fresh Debian machine (apt: compilers, Eigen, GoogleTest,
-# Blender, CalculiX, gmsh, Xvfb) and builds the engine into ./.venv (editable install).
+# Installs what osteon needs on a fresh Debian machine (apt: compilers incl. clang/libFuzzer,
+# Eigen, GoogleTest, Blender, CalculiX, gmsh, Xvfb) and builds the engine into ./.venv (editable install).
 # Idempotent: a second run only rebuilds what changed. Used by scripts/demo.sh, scripts/test.sh
 # and .ci/run.
 set -euo pipefail
@@ -10,7 +10,7 @@ SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 APT_PACKAGES=(build-essential cmake ninja-build libeigen3-dev libgtest-dev blender calculix-ccx gmsh
-  xvfb python3-venv)
+  xvfb python3-venv clang libclang-rt-14-dev)
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

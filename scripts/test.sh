@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Runs every test: C++ unit tests (GoogleTest via ctest), the Python suite on the installed
-# wheel (engine, readers, CLI, FEM cross-check, robustness), and the Blender add-on tests in
-# Debian's Blender 3.4 and the bpy 4.5 wheel. Installs what it needs first (scripts/setup.sh).
+# wheel (engine, readers, CLI, FEM cross-check, robustness, hypothesis), the Blender add-on tests
+# in Debian's Blender 3.4 and the bpy 4.5 wheel, a libFuzzer smoke run of the slicer, and the
+# C++ tests + Python suite again under AddressSanitizer + UndefinedBehaviorSanitizer.
+# Installs what it needs first (scripts/setup.sh). OSTEON_QUICK=1 skips fuzzing and sanitizers.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -17,7 +19,12 @@ echo "== Lint (ruff)"
 echo "== Python tests"
 .venv/bin/python -m pytest tests/python -q
 
-if [ -f scripts/blender_tests.sh ]; then
-  echo "== Blender add-on tests"
-  bash scripts/blender_tests.sh
+echo "== Blender add-on tests"
+bash scripts/blender_tests.sh
+
+if [ "${OSTEON_QUICK:-0}" != 1 ]; then
+  echo "== Fuzz smoke run (libFuzzer, 20000 inputs)"
+  bash scripts/fuzz.sh 20000
+  echo "== Sanitizers (ASan + UBSan): GoogleTest and the Python suite"
+  bash scripts/sanitize.sh -q
 fi

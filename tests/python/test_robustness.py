@@ -19,16 +19,13 @@ vertices (V,2), (V,4), 1D; ragged lists       ValueError "vertices must have sha
 quads (F,4) or 1D faces                       ValueError "faces must have shape (F, 3)
                                               (triangles), got ..."
 empty mesh (no vertices / no faces)           ValueError "empty mesh: ..."
-degenerate faces (repeated index,             ignored: the same result as without them
-collinear corners)
-duplicate faces (same triangle twice)         sections whose plane crosses a doubled triangle are
-                                              flagged ``non_manifold`` + ``open`` and skipped
-                                              (NaN); see the xfail test: they should be ignored
+degenerate faces (repeated index,             ignored: the same stresses (a zero-area sliver
+collinear corners)                             crossing a plane may add ``gap_closed``)
+duplicate faces (same triangle, any winding)  dropped by the slicer: the same result, no flag
 duplicate vertices (unwelded triangle soup)   sections flagged ``gap_closed``, same stresses as the
-                                              welded mesh (gap tolerance > 0); with
-                                              ``gap_tolerance=0``, or more than 256 open chains in
-                                              one cut, the sections are ``open`` + ``empty``
-                                              (weld first; see the xfail test)
+                                              welded mesh (any number of open chains); with
+                                              ``gap_tolerance=0`` the sections are ``open`` +
+                                              ``empty`` (NaN): weld first or keep a tolerance
 open mesh (a slit in the wall)                sections through the slit ``open`` (+ ``empty``,
                                               NaN) when the gap exceeds the tolerance, else
                                               ``gap_closed``; the other sections unchanged
@@ -261,33 +258,15 @@ def test_degenerate_faces_are_ignored(clean):
     assert flag_set(res) <= {"gap_closed"}
 
 
-def test_duplicate_faces_are_flagged_not_lost(clean):
-    v, f, sk, ref = clean
-    # Double the triangles of one ring band (between x = 20 and x = 21 mm).
-    band = np.flatnonzero(np.all(np.isin(v[f][:, :, 0], [20.0, 21.0]), axis=1))
-    assert len(band) > 0
-    res = osteon.analyze(v, np.vstack([f, f[band]]), sk, interval=0.5)
-    ref = osteon.analyze(v, f, sk, interval=0.5)
-    assert_well_formed(res, len(v))
-    x = res.section_point[:, 0]
-    hit = (x > 20) & (x < 21)  # planes at 20 and 21 only touch the band at its ring vertices
-    assert hit.any()
-    assert has_flag(res, "non_manifold")[hit].all()
-    hit |= (x >= 20 - 1e-9) & (x <= 21 + 1e-9)
-    # Everything the doubled band does not touch is unchanged and unflagged.
-    np.testing.assert_allclose(res.stress[~hit], ref.stress[~hit], rtol=1e-12)
-    assert (res.section_flags[~hit] == 0).all()
-
-
-@pytest.mark.xfail(strict=True, reason="slicer: a doubled triangle makes its mesh edges carry 4 "
-                   "cut endpoints, so assemble_loops cannot link the loop (flags non_manifold, "
-                   "skips the section); exact duplicate faces should be dropped (lead: slicer.cpp "
-                   "/ Analyzer)")
-def test_duplicate_faces_should_be_ignored(clean):
+def test_duplicate_faces_are_ignored(clean):
+    """Exact duplicates (either winding) are dropped by the slicer: same result, no flag."""
     v, f, sk, _ = clean
     ref = osteon.analyze(v, f, sk, interval=0.5)
-    res = osteon.analyze(v, np.vstack([f, f[::7]]), sk, interval=0.5)
-    np.testing.assert_allclose(res.stress, ref.stress, rtol=1e-9)
+    for extra in (f[::7], f[::7][:, [0, 2, 1]], f[:1].repeat(3, axis=0)):
+        res = osteon.analyze(v, np.vstack([f, extra]), sk, interval=0.5)
+        assert_well_formed(res, len(v))
+        np.testing.assert_allclose(res.stress, ref.stress, rtol=1e-9)
+        np.testing.assert_array_equal(res.section_flags, ref.section_flags)
 
 
 def test_duplicate_vertices_unwelded_soup(clean):
@@ -304,16 +283,14 @@ def test_duplicate_vertices_unwelded_soup(clean):
     assert (has_flag(res0, "open") & has_flag(res0, "empty")).all()
 
 
-@pytest.mark.xfail(strict=True, reason="slicer: gap closing is limited to 256 open chains per "
-                   "cut, so an unwelded mesh with more than 256 triangles around a section loses "
-                   "it (flagged open + empty); endpoints should be matched by position (lead: "
-                   "assemble_loops in slicer.cpp)")
-def test_unwelded_fine_mesh_should_match_welded():
+def test_unwelded_fine_mesh_matches_welded():
+    """More than 256 open chains per cut (300 triangles around the bar) still close up."""
     v, f = bar(n=300)
     sk = two_bones()
     ref = osteon.analyze(v, f, sk)
     soup_v = v[f].reshape(-1, 3)
     res = osteon.analyze(soup_v, np.arange(len(soup_v)).reshape(-1, 3), sk)
+    assert flag_set(res) == {"gap_closed"}
     np.testing.assert_allclose(res.stress, ref.stress, rtol=1e-9)
 
 
@@ -679,7 +656,7 @@ def test_bad_threads(clean, threads):
 
 
 def off_grid_bones() -> osteon.Skeleton:
-    """Bones whose section planes miss the bar's vertex rings (see the xfail test below)."""
+    """Bones whose section planes miss the bar's vertex rings (see the regression below)."""
     return osteon.Skeleton([[1.37, 0, 0], [30.37, 0, 0]], [[30.37, 0, 0], [58.37, 0, 0]], [-1, 0])
 
 
@@ -702,11 +679,9 @@ def test_extreme_scales(clean, scale):
     np.testing.assert_array_equal(res.weak, res.stress > res.allowable_stress)
 
 
-@pytest.mark.xfail(strict=True, reason="slicer: at 1e-6 mm, section planes that pass exactly "
-                   "through a ring of vertices lose their cut (flag empty / gap_closed): the face "
-                   "grid's cell-box test FaceGrid::meets rounds a box whose top lies in the plane "
-                   "to below it (lead: slicer.hpp/slicer.cpp)")
 def test_extreme_scale_planes_through_vertices(clean):
+    """Regression (found by fuzz_section): planes exactly through vertex rings at 1e-6 mm lost
+    their cut when the face grid rounded a cell box below the plane."""
     v, f, sk, ref = clean  # bones on integers: planes every 2 mm through the 1 mm vertex rings
     s = 1e-6
     res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s)
