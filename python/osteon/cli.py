@@ -367,6 +367,24 @@ def _f(x):
     return x if np.isfinite(x) else None
 
 
+def _analyze(args, model, allowable: float):
+    """Run the analysis with the command's settings; returns (Analysis, seconds)."""
+    import osteon
+
+    t = time.perf_counter()
+    a = osteon.analyze(
+        model.vertices,
+        model.faces,
+        model.skeleton,
+        model.weights,
+        force=args.force,
+        allowable_stress=allowable,
+        interval=args.interval,
+        root=_root(args, model),
+    )
+    return a, time.perf_counter() - t
+
+
 def _report(args, model, material, strength, allowable, analysis, seconds):
     return {
         "model": str(args.model),
@@ -422,7 +440,6 @@ def _png(args, model, analysis, allowable, before=None, vertices=None, marks=Non
 
 
 def cmd_analyze(args, out):
-    import osteon
 
     prog = _Progress(["reading model", "analysing", "writing outputs"], args.quiet)
     try:
@@ -431,18 +448,7 @@ def cmd_analyze(args, out):
         _positive(args.interval, "--interval", "mm")
         model = _load(args)
         prog.next()
-        t = time.perf_counter()
-        a = osteon.analyze(
-            model.vertices,
-            model.faces,
-            model.skeleton,
-            model.weights,
-            force=args.force,
-            allowable_stress=allowable,
-            interval=args.interval,
-            root=_root(args, model),
-        )
-        secs = time.perf_counter() - t
+        a, secs = _analyze(args, model, allowable)
         prog.next()
         rep = _report(args, model, material, strength, allowable, a, secs)
         if args.json:
@@ -572,7 +578,6 @@ def cmd_correct(args, out):
 
 
 def cmd_validate(args, out):
-    import osteon
 
     stages = ["reading model", "analysing"] + (["meshing + solving (FEM)"] if args.fem else [])
     prog = _Progress(stages + ["writing outputs"], args.quiet)
@@ -582,18 +587,7 @@ def cmd_validate(args, out):
         model = _load(args)
         checks = model_checks(model)
         prog.next()
-        t = time.perf_counter()
-        a = osteon.analyze(
-            model.vertices,
-            model.faces,
-            model.skeleton,
-            model.weights,
-            force=args.force,
-            allowable_stress=allowable,
-            interval=args.interval,
-            root=_root(args, model),
-        )
-        secs = time.perf_counter() - t
+        a, secs = _analyze(args, model, allowable)
         prog.next()
         rep = {
             "model": str(args.model),
