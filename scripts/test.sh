@@ -26,5 +26,5 @@ if [ "${OSTEON_QUICK:-0}" != 1 ]; then
   echo "== Fuzz smoke run (libFuzzer, 20000 inputs)"
   bash scripts/fuzz.sh 20000
   echo "== Sanitizers (ASan + UBSan): GoogleTest and the Python suite"
-  bash scripts/sanitize.sh -q
+  bash scripts/sanitize.sh
 fi
