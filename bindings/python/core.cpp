@@ -161,11 +161,28 @@ class PyAnalyzer {
              const py::object& csr, double force, double allowable_stress, double interval,
              int held_bone, double gap_tolerance, int threads, bool local_cuts) {
     require_rows3(faces, "faces");
-    weights_ = make_weights(dense, csr, num_vertices, num_bones);
-    analyzer_ = std::make_unique<Analyzer>(
-        faces.data(), faces.shape(0), num_vertices, weights_.get(), num_bones,
-        make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads,
-                     local_cuts));
+    const AnalysisOptions options = make_options(force, allowable_stress, interval, held_bone,
+                                                 gap_tolerance, threads, local_cuts);
+    if (dense.is_none() && !csr.is_none()) {
+      // Sparse weights: the analysis needs only each vertex's dominant bone; no copy of them.
+      auto parts = csr.cast<py::tuple>();
+      Int64Array indptr = parts[0].cast<Int64Array>();
+      Int64Array indices = parts[1].cast<Int64Array>();
+      DoubleArray data = parts[2].cast<DoubleArray>();
+      if (indptr.ndim() != 1 || indptr.shape(0) != num_vertices + 1)
+        throw std::invalid_argument("weights must have one row per vertex (" +
+                                    std::to_string(num_vertices) + ")");
+      if (indices.shape(0) != data.shape(0) || indptr.at(num_vertices) != indices.shape(0))
+        throw std::invalid_argument("weights: sparse indices and data do not match");
+      std::vector<int> dominant = dominant_bones_csr(indptr.data(), indices.data(), data.data(),
+                                                     num_vertices, num_bones);
+      analyzer_ = std::make_unique<Analyzer>(faces.data(), faces.shape(0), num_vertices,
+                                             std::move(dominant), num_bones, options);
+    } else {
+      auto weights = make_weights(dense, csr, num_vertices, num_bones);
+      analyzer_ = std::make_unique<Analyzer>(faces.data(), faces.shape(0), num_vertices,
+                                             weights.get(), num_bones, options);
+    }
     num_vertices_ = num_vertices;
   }
   py::dict run(const DoubleArray& vertices, const DoubleArray& heads, const DoubleArray& tails,
@@ -187,7 +204,6 @@ class PyAnalyzer {
   }
 
  private:
-  std::unique_ptr<BoneWeights> weights_;
   std::unique_ptr<Analyzer> analyzer_;
   Index num_vertices_ = 0;
   std::mutex mutex_;

@@ -98,9 +98,19 @@ Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertice
   if (weights != nullptr) {
     validate_weights(*weights, num_vertices, num_bones);
     s.has_weights = true;
-    s.weights = *weights;
-    s.dominant = dominant_bones(s.weights);
+    s.dominant = dominant_bones(*weights);  // all the analysis needs of the weights
   }
+}
+
+Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertices,
+                   std::vector<int> vertex_bone, int num_bones, const AnalysisOptions& options)
+    : Analyzer(faces, num_faces, num_vertices, nullptr, num_bones, options) {
+  if (static_cast<Index>(vertex_bone.size()) != num_vertices)
+    throw std::invalid_argument("vertex_bone must have one entry per vertex");
+  for (int b : vertex_bone)
+    if (b < -1 || b >= num_bones) throw std::invalid_argument("vertex_bone: bone index out of range");
+  impl_->has_weights = true;
+  impl_->dominant = std::move(vertex_bone);
 }
 
 Analyzer::~Analyzer() = default;

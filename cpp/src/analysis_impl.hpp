@@ -48,8 +48,7 @@ struct Analyzer::Impl {
   std::vector<std::int32_t> faces;
   Index num_vertices = 0;
   int num_bones = 0;
-  bool has_weights = false;
-  BoneWeights weights;
+  bool has_weights = false;  // weights given: `dominant` holds each vertex's bone (-1: none)
   std::vector<int> dominant;
 
   // State of the last run.

@@ -92,6 +92,30 @@ std::vector<int> dominant_bones(const BoneWeights& w) {
   return dom;
 }
 
+std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, const double* data,
+                                    Index num_vertices, int num_bones) {
+  if (indptr[0] != 0) throw std::invalid_argument("weights: CSR indptr must start at 0");
+  std::vector<int> dom(num_vertices, -1);
+  for (Index v = 0; v < num_vertices; ++v) {
+    if (indptr[v + 1] < indptr[v]) throw std::invalid_argument("weights: CSR indptr must not decrease");
+    double best = 1e-12;  // round-off weights never make a bone dominant
+    for (Index k = indptr[v]; k < indptr[v + 1]; ++k) {
+      const double w = data[k];
+      if (!std::isfinite(w)) throw std::invalid_argument("weights contain NaN or infinity");
+      if (w < -1e-6)
+        throw std::invalid_argument("weights must not be negative (found " + std::to_string(w) + ")");
+      if (indices[k] < 0 || indices[k] >= num_bones)
+        throw std::invalid_argument("weights: bone (column) index " + std::to_string(indices[k]) +
+                                    " out of range for " + std::to_string(num_bones) + " bones");
+      if (w > best) {
+        best = w;
+        dom[v] = static_cast<int>(indices[k]);
+      }
+    }
+  }
+  return dom;
+}
+
 std::vector<int> nearest_bones(const MeshView& mesh, const Skeleton& s, int threads) {
   const int nb = s.num_bones();
   std::vector<int> nearest(mesh.num_vertices, 0);

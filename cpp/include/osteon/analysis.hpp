@@ -68,6 +68,9 @@ class Analyzer {
   /// faces: #F by 3 row-major; weights may be null (each vertex bound to its nearest bone).
   Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertices,
            const BoneWeights* weights, int num_bones, const AnalysisOptions& options);
+  /// Same, given each vertex's dominant bone (#V, -1 = unweighted) instead of the weights.
+  Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertices,
+           std::vector<int> vertex_bone, int num_bones, const AnalysisOptions& options);
   ~Analyzer();
   Analyzer(const Analyzer&) = delete;
   Analyzer& operator=(const Analyzer&) = delete;

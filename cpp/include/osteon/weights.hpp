@@ -32,6 +32,11 @@ void validate_weights(const BoneWeights& weights, Index num_vertices, int num_bo
 /// Dominant (largest-weight) bone of every vertex; -1 where a row is all zero.
 std::vector<int> dominant_bones(const BoneWeights& weights);
 
+/// The same straight from CSR arrays (indptr #V+1, indices nnz, data nnz), checking them in the
+/// same pass (index range, finite, not below -1e-6) without copying the weights.
+std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, const double* data,
+                                    Index num_vertices, int num_bones);
+
 /// Nearest bone (by distance to the bone segment) of every vertex; rows listed in `only` if given.
 std::vector<int> nearest_bones(const MeshView& mesh, const Skeleton& skeleton, int threads = 0);
 
