@@ -1,5 +1,6 @@
 // pybind11 bindings: osteon._core. Thin: converts NumPy arrays to engine views and results back
-// to NumPy without copying, releases the GIL while the engine works. The public API is python/osteon.
+// to NumPy without copying, releases the GIL while the engine works. The public API is
+// python/osteon.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -62,8 +63,8 @@ void require_rows3(const py::array& a, const char* name) {
     throw std::invalid_argument(std::string(name) + " must have shape (N, 3)");
 }
 
-Skeleton make_skeleton(const DoubleArray& heads, const DoubleArray& tails, const Int32Array& parents,
-                       const std::vector<std::string>& names) {
+Skeleton make_skeleton(const DoubleArray& heads, const DoubleArray& tails,
+                       const Int32Array& parents, const std::vector<std::string>& names) {
   require_rows3(heads, "heads");
   require_rows3(tails, "tails");
   if (parents.ndim() != 1) throw std::invalid_argument("parents must be a 1D array");
@@ -95,7 +96,8 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
       throw std::invalid_argument("weights must have shape (V, B) = (" +
                                   std::to_string(num_vertices) + ", " + std::to_string(num_bones) +
                                   ")");
-    return std::make_unique<BoneWeights>(BoneWeights::from_dense(w.data(), num_vertices, num_bones));
+    return std::make_unique<BoneWeights>(
+        BoneWeights::from_dense(w.data(), num_vertices, num_bones));
   }
   if (!csr.is_none()) {
     auto parts = csr.cast<py::tuple>();
@@ -107,8 +109,8 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
                                   std::to_string(num_vertices) + ")");
     if (indices.shape(0) != data.shape(0) || indptr.at(num_vertices) != indices.shape(0))
       throw std::invalid_argument("weights: sparse indices and data do not match");
-    return std::make_unique<BoneWeights>(BoneWeights::from_csr(
-        indptr.data(), indices.data(), data.data(), num_vertices, num_bones));
+    return std::make_unique<BoneWeights>(
+        BoneWeights::from_csr(indptr.data(), indices.data(), data.data(), num_vertices, num_bones));
   }
   return nullptr;
 }
@@ -174,8 +176,8 @@ class PyAnalyzer {
                                     std::to_string(num_vertices) + ")");
       if (indices.shape(0) != data.shape(0) || indptr.at(num_vertices) != indices.shape(0))
         throw std::invalid_argument("weights: sparse indices and data do not match");
-      std::vector<int> dominant = dominant_bones_csr(indptr.data(), indices.data(), data.data(),
-                                                     num_vertices, num_bones);
+      std::vector<int> dominant =
+          dominant_bones_csr(indptr.data(), indices.data(), data.data(), num_vertices, num_bones);
       analyzer_ = std::make_unique<Analyzer>(faces.data(), faces.shape(0), num_vertices,
                                              std::move(dominant), num_bones, options);
     } else {
@@ -237,7 +239,8 @@ PYBIND11_MODULE(_core, m) {
            py::arg("held_bone"), py::arg("gap_tolerance"), py::arg("threads"),
            py::arg("local_cuts") = true)
       .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("heads"), py::arg("tails"),
-           py::arg("parents"), py::arg("names"), "Analyse vertices (V,3 mm) with a posed skeleton.");
+           py::arg("parents"), py::arg("names"),
+           "Analyse vertices (V,3 mm) with a posed skeleton.");
 
   m.def(
       "correct",
@@ -267,7 +270,8 @@ PYBIND11_MODULE(_core, m) {
         d["bone_scale"] = to_numpy(std::move(r.bone_scale));
         d["vertices"] = to_numpy_rows3(std::move(r.vertices));
         py::list rounds;
-        for (const auto& rd : r.rounds) rounds.append(py::make_tuple(rd.bone, rd.factor, rd.max_stress_after));
+        for (const auto& rd : r.rounds)
+          rounds.append(py::make_tuple(rd.bone, rd.factor, rd.max_stress_after));
         d["rounds"] = rounds;
         d["converged"] = r.converged;
         d["reason"] = r.reason;
@@ -303,8 +307,8 @@ PYBIND11_MODULE(_core, m) {
         }
         return to_numpy_rows3(std::move(out));
       },
-      py::arg("vertices"), py::arg("heads"), py::arg("tails"), py::arg("parents"),
-      py::arg("dense"), py::arg("csr"), py::arg("bone_scale"),
+      py::arg("vertices"), py::arg("heads"), py::arg("tails"), py::arg("parents"), py::arg("dense"),
+      py::arg("csr"), py::arg("bone_scale"),
       "Linear blend skinning with per-bone cross-section scales.");
 
   m.def(
@@ -325,8 +329,8 @@ PYBIND11_MODULE(_core, m) {
         py::dict d;
         d["area"] = p.area;
         d["centroid"] = py::make_tuple(p.centroid.x(), p.centroid.y());
-        d["second_moment"] = py::make_tuple(p.second_moment(0, 0), p.second_moment(0, 1),
-                                            p.second_moment(1, 1));
+        d["second_moment"] =
+            py::make_tuple(p.second_moment(0, 0), p.second_moment(0, 1), p.second_moment(1, 1));
         d["modulus"] = p.modulus;
         d["valid"] = p.valid;
         return d;
@@ -362,7 +366,8 @@ PYBIND11_MODULE(_core, m) {
         return d;
       },
       py::arg("vertices"), py::arg("faces"), py::arg("origin"), py::arg("normal"),
-      py::arg("gap_tolerance"), "The section region of one plane around its origin (3D loops, mm).");
+      py::arg("gap_tolerance"),
+      "The section region of one plane around its origin (3D loops, mm).");
 
   m.attr("FLAG_GAP_CLOSED") = static_cast<int>(kFlagGapClosed);
   m.attr("FLAG_OPEN") = static_cast<int>(kFlagOpen);

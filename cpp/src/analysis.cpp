@@ -1,15 +1,14 @@
 #include "osteon/analysis.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
-
-#include <atomic>
-#include <chrono>
-#include <cstdio>
-#include <cstdlib>
 
 #include "analysis_impl.hpp"
 #include "parallel.hpp"
@@ -23,7 +22,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 int interior_count(double length, double interval) {
   const double n = std::ceil(length / interval * (1.0 - 1e-12)) - 1.0;
   if (n <= 0) return 0;
-  if (n > 1e6) throw std::invalid_argument("interval too small: more than 10^6 sections on one bone");
+  if (n > 1e6)
+    throw std::invalid_argument("interval too small: more than 10^6 sections on one bone");
   return static_cast<int>(n);
 }
 
@@ -83,7 +83,8 @@ Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertice
   s.num_vertices = num_vertices;
   s.num_bones = num_bones;
   if (num_vertices <= 0) throw std::invalid_argument("empty mesh: vertices has no rows");
-  if (num_faces <= 0 || faces == nullptr) throw std::invalid_argument("empty mesh: faces has no rows");
+  if (num_faces <= 0 || faces == nullptr)
+    throw std::invalid_argument("empty mesh: faces has no rows");
   if (num_bones <= 0) throw std::invalid_argument("skeleton has no bones");
   s.faces.assign(faces, faces + 3 * num_faces);
   MeshView probe{nullptr, num_vertices, s.faces.data(), num_faces};
@@ -108,7 +109,8 @@ Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertice
   if (static_cast<Index>(vertex_bone.size()) != num_vertices)
     throw std::invalid_argument("vertex_bone must have one entry per vertex");
   for (int b : vertex_bone)
-    if (b < -1 || b >= num_bones) throw std::invalid_argument("vertex_bone: bone index out of range");
+    if (b < -1 || b >= num_bones)
+      throw std::invalid_argument("vertex_bone: bone index out of range");
   impl_->has_weights = true;
   impl_->dominant = std::move(vertex_bone);
 }
@@ -321,11 +323,13 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
         for (int k = 0; k < 3; ++k) {
           const Index v = faces[f + k];
           moved_box.add(mesh.vertex(v));
-          moved_box.add(Vec3(last_vertices[3 * v], last_vertices[3 * v + 1], last_vertices[3 * v + 2]));
+          moved_box.add(
+              Vec3(last_vertices[3 * v], last_vertices[3 * v + 1], last_vertices[3 * v + 2]));
         }
       }
     }
-    const Vec3 center = 0.5 * (moved_box.lo + moved_box.hi), half = 0.5 * (moved_box.hi - moved_box.lo);
+    const Vec3 center = 0.5 * (moved_box.lo + moved_box.hi),
+               half = 0.5 * (moved_box.hi - moved_box.lo);
     std::fill(job_dirty.begin(), job_dirty.end(), 0);
     for (std::size_t i = 0; i < specs.size(); ++i) {
       const SectionSpec& a = specs[i];
@@ -361,10 +365,12 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   // inside test along the bone's axis (so no far loop, e.g. a hollow body's wall, encloses it).
   // Otherwise the whole plane is cut.
   std::vector<double> reach(nb, 0.0);
+  std::vector<Vec3> axis(nb);
+  for (int b = 0; b < nb; ++b) axis[b] = sk.direction(b);
   for (Index v = 0; v < num_vertices; ++v) {
     const int b = vertex_bone[v];
     const Vec3 rel = mesh.vertex(v) - sk.heads[b];
-    const Vec3 d = sk.direction(b);
+    const Vec3& d = axis[b];
     reach[b] = std::max(reach[b], (rel - rel.dot(d) * d).squaredNorm());
   }
   for (int b = 0; b < nb; ++b) reach[b] = 2.5 * std::sqrt(reach[b]) + 2.0 * h;
@@ -502,7 +508,8 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       frame = PlaneFrame::make(spec.point, spec.normal);
     }
     const double param = slab_params[b][spec.boundary];
-    if (retry[si] == kGrowFamily && grow_local(si, frame, 3.0 * reach[b], inside_at(b, param), single))
+    if (retry[si] == kGrowFamily &&
+        grow_local(si, frame, 3.0 * reach[b], inside_at(b, param), single))
       return;
     if (retry[si] == kGrowJoint) {
       double radius = reach[b];
@@ -512,9 +519,9 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     finish(si, frame, whole_plane(frame, single), nullptr);
   });
   if (timer.on) {
-    std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(local_used), int(local_failed));
+    std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(local_used),
+                 int(local_failed));
     std::fprintf(stderr, "sections retried %zu\n", retries.size());
-
   }
   timer.lap("slicing");
   // 4. Loads: farthest downstream point of every section (paper §4.4), then stress.
@@ -584,9 +591,8 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   std::vector<std::vector<std::uint8_t>> sc(nb);
   for (int b = 0; b < nb; ++b) {
     auto& list = bone_sections[b];
-    std::sort(list.begin(), list.end(), [&](int x, int y) {
-      return r.section_param[x] < r.section_param[y];
-    });
+    std::sort(list.begin(), list.end(),
+              [&](int x, int y) { return r.section_param[x] < r.section_param[y]; });
     for (int i : list) {
       const double p = r.section_param[i];
       if (!sp[b].empty() && p - sp[b].back() <= 1e-9 * (1.0 + std::abs(p))) {
@@ -604,28 +610,28 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   r.vertex_culled.assign(num_vertices, 0);
   r.vertex_bone = vertex_bone;
   const Index block = 8192;
-  detail::parallel_for(static_cast<long>((num_vertices + block - 1) / block), threads,
-                       [&](long chunk, int) {
-    const Index end = std::min(num_vertices, (chunk + 1) * block);
-    for (Index v = chunk * block; v < end; ++v) {
-      const int b = vertex_bone[v];
-      const auto& p = sp[b];
-      if (p.empty()) continue;
-      const double t = (mesh.vertex(v) - sk.heads[b]).dot(sk.direction(b));
-      const std::size_t j = std::upper_bound(p.begin(), p.end(), t) - p.begin();
-      if (j == 0) {
-        r.vertex_stress[v] = ss[b][0];
-        r.vertex_culled[v] = sc[b][0];
-      } else if (j == p.size()) {
-        r.vertex_stress[v] = ss[b].back();
-        r.vertex_culled[v] = sc[b].back();
-      } else {
-        const double w = (t - p[j - 1]) / (p[j] - p[j - 1]);
-        r.vertex_stress[v] = (1 - w) * ss[b][j - 1] + w * ss[b][j];
-        r.vertex_culled[v] = sc[b][j - 1] && sc[b][j];
-      }
-    }
-  });
+  detail::parallel_for(
+      static_cast<long>((num_vertices + block - 1) / block), threads, [&](long chunk, int) {
+        const Index end = std::min(num_vertices, (chunk + 1) * block);
+        for (Index v = chunk * block; v < end; ++v) {
+          const int b = vertex_bone[v];
+          const auto& p = sp[b];
+          if (p.empty()) continue;
+          const double t = (mesh.vertex(v) - sk.heads[b]).dot(axis[b]);
+          const std::size_t j = std::upper_bound(p.begin(), p.end(), t) - p.begin();
+          if (j == 0) {
+            r.vertex_stress[v] = ss[b][0];
+            r.vertex_culled[v] = sc[b][0];
+          } else if (j == p.size()) {
+            r.vertex_stress[v] = ss[b].back();
+            r.vertex_culled[v] = sc[b].back();
+          } else {
+            const double w = (t - p[j - 1]) / (p[j] - p[j - 1]);
+            r.vertex_stress[v] = (1 - w) * ss[b][j - 1] + w * ss[b][j];
+            r.vertex_culled[v] = sc[b][j - 1] && sc[b][j];
+          }
+        }
+      });
   timer.lap("vertex stress");
   last_vertices.assign(vertices, vertices + 3 * num_vertices);
   last_heads = sk.heads;

@@ -29,7 +29,7 @@ struct SectionSpec {
   bool plus_side = true;  // downstream lies beyond the param (towards the tail)
   Vec3 point = Vec3::Zero();
   Vec3 normal = Vec3::UnitZ();
-  int job = 0;            // slicing job that computes it
+  int job = 0;  // slicing job that computes it
 };
 
 /// Geometry of a computed section, kept between runs for partial re-analysis.

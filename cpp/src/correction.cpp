@@ -12,7 +12,8 @@ namespace osteon {
 namespace {
 
 // The bone whose skinning domain holds a section: the largest weight sum over the vertices in a
-// thin slab around the section plane, near its centre (paper §5: the domain of the weakest section).
+// thin slab around the section plane, near its centre (paper §5: the domain of the weakest
+// section).
 int domain_bone(const MeshView& mesh, const BoneWeights& w, const AnalysisResult& a, int section,
                 double interval) {
   const Vec3 c = a.section_center[section];
@@ -104,14 +105,16 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     }
     std::vector<double> trial_scale = res.bone_scale;
     trial_scale[bone] = new_scale;
-    skin_cross_section_scales(mesh.vertices, mesh.num_vertices, sk, weights, trial_scale, next.data());
+    skin_cross_section_scales(mesh.vertices, mesh.num_vertices, sk, weights, trial_scale,
+                              next.data());
     // Box of every triangle touching a moved vertex, before and after: only planes through it
     // can change (the paper's culling of unaffected domains).
     // Smooth weights (e.g. bounded biharmonic) reach everywhere with ~1e-10: displacements below
     // 1e-6 of the model size do not make a plane dirty (the final `after` is a full analysis).
     Box3 dirty;
     for (Index v = 0; v < mesh.num_vertices; ++v) {
-      const double dx = next[3 * v] - res.vertices[3 * v], dy = next[3 * v + 1] - res.vertices[3 * v + 1],
+      const double dx = next[3 * v] - res.vertices[3 * v],
+                   dy = next[3 * v + 1] - res.vertices[3 * v + 1],
                    dz = next[3 * v + 2] - res.vertices[3 * v + 2];
       moved[v] = dx * dx + dy * dy + dz * dz > move_tolerance2;
     }
@@ -132,8 +135,8 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     // No progress on this section: its domain is not this bone's alone (blended joint weights).
     if (!(current.stress[worst] < before_stress * 0.995)) {
       unfixable[worst] = 1;
-      why[worst] = "scaling bone '" + sk.name(bone) +
-                   "' does not thicken it (blended weights at a joint?)";
+      why[worst] =
+          "scaling bone '" + sk.name(bone) + "' does not thicken it (blended weights at a joint?)";
     }
   }
   res.after = impl.run(res.vertices.data(), sk, nullptr);
@@ -162,7 +165,8 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
   }
   const double v0 = enclosed_volume(mesh);
   const MeshView out{res.vertices.data(), mesh.num_vertices, mesh.faces, mesh.num_faces};
-  if (std::abs(v0) > 0) res.volume_change_percent = 100.0 * (enclosed_volume(out) - v0) / std::abs(v0);
+  if (std::abs(v0) > 0)
+    res.volume_change_percent = 100.0 * (enclosed_volume(out) - v0) / std::abs(v0);
   return res;
 }
 

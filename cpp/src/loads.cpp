@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <string>
 #include <limits>
 #include <queue>
 #include <stdexcept>
+#include <string>
 
 namespace osteon {
 
@@ -106,10 +106,12 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
   const Index ngroups = group_offset_[nb];
   std::vector<Index> vertex_group(mesh.num_vertices);
   std::vector<Index> count(ngroups + 1, 0);
+  std::vector<Vec3> axis(nb);
+  for (int b = 0; b < nb; ++b) axis[b] = s.direction(b);
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     const int b = vertex_bone[v];
     const auto& p = slab_params_[b];
-    const double t = (mesh.vertex(v) - s.heads[b]).dot(s.direction(b));
+    const double t = (mesh.vertex(v) - s.heads[b]).dot(axis[b]);
     const Index j = std::upper_bound(p.begin(), p.end(), t) - p.begin();
     vertex_group[v] = group_offset_[b] + j;
     ++count[vertex_group[v] + 1];

@@ -10,7 +10,8 @@
 
 namespace osteon::detail {
 
-/// Number of workers to use for `jobs` jobs when `requested` threads were asked for (0 = all cores).
+/// Number of workers to use for `jobs` jobs when `requested` threads were asked for (0 = all
+/// cores).
 inline int worker_count(int requested, long jobs) {
   int hw = static_cast<int>(std::thread::hardware_concurrency());
   int n = requested > 0 ? requested : std::max(1, hw);

@@ -1,8 +1,7 @@
 #include "osteon/section.hpp"
 
-#include <cmath>
-
 #include <Eigen/LU>
+#include <cmath>
 
 namespace osteon {
 namespace {

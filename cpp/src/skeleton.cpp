@@ -24,7 +24,8 @@ void validate_skeleton(const Skeleton& s) {
     if (!std::isfinite(s.length(b)))  // |tail - head| overflows: squared distances would be inf
       throw std::invalid_argument("bone '" + s.name(b) +
                                   "' is too long (coordinates out of range)");
-    const double scale = std::max({s.heads[b].cwiseAbs().maxCoeff(), s.tails[b].cwiseAbs().maxCoeff(), 1e-300});
+    const double scale =
+        std::max({s.heads[b].cwiseAbs().maxCoeff(), s.tails[b].cwiseAbs().maxCoeff(), 1e-300});
     if (s.length(b) <= 1e-12 * scale || s.length(b) == 0.0)
       throw std::invalid_argument("bone '" + s.name(b) + "' has zero length (head == tail)");
     const int p = s.parents[b];

@@ -123,9 +123,12 @@ PlaneFrame PlaneFrame::make(const Vec3& origin, const Vec3& normal) {
   // Pick the world axis least aligned with the normal to build u deterministically.
   Vec3 helper = Vec3::UnitX();
   const Vec3 a = f.normal.cwiseAbs();
-  if (a.x() <= a.y() && a.x() <= a.z()) helper = Vec3::UnitX();
-  else if (a.y() <= a.z()) helper = Vec3::UnitY();
-  else helper = Vec3::UnitZ();
+  if (a.x() <= a.y() && a.x() <= a.z())
+    helper = Vec3::UnitX();
+  else if (a.y() <= a.z())
+    helper = Vec3::UnitY();
+  else
+    helper = Vec3::UnitZ();
   f.u = (helper - helper.dot(f.normal) * f.normal).normalized();
   f.v = f.normal.cross(f.u);
   return f;
@@ -151,9 +154,9 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
   Index sampled = 0;
   for (Index f = 0; f < nf; f += step, ++sampled) {
     const std::int32_t* t = mesh.faces + 3 * f;
-    area += 0.5 * (mesh.vertex(t[1]) - mesh.vertex(t[0]))
-                      .cross(mesh.vertex(t[2]) - mesh.vertex(t[0]))
-                      .norm();
+    area +=
+        0.5 *
+        (mesh.vertex(t[1]) - mesh.vertex(t[0])).cross(mesh.vertex(t[2]) - mesh.vertex(t[0])).norm();
   }
   const double mean_area = area / std::max<Index>(1, sampled);
   double cell = std::sqrt(std::max(mean_area, 1e-300) * faces_per_cell);
@@ -174,7 +177,8 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
     int x[3];
     for (int k = 0; k < 3; ++k)
       x[k] = std::clamp(static_cast<int>((c[k] - lo[k]) * inv[k]), 0, dims[k] - 1);
-    const Index block = (Index(x[0] / kBlock) * bdims[1] + x[1] / kBlock) * bdims[2] + x[2] / kBlock;
+    const Index block =
+        (Index(x[0] / kBlock) * bdims[1] + x[1] / kBlock) * bdims[2] + x[2] / kBlock;
     const Index inner = ((x[0] % kBlock) * kBlock + x[1] % kBlock) * kBlock + x[2] % kBlock;
     return block * (kBlock * kBlock * kBlock) + inner;
   };
@@ -192,9 +196,9 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
     const Index id = cell_id(centroid);
     cell_of[f] = static_cast<std::int32_t>(id);
     ++count[id + 1];
-    const double reach = std::max({(a - centroid).cwiseAbs().maxCoeff(),
-                                   (b - centroid).cwiseAbs().maxCoeff(),
-                                   (c - centroid).cwiseAbs().maxCoeff()});
+    const double reach =
+        std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
+                  (c - centroid).cwiseAbs().maxCoeff()});
     overhang[id] = std::max(overhang[id], static_cast<float>(reach * (1 + 1e-6)));
   }
   for (Index c = 0; c < total; ++c) count[c + 1] += count[c];
@@ -271,8 +275,7 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
               const FaceGrid* grid, const CutRegion* region) {
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
-  for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region,
-                    [&](const std::int32_t* f) {
+  for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, [&](const std::int32_t* f) {
     double height[3];
     bool above[3];
     for (int k = 0; k < 3; ++k) {
@@ -299,55 +302,59 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
   const double offset = plane.normal.dot(plane.origin);
   const double inv = 1.0 / spacing;
   const double top = static_cast<double>(count);
-  for_faces_in_slab(mesh, grid, plane.normal, offset + spacing, offset + count * spacing, region,
-                    [&](const std::int32_t* f) {
-    double t[3];
-    std::int32_t b[3];
-    for (int k = 0; k < 3; ++k) {
-      const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
-      t[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
-      double q = std::floor(t[k] * inv);
-      q = q < 0.0 ? 0.0 : (q > top ? top : q);
-      b[k] = static_cast<std::int32_t>(q);
-    }
-    const std::int32_t lo = std::min({b[0], b[1], b[2]}), hi = std::max({b[0], b[1], b[2]});
-    for (std::int32_t k = lo + 1; k <= hi; ++k) {
-      const double c = k * spacing;
-      bool above[3];
-      double height[3];
-      for (int j = 0; j < 3; ++j) {
-        above[j] = b[j] >= k;
-        height[j] = t[j] - c;
-      }
-      CutSegment seg;
-      emit_segment(mesh, plane, f, above, height, seg);
-      out[k - 1].push_back(seg);
-    }
-  });
+  for_faces_in_slab(
+      mesh, grid, plane.normal, offset + spacing, offset + count * spacing, region,
+      [&](const std::int32_t* f) {
+        double t[3];
+        std::int32_t b[3];
+        for (int k = 0; k < 3; ++k) {
+          const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
+          t[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
+          double q = std::floor(t[k] * inv);
+          q = q < 0.0 ? 0.0 : (q > top ? top : q);
+          b[k] = static_cast<std::int32_t>(q);
+        }
+        const std::int32_t lo = std::min({b[0], b[1], b[2]}), hi = std::max({b[0], b[1], b[2]});
+        for (std::int32_t k = lo + 1; k <= hi; ++k) {
+          const double c = k * spacing;
+          bool above[3];
+          double height[3];
+          for (int j = 0; j < 3; ++j) {
+            above[j] = b[j] >= k;
+            height[j] = t[j] - c;
+          }
+          CutSegment seg;
+          emit_segment(mesh, plane, f, above, height, seg);
+          out[k - 1].push_back(seg);
+        }
+      });
 }
 
 std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,
                                    const Vec3& dir) {
   std::vector<double> hits;
   const CutRegion line{point, dir, 0.0};
-  for (Index c = 0; c < grid.num_cells(); ++c) {
-    if (!grid.near(c, line)) continue;
-    const std::int32_t* t = grid.faces() + 3 * grid.begin(c);
-    for (Index f = grid.begin(c); f < grid.end(c); ++f, t += 3) {
-      // Moller-Trumbore for the infinite line.
-      const Vec3 a = mesh.vertex(t[0]);
-      const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
-      const Vec3 p = dir.cross(e2);
-      const double det = e1.dot(p);
-      if (det == 0.0) continue;
-      const double inv = 1.0 / det;
-      const Vec3 s = point - a;
-      const double u = s.dot(p) * inv;
-      if (u < 0.0 || u > 1.0) continue;
-      const Vec3 q = s.cross(e1);
-      const double v = dir.dot(q) * inv;
-      if (v < 0.0 || u + v > 1.0) continue;
-      hits.push_back(e2.dot(q) * inv);
+  for (Index c = 0, k = 0; k < grid.num_blocks(); ++k) {
+    if (!grid.block_near(k, line)) continue;
+    for (c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+      if (!grid.near(c, line)) continue;
+      const std::int32_t* t = grid.faces() + 3 * grid.begin(c);
+      for (Index f = grid.begin(c); f < grid.end(c); ++f, t += 3) {
+        // Moller-Trumbore for the infinite line.
+        const Vec3 a = mesh.vertex(t[0]);
+        const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
+        const Vec3 p = dir.cross(e2);
+        const double det = e1.dot(p);
+        if (det == 0.0) continue;
+        const double inv = 1.0 / det;
+        const Vec3 s = point - a;
+        const double u = s.dot(p) * inv;
+        if (u < 0.0 || u > 1.0) continue;
+        const Vec3 q = s.cross(e1);
+        const double v = dir.dot(q) * inv;
+        if (v < 0.0 || u + v > 1.0) continue;
+        hits.push_back(e2.dot(q) * inv);
+      }
     }
   }
   std::sort(hits.begin(), hits.end());
@@ -384,9 +391,9 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
         if (!table.insert(segs[s].edge[e], static_cast<std::int32_t>(2 * s + e))) crowded = true;
     if (crowded && attempt == 0) {
       deduplicated = input;
-      std::sort(deduplicated.begin(), deduplicated.end(), [](const CutSegment& x, const CutSegment& y) {
-        return segment_key(x) < segment_key(y);
-      });
+      std::sort(
+          deduplicated.begin(), deduplicated.end(),
+          [](const CutSegment& x, const CutSegment& y) { return segment_key(x) < segment_key(y); });
       const auto last = std::unique(deduplicated.begin(), deduplicated.end(),
                                     [](const CutSegment& x, const CutSegment& y) {
                                       return segment_key(x) == segment_key(y);
@@ -472,7 +479,8 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
     auto cell_of = [&](const Vec2& p, int dx, int dy) {
       const std::int64_t x = static_cast<std::int64_t>(std::floor(p.x() / cell)) + dx;
       const std::int64_t y = static_cast<std::int64_t>(std::floor(p.y() / cell)) + dy;
-      return (static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull) ^ static_cast<std::uint64_t>(y);
+      return (static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull) ^
+             static_cast<std::uint64_t>(y);
     };
     for (std::size_t end = 0; end < 2 * c; ++end)
       buckets[cell_of(end_point(end), 0, 0)].push_back(static_cast<std::uint32_t>(end));
@@ -533,8 +541,10 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
         if (done[chain]) break;
         done[chain] = 1;
         // Enter the chain at `end`, traverse to its other end.
-        if (end % 2 == 0) pts.insert(pts.end(), chains[chain].begin(), chains[chain].end());
-        else pts.insert(pts.end(), chains[chain].rbegin(), chains[chain].rend());
+        if (end % 2 == 0)
+          pts.insert(pts.end(), chains[chain].begin(), chains[chain].end());
+        else
+          pts.insert(pts.end(), chains[chain].rbegin(), chains[chain].rend());
         const std::size_t exit_end = end ^ 1u;
         if (link[exit_end] < 0) break;
         end = static_cast<std::size_t>(link[exit_end]);

@@ -68,8 +68,7 @@ void validate_weights(const BoneWeights& w, Index num_vertices, int num_bones) {
   if (static_cast<Index>(w.row_start.size()) != num_vertices + 1)
     throw std::invalid_argument("weights: row offsets do not match the vertex count");
   for (std::size_t k = 0; k < w.weight.size(); ++k) {
-    if (!std::isfinite(w.weight[k]))
-      throw std::invalid_argument("weights contain NaN or infinity");
+    if (!std::isfinite(w.weight[k])) throw std::invalid_argument("weights contain NaN or infinity");
     if (w.weight[k] < -1e-6)  // solver round-off (~-1e-9) is tolerated and reads as 0
       throw std::invalid_argument("weights must not be negative (found " +
                                   std::to_string(w.weight[k]) + ")");
@@ -97,13 +96,15 @@ std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, c
   if (indptr[0] != 0) throw std::invalid_argument("weights: CSR indptr must start at 0");
   std::vector<int> dom(num_vertices, -1);
   for (Index v = 0; v < num_vertices; ++v) {
-    if (indptr[v + 1] < indptr[v]) throw std::invalid_argument("weights: CSR indptr must not decrease");
+    if (indptr[v + 1] < indptr[v])
+      throw std::invalid_argument("weights: CSR indptr must not decrease");
     double best = 1e-12;  // round-off weights never make a bone dominant
     for (Index k = indptr[v]; k < indptr[v + 1]; ++k) {
       const double w = data[k];
       if (!std::isfinite(w)) throw std::invalid_argument("weights contain NaN or infinity");
       if (w < -1e-6)
-        throw std::invalid_argument("weights must not be negative (found " + std::to_string(w) + ")");
+        throw std::invalid_argument("weights must not be negative (found " + std::to_string(w) +
+                                    ")");
       if (indices[k] < 0 || indices[k] >= num_bones)
         throw std::invalid_argument("weights: bone (column) index " + std::to_string(indices[k]) +
                                     " out of range for " + std::to_string(num_bones) + " bones");

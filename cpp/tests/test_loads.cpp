@@ -21,7 +21,8 @@ TEST(LoadTree, ChildrenAttachWhereTheirHeadProjects) {
   const LoadTree t = build_load_tree(tee(), -1, {});
   EXPECT_EQ(t.held_bone, 0);
   ASSERT_EQ(t.children[0].size(), 2u);
-  for (const auto& [child, param] : t.children[0]) EXPECT_NEAR(param, child == 1 ? 60.0 : 30.0, 1e-12);
+  for (const auto& [child, param] : t.children[0])
+    EXPECT_NEAR(param, child == 1 ? 60.0 : 30.0, 1e-12);
   EXPECT_EQ(t.entry_param[1], 0.0);
 }
 

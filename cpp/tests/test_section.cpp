@@ -34,7 +34,8 @@ TEST(SectionProperties, CircleAndTube) {
   const SectionProperties tube =
       section_properties({regular_polygon(ro, 4096), {regular_polygon(ri, 4096)}});
   EXPECT_NEAR(tube.area / (M_PI * (ro * ro - ri * ri)), 1.0, 1e-5);
-  EXPECT_NEAR(tube.modulus / (M_PI * (ro * ro * ro * ro - ri * ri * ri * ri) / (4 * ro)), 1.0, 1e-4);
+  EXPECT_NEAR(tube.modulus / (M_PI * (ro * ro * ro * ro - ri * ri * ri * ri) / (4 * ro)), 1.0,
+              1e-4);
 }
 
 TEST(SectionProperties, OrientationAndPositionDoNotMatter) {

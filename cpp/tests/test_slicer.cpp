@@ -37,7 +37,8 @@ TEST(Slicer, ParallelPlanesMatchSinglePlanes) {
     std::vector<CutSegment> single;
     cut_mesh(m.view(), plane, single, nullptr);
     EXPECT_EQ(family[k - 1].size(), single.size()) << k;
-    const double a1 = section_properties(select_section(assemble_loops(family[k - 1], 0)).polygon).area;
+    const double a1 =
+        section_properties(select_section(assemble_loops(family[k - 1], 0)).polygon).area;
     const double a2 = section_properties(select_section(assemble_loops(single, 0)).polygon).area;
     EXPECT_NEAR(a1, a2, 1e-9);
   }

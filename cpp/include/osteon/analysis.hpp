@@ -20,8 +20,8 @@ struct AnalysisOptions {
   int held_bone = -1;              ///< bone held at its head; -1 = the main root bone
   double gap_tolerance = -1.0;     ///< open cuts closed across gaps up to this, mm; <0: 1% of size
   int threads = 0;                 ///< worker threads; 0 = all cores
-  bool local_cuts = true;          ///< cut near the bone first (same result, faster); false: whole planes
-  bool reuse_sections = true;      ///< Analyzer::run re-cuts only sections a change can reach (exact)
+  bool local_cuts = true;  ///< cut near the bone first (same result, faster); false: whole planes
+  bool reuse_sections = true;  ///< Analyzer::run re-cuts only sections a change can reach (exact)
 };
 
 /// Where a section sits on its bone.
@@ -48,14 +48,14 @@ struct AnalysisResult {
   std::vector<std::uint8_t> culled;       ///< S W > safe modulus: safe for sure (drawn grey)
   std::vector<std::uint8_t> weak;         ///< S stress > allowable stress
   std::vector<std::uint32_t> section_flags;  ///< S SectionFlag bits
-  double max_moment = 0.0;                ///< M_gmax, N mm
-  double safe_modulus = 0.0;              ///< W_k = M_gmax / [sigma], mm^3
-  double max_stress = 0.0;                ///< largest section stress, MPa
-  int weakest_section = -1;               ///< index of the largest stress, -1 if none
-  int held_bone = -1;                     ///< bone the object was held by
-  std::vector<double> vertex_stress;      ///< V stress interpolated along the vertex's bone, MPa
-  std::vector<std::uint8_t> vertex_culled;  ///< V vertex lies among culled sections
-  std::vector<int> vertex_bone;           ///< V bone whose sections colour the vertex
+  double max_moment = 0.0;                   ///< M_gmax, N mm
+  double safe_modulus = 0.0;                 ///< W_k = M_gmax / [sigma], mm^3
+  double max_stress = 0.0;                   ///< largest section stress, MPa
+  int weakest_section = -1;                  ///< index of the largest stress, -1 if none
+  int held_bone = -1;                        ///< bone the object was held by
+  std::vector<double> vertex_stress;         ///< V stress interpolated along the vertex's bone, MPa
+  std::vector<std::uint8_t> vertex_culled;   ///< V vertex lies among culled sections
+  std::vector<int> vertex_bone;              ///< V bone whose sections colour the vertex
 };
 
 /// Throws std::invalid_argument when an option is out of range (force, stress, interval <= 0...).

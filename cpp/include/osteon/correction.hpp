@@ -10,9 +10,9 @@ namespace osteon {
 
 /// Stop rules and targets of the correction loop.
 struct CorrectionOptions {
-  double max_scale = 3.0;     ///< largest cross-section scale of one bone
-  int max_rounds = 100;       ///< largest number of scaling rounds
-  double target_ratio = 0.99; ///< aim each scaled section at this fraction of the allowable stress
+  double max_scale = 3.0;      ///< largest cross-section scale of one bone
+  int max_rounds = 100;        ///< largest number of scaling rounds
+  double target_ratio = 0.99;  ///< aim each scaled section at this fraction of the allowable stress
 };
 
 /// One scaling round: which bone, by what factor, and the largest stress after it.
@@ -24,14 +24,14 @@ struct CorrectionRound {
 
 /// Result of a correction: per-bone scales, the corrected vertices, and analyses before/after.
 struct CorrectionResult {
-  std::vector<double> bone_scale;        ///< B cross-section scale per bone (1 = unchanged)
-  std::vector<double> vertices;          ///< #V by 3 row-major corrected vertices, mm
-  std::vector<CorrectionRound> rounds;   ///< the rounds taken, in order
-  bool converged = false;                ///< true when no section is weak after
-  std::string reason;                    ///< why the loop stopped
-  std::vector<int> unfixed_sections;     ///< sections still weak at the end (indices into after)
-  double max_displacement = 0.0;         ///< largest vertex displacement, mm
-  double volume_change_percent = 0.0;    ///< enclosed volume added, % of the original
+  std::vector<double> bone_scale;       ///< B cross-section scale per bone (1 = unchanged)
+  std::vector<double> vertices;         ///< #V by 3 row-major corrected vertices, mm
+  std::vector<CorrectionRound> rounds;  ///< the rounds taken, in order
+  bool converged = false;               ///< true when no section is weak after
+  std::string reason;                   ///< why the loop stopped
+  std::vector<int> unfixed_sections;    ///< sections still weak at the end (indices into after)
+  double max_displacement = 0.0;        ///< largest vertex displacement, mm
+  double volume_change_percent = 0.0;   ///< enclosed volume added, % of the original
   AnalysisResult before, after;
 };
 

@@ -13,12 +13,12 @@ namespace osteon {
 /// head projects onto it; extra root bones (IK, props) are joined to the nearest bone of the main
 /// tree. Moving away from the hold, every bone is entered at `entry_param` (mm from its head).
 struct LoadTree {
-  int held_bone = 0;                          ///< bone the object is held by (at its head)
-  std::vector<int> parent;                    ///< B re-rooted parent, -1 for the held bone
-  std::vector<double> entry_param;            ///< B where each bone is entered from the root side, mm
+  int held_bone = 0;                ///< bone the object is held by (at its head)
+  std::vector<int> parent;          ///< B re-rooted parent, -1 for the held bone
+  std::vector<double> entry_param;  ///< B where each bone is entered from the root side, mm
   std::vector<std::vector<std::pair<int, double>>> children;  ///< B lists (child, attach param mm)
-  std::vector<int> order;                     ///< bones in breadth-first order from the held bone
-  std::vector<int> attached_roots;            ///< extra root bones joined to the main tree
+  std::vector<int> order;           ///< bones in breadth-first order from the held bone
+  std::vector<int> attached_roots;  ///< extra root bones joined to the main tree
 };
 
 /// Builds the load tree. held_bone = -1 holds the main root's head (the root whose tree has most
@@ -38,7 +38,8 @@ class MomentArmIndex {
   /// Farthest downstream vertex from `center` for a section of `bone` at slab boundary `boundary`
   /// (index into slab_params[bone]); downstream is the far side (plus = beyond the param).
   /// Returns (distance mm, vertex index or -1 when nothing is downstream).
-  std::pair<double, Index> farthest(int bone, int boundary, bool plus_side, const Vec3& center) const;
+  std::pair<double, Index> farthest(int bone, int boundary, bool plus_side,
+                                    const Vec3& center) const;
 
  private:
   struct Group {
@@ -47,11 +48,11 @@ class MomentArmIndex {
   };
   const LoadTree* tree_;
   std::vector<std::vector<double>> slab_params_;
-  std::vector<Index> group_offset_;      // B+1: first group of each bone
-  std::vector<Group> groups_;            // slabs of every bone
+  std::vector<Index> group_offset_;  // B+1: first group of each bone
+  std::vector<Group> groups_;        // slabs of every bone
   std::vector<Vec3> subtree_lo_, subtree_hi_;
-  std::vector<double> packed_xyz_;       // vertices grouped by (bone, slab), xyz interleaved, mm
-  std::vector<Index> packed_index_;      // original vertex index of each packed vertex
+  std::vector<double> packed_xyz_;   // vertices grouped by (bone, slab), xyz interleaved, mm
+  std::vector<Index> packed_index_;  // original vertex index of each packed vertex
 };
 
 }  // namespace osteon

@@ -9,10 +9,10 @@ namespace osteon {
 
 /// A triangle mesh borrowed from the caller; nothing is copied.
 struct MeshView {
-  const double* vertices = nullptr;      ///< V  #V by 3 row-major vertex positions, mm
-  Index num_vertices = 0;                ///< #V
-  const std::int32_t* faces = nullptr;   ///< F  #F by 3 row-major vertex indices into V
-  Index num_faces = 0;                   ///< #F
+  const double* vertices = nullptr;     ///< V  #V by 3 row-major vertex positions, mm
+  Index num_vertices = 0;               ///< #V
+  const std::int32_t* faces = nullptr;  ///< F  #F by 3 row-major vertex indices into V
+  Index num_faces = 0;                  ///< #F
 
   /// Position of vertex i, mm.
   Vec3 vertex(Index i) const {

@@ -10,10 +10,10 @@ namespace osteon {
 
 /// A skeleton of B bones; bone b runs from heads[b] to tails[b] (mm); parents[b] = -1 for a root.
 struct Skeleton {
-  std::vector<Vec3> heads;          ///< B head positions, mm
-  std::vector<Vec3> tails;          ///< B tail positions, mm
-  std::vector<int> parents;         ///< B parent indices, -1 = root bone
-  std::vector<std::string> names;   ///< B names (may be empty: then "bone_<b>")
+  std::vector<Vec3> heads;         ///< B head positions, mm
+  std::vector<Vec3> tails;         ///< B tail positions, mm
+  std::vector<int> parents;        ///< B parent indices, -1 = root bone
+  std::vector<std::string> names;  ///< B names (may be empty: then "bone_<b>")
 
   /// Number of bones B.
   int num_bones() const { return static_cast<int>(heads.size()); }

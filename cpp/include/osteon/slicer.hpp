@@ -50,10 +50,10 @@ struct PlaneCut {
 
 /// A section's material region and how it was found.
 struct SectionGeometry {
-  SectionPolygon polygon;  ///< outer boundary + holes, plane coordinates (mm)
-  std::uint32_t flags = 0; ///< SectionFlag bits
-  bool found = false;      ///< false when the section had to be skipped
-  int containing = 0;      ///< number of closed loops around the bone point
+  SectionPolygon polygon;   ///< outer boundary + holes, plane coordinates (mm)
+  std::uint32_t flags = 0;  ///< SectionFlag bits
+  bool found = false;       ///< false when the section had to be skipped
+  int containing = 0;       ///< number of closed loops around the bone point
 };
 
 /// A region (mm) a cut may be restricted to: the cylinder of `radius` around the line through
@@ -84,7 +84,8 @@ class FaceGrid {
   Index end(Index c) const { return start_[c + 1]; }
   const std::int32_t* faces() const { return faces_.data(); }
   /// True when cell c's box meets the slab lo <= dot(n, x) <= hi (and the region, if any).
-  bool meets(Index c, const Vec3& n, double lo, double hi, const CutRegion* region = nullptr) const {
+  bool meets(Index c, const Vec3& n, double lo, double hi,
+             const CutRegion* region = nullptr) const {
     const double mid = n.dot(center_[c]);
     const double r = n.cwiseAbs().dot(half_[c]);
     if (mid + r < lo || mid - r > hi) return false;
@@ -98,6 +99,10 @@ class FaceGrid {
   Index num_blocks() const { return static_cast<Index>(block_center_.size()); }
   Index block_begin(Index k) const { return block_start_[k]; }
   Index block_end(Index k) const { return block_start_[k + 1]; }
+  /// True when block k's box may be touched by the region.
+  bool block_near(Index k, const CutRegion& region) const {
+    return region.meets_box(block_center_[k], block_half_[k]);
+  }
   /// True when block k's box meets the slab lo <= dot(n, x) <= hi (and the region, if any).
   bool block_meets(Index k, const Vec3& n, double lo, double hi,
                    const CutRegion* region = nullptr) const {
@@ -121,7 +126,8 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
               const FaceGrid* grid = nullptr, const CutRegion* region = nullptr);
 
 /// Cuts the mesh by `count` parallel planes base + k*spacing*normal, k = 1..count, in one pass.
-/// out[k-1] receives plane k's segments, in coordinates of the frame `plane` (whose origin is base).
+/// out[k-1] receives plane k's segments, in coordinates of the frame `plane` (whose origin is
+/// base).
 void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spacing, int count,
                        std::vector<std::vector<CutSegment>>& out, const FaceGrid* grid = nullptr,
                        const CutRegion* region = nullptr);
@@ -131,7 +137,8 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
 std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,
                                    const Vec3& dir);
 
-/// Links cut segments into loops by shared mesh edges; joins open ends closer than gap_tolerance (mm).
+/// Links cut segments into loops by shared mesh edges; joins open ends closer than gap_tolerance
+/// (mm).
 PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tolerance);
 
 /// The material region around the plane origin (the bone point), following SPEC §3: the deepest

@@ -12,9 +12,9 @@ namespace osteon {
 struct BoneWeights {
   Index num_vertices = 0;
   int num_bones = 0;
-  std::vector<Index> row_start;   ///< #V+1 offsets into bone/weight
-  std::vector<int> bone;          ///< nnz bone index per stored weight
-  std::vector<double> weight;     ///< nnz weight (>= 0, unitless; rows are normalised by their sum)
+  std::vector<Index> row_start;  ///< #V+1 offsets into bone/weight
+  std::vector<int> bone;         ///< nnz bone index per stored weight
+  std::vector<double> weight;    ///< nnz weight (>= 0, unitless; rows are normalised by their sum)
 
   /// Builds from a dense row-major #V by #B array, keeping the non-zero entries.
   static BoneWeights from_dense(const double* dense, Index num_vertices, int num_bones);
