@@ -87,6 +87,24 @@ Skeleton make_skeleton(const DoubleArray& heads, const DoubleArray& tails,
   return s;
 }
 
+// CSR triplets (indptr, indices, data) of a (V, B) sparse weight matrix, shape-checked.
+struct CsrArrays {
+  Int64Array indptr, indices;
+  DoubleArray data;
+};
+
+CsrArrays csr_arrays(const py::object& csr, Index num_vertices) {
+  auto parts = csr.cast<py::tuple>();
+  CsrArrays c{parts[0].cast<Int64Array>(), parts[1].cast<Int64Array>(),
+              parts[2].cast<DoubleArray>()};
+  if (c.indptr.ndim() != 1 || c.indptr.shape(0) != num_vertices + 1)
+    throw std::invalid_argument("weights must have one row per vertex (" +
+                                std::to_string(num_vertices) + ")");
+  if (c.indices.shape(0) != c.data.shape(0) || c.indptr.at(num_vertices) != c.indices.shape(0))
+    throw std::invalid_argument("weights: sparse indices and data do not match");
+  return c;
+}
+
 // Weights arrive as None, a dense (V, B) array, or CSR triplets (indptr, indices, data).
 std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::object& csr,
                                           Index num_vertices, int num_bones) {
@@ -100,17 +118,9 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
         BoneWeights::from_dense(w.data(), num_vertices, num_bones));
   }
   if (!csr.is_none()) {
-    auto parts = csr.cast<py::tuple>();
-    Int64Array indptr = parts[0].cast<Int64Array>();
-    Int64Array indices = parts[1].cast<Int64Array>();
-    DoubleArray data = parts[2].cast<DoubleArray>();
-    if (indptr.ndim() != 1 || indptr.shape(0) != num_vertices + 1)
-      throw std::invalid_argument("weights must have one row per vertex (" +
-                                  std::to_string(num_vertices) + ")");
-    if (indices.shape(0) != data.shape(0) || indptr.at(num_vertices) != indices.shape(0))
-      throw std::invalid_argument("weights: sparse indices and data do not match");
-    return std::make_unique<BoneWeights>(
-        BoneWeights::from_csr(indptr.data(), indices.data(), data.data(), num_vertices, num_bones));
+    const CsrArrays c = csr_arrays(csr, num_vertices);
+    return std::make_unique<BoneWeights>(BoneWeights::from_csr(
+        c.indptr.data(), c.indices.data(), c.data.data(), num_vertices, num_bones));
   }
   return nullptr;
 }
@@ -167,17 +177,9 @@ class PyAnalyzer {
                                                  gap_tolerance, threads, local_cuts);
     if (dense.is_none() && !csr.is_none()) {
       // Sparse weights: the analysis needs only each vertex's dominant bone; no copy of them.
-      auto parts = csr.cast<py::tuple>();
-      Int64Array indptr = parts[0].cast<Int64Array>();
-      Int64Array indices = parts[1].cast<Int64Array>();
-      DoubleArray data = parts[2].cast<DoubleArray>();
-      if (indptr.ndim() != 1 || indptr.shape(0) != num_vertices + 1)
-        throw std::invalid_argument("weights must have one row per vertex (" +
-                                    std::to_string(num_vertices) + ")");
-      if (indices.shape(0) != data.shape(0) || indptr.at(num_vertices) != indices.shape(0))
-        throw std::invalid_argument("weights: sparse indices and data do not match");
-      std::vector<int> dominant =
-          dominant_bones_csr(indptr.data(), indices.data(), data.data(), num_vertices, num_bones);
+      const CsrArrays c = csr_arrays(csr, num_vertices);
+      std::vector<int> dominant = dominant_bones_csr(c.indptr.data(), c.indices.data(),
+                                                     c.data.data(), num_vertices, num_bones);
       analyzer_ = std::make_unique<Analyzer>(faces.data(), faces.shape(0), num_vertices,
                                              std::move(dominant), num_bones, options);
     } else {
