@@ -151,7 +151,10 @@ def test_random_face_subsets_of_closed_mesh(data):
 def test_perturbed_primitive(radius, length, noise, tilt, offset, seed, interval, scale):
     rng = np.random.default_rng(seed)
     v, f = cylinder_along([0, 0, 0], [length, 0, 0], radius, n=16, stations=12)
-    v = v + rng.normal(0, noise * radius, v.shape)
+    # Noise relative to the vertex spacing, so the bar stays a (rough) bar rather than a
+    # crumpled self-intersecting shell, for which "most sections valid" need not hold.
+    spacing = min(2 * np.pi * radius / 16, length / 11)
+    v = v + rng.normal(0, noise * spacing, v.shape)
     mid = length / 2
     heads = np.array([[0.05 * length, offset * radius * 0.3, 0], [mid, 0, 0]])
     tails = np.array([[mid, 0, 0], [0.95 * length, tilt * radius, 0]])
