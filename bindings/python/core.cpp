@@ -178,8 +178,8 @@ class PyAnalyzer {
     if (dense.is_none() && !csr.is_none()) {
       // Sparse weights: the analysis needs only each vertex's dominant bone; no copy of them.
       const CsrArrays c = csr_arrays(csr, num_vertices);
-      std::vector<int> dominant = dominant_bones_csr(c.indptr.data(), c.indices.data(),
-                                                     c.data.data(), num_vertices, num_bones);
+      std::vector<int> dominant = dominant_bones_csr(
+          c.indptr.data(), c.indices.data(), c.data.data(), num_vertices, num_bones, threads);
       analyzer_ = std::make_unique<Analyzer>(faces.data(), faces.shape(0), num_vertices,
                                              std::move(dominant), num_bones, options);
     } else {

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -357,7 +358,8 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   const int workers = detail::worker_count(threads, jobs);
   timer.lap("sections");
   FaceGrid grid;
-  if (std::find(job_dirty.begin(), job_dirty.end(), 1) != job_dirty.end()) grid.build(mesh);
+  if (std::find(job_dirty.begin(), job_dirty.end(), 1) != job_dirty.end())
+    grid.build(mesh, 12, threads);
   timer.lap("grid");
   // Cuts are first made locally, inside a cylinder (joints: a ball) around the bone that holds
   // the bone's own vertices; the local section is used only when it is provably the one the whole
@@ -382,6 +384,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     if (options.local_cuts && need_crossings[b])
       crossings[b] = line_crossings(mesh, grid, sk.heads[b], sk.direction(b));
   });
+  timer.lap("reach+lines");
   auto inside_at = [&](int b, double param) {
     const auto& c = crossings[b];
     return (c.end() - std::upper_bound(c.begin(), c.end(), param)) % 2 == 1;
@@ -408,13 +411,9 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   };
   std::vector<std::vector<std::vector<CutSegment>>> family_segments(workers);
   std::vector<std::vector<CutSegment>> single_segments(workers);
-  auto whole_plane = [&](const PlaneFrame& frame, std::vector<CutSegment>& segs) {
-    segs.clear();
-    cut_mesh(mesh, frame, segs, &grid, nullptr);
-    SectionGeometry geom = select_section(assemble_loops(segs, gap));
-    if (segs.empty()) geom.flags |= kFlagEmpty;
-    return geom;
-  };
+  // Segments of a section whose local cut was not enough: a wider cut only adds the triangles
+  // the narrower one left out (cut_mesh's `exclude`), so no triangle is cut twice.
+  std::vector<std::vector<CutSegment>> kept(specs.size());
   auto finish = [&](int si, const PlaneFrame& frame, const SectionGeometry& geom,
                     const CutRegion* region) {
     SectionState st;
@@ -434,28 +433,14 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     }
     states[si] = st;
   };
-  // Local cut in a ball around the plane origin, growing 3x while the loop around the bone point
-  // is clipped, up to the model size; true when the section was found locally.
-  auto grow_local = [&](int si, const PlaneFrame& frame, double radius, bool inside,
-                        std::vector<CutSegment>& segs) {
-    for (int step = 0; step < 2 && radius < diag; ++step, radius *= 3.0) {
-      const CutRegion ball{frame.origin, Vec3::Zero(), radius};
-      segs.clear();
-      cut_mesh(mesh, frame, segs, &grid, &ball);
-      const PlaneCut cut = assemble_loops(segs, 0.0);
-      const SectionGeometry geom = select_section(cut);
-      if (local_ok(cut, geom, inside)) {
-        finish(si, frame, geom, &ball);
-        return true;
-      }
-      if (geom.found) return false;  // found but not provably right: cut the whole plane
-    }
-    return false;
+  // The whole-plane section from all of a plane's segments (gaps closed: nothing is clipped).
+  auto finish_whole = [&](int si, const PlaneFrame& frame, const std::vector<CutSegment>& segs) {
+    SectionGeometry geom = select_section(assemble_loops(segs, gap));
+    if (segs.empty()) geom.flags |= kFlagEmpty;
+    finish(si, frame, geom, nullptr);
   };
-  // Phase 1 (parallel over bones and joints): one local cut per family of parallel planes, and
-  // the local attempt of every joint. Sections whose local cut is not provably right are queued.
-  // Phase 2 (parallel over those sections): grow the region, or cut the whole plane. Two phases
-  // keep one hard bone (a body cut by every plane) from holding up the other core.
+  // Phase 1 (parallel over bones and joints): one local cut per family of parallel planes.
+  // Sections whose local cut is not provably right, and all joints, are queued for phase 2.
   enum Retry : std::uint8_t { kNone = 0, kGrowFamily = 1, kWholePlane = 2, kGrowJoint = 3 };
   std::vector<std::uint8_t> retry(specs.size(), kNone);
   detail::parallel_for(jobs, threads, [&](long job, int worker) {
@@ -470,58 +455,131 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     const int n = static_cast<int>(slab_params[b].size()) - 2;
     auto& segs = family_segments[worker];
     const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
-    cut_mesh_parallel(mesh, base, h, n, segs, &grid, options.local_cuts ? &region : nullptr);
+    cut_mesh_parallel(mesh, base, h, n, segs, &grid, options.local_cuts ? &region : nullptr,
+                      section_dirty.data() + first);
     for (int k = 1; k <= n; ++k) {
       const int si = first + k - 1;
       if (!section_dirty[si]) continue;
       PlaneFrame frame = base;
       frame.origin = specs[si].point;
-      if (options.local_cuts) {
-        const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
-        const SectionGeometry geom = select_section(cut);
-        if (local_ok(cut, geom, inside_at(b, k * h))) {
-          finish(si, frame, geom, &region);
-          continue;
-        }
-        retry[si] = geom.found ? kWholePlane : kGrowFamily;
-      } else {
-        SectionGeometry geom = select_section(assemble_loops(segs[k - 1], gap));
-        if (segs[k - 1].empty()) geom.flags |= kFlagEmpty;
-        finish(si, frame, geom, nullptr);
+      if (!options.local_cuts) {
+        finish_whole(si, frame, segs[k - 1]);
+        continue;
       }
+      const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
+      const SectionGeometry geom = select_section(cut);
+      if (local_ok(cut, geom, inside_at(b, k * h))) {
+        finish(si, frame, geom, &region);
+        continue;
+      }
+      retry[si] = geom.found ? kWholePlane : kGrowFamily;
+      kept[si] = std::move(segs[k - 1]);
     }
   });
   timer.lap("slicing phase 1");
-  std::vector<int> retries;
-  for (std::size_t i = 0; i < specs.size(); ++i)
-    if (retry[i] != kNone) retries.push_back(static_cast<int>(i));
-  detail::parallel_for(static_cast<long>(retries.size()), threads, [&](long r, int worker) {
-    const int si = retries[r];
-    const SectionSpec& spec = specs[si];
-    const int b = spec.bone;
-    auto& single = single_segments[worker];
-    PlaneFrame frame;
-    if (spec.kind == kInterior) {
-      frame = PlaneFrame::make(sk.heads[b], sk.direction(b));  // the family's frame
-      frame.origin = spec.point;
-    } else {
-      frame = PlaneFrame::make(spec.point, spec.normal);
+  // Phase 2 units: a family's queued planes are re-cut together in masked passes (a cylinder
+  // three times wider, then the whole plane); a joint grows a ball around its point, then cuts
+  // the whole plane. Families first: they are the larger units, joints balance the cores last.
+  std::vector<int> units;
+  long retried = 0;
+  for (long job = 0; job < jobs; ++job) {
+    const int first = job_section[job];
+    const int n = job_bone[job] >= 0 ? static_cast<int>(slab_params[job_bone[job]].size()) - 2 : 1;
+    bool any = false;
+    for (int i = first; i < first + n; ++i) {
+      any |= retry[i] != kNone;
+      retried += retry[i] != kNone;
     }
-    const double param = slab_params[b][spec.boundary];
-    if (retry[si] == kGrowFamily &&
-        grow_local(si, frame, 3.0 * reach[b], inside_at(b, param), single))
+    if (any) units.push_back(static_cast<int>(job));
+  }
+  std::stable_partition(units.begin(), units.end(), [&](int job) { return job_bone[job] >= 0; });
+  // The moment-arm index (step 4) needs no section: it is built as one more unit, third in
+  // line, so that it fills a core while the other cuts.
+  std::unique_ptr<MomentArmIndex> arms;
+  const long index_unit = std::min<long>(2, static_cast<long>(units.size()));
+  detail::parallel_for(static_cast<long>(units.size()) + 1, threads, [&](long u, int worker) {
+    if (u == index_unit) {
+      arms = std::make_unique<MomentArmIndex>(mesh, sk, tree, vertex_bone, slab_params);
       return;
-    if (retry[si] == kGrowJoint) {
-      double radius = reach[b];
-      if (sk.parents[b] >= 0) radius = std::max(radius, reach[sk.parents[b]]);
-      if (grow_local(si, frame, radius, inside_at(b, param), single)) return;
     }
-    finish(si, frame, whole_plane(frame, single), nullptr);
+    const int job = units[u > index_unit ? u - 1 : u];
+    const int first = job_section[job];
+    const int b = job_bone[job];
+    if (b < 0) {
+      const SectionSpec& spec = specs[first];
+      const int bone = spec.bone;
+      const PlaneFrame frame = PlaneFrame::make(spec.point, spec.normal);
+      auto& segs = single_segments[worker];
+      segs.clear();
+      CutRegion ball{spec.point, Vec3::Zero(), reach[bone]};
+      if (sk.parents[bone] >= 0) ball.radius = std::max(ball.radius, reach[sk.parents[bone]]);
+      const CutRegion* done = nullptr;  // the region already cut
+      CutRegion previous;
+      if (retry[first] == kGrowJoint) {
+        const bool inside = inside_at(bone, slab_params[bone][spec.boundary]);
+        for (int step = 0; step < 2 && ball.radius < diag; ++step, ball.radius *= 3.0) {
+          cut_mesh(mesh, frame, segs, &grid, &ball, done);
+          const PlaneCut cut = assemble_loops(segs, 0.0);
+          const SectionGeometry geom = select_section(cut);
+          previous = ball;
+          done = &previous;
+          if (local_ok(cut, geom, inside)) {
+            finish(first, frame, geom, &ball);
+            return;
+          }
+          if (geom.found) break;  // found but not provably right: cut the whole plane
+        }
+      }
+      cut_mesh(mesh, frame, segs, &grid, nullptr, done);
+      finish_whole(first, frame, segs);
+      return;
+    }
+    const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
+    const int n = static_cast<int>(slab_params[b].size()) - 2;
+    auto& segs = family_segments[worker];
+    std::vector<std::uint8_t> wanted(n);
+    for (int k = 1; k <= n; ++k) wanted[k - 1] = retry[first + k - 1] != kNone;
+    auto frame_of = [&](int k) {
+      PlaneFrame frame = base;
+      frame.origin = specs[first + k - 1].point;
+      return frame;
+    };
+    auto add_kept = [&](int k) {
+      auto& all = kept[first + k - 1];
+      all.insert(all.end(), segs[k - 1].begin(), segs[k - 1].end());
+    };
+    const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
+    const CutRegion wide{sk.heads[b], sk.direction(b), 3.0 * reach[b]};
+    const CutRegion* done = &region;
+    bool grow = false;
+    for (int k = 1; k <= n; ++k) grow |= retry[first + k - 1] == kGrowFamily;
+    if (grow && wide.radius < diag) {
+      cut_mesh_parallel(mesh, base, h, n, segs, &grid, &wide, wanted.data(), &region);
+      done = &wide;
+      for (int k = 1; k <= n; ++k) {
+        if (!wanted[k - 1]) continue;
+        add_kept(k);
+        if (retry[first + k - 1] != kGrowFamily) continue;
+        const PlaneCut cut = assemble_loops(kept[first + k - 1], 0.0);
+        const SectionGeometry geom = select_section(cut);
+        if (local_ok(cut, geom, inside_at(b, k * h))) {
+          finish(first + k - 1, frame_of(k), geom, &wide);
+          wanted[k - 1] = 0;
+        }
+      }
+    }
+    if (std::find(wanted.begin(), wanted.end(), 1) == wanted.end()) return;
+    cut_mesh_parallel(mesh, base, h, n, segs, &grid, nullptr, wanted.data(), done);
+    for (int k = 1; k <= n; ++k) {
+      if (!wanted[k - 1]) continue;
+      add_kept(k);
+      finish_whole(first + k - 1, frame_of(k), kept[first + k - 1]);
+    }
   });
   if (timer.on) {
     std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(local_used),
                  int(local_failed));
-    std::fprintf(stderr, "sections retried %zu\n", retries.size());
+    std::fprintf(stderr, "sections retried %ld\n", retried);
   }
   timer.lap("slicing");
   // 4. Loads: farthest downstream point of every section (paper §4.4), then stress.
@@ -543,7 +601,6 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   r.culled.assign(ns, 0);
   r.weak.assign(ns, 0);
   r.section_flags.resize(ns);
-  const MomentArmIndex arms(mesh, sk, tree, vertex_bone, slab_params);
   timer.lap("moment index");
   detail::parallel_for((ns + 63) / 64, threads, [&](long chunk, int) {
     const int end = std::min(ns, static_cast<int>(chunk + 1) * 64);
@@ -558,7 +615,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       r.section_flags[i] = st.flags;
       const Vec3 center = st.found ? st.center : spec.point;
       r.section_center[i] = center;
-      const auto [arm, vertex] = arms.farthest(spec.bone, spec.boundary, spec.plus_side, center);
+      const auto [arm, vertex] = arms->farthest(spec.bone, spec.boundary, spec.plus_side, center);
       r.moment_arm[i] = arm;
       r.load_point[i] = vertex >= 0 ? mesh.vertex(vertex) : center;
       r.moment[i] = options.force * arm;

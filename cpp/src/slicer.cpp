@@ -6,6 +6,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include "parallel.hpp"
+
 namespace osteon {
 namespace {
 
@@ -36,38 +38,42 @@ inline void emit_segment(const MeshView& mesh, const PlaneFrame& plane, const st
   }
 }
 
-// Open-addressing table: mesh edge key -> up to two segment endpoints ("occurrences").
+// Open-addressing table pairing the two segment endpoints ("occurrences") on each mesh edge.
 struct EdgeTable {
-  std::vector<std::uint64_t> keys;
-  std::vector<std::int32_t> first, second;
+  struct Slot {
+    std::uint64_t key;
+    std::int32_t first;
+  };
+  std::vector<Slot> slots;
   std::uint64_t mask = 0;
   int bits = 0;
   static constexpr std::uint64_t kEmpty = ~0ull;
 
-  void reset(std::size_t entries) {
+  // `keys` = distinct edges expected (at most); the table stays at most half full.
+  void reset(std::size_t keys) {
     bits = 4;
-    while ((std::size_t(1) << bits) < 2 * entries + 16) ++bits;
+    while ((std::size_t(1) << bits) < 2 * keys + 16) ++bits;
     const std::size_t size = std::size_t(1) << bits;
     mask = size - 1;
-    keys.assign(size, kEmpty);
-    first.assign(size, -1);
-    second.assign(size, -1);
+    slots.assign(size, Slot{kEmpty, -1});
   }
-  // Returns false if the edge already had two endpoints (non-manifold).
-  bool insert(std::uint64_t key, std::int32_t occurrence) {
+  // Pairs `occurrence` with the endpoint already on the edge (partner[] both ways); returns
+  // false if the edge already had two endpoints (non-manifold).
+  bool insert(std::uint64_t key, std::int32_t occurrence, std::vector<std::int32_t>& partner) {
     std::uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> (64 - bits);
     while (true) {
-      if (keys[h] == kEmpty) {
-        keys[h] = key;
-        first[h] = occurrence;
+      Slot& slot = slots[h];
+      if (slot.key == kEmpty) {
+        slot.key = key;
+        slot.first = occurrence;
         return true;
       }
-      if (keys[h] == key) {
-        if (second[h] < 0) {
-          second[h] = occurrence;
-          return true;
-        }
-        return false;
+      if (slot.key == key) {
+        if (slot.first < 0) return false;
+        partner[slot.first] = occurrence;
+        partner[occurrence] = slot.first;
+        slot.first = -1;  // paired: a third endpoint is non-manifold
+        return true;
       }
       h = (h + 1) & mask;
     }
@@ -134,7 +140,7 @@ PlaneFrame PlaneFrame::make(const Vec3& origin, const Vec3& normal) {
   return f;
 }
 
-void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
+void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   const Index nf = mesh.num_faces;
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (Index i = 0; i < mesh.num_vertices; ++i) {
@@ -183,31 +189,57 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
     return block * (kBlock * kBlock * kBlock) + inner;
   };
   const Index total = Index(dims[0]) * dims[1] * dims[2];
-  // One pass over the triangles: cell of the centroid, and how far each cell's triangles stick
-  // out of it (so that a cell's box = its grid box widened by that, without a second pass).
+  // One pass over the triangles (split over the workers): cell of the centroid, and how far each
+  // cell's triangles stick out of it (so that a cell's box = its grid box widened by that,
+  // without a second pass).
+  const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
   std::vector<std::int32_t> cell_of(nf);
-  std::vector<Index> count(total + 1, 0);
-  std::vector<float> overhang(total, 0.0f);
+  std::vector<std::vector<Index>> part_count(parts, std::vector<Index>(total, 0));
+  std::vector<std::vector<float>> part_overhang(parts, std::vector<float>(total, 0.0f));
   const Vec3 size(extent.x() / dims[0], extent.y() / dims[1], extent.z() / dims[2]);
-  for (Index f = 0; f < nf; ++f) {
-    const std::int32_t* t = mesh.faces + 3 * f;
-    const Vec3 a = mesh.vertex(t[0]), b = mesh.vertex(t[1]), c = mesh.vertex(t[2]);
-    const Vec3 centroid = (a + b + c) / 3.0;
-    const Index id = cell_id(centroid);
-    cell_of[f] = static_cast<std::int32_t>(id);
-    ++count[id + 1];
-    const double reach =
-        std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
-                  (c - centroid).cwiseAbs().maxCoeff()});
-    overhang[id] = std::max(overhang[id], static_cast<float>(reach * (1 + 1e-6)));
+  auto part_range = [&](long part) {
+    return std::make_pair(nf * part / parts, nf * (part + 1) / parts);
+  };
+  detail::parallel_for(parts, parts, [&](long part, int) {
+    auto& count = part_count[part];
+    auto& overhang = part_overhang[part];
+    const auto [begin, end] = part_range(part);
+    for (Index f = begin; f < end; ++f) {
+      const std::int32_t* t = mesh.faces + 3 * f;
+      const Vec3 a = mesh.vertex(t[0]), b = mesh.vertex(t[1]), c = mesh.vertex(t[2]);
+      const Vec3 centroid = (a + b + c) / 3.0;
+      const Index id = cell_id(centroid);
+      cell_of[f] = static_cast<std::int32_t>(id);
+      ++count[id];
+      const double reach =
+          std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
+                    (c - centroid).cwiseAbs().maxCoeff()});
+      overhang[id] = std::max(overhang[id], static_cast<float>(reach * (1 + 1e-6)));
+    }
+  });
+  // Cell starts, and where each part writes its triangles of a cell: after the earlier parts', so
+  // the order is the sequential one whatever the number of workers.
+  std::vector<Index> count(total + 1, 0);
+  std::vector<float>& overhang = part_overhang[0];
+  for (Index c = 0; c < total; ++c) {
+    Index sum = count[c];
+    for (int p = 0; p < parts; ++p) {
+      const Index n = part_count[p][c];
+      part_count[p][c] = sum;  // now: where part p starts writing in cell c
+      sum += n;
+      if (p > 0) overhang[c] = std::max(overhang[c], part_overhang[p][c]);
+    }
+    count[c + 1] = sum;
   }
-  for (Index c = 0; c < total; ++c) count[c + 1] += count[c];
   faces_.resize(3 * nf);
-  std::vector<Index> fill(count.begin(), count.end() - 1);
-  for (Index f = 0; f < nf; ++f) {
-    const Index k = fill[cell_of[f]]++;
-    std::copy(mesh.faces + 3 * f, mesh.faces + 3 * f + 3, faces_.begin() + 3 * k);
-  }
+  detail::parallel_for(parts, parts, [&](long part, int) {
+    auto& fill = part_count[part];
+    const auto [begin, end] = part_range(part);
+    for (Index f = begin; f < end; ++f) {
+      const Index k = fill[cell_of[f]]++;
+      std::copy(mesh.faces + 3 * f, mesh.faces + 3 * f + 3, faces_.begin() + 3 * k);
+    }
+  });
   // Keep the non-empty cells only, each with its grid box widened by its triangles' overhang
   // (centroids lie inside the grid box), and the non-empty blocks with the box of their cells.
   center_.clear();
@@ -251,18 +283,24 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell) {
 
 namespace {
 
-// Visits the triangles (vertex index triples) of the cells meeting a slab, or all triangles.
+// Visits the triangles (vertex index triples) of the cells meeting a slab (and the region, and
+// not near `exclude`), or all triangles.
 template <class Fn>
 void for_faces_in_slab(const MeshView& mesh, const FaceGrid* grid, const Vec3& n, double lo,
-                       double hi, const CutRegion* region, Fn&& fn) {
+                       double hi, const CutRegion* region, const CutRegion* exclude, Fn&& fn) {
   if (grid == nullptr) {
     for (Index f = 0; f < mesh.num_faces; ++f) fn(mesh.faces + 3 * f);
     return;
   }
   for (Index k = 0; k < grid->num_blocks(); ++k) {
     if (!grid->block_meets(k, n, lo, hi, region)) continue;
+    // A cell was visited by the `exclude` cut when both its block and itself are near `exclude`
+    // (the two tests are not nested: a cell's bounding sphere may stick out of its block's).
+    const bool block_excluded = exclude != nullptr && grid->block_near(k, *exclude);
+    if (block_excluded && grid->block_within(k, *exclude)) continue;
     for (Index c = grid->block_begin(k); c < grid->block_end(k); ++c) {
       if (!grid->meets(c, n, lo, hi, region)) continue;
+      if (block_excluded && grid->near(c, *exclude)) continue;
       const std::int32_t* t = grid->faces() + 3 * grid->begin(c);
       for (Index f = grid->begin(c); f < grid->end(c); ++f, t += 3) fn(t);
     }
@@ -272,62 +310,79 @@ void for_faces_in_slab(const MeshView& mesh, const FaceGrid* grid, const Vec3& n
 }  // namespace
 
 void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
-              const FaceGrid* grid, const CutRegion* region) {
+              const FaceGrid* grid, const CutRegion* region, const CutRegion* exclude) {
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
-  for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, [&](const std::int32_t* f) {
-    double height[3];
-    bool above[3];
-    for (int k = 0; k < 3; ++k) {
-      const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
-      height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
-      above[k] = height[k] >= 0.0;
-    }
-    if (above[0] == above[1] && above[1] == above[2]) return;
-    CutSegment seg;
-    emit_segment(mesh, plane, f, above, height, seg);
-    out.push_back(seg);
-  });
+  for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude,
+                    [&](const std::int32_t* f) {
+                      double height[3];
+                      bool above[3];
+                      for (int k = 0; k < 3; ++k) {
+                        const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
+                        height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
+                        above[k] = height[k] >= 0.0;
+                      }
+                      if (above[0] == above[1] && above[1] == above[2]) return;
+                      CutSegment seg;
+                      emit_segment(mesh, plane, f, above, height, seg);
+                      out.push_back(seg);
+                    });
 }
 
 void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spacing, int count,
                        std::vector<std::vector<CutSegment>>& out, const FaceGrid* grid,
-                       const CutRegion* region) {
+                       const CutRegion* region, const std::uint8_t* wanted,
+                       const CutRegion* exclude) {
   out.resize(count);
   for (auto& o : out) o.clear();
   if (count <= 0) return;
-  // Bucket of a vertex: the number of planes at or below it (clamped to 0..count). A triangle
-  // crosses plane k exactly when its vertices' buckets straddle k.
+  int first = 1, last = count;
+  if (wanted != nullptr) {
+    while (first <= count && !wanted[first - 1]) ++first;
+    while (last >= first && !wanted[last - 1]) --last;
+    if (first > last) return;
+  }
+  // Height and bucket of every vertex, once: the bucket is the number of planes at or below the
+  // vertex (clamped to 0..count), so a triangle crosses plane k exactly when its vertices'
+  // buckets straddle k, and most triangles are rejected with three integer loads.
+  thread_local std::vector<double> height;
+  thread_local std::vector<std::int32_t> bucket;
+  const Index nv = mesh.num_vertices;
+  height.resize(nv);
+  bucket.resize(nv);
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
   const double inv = 1.0 / spacing;
   const double top = static_cast<double>(count);
-  for_faces_in_slab(
-      mesh, grid, plane.normal, offset + spacing, offset + count * spacing, region,
-      [&](const std::int32_t* f) {
-        double t[3];
-        std::int32_t b[3];
-        for (int k = 0; k < 3; ++k) {
-          const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
-          t[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
-          double q = std::floor(t[k] * inv);
-          q = q < 0.0 ? 0.0 : (q > top ? top : q);
-          b[k] = static_cast<std::int32_t>(q);
-        }
-        const std::int32_t lo = std::min({b[0], b[1], b[2]}), hi = std::max({b[0], b[1], b[2]});
-        for (std::int32_t k = lo + 1; k <= hi; ++k) {
-          const double c = k * spacing;
-          bool above[3];
-          double height[3];
-          for (int j = 0; j < 3; ++j) {
-            above[j] = b[j] >= k;
-            height[j] = t[j] - c;
-          }
-          CutSegment seg;
-          emit_segment(mesh, plane, f, above, height, seg);
-          out[k - 1].push_back(seg);
-        }
-      });
+  const double* x = mesh.vertices;
+  for (Index v = 0; v < nv; ++v) {
+    const double t = x[3 * v] * nx + x[3 * v + 1] * ny + x[3 * v + 2] * nz - offset;
+    height[v] = t;
+    // Clamped first, so truncation is floor (and vectorizes, unlike std::floor without SSE4.1).
+    const double q = t * inv;
+    bucket[v] = static_cast<std::int32_t>(q < 0.0 ? 0.0 : (q > top ? top : q));
+  }
+  const std::int32_t* bk = bucket.data();
+  const double* ht = height.data();
+  for_faces_in_slab(mesh, grid, plane.normal, offset + first * spacing, offset + last * spacing,
+                    region, exclude, [&](const std::int32_t* f) {
+                      const std::int32_t b[3] = {bk[f[0]], bk[f[1]], bk[f[2]]};
+                      const std::int32_t lo = std::max(std::min({b[0], b[1], b[2]}), first - 1);
+                      const std::int32_t hi = std::min(std::max({b[0], b[1], b[2]}), last);
+                      for (std::int32_t k = lo + 1; k <= hi; ++k) {
+                        if (wanted != nullptr && !wanted[k - 1]) continue;
+                        const double c = k * spacing;
+                        bool above[3];
+                        double h[3];
+                        for (int j = 0; j < 3; ++j) {
+                          above[j] = b[j] >= k;
+                          h[j] = ht[f[j]] - c;
+                        }
+                        CutSegment seg;
+                        emit_segment(mesh, plane, f, above, h, seg);
+                        out[k - 1].push_back(seg);
+                      }
+                    });
 }
 
 std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,
@@ -383,12 +438,13 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   for (int attempt = 0; attempt < 2; ++attempt) {
     const std::vector<CutSegment>& segs = *source;
     const std::size_t count = segs.size();
-    table.reset(2 * count);
+    table.reset(2 * count);  // 2*count endpoints: at most that many distinct edges
     partner.assign(2 * count, -1);
     bool crowded = false;
     for (std::size_t s = 0; s < count; ++s)
       for (int e = 0; e < 2; ++e)
-        if (!table.insert(segs[s].edge[e], static_cast<std::int32_t>(2 * s + e))) crowded = true;
+        if (!table.insert(segs[s].edge[e], static_cast<std::int32_t>(2 * s + e), partner))
+          crowded = true;
     if (crowded && attempt == 0) {
       deduplicated = input;
       std::sort(
@@ -409,12 +465,6 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   }
   const std::vector<CutSegment>& segments = *source;
   const std::size_t m = segments.size();
-  for (std::size_t h = 0; h < table.keys.size(); ++h) {
-    if (table.second[h] >= 0) {
-      partner[table.first[h]] = table.second[h];
-      partner[table.second[h]] = table.first[h];
-    }
-  }
   std::vector<std::uint8_t> used(m, 0);
   std::vector<Vec2> forward, backward;
   for (std::size_t s0 = 0; s0 < m; ++s0) {

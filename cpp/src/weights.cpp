@@ -1,6 +1,8 @@
 #include "osteon/weights.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -92,14 +94,39 @@ std::vector<int> dominant_bones(const BoneWeights& w) {
 }
 
 std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, const double* data,
-                                    Index num_vertices, int num_bones) {
+                                    Index num_vertices, int num_bones, int threads) {
   if (indptr[0] != 0) throw std::invalid_argument("weights: CSR indptr must start at 0");
-  std::vector<int> dom(num_vertices, -1);
-  for (Index v = 0; v < num_vertices; ++v) {
+  for (Index v = 0; v < num_vertices; ++v)
     if (indptr[v + 1] < indptr[v])
       throw std::invalid_argument("weights: CSR indptr must not decrease");
-    double best = 1e-12;  // round-off weights never make a bone dominant
-    for (Index k = indptr[v]; k < indptr[v + 1]; ++k) {
+  // Check all entries first in a branch-free pass (it vectorises); name the first bad one only
+  // when there is one.
+  const Index nnz = indptr[num_vertices];
+  const Index block = 8192;
+  const long chunks = static_cast<long>((num_vertices + block - 1) / block);
+  std::vector<std::uint8_t> chunk_bad(chunks, 0);
+  std::vector<int> dom(num_vertices, -1);
+  detail::parallel_for(chunks, threads, [&](long chunk, int) {
+    const Index v0 = chunk * block, v1 = std::min(num_vertices, v0 + block);
+    bool bad = false;
+    for (Index k = indptr[v0]; k < indptr[v1]; ++k)
+      bad |= !(data[k] >= -1e-6 && data[k] <= std::numeric_limits<double>::max()) |
+             (indices[k] < 0) | (indices[k] >= num_bones);
+    chunk_bad[chunk] = bad;
+    if (bad) return;
+    for (Index v = v0; v < v1; ++v) {
+      double best = 1e-12;  // round-off weights never make a bone dominant
+      Index arg = -1;
+      for (Index k = indptr[v]; k < indptr[v + 1]; ++k) {
+        const bool larger = data[k] > best;
+        best = larger ? data[k] : best;
+        arg = larger ? k : arg;
+      }
+      if (arg >= 0) dom[v] = static_cast<int>(indices[arg]);
+    }
+  });
+  if (std::find(chunk_bad.begin(), chunk_bad.end(), 1) != chunk_bad.end()) {
+    for (Index k = 0; k < nnz; ++k) {
       const double w = data[k];
       if (!std::isfinite(w)) throw std::invalid_argument("weights contain NaN or infinity");
       if (w < -1e-6)
@@ -108,10 +135,6 @@ std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, c
       if (indices[k] < 0 || indices[k] >= num_bones)
         throw std::invalid_argument("weights: bone (column) index " + std::to_string(indices[k]) +
                                     " out of range for " + std::to_string(num_bones) + " bones");
-      if (w > best) {
-        best = w;
-        dom[v] = static_cast<int>(indices[k]);
-      }
     }
   }
   return dom;

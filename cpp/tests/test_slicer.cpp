@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "osteon/section.hpp"
 #include "osteon/slicer.hpp"
@@ -41,6 +43,60 @@ TEST(Slicer, ParallelPlanesMatchSinglePlanes) {
         section_properties(select_section(assemble_loops(family[k - 1], 0)).polygon).area;
     const double a2 = section_properties(select_section(assemble_loops(single, 0)).polygon).area;
     EXPECT_NEAR(a1, a2, 1e-9);
+  }
+}
+
+namespace {
+// The cut as a sorted list of (edge, edge) pairs, to compare cuts as sets of triangles.
+std::vector<std::pair<std::uint64_t, std::uint64_t>> cut_keys(const std::vector<CutSegment>& segs) {
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> keys;
+  for (const CutSegment& s : segs)
+    keys.emplace_back(std::min(s.edge[0], s.edge[1]), std::max(s.edge[0], s.edge[1]));
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+}  // namespace
+
+TEST(Slicer, GrownCutsAddExactlyTheTrianglesLeftOut) {
+  // A wide prism (many grid cells in each plane) and nested regions off its axis: a local cut,
+  // then the ring up to a wider region, then the rest of the plane, is the whole cut exactly.
+  const auto m = prism(regular_polygon(40, 240), 60, 61);
+  FaceGrid grid;
+  grid.build(m.view());
+  const CutRegion small{Vec3(0, 30, 0), Vec3::UnitX(), 6.0};
+  const CutRegion wide{Vec3(0, 30, 0), Vec3::UnitX(), 18.0};
+  PlaneFrame plane = PlaneFrame::make(Vec3(30.3, 0, 0), Vec3::UnitX());
+  std::vector<CutSegment> whole, grown;
+  cut_mesh(m.view(), plane, whole, &grid);
+  cut_mesh(m.view(), plane, grown, &grid, &small);
+  const std::size_t local = grown.size();
+  cut_mesh(m.view(), plane, grown, &grid, &wide, &small);
+  const std::size_t ring = grown.size() - local;
+  cut_mesh(m.view(), plane, grown, &grid, nullptr, &wide);
+  EXPECT_GT(local, 0u);
+  EXPECT_GT(ring, 0u);
+  EXPECT_LT(local + ring, whole.size());
+  EXPECT_EQ(cut_keys(grown), cut_keys(whole));
+
+  // The same for a family of parallel planes, re-cutting only every third plane.
+  const PlaneFrame base = PlaneFrame::make(Vec3::Zero(), Vec3::UnitX());
+  std::vector<std::vector<CutSegment>> all, part, step;
+  cut_mesh_parallel(m.view(), base, 2.5, 23, all, &grid);
+  std::vector<std::uint8_t> wanted(23, 0);
+  for (int k = 0; k < 23; k += 3) wanted[k] = 1;
+  cut_mesh_parallel(m.view(), base, 2.5, 23, part, &grid, &small);
+  cut_mesh_parallel(m.view(), base, 2.5, 23, step, &grid, &wide, wanted.data(), &small);
+  for (int k = 0; k < 23; ++k) {
+    if (!wanted[k]) {
+      EXPECT_TRUE(step[k].empty()) << k;
+      continue;
+    }
+    part[k].insert(part[k].end(), step[k].begin(), step[k].end());
+  }
+  cut_mesh_parallel(m.view(), base, 2.5, 23, step, &grid, nullptr, wanted.data(), &wide);
+  for (int k = 0; k < 23; k += 3) {
+    part[k].insert(part[k].end(), step[k].begin(), step[k].end());
+    EXPECT_EQ(cut_keys(part[k]), cut_keys(all[k])) << k;
   }
 }
 

@@ -202,7 +202,14 @@ def test_threads_and_local_cuts_do_not_change_results():
     for threads, local in [(1, True), (2, True), (2, False)]:
         other = osteon.analyze(v, f, sk, threads=threads, local_cuts=local)
         assert np.allclose(ref.stress, other.stress, rtol=1e-12, equal_nan=True)
-        assert np.array_equal(ref.vertex_stress, other.vertex_stress)
+        if local:
+            # Local cuts assemble the same loops from segments found in another order: the
+            # section integrals agree to round-off, not bitwise.
+            assert np.allclose(ref.vertex_stress, other.vertex_stress, rtol=1e-12, atol=0)
+        else:
+            assert np.array_equal(ref.vertex_stress, other.vertex_stress)
+    local = osteon.analyze(v, f, sk, threads=1)
+    assert np.array_equal(local.vertex_stress, osteon.analyze(v, f, sk, threads=2).vertex_stress)
 
 
 def test_analyzer_reuse_matches_one_off_analysis():

@@ -69,14 +69,21 @@ struct CutRegion {
     const double reach = radius + half.norm();
     return d.squaredNorm() <= reach * reach;
   }
+  /// True when a box (center, half extents) lies wholly inside the region.
+  bool holds_box(const Vec3& center, const Vec3& half) const {
+    Vec3 d = center - point;
+    d -= d.dot(axis) * axis;
+    return d.norm() + half.norm() <= radius;
+  }
 };
 
 /// Triangles bucketed into a uniform grid of cells, each with the bounding box of its triangles,
 /// so that a plane (or a slab of parallel planes) visits only the cells it passes through.
 class FaceGrid {
  public:
-  /// Buckets the faces of `mesh` (about faces_per_cell triangles per non-empty cell).
-  void build(const MeshView& mesh, int faces_per_cell = 12);
+  /// Buckets the faces of `mesh` (about faces_per_cell triangles per non-empty cell) on up to
+  /// `threads` workers (0 = all cores); the result does not depend on the number of workers.
+  void build(const MeshView& mesh, int faces_per_cell = 12, int threads = 0);
   /// Number of non-empty cells.
   Index num_cells() const { return static_cast<Index>(center_.size()); }
   /// Cell c's faces are faces()[3*begin(c) .. 3*end(c)) (vertex indices, reordered copy).
@@ -103,6 +110,10 @@ class FaceGrid {
   bool block_near(Index k, const CutRegion& region) const {
     return region.meets_box(block_center_[k], block_half_[k]);
   }
+  /// True when block k's box (and so each of its cells) lies wholly inside the region.
+  bool block_within(Index k, const CutRegion& region) const {
+    return region.holds_box(block_center_[k], block_half_[k]);
+  }
   /// True when block k's box meets the slab lo <= dot(n, x) <= hi (and the region, if any).
   bool block_meets(Index k, const Vec3& n, double lo, double hi,
                    const CutRegion* region = nullptr) const {
@@ -121,16 +132,21 @@ class FaceGrid {
 };
 
 /// Cuts every triangle of the mesh that crosses the plane; appends to `out`. With a grid only
-/// the cells the plane passes through are visited; with a region only cells near it.
+/// the cells the plane passes through are visited; with a region only cells near it; with
+/// `exclude` (grid only) not the cells near that region, so that a cut grown from `exclude` to
+/// `region` adds exactly the triangles the smaller cut left out.
 void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
-              const FaceGrid* grid = nullptr, const CutRegion* region = nullptr);
+              const FaceGrid* grid = nullptr, const CutRegion* region = nullptr,
+              const CutRegion* exclude = nullptr);
 
 /// Cuts the mesh by `count` parallel planes base + k*spacing*normal, k = 1..count, in one pass.
 /// out[k-1] receives plane k's segments, in coordinates of the frame `plane` (whose origin is
-/// base).
+/// base). With `wanted` (count flags) only the planes k with wanted[k-1] != 0 are cut; region and
+/// exclude as for cut_mesh.
 void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spacing, int count,
                        std::vector<std::vector<CutSegment>>& out, const FaceGrid* grid = nullptr,
-                       const CutRegion* region = nullptr);
+                       const CutRegion* region = nullptr, const std::uint8_t* wanted = nullptr,
+                       const CutRegion* exclude = nullptr);
 
 /// Sorted parameters s (mm) where the line point + s*dir (dir unit) crosses mesh triangles; a
 /// point of the line is inside a closed mesh when an odd number of crossings lie beyond it.

@@ -33,9 +33,10 @@ void validate_weights(const BoneWeights& weights, Index num_vertices, int num_bo
 std::vector<int> dominant_bones(const BoneWeights& weights);
 
 /// The same straight from CSR arrays (indptr #V+1, indices nnz, data nnz), checking them in the
-/// same pass (index range, finite, not below -1e-6) without copying the weights.
+/// same pass (index range, finite, not below -1e-6) without copying the weights; `threads` as
+/// in AnalysisOptions (0 = all cores).
 std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, const double* data,
-                                    Index num_vertices, int num_bones);
+                                    Index num_vertices, int num_bones, int threads = 0);
 
 /// Nearest bone (by distance to the bone segment) of every vertex; rows listed in `only` if given.
 std::vector<int> nearest_bones(const MeshView& mesh, const Skeleton& skeleton, int threads = 0);
