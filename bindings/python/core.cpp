@@ -149,6 +149,8 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["load_point"] = to_numpy(std::move(r.load_point));
   d["section_area"] = to_numpy(std::move(r.section_area));
   d["section_modulus"] = to_numpy(std::move(r.section_modulus));
+  d["section_thin_axis"] = to_numpy(std::move(r.section_thin_axis));
+  d["section_aspect"] = to_numpy(std::move(r.section_aspect));
   d["moment_arm"] = to_numpy(std::move(r.moment_arm));
   d["moment"] = to_numpy(std::move(r.moment));
   d["stress"] = to_numpy(std::move(r.stress));
@@ -250,7 +252,8 @@ PYBIND11_MODULE(_core, m) {
          const DoubleArray& tails, const Int32Array& parents, const std::vector<std::string>& names,
          const py::object& dense, const py::object& csr, double force, double allowable_stress,
          double interval, int held_bone, double gap_tolerance, int threads, double max_scale,
-         int max_rounds, double target_ratio) {
+         int max_rounds, double target_ratio, bool thin_direction, double flat_aspect,
+         const py::object& bone_x_axes) {
         require_rows3(vertices, "vertices");
         require_rows3(faces, "faces");
         const Skeleton s = make_skeleton(heads, tails, parents, names);
@@ -263,6 +266,15 @@ PYBIND11_MODULE(_core, m) {
         co.max_scale = max_scale;
         co.max_rounds = max_rounds;
         co.target_ratio = target_ratio;
+        co.thin_direction = thin_direction;
+        co.flat_aspect = flat_aspect;
+        if (!bone_x_axes.is_none()) {
+          const DoubleArray axes = bone_x_axes.cast<DoubleArray>();
+          require_rows3(axes, "bone_x_axes");
+          auto a = axes.unchecked<2>();
+          for (py::ssize_t b = 0; b < axes.shape(0); ++b)
+            co.bone_x_axes.emplace_back(a(b, 0), a(b, 1), a(b, 2));
+        }
         CorrectionResult r;
         {
           py::gil_scoped_release release;
@@ -270,10 +282,13 @@ PYBIND11_MODULE(_core, m) {
         }
         py::dict d;
         d["bone_scale"] = to_numpy(std::move(r.bone_scale));
+        d["bone_scale_x"] = to_numpy(std::move(r.bone_scale_x));
+        d["bone_scale_z"] = to_numpy(std::move(r.bone_scale_z));
+        d["bone_x_axis"] = to_numpy(std::move(r.bone_x_axis));
         d["vertices"] = to_numpy_rows3(std::move(r.vertices));
         py::list rounds;
         for (const auto& rd : r.rounds)
-          rounds.append(py::make_tuple(rd.bone, rd.factor, rd.max_stress_after));
+          rounds.append(py::make_tuple(rd.bone, rd.factor, rd.max_stress_after, rd.axis));
         d["rounds"] = rounds;
         d["converged"] = r.converged;
         d["reason"] = r.reason;
@@ -288,30 +303,45 @@ PYBIND11_MODULE(_core, m) {
       py::arg("names"), py::arg("dense"), py::arg("csr"), py::arg("force"),
       py::arg("allowable_stress"), py::arg("interval"), py::arg("held_bone"),
       py::arg("gap_tolerance"), py::arg("threads"), py::arg("max_scale"), py::arg("max_rounds"),
-      py::arg("target_ratio"), "Correction loop (paper §5); see osteon.correct.");
+      py::arg("target_ratio"), py::arg("thin_direction") = false, py::arg("flat_aspect") = 2.0,
+      py::arg("bone_x_axes") = py::none(), "Correction loop (paper §5); see osteon.correct.");
 
   m.def(
       "skin",
       [](const DoubleArray& vertices, const DoubleArray& heads, const DoubleArray& tails,
          const Int32Array& parents, const py::object& dense, const py::object& csr,
-         const std::vector<double>& bone_scale) {
+         const std::vector<double>& bone_scale, const py::object& bone_scale_z,
+         const py::object& bone_x_axes) {
         require_rows3(vertices, "vertices");
         const Skeleton s = make_skeleton(heads, tails, parents, {});
         validate_skeleton(s);
         auto weights = make_weights(dense, csr, vertices.shape(0), s.num_bones());
         if (!weights) throw std::invalid_argument("skin() needs skinning weights");
         validate_weights(*weights, vertices.shape(0), s.num_bones());
+        if (bone_scale.size() != static_cast<std::size_t>(s.num_bones()))
+          throw std::invalid_argument("bone_scale must have one entry per bone");
+        AxisScales scales{bone_scale, bone_scale, std::vector<Vec3>(s.num_bones(), Vec3::Zero())};
+        if (!bone_scale_z.is_none()) scales.z = bone_scale_z.cast<std::vector<double>>();
+        if (!bone_x_axes.is_none()) {
+          const DoubleArray axes = bone_x_axes.cast<DoubleArray>();
+          require_rows3(axes, "bone_x_axes");
+          if (axes.shape(0) != s.num_bones())
+            throw std::invalid_argument("bone_x_axes must have one row per bone");
+          auto a = axes.unchecked<2>();
+          for (py::ssize_t b = 0; b < axes.shape(0); ++b)
+            scales.x_axis[b] = Vec3(a(b, 0), a(b, 1), a(b, 2));
+        }
         std::vector<double> out(vertices.size());
         {
           py::gil_scoped_release release;
-          skin_cross_section_scales(vertices.data(), vertices.shape(0), s, *weights, bone_scale,
-                                    out.data());
+          skin_axis_scales(vertices.data(), vertices.shape(0), s, *weights, scales, out.data());
         }
         return to_numpy_rows3(std::move(out));
       },
       py::arg("vertices"), py::arg("heads"), py::arg("tails"), py::arg("parents"), py::arg("dense"),
-      py::arg("csr"), py::arg("bone_scale"),
-      "Linear blend skinning with per-bone cross-section scales.");
+      py::arg("csr"), py::arg("bone_scale"), py::arg("bone_scale_z") = py::none(),
+      py::arg("bone_x_axes") = py::none(),
+      "Linear blend skinning with per-bone cross-section scales (x, optionally z and x axes).");
 
   m.def(
       "section_properties",

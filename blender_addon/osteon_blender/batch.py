@@ -7,6 +7,7 @@ and a PNG of the stress map.
 Options (units: mm, N, MPa): --object NAME, --material {PLA,PETG,ABS,RESIN,NYLON,CUSTOM},
 --strength MPA, --safety FACTOR, --force N, --size-mode {HEIGHT,LARGEST,UNITS},
 --print-size MM, --interval MM, --held-bone NAME, --max-scale S, --max-rounds N,
+--scaling THIN|UNIFORM,
 --resolution PIXELS.  Exit code 0 on success, 1 on any error (message on stderr).
 """
 
@@ -55,6 +56,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     ap.add_argument("--held-bone", help="bone where the print is held")
     ap.add_argument("--max-scale", type=float)
     ap.add_argument("--max-rounds", type=int)
+    ap.add_argument("--scaling", choices=[m[0] for m in core.SCALING_MODES],
+                    help="THIN (flat parts across their thickness only) or UNIFORM (both axes)")
     ap.add_argument("--resolution", type=int, default=1000, help="PNG width, pixels")
     return ap.parse_args(argv)
 
@@ -91,6 +94,8 @@ def apply_settings(s, a: argparse.Namespace) -> None:
             setattr(s, attr, val)
     if a.size_mode:
         s.size_mode = a.size_mode
+    if a.scaling:
+        s.scaling = a.scaling
     if a.held_bone is not None:
         s.held_bone = a.held_bone
 

@@ -179,6 +179,7 @@ class SkeletonArrays:
     heads: np.ndarray         # (B, 3) world, posed, Blender units
     tails: np.ndarray         # (B, 3)
     parents: np.ndarray       # (B,) int, nearest deform ancestor, -1 = root
+    x_axes: np.ndarray | None = None  # (B, 3) world unit X axis of each posed bone (roll)
 
 
 def skeleton_arrays(arm) -> SkeletonArrays:
@@ -193,17 +194,21 @@ def skeleton_arrays(arm) -> SkeletonArrays:
     head = np.empty((nb, 3))
     tail = np.empty((nb, 3))
     parents = np.full(nb, -1, dtype=np.int64)
+    x_axes = np.empty((nb, 3))
     for i, name in enumerate(deform):
         p = pb[name]
         head[i] = p.head
         tail[i] = p.tail
+        x_axes[i] = p.x_axis
         anc = bones[name].parent
         while anc is not None and anc.name not in idx:
             anc = anc.parent
         if anc is not None:
             parents[i] = idx[anc.name]
     mw = _matrix_np(arm.matrix_world)
-    return SkeletonArrays(deform, _transform(head, mw), _transform(tail, mw), parents)
+    x_world = x_axes @ mw[:3, :3].T
+    x_world /= np.linalg.norm(x_world, axis=1, keepdims=True)
+    return SkeletonArrays(deform, _transform(head, mw), _transform(tail, mw), parents, x_world)
 
 
 # --------------------------------------------------------------------------- weights
@@ -454,8 +459,16 @@ def _depth(bone) -> int:
     return d
 
 
-def apply_bone_scales(context, arm, scales: dict[str, float], tol: float = 1e-7) -> list[str]:
-    """Scale pose bones across their axis (pose scale x and z times s, y kept) such that
+def _xz(scale) -> tuple[float, float]:
+    """A bone's cross-section scale as (x, z): a number scales both axes."""
+    if isinstance(scale, (tuple, list)):
+        return float(scale[0]), float(scale[1])
+    return float(scale), float(scale)
+
+
+def apply_bone_scales(context, arm, scales: dict, tol: float = 1e-7) -> list[str]:
+    """Scale pose bones across their axis (pose scale x and z times s, y kept; a value is s
+    for both axes or an (x, z) pair, as ``osteon.Correction.bone_scale_x/_z``) such that
     Blender's armature deformation reproduces the engine's skinning: children of a
     scaled bone do not inherit the scale (``inherit_scale = 'NONE'``) and get a pose
     location that puts their head back where it was, so they keep shape and place.
@@ -467,7 +480,8 @@ def apply_bone_scales(context, arm, scales: dict[str, float], tol: float = 1e-7)
     restore_pose(context, arm)
     bones = arm.data.bones
     pb = arm.pose.bones
-    scaled = [n for n, s in scales.items() if abs(float(s) - 1.0) > tol and n in pb]
+    scaled = [n for n, s in scales.items()
+              if max(abs(v - 1.0) for v in _xz(s)) > tol and n in pb]
     if not scaled:
         return []
     children = sorted({c.name for n in scaled for c in bones[n].children},
@@ -479,9 +493,9 @@ def apply_bone_scales(context, arm, scales: dict[str, float], tol: float = 1e-7)
     arm[SAVED_POSE_KEY] = {"bones": saved}
     try:
         for n in scaled:
-            s = float(scales[n])
+            kx, kz = _xz(scales[n])
             sx, sy, sz = pb[n].scale
-            pb[n].scale = (sx * s, sy, sz * s)
+            pb[n].scale = (sx * kx, sy, sz * kz)
         for n in children:
             bones[n].inherit_scale = "NONE"
         by_depth: dict[int, list[str]] = {}
@@ -520,25 +534,25 @@ def restore_pose(context, arm) -> bool:
     return True
 
 
-def correction_ratios(arm) -> dict[str, float]:
-    """Per bone, the cross-section scale the current correction applies (x scale ratio)."""
+def correction_ratios(arm) -> dict[str, tuple[float, float]]:
+    """Per bone, the cross-section scales (x, z) the current correction applies."""
     if SAVED_POSE_KEY not in arm:
         return {}
     saved = arm[SAVED_POSE_KEY].to_dict().get("bones", {})
     out = {}
     for n, st in saved.items():
         p = arm.pose.bones.get(n)
-        if p is not None and st["scale"][0] != 0.0:
-            r = p.scale[0] / st["scale"][0]
-            if abs(r - 1.0) > 1e-7:
-                out[n] = float(r)
+        if p is not None and st["scale"][0] != 0.0 and st["scale"][2] != 0.0:
+            r = (float(p.scale[0] / st["scale"][0]), float(p.scale[2] / st["scale"][2]))
+            if max(abs(v - 1.0) for v in r) > 1e-7:
+                out[n] = r
     return out
 
 
 # --------------------------------------------------------------------------- apply
 
 
-def bake_scales_into_mesh(obj, arm, ratios: dict[str, float], bone_names: list[str],
+def bake_scales_into_mesh(obj, arm, ratios: dict, bone_names: list[str],
                           csr: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
     """New rest coordinates (mesh object space) with each bone's cross-section scaled
     about its REST axis, blended by normalised weights (zero-weight vertices kept)."""
@@ -562,7 +576,8 @@ def bake_scales_into_mesh(obj, arm, ratios: dict[str, float], bone_names: list[s
         r = rows[sel]
         w = data[sel] / np.where(total[r] > 0, total[r], 1.0)
         rest = _matrix_np(arm.data.bones[name].matrix_local)
-        d = rest @ np.diag([s, 1.0, s, 1.0]) @ np.linalg.inv(rest)
+        kx, kz = _xz(s)
+        d = rest @ np.diag([kx, 1.0, kz, 1.0]) @ np.linalg.inv(rest)
         p = pa[r]
         delta[r] += w[:, None] * (_transform(p, d) - p)
     return _transform(pa + delta, from_arm)

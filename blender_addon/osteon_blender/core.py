@@ -50,6 +50,14 @@ def allowable_stress(strength_mpa: float, safety_factor: float) -> float:
 
 # --------------------------------------------------------------------------- units
 
+SCALING_MODES = (
+    ("THIN", "Thin direction", ("Flat parts are thickened across their thickness only (pose "
+                                "scale X or Z); round parts on both axes. Keeps widths, adds "
+                                "less material")),
+    ("UNIFORM", "Both axes", ("Every weak part is thickened on both axes across the bone "
+                              "(pose scale X and Z), as in the paper")),
+)
+
 SIZE_MODES = (
     ("HEIGHT", "Printed height", "The model's world Z extent becomes this many mm"),
     ("LARGEST", "Largest dimension", "The model's largest world extent becomes this many mm"),
@@ -254,4 +262,11 @@ def build_report(*, object_name: str, armature_name: str, bone_names: list[str],
             "engine_max_stress_after_mpa": _finite(correction.after.max_stress),
             "bone_scale": {bone_names[i]: float(s) for i, s in enumerate(scale) if s != 1.0},
         }
+        sx, sz = getattr(correction, "bone_scale_x", None), getattr(correction, "bone_scale_z", None)
+        if sx is not None and sz is not None:
+            # pose scale X and Z of each scaled bone (they differ where a flat part was
+            # thickened across its thickness only)
+            report["correction"]["bone_scale_xz"] = {
+                bone_names[i]: [float(sx[i]), float(sz[i])]
+                for i in range(len(bone_names)) if sx[i] != 1.0 or sz[i] != 1.0}
     return report

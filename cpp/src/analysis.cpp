@@ -1,5 +1,6 @@
 #include "osteon/analysis.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -427,6 +428,13 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
         st.area = props.area;
         st.modulus = props.modulus;
         st.center = frame.to_world(props.centroid);
+        // Principal second moments: the smaller one is across the thinnest direction (a b x t
+        // rectangle has b^3 t / 12 and b t^3 / 12, so the aspect is b / t).
+        const Eigen::SelfAdjointEigenSolver<Mat2> eig(props.second_moment);
+        const Vec2 thin = eig.eigenvectors().col(0);
+        st.thin_axis = (thin.x() * frame.u + thin.y() * frame.v).normalized();
+        const double lo = std::max(eig.eigenvalues()(0), 0.0), hi = eig.eigenvalues()(1);
+        st.aspect = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
       } else {
         st.flags |= kFlagDegenerate;
       }
@@ -455,14 +463,15 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     const int n = static_cast<int>(slab_params[b].size()) - 2;
     auto& segs = family_segments[worker];
     const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
-    cut_mesh_parallel(mesh, base, h, n, segs, &grid, options.local_cuts ? &region : nullptr,
+    const bool local = options.local_cuts;
+    cut_mesh_parallel(mesh, base, h, n, segs, &grid, local ? &region : nullptr,
                       section_dirty.data() + first);
     for (int k = 1; k <= n; ++k) {
       const int si = first + k - 1;
       if (!section_dirty[si]) continue;
       PlaneFrame frame = base;
       frame.origin = specs[si].point;
-      if (!options.local_cuts) {
+      if (!local) {
         finish_whole(si, frame, segs[k - 1]);
         continue;
       }
@@ -595,6 +604,8 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   r.load_point.resize(ns);
   r.section_area.resize(ns);
   r.section_modulus.resize(ns);
+  r.section_thin_axis.resize(ns);
+  r.section_aspect.resize(ns);
   r.moment_arm.resize(ns);
   r.moment.resize(ns);
   r.stress.resize(ns);
@@ -621,6 +632,8 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       r.moment[i] = options.force * arm;
       r.section_area[i] = st.found ? st.area : 0.0;
       r.section_modulus[i] = st.found ? st.modulus : kNaN;
+      r.section_thin_axis[i] = st.found ? st.thin_axis : Vec3(kNaN, kNaN, kNaN);
+      r.section_aspect[i] = st.found ? st.aspect : kNaN;
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });

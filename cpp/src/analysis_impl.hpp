@@ -41,6 +41,8 @@ struct SectionState {
   double area = 0.0;
   double modulus = 0.0;
   Vec3 center = Vec3::Zero();
+  Vec3 thin_axis = Vec3::Zero();  // unit, in the plane: the direction across the thinnest width
+  double aspect = 1.0;            // width / thickness
 };
 
 struct Analyzer::Impl {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "analysis_impl.hpp"
 #include "osteon/skinning.hpp"
@@ -59,6 +60,20 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
   if (!(co.target_ratio > 0 && co.target_ratio <= 1.0))
     throw std::invalid_argument("target_ratio must be in (0, 1]");
   const int nb = sk.num_bones();
+  if (!(co.flat_aspect >= 1.0)) throw std::invalid_argument("flat_aspect must be >= 1");
+  if (!co.bone_x_axes.empty() && static_cast<int>(co.bone_x_axes.size()) != nb)
+    throw std::invalid_argument("bone_x_axes must have one axis per bone");
+  AxisScales scales{std::vector<double>(nb, 1.0), std::vector<double>(nb, 1.0),
+                    std::vector<Vec3>(nb)};
+  for (int b = 0; b < nb; ++b) {
+    const Vec3 d = sk.direction(b);
+    Vec3 x = co.bone_x_axes.empty() ? PlaneFrame::make(sk.heads[b], d).u : co.bone_x_axes[b];
+    x -= x.dot(d) * d;
+    if (!x.allFinite() || !(x.norm() > 1e-6))
+      throw std::invalid_argument("bone_x_axes[" + std::to_string(b) +
+                                  "] must be a finite vector across the bone");
+    scales.x_axis[b] = x.normalized();
+  }
   Analyzer analyzer(mesh.faces, mesh.num_faces, mesh.num_vertices, &weights, nb, options);
   Analyzer::Impl& impl = analyzer.internals();
 
@@ -95,18 +110,34 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     if (round >= co.max_rounds) break;
     const MeshView current_mesh{res.vertices.data(), mesh.num_vertices, mesh.faces, mesh.num_faces};
     const int bone = domain_bone(current_mesh, weights, current, worst, options.interval);
-    const double want = std::cbrt(current.stress[worst] / (co.target_ratio * allowable));
-    const double old_scale = res.bone_scale[bone];
-    const double new_scale = std::min(old_scale * want, co.max_scale);
-    if (new_scale <= old_scale * (1.0 + 1e-9)) {
+    const double ratio = current.stress[worst] / (co.target_ratio * allowable);
+    // Which axes to scale: both (the paper), or only the one across a flat section's thickness.
+    int axis = 0;
+    AxisScales trial = scales;
+    if (co.thin_direction && current.section_aspect[worst] >= co.flat_aspect) {
+      const Vec3 d = sk.direction(bone);
+      Vec3 thin = current.section_thin_axis[worst];
+      thin -= thin.dot(d) * d;
+      if (thin.norm() > 0.5) {  // the section's thin direction lies mostly across the bone
+        thin.normalize();
+        if (co.bone_x_axes.empty() && scales.x[bone] == scales.z[bone]) trial.x_axis[bone] = thin;
+        const Vec3 x = trial.x_axis[bone], z = x.cross(d);
+        const double cx = std::abs(thin.dot(x)), cz = std::abs(thin.dot(z));
+        if (std::max(cx, cz) >= std::cos(M_PI / 6)) axis = cx >= cz ? 1 : 2;
+      }
+    }
+    const double want = axis == 0 ? std::cbrt(ratio) : std::sqrt(ratio);
+    if (axis != 2) trial.x[bone] = std::min(scales.x[bone] * want, co.max_scale);
+    if (axis != 1) trial.z[bone] = std::min(scales.z[bone] * want, co.max_scale);
+    const double old_scale = axis == 2 ? scales.z[bone] : scales.x[bone];
+    const double new_scale = axis == 2 ? trial.z[bone] : trial.x[bone];
+    if (trial.x[bone] <= scales.x[bone] * (1.0 + 1e-9) &&
+        trial.z[bone] <= scales.z[bone] * (1.0 + 1e-9)) {
       unfixable[worst] = 1;
       why[worst] = "bone '" + sk.name(bone) + "' already at max_scale";
       continue;
     }
-    std::vector<double> trial_scale = res.bone_scale;
-    trial_scale[bone] = new_scale;
-    skin_cross_section_scales(mesh.vertices, mesh.num_vertices, sk, weights, trial_scale,
-                              next.data());
+    skin_axis_scales(mesh.vertices, mesh.num_vertices, sk, weights, trial, next.data());
     // Box of every triangle touching a moved vertex, before and after: only planes through it
     // can change (the paper's culling of unaffected domains).
     // Smooth weights (e.g. bounded biharmonic) reach everywhere with ~1e-10: displacements below
@@ -129,9 +160,9 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     }
     const double before_stress = current.stress[worst];
     res.vertices.swap(next);
-    res.bone_scale = trial_scale;
+    scales = trial;
     current = dirty.empty() ? current : impl.run(res.vertices.data(), sk, &dirty);
-    res.rounds.push_back({bone, new_scale / old_scale, current.max_stress});
+    res.rounds.push_back({bone, new_scale / old_scale, current.max_stress, axis});
     // No progress on this section: its domain is not this bone's alone (blended joint weights).
     if (!(current.stress[worst] < before_stress * 0.995)) {
       unfixable[worst] = 1;
@@ -139,6 +170,12 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
           "scaling bone '" + sk.name(bone) + "' does not thicken it (blended weights at a joint?)";
     }
   }
+  res.bone_scale_x = scales.x;
+  res.bone_scale_z = scales.z;
+  res.bone_x_axis = scales.x_axis;
+  for (int b = 0; b < nb; ++b)
+    res.bone_scale[b] =
+        scales.x[b] == scales.z[b] ? scales.x[b] : std::sqrt(scales.x[b] * scales.z[b]);
   res.after = impl.run(res.vertices.data(), sk, nullptr);
   res.converged = true;
   for (std::size_t i = 0; i < res.after.weak.size(); ++i) {

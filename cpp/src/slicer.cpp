@@ -237,7 +237,9 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
     const auto [begin, end] = part_range(part);
     for (Index f = begin; f < end; ++f) {
       const Index k = fill[cell_of[f]]++;
-      std::copy(mesh.faces + 3 * f, mesh.faces + 3 * f + 3, faces_.begin() + 3 * k);
+      faces_[3 * k] = mesh.faces[3 * f];
+      faces_[3 * k + 1] = mesh.faces[3 * f + 1];
+      faces_[3 * k + 2] = mesh.faces[3 * f + 2];
     }
   });
   // Keep the non-empty cells only, each with its grid box widened by its triangles' overhang

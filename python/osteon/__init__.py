@@ -5,6 +5,7 @@ printed object, newtons, MPa. See :func:`analyze`, :func:`correct`, :class:`Skel
 """
 
 from ._api import (
+    DEFAULT_SCALING,
     SECTION_FLAGS,
     SECTION_KINDS,
     Analysis,
@@ -21,6 +22,7 @@ from ._api import (
 __version__ = "0.1.0"
 
 __all__ = [
+    "DEFAULT_SCALING",
     "SECTION_FLAGS",
     "SECTION_KINDS",
     "Analysis",

@@ -155,6 +155,9 @@ class Skeleton:
         return f"Skeleton({self.num_bones} bones, roots={self.roots})"
 
 
+#: Default of ``correct(scaling=...)``: chosen by measurement, see docs/correction.md.
+DEFAULT_SCALING = "thin"
+
 #: Weights down to this are solver round-off (bounded biharmonic weights have ~-1e-9) and read as 0.
 NEGATIVE_WEIGHT_TOLERANCE = 1e-6
 
@@ -239,7 +242,8 @@ class Analysis:
     2 end), ``section_param`` (S,) mm from the bone head, ``section_point`` (S,3) where the bone
     pierces the plane, ``section_center`` (S,3) centroid, ``section_normal`` (S,3),
     ``load_point`` (S,3) farthest downstream point, ``section_area`` (S,) mm², ``section_modulus``
-    (S,) mm³, ``moment_arm`` (S,) mm, ``moment`` (S,) N·mm, ``stress`` (S,) MPa, ``culled`` (S,)
+    (S,) mm³, ``section_thin_axis`` (S,3) unit in-plane direction across the section's thinnest
+    width, ``section_aspect`` (S,) width / thickness (1 for a circle or square), ``moment_arm`` (S,) mm, ``moment`` (S,) N·mm, ``stress`` (S,) MPa, ``culled`` (S,)
     bool (W > safe modulus: safe for sure), ``weak`` (S,) bool (stress > allowable),
     ``section_flags`` (S,) bit mask (see ``SECTION_FLAGS``). Skipped sections (flag ``empty`` or
     ``degenerate``) have NaN modulus and stress and are never weak or culled.
@@ -257,6 +261,8 @@ class Analysis:
     load_point: np.ndarray
     section_area: np.ndarray
     section_modulus: np.ndarray
+    section_thin_axis: np.ndarray
+    section_aspect: np.ndarray
     moment_arm: np.ndarray
     moment: np.ndarray
     stress: np.ndarray
@@ -352,13 +358,20 @@ class Analysis:
 class Correction:
     """Result of :func:`correct`.
 
-    ``bone_scale`` (B,) cross-section scale per bone; ``vertices`` (V,3) corrected positions, mm;
-    ``rounds`` list of ``(bone index, factor, max stress after MPa)``; ``converged``; ``reason``;
-    ``unfixed_sections`` (indices into ``after``); ``max_displacement`` mm;
-    ``volume_change_percent``; ``before`` and ``after`` :class:`Analysis`.
+    ``bone_scale`` (B,) cross-section scale per bone (with ``scaling="thin"``: the geometric mean
+    sqrt(x * z) of its two axes); ``bone_scale_x``, ``bone_scale_z`` (B,) scale along each bone's
+    local x and z axes (equal for both-axes scaling); ``bone_x_axis`` (B,3) unit x axis across
+    each bone (z = x × bone direction, as Blender's X × Y); ``vertices`` (V,3) corrected
+    positions, mm; ``rounds`` list of ``(bone index, factor, max stress after MPa, axis)`` with
+    axis 0 = both axes, 1 = x only, 2 = z only; ``converged``; ``reason``; ``unfixed_sections``
+    (indices into ``after``); ``max_displacement`` mm; ``volume_change_percent``; ``before`` and
+    ``after`` :class:`Analysis`.
     """
 
     bone_scale: np.ndarray
+    bone_scale_x: np.ndarray
+    bone_scale_z: np.ndarray
+    bone_x_axis: np.ndarray
     vertices: np.ndarray
     rounds: list
     converged: bool
@@ -375,10 +388,11 @@ class Correction:
         return len(self.rounds)
 
     def scaled_bones(self) -> list[dict]:
-        """Bones whose scale changed: ``{bone, index, scale}``."""
+        """Bones whose scale changed: ``{bone, index, scale, scale_x, scale_z}``."""
         names = self.before.bone_names
         return [
-            {"bone": names[b], "index": int(b), "scale": float(self.bone_scale[b])}
+            {"bone": names[b], "index": int(b), "scale": float(self.bone_scale[b]),
+             "scale_x": float(self.bone_scale_x[b]), "scale_z": float(self.bone_scale_z[b])}
             for b in np.flatnonzero(self.bone_scale != 1.0)
         ]
 
@@ -501,6 +515,9 @@ def correct(
     target_ratio: float = 0.99,
     gap_tolerance: float | None = None,
     threads: int = 0,
+    scaling: str = DEFAULT_SCALING,
+    flat_aspect: float = 2.0,
+    bone_x_axes: Any = None,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -508,7 +525,25 @@ def correct(
     ``cbrt(stress / (target_ratio * allowable_stress))`` (capped at ``max_scale`` per bone) and
     re-skins the rest mesh (linear blend skinning, weights normalised per vertex). ``weights``
     (V,B) dense or SciPy sparse is required (None binds each vertex to its nearest bone).
+
+    ``scaling="uniform"`` scales both axes across the bone (the paper). ``scaling="thin"``
+    thickens a flat section (width / thickness >= ``flat_aspect``) across its thickness only,
+    by ``sqrt(stress / target)`` (a plate's W grows as t²), along the bone's local x or z axis
+    nearest to it (round sections still get both axes). ``bone_x_axes`` (B,3) gives each bone's
+    local x axis (e.g. Blender's, so that pose-bone scale X/Z reproduce the result); None lets
+    each bone's axes follow the first flat section scaled on it.
     """
+    if scaling not in ("uniform", "thin"):
+        raise ValueError(f"scaling must be 'uniform' or 'thin', got {scaling!r}")
+    if not (float(flat_aspect) >= 1.0):
+        raise ValueError(f"flat_aspect must be >= 1, got {flat_aspect!r}")
+    axes = None
+    if bone_x_axes is not None:
+        axes = _float_rows(bone_x_axes, "bone_x_axes")
+        if len(axes) != skeleton.num_bones:
+            raise ValueError(
+                f"bone_x_axes must have shape ({skeleton.num_bones}, 3), got {axes.shape}"
+            )
     if not isinstance(skeleton, Skeleton):
         raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
     v = _float_rows(vertices, "vertices")
@@ -535,7 +570,7 @@ def correct(
         v, f, skeleton.heads, skeleton.tails, skeleton.parents, skeleton.names, dense, csr,
         force, allowable_stress, interval, _held_bone(root, skeleton),
         -1.0 if gap_tolerance is None else float(gap_tolerance), threads, float(max_scale),
-        max_rounds, float(target_ratio),
+        max_rounds, float(target_ratio), scaling == "thin", float(flat_aspect), axes,
     )
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
               "interval": interval}
@@ -544,19 +579,34 @@ def correct(
     return Correction(**d)
 
 
-def skin(vertices: Any, skeleton: Skeleton, weights: Any, bone_scale: Any) -> np.ndarray:
+def skin(vertices: Any, skeleton: Skeleton, weights: Any, bone_scale: Any, *,
+         bone_scale_z: Any = None, bone_x_axes: Any = None) -> np.ndarray:
     """Linear blend skinning of rest ``vertices`` (V,3) mm with per-bone cross-section scales
-    ``bone_scale`` (B,): each bone scales the two axes across itself about its own axis."""
+    ``bone_scale`` (B,): each bone scales the two axes across itself about its own axis. With
+    ``bone_scale_z`` (B,) and ``bone_x_axes`` (B,3), ``bone_scale`` applies along each bone's x
+    axis and ``bone_scale_z`` along z = x × direction (as :class:`Correction` reports them)."""
     v = _float_rows(vertices, "vertices")
     dense, csr = _weights_args(weights, len(v), skeleton.num_bones)
     if dense is None and csr is None:
         raise ValueError("skin() needs weights")
-    s = np.asarray(bone_scale, dtype=np.float64)
-    if s.shape != (skeleton.num_bones,):
-        raise ValueError(f"bone_scale must have shape ({skeleton.num_bones},), got {s.shape}")
-    if not np.isfinite(s).all() or (s <= 0).any():
-        raise ValueError("bone_scale must be positive and finite")
-    return _core.skin(v, skeleton.heads, skeleton.tails, skeleton.parents, dense, csr, list(s))
+    scales = []
+    for name, value in (("bone_scale", bone_scale), ("bone_scale_z", bone_scale_z)):
+        if value is None:
+            scales.append(None)
+            continue
+        s = np.asarray(value, dtype=np.float64)
+        if s.shape != (skeleton.num_bones,):
+            raise ValueError(f"{name} must have shape ({skeleton.num_bones},), got {s.shape}")
+        if not np.isfinite(s).all() or (s <= 0).any():
+            raise ValueError(f"{name} must be positive and finite")
+        scales.append(list(s))
+    axes = None
+    if bone_scale_z is not None:
+        if bone_x_axes is None:
+            raise ValueError("bone_scale_z needs bone_x_axes (B,3): the axes it scales along")
+        axes = _float_rows(bone_x_axes, "bone_x_axes")
+    return _core.skin(v, skeleton.heads, skeleton.tails, skeleton.parents, dense, csr, scales[0],
+                      scales[1], axes)
 
 
 def section_properties(outer: Any, holes: Sequence[Any] = ()) -> dict:

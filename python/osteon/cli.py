@@ -163,6 +163,14 @@ def build_parser() -> argparse.ArgumentParser:
     pc.add_argument(
         "--max-rounds", type=int, default=100, metavar="N", help="most scaling rounds (default 100)"
     )
+    pc.add_argument(
+        "--scaling",
+        choices=("thin", "uniform"),
+        default=None,
+        help="thin: flat parts are thickened across their thickness only (keeps widths, adds "
+        "less material); uniform: both axes across the bone, as in the paper (default: "
+        "osteon.DEFAULT_SCALING)",
+    )
     pv = sub.add_parser(
         "validate",
         help="check the input; with --fem compare with a FEM solve",
@@ -509,6 +517,7 @@ def cmd_correct(args, out):
             root=_root(args, model),
             max_scale=args.max_scale,
             max_rounds=args.max_rounds,
+            scaling=args.scaling or osteon.DEFAULT_SCALING,
         )
         secs = time.perf_counter() - t
         prog.next()
@@ -522,6 +531,9 @@ def cmd_correct(args, out):
                     "rounds": rounds,
                     "reason": getattr(fix, "reason", ""),
                     "bone_scale": [float(s) for s in fix.bone_scale],
+                    "bone_scale_xz": [
+                        [float(x), float(z)] for x, z in zip(fix.bone_scale_x, fix.bone_scale_z)
+                    ],
                     "max_stress_before_mpa": _f(fix.before.max_stress),
                     "output": str(args.out),
                     "before": {

@@ -61,6 +61,57 @@ def test_correct_matches_engine_and_only_scales_across(sample, engine):
     assert {b["bone"] for b in last["report"]["weak_bones"]} == scaled
 
 
+def _flatten_tail(obj, factor: float = 0.4):
+    """Squash the figurine's tail across world z about its axis (blended by its weight): a
+    flat tail, wide in x and thin in z."""
+    import make_sample_rig
+
+    a = np.array(make_sample_rig.JOINTS["tail_base"][0])
+    b = np.array(make_sample_rig.JOINTS["tail_tip"][0])
+    gi = obj.vertex_groups["tail"].index
+    co = bridge.local_positions(obj.data)
+    w = np.array([next((g.weight for g in v.groups if g.group == gi), 0.0)
+                  for v in obj.data.vertices])
+    t = np.clip((co - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0)
+    axis_z = a[2] + t * (b[2] - a[2])
+    co[:, 2] = axis_z + (co[:, 2] - axis_z) * (1.0 - (1.0 - factor) * w)
+    bridge.set_local_positions(obj.data, co)
+
+
+@pytest.mark.parametrize("scaling", ["THIN", "UNIFORM"])
+def test_flat_part_pose_scales_reproduce_the_engine(sample, engine, scaling):
+    """A flat tail: THIN thickens it on one pose axis only, UNIFORM on both; either way
+    Blender's deformation of the pose scales is the engine's corrected mesh."""
+    obj, arm = sample
+    _flatten_tail(obj)
+    bpy.context.scene.osteon.scaling = scaling
+    assert bpy.ops.osteon.correct() == {"FINISHED"}
+    last = common.LAST[bpy.context.scene.name]
+    fix, inp = last["correction"], last["inputs"]
+    assert fix.converged
+    names = inp.skeleton.names
+    tail = names.index("tail")
+    sx, sy, sz = arm.pose.bones["tail"].scale
+    assert sy == 1.0
+    assert sx == pytest.approx(fix.bone_scale_x[tail], rel=1e-6)
+    assert sz == pytest.approx(fix.bone_scale_z[tail], rel=1e-6)
+    if scaling == "THIN":
+        # flat: thickened across its thickness (one pose axis) until it is no longer flat
+        assert {r[3] for r in fix.rounds if r[0] == tail} & {1, 2}
+        assert max(sx, sz) > 1.2 * min(sx, sz)
+    else:
+        assert sx == pytest.approx(sz) and sx > 1.0
+    size = np.ptp(fix.vertices, axis=0).max()
+    assert np.abs(inp.vertices_mm - fix.vertices).max() <= 1e-4 * size
+    report = last["report"]
+    assert report["settings"]["scaling"] == scaling
+    assert report["correction"]["bone_scale_xz"]["tail"] == pytest.approx([sx, sz], rel=1e-6)
+    # Apply bakes the same shape into the mesh
+    corrected = _eval(obj)
+    assert bpy.ops.osteon.apply("EXEC_DEFAULT") == {"FINISHED"}
+    assert np.abs(_eval(obj) - corrected).max() < 1e-4 * np.ptp(corrected, axis=0).max()
+
+
 @pytest.mark.parametrize("bone", ["spine", "upper_arm.L", "thigh.R"])
 def test_children_keep_shape_and_place(sample, engine, bone):
     """Scale a bone with children: Blender == osteon.skin, children's matrices unchanged."""
@@ -147,13 +198,15 @@ def test_apply_bakes_correction_into_mesh(sample):
     assert not any(r.weak for r in bpy.context.scene.osteon.weak_bones)
 
 
+@pytest.mark.parametrize("scaling", ["THIN", "UNIFORM"])
 @pytest.mark.parametrize("model", ["2982", "11814"])
-def test_correct_real_rignet_fbx_matches_engine(addon, model):
+def test_correct_real_rignet_fbx_matches_engine(addon, model, scaling):
     """FBX rigs: armature object scaled 0.01 and rotated; heavier children chains."""
     from conftest import import_rignet
 
     obj, arm = import_rignet(model)
     bpy.context.scene.osteon.force_n = 40.0  # make sure something needs thickening
+    bpy.context.scene.osteon.scaling = scaling
     before = _eval(obj)
     assert bpy.ops.osteon.correct() == {"FINISHED"}
     last = common.LAST[bpy.context.scene.name]
@@ -166,7 +219,12 @@ def test_correct_real_rignet_fbx_matches_engine(addon, model):
     assert np.abs(_eval(obj)[free] - before[free]).max() < 1e-6 * np.ptp(before, axis=0).max()
     for p in arm.pose.bones:
         if p.name in scaled:
-            assert p.scale[1] == 1.0 and p.scale[0] == pytest.approx(p.scale[2])
+            b = inp.skeleton.names.index(p.name)
+            assert p.scale[1] == 1.0
+            assert p.scale[0] == pytest.approx(fix.bone_scale_x[b], rel=1e-6)
+            assert p.scale[2] == pytest.approx(fix.bone_scale_z[b], rel=1e-6)
+            if scaling == "UNIFORM":
+                assert p.scale[0] == pytest.approx(p.scale[2])
     assert bpy.ops.osteon.reset() == {"FINISHED"}
     assert np.abs(_eval(obj) - before).max() < 1e-6 * np.ptp(before, axis=0).max()
 

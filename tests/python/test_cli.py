@@ -135,6 +135,26 @@ def test_correct_dog(tmp_path, capsys):
 
 
 @needs_data
+@pytest.mark.parametrize("scaling", ["uniform", "thin"])
+def test_correct_scaling_option_reaches_the_engine(tmp_path, scaling):
+    import osteon
+    from osteon.io import load_model
+
+    js = tmp_path / "c.json"
+    rc = main(["correct", str(DOG), "--force", "40", "--scaling", scaling, "-q",
+               "--out", str(tmp_path / "fixed.obj"), "--json", str(js)])
+    rep = json.loads(js.read_text())
+    assert rc == (0 if rep["converged"] else 1)
+    m = load_model(DOG, height_mm=120.0)
+    fix = osteon.correct(m.vertices, m.faces, m.skeleton, m.weights, force=40.0,
+                         allowable_stress=rep["allowable_stress_mpa"], scaling=scaling)
+    assert np.allclose(rep["bone_scale_xz"], np.column_stack([fix.bone_scale_x, fix.bone_scale_z]),
+                       rtol=1e-12)
+    if scaling == "uniform":
+        assert all(x == z for x, z in rep["bone_scale_xz"])
+
+
+@needs_data
 def test_validate_without_fem(tmp_path):
     js = tmp_path / "v.json"
     assert main(["validate", str(ARM), "-q", "--json", str(js)]) == 0

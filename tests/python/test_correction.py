@@ -5,7 +5,7 @@ import osteon
 import pytest
 from models import load
 from scipy import sparse
-from shapes import circle, cylinder_along, merge, prism, revolve
+from shapes import circle, cylinder_along, merge, prism, rectangle, revolve
 
 
 def bar():
@@ -106,13 +106,105 @@ def test_max_rounds_zero_changes_nothing():
     assert np.array_equal(fix.vertices, v)
 
 
+def plate():
+    """A 12 x 3 mm flat bar along x: thin across z."""
+    v, f = prism(rectangle(12.0, 3.0), 100.0)
+    sk = osteon.Skeleton([[0, 0, 0]], [[100, 0, 0]], [-1], ["plate"])
+    return v, f, sk, np.ones((len(v), 1))
+
+
+def rectangle_modulus(b, t):
+    """Minimum section modulus of a b x t rectangle over all bending directions."""
+    return b**2 * t**2 / (6 * np.hypot(b, t))
+
+
+def test_thin_scaling_thickens_a_flat_bar_across_its_thickness_only():
+    v, f, sk, w = plate()
+    before = osteon.analyze(v, f, sk, w, force=10.0)
+    mid = np.argmin(np.abs(before.section_param - 50.0))
+    assert before.section_aspect[mid] == pytest.approx(4.0, rel=1e-9)  # width / thickness
+    assert abs(before.section_thin_axis[mid] @ [0, 0, 1]) == pytest.approx(1.0, abs=1e-12)
+    allowable = before.max_stress / 2
+    thin = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable, scaling="thin")
+    both = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable,
+                          scaling="uniform")
+    assert thin.converged and both.converged and not thin.after.weak.any()
+    # first round: sqrt of the stress ratio (a plate's W grows as t^2), on one axis only
+    assert thin.rounds[0][1] == pytest.approx(np.sqrt(2 / 0.99), rel=1e-9)
+    assert {r[3] for r in thin.rounds} == {1} and len(thin.rounds) <= 3
+    assert abs(thin.bone_x_axis[0] @ [0, 0, 1]) == pytest.approx(1.0, abs=1e-12)
+    assert thin.bone_scale_z[0] == 1.0
+    # width and length untouched (bitwise); the thickness grows by the x scale
+    assert np.array_equal(thin.vertices[:, :2], v[:, :2])
+    assert np.allclose(thin.vertices[:, 2], thin.bone_scale_x[0] * v[:, 2])
+    # the stress after is the closed form for a 12 x (3 s) rectangle
+    s = thin.bone_scale_x[0]
+    w_after = rectangle_modulus(12.0, 3.0 * s)
+    assert thin.after.section_modulus[mid] == pytest.approx(w_after, rel=1e-9)
+    # less material than scaling both axes (area x s vs x s^2), and narrower
+    assert thin.volume_change_percent == pytest.approx(100 * (s - 1), rel=1e-6)
+    assert thin.volume_change_percent < both.volume_change_percent
+    assert np.ptp(thin.vertices[:, 1]) < np.ptp(both.vertices[:, 1])
+    # skin() reproduces it from the reported scales and axes
+    again = osteon.skin(v, sk, w, thin.bone_scale_x, bone_scale_z=thin.bone_scale_z,
+                        bone_x_axes=thin.bone_x_axis)
+    assert np.allclose(again, thin.vertices, atol=1e-12)
+
+
+def test_thin_scaling_uses_the_given_bone_axes():
+    """With Blender's bone axes given (x across the width), the thickness is the z axis."""
+    v, f, sk, w = plate()
+    allowable = osteon.analyze(v, f, sk, w, force=10.0).max_stress / 2
+    free = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable, scaling="thin")
+    given = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable, scaling="thin",
+                           bone_x_axes=[[0, 1, 0]])
+    assert {r[3] for r in given.rounds} == {2}
+    assert given.bone_scale_x[0] == 1.0 and given.bone_scale_z[0] == free.bone_scale_x[0]
+    assert np.allclose(given.vertices, free.vertices, atol=1e-12)
+    # an axis 45 degrees off the thickness cannot be reproduced: both axes are scaled instead
+    tilted = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable,
+                            scaling="thin", bone_x_axes=[[0, 1, 1]])
+    assert {r[3] for r in tilted.rounds} == {0} and tilted.converged
+
+
+def test_thin_scaling_leaves_round_parts_to_both_axes():
+    v, f, sk, w = bar()
+    allowable = osteon.analyze(v, f, sk, w, force=10.0).max_stress / 2
+    thin = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable, scaling="thin")
+    both = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable,
+                          scaling="uniform")
+    assert np.array_equal(thin.vertices, both.vertices)
+    assert np.array_equal(thin.bone_scale_x, thin.bone_scale_z)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [({"scaling": "thinner"}, "scaling must be"),
+     ({"flat_aspect": 0.5}, "flat_aspect"),
+     ({"bone_x_axes": [[0, 1, 0], [0, 1, 0]]}, "bone_x_axes must have shape"),
+     ({"bone_x_axes": [[1, 0, 0]]}, "across the bone"),
+     ({"bone_x_axes": [[0, np.nan, 1]]}, "NaN")],
+)
+def test_bad_scaling_arguments(kwargs, message):
+    v, f, sk, w = plate()
+    with pytest.raises(ValueError, match=message):
+        osteon.correct(v, f, sk, w, force=10.0, allowable_stress=1.0, **kwargs)
+
+
+def test_skin_axis_scales_need_axes():
+    v, _f, sk, w = plate()
+    with pytest.raises(ValueError, match="bone_x_axes"):
+        osteon.skin(v, sk, w, [1.0], bone_scale_z=[2.0])
+
+
+@pytest.mark.parametrize("scaling", ["uniform", "thin"])
 @pytest.mark.parametrize("name", ["arm", "elephant", "cheburashka", "cow", "rignet2982",
                                   "rignet11814"])
-def test_real_models_converge_under_a_load_that_makes_them_weak(name, data_dir):
+def test_real_models_converge_under_a_load_that_makes_them_weak(name, scaling, data_dir):
     v, f, sk, w = load(name, height_mm=120.0)
     before = osteon.analyze(v, f, sk, w, force=20.0)
     allowable = before.max_stress / 2  # twice over the limit somewhere
-    fix = osteon.correct(v, f, sk, w, force=20.0, allowable_stress=allowable)
+    fix = osteon.correct(v, f, sk, w, force=20.0, allowable_stress=allowable, scaling=scaling)
     assert fix.before.weak.any()
     assert fix.converged, fix.reason
     assert not fix.after.weak.any()

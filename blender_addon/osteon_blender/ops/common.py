@@ -47,6 +47,7 @@ def settings_dict(s) -> dict:
         "held_bone": s.held_bone,
         "max_scale": float(s.max_scale),
         "max_rounds": int(s.max_rounds),
+        "scaling": str(s.scaling),
     }
 
 
@@ -193,12 +194,16 @@ def run_correct(context, progress=_no_progress) -> dict:
         progress(0.2)
         skeleton = engine_skeleton(osteon, inp)
         try:
+            # The bones' own X axes: a thin-direction scale must be one Blender's pose scale
+            # X or Z can reproduce.
             fix = osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
                                  max_scale=float(s.max_scale), max_rounds=int(s.max_rounds),
+                                 scaling=s.scaling.lower(), bone_x_axes=inp.skeleton.x_axes,
                                  **inp.params)
         except ValueError as e:
             raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
-        scales = {n: float(x) for n, x in zip(inp.skeleton.names, np.asarray(fix.bone_scale))}
+        scales = {n: (float(x), float(z)) for n, x, z in
+                  zip(inp.skeleton.names, fix.bone_scale_x, fix.bone_scale_z)}
         bridge.apply_bone_scales(context, arm, scales)
         progress(0.7)
         after_inp = gather(context, mm_per_unit=inp.mm_per_unit)

@@ -53,6 +53,7 @@ class OSTEON_PT_main(bpy.types.Panel):
         row.operator("osteon.correct", icon="MOD_SOLIDIFY")
         row.operator("osteon.reset", icon="LOOP_BACK")
         sub = layout.column(align=True)
+        sub.prop(s, "scaling")
         sub.prop(s, "max_scale")
         sub.prop(s, "max_rounds")
         if s.has_result:

@@ -72,6 +72,8 @@ class OsteonSettings(bpy.types.PropertyGroup):
                              description="Largest cross-section scale Correct may give a bone")
     max_rounds: IntProperty(name="Max rounds", default=100, min=1, soft_max=1000,
                             description="Largest number of correction rounds")
+    scaling: EnumProperty(name="Scaling", items=core.SCALING_MODES, default="THIN",
+                          description="How Correct thickens a weak part")
     # results of the last run
     weak_bones: CollectionProperty(type=OsteonBoneResult)
     weak_bones_index: IntProperty(default=-1, update=_on_bone_row)

@@ -42,11 +42,14 @@ struct AnalysisResult {
   std::vector<Vec3> load_point;           ///< S farthest downstream mesh point, mm
   std::vector<double> section_area;       ///< S area, mm^2 (0 when skipped)
   std::vector<double> section_modulus;    ///< S minimum section modulus W, mm^3 (NaN when skipped)
-  std::vector<double> moment_arm;         ///< S distance centroid -> load point d, mm
-  std::vector<double> moment;             ///< S bending moment M = F d, N mm
-  std::vector<double> stress;             ///< S peak bending stress M / W, MPa (NaN when skipped)
-  std::vector<std::uint8_t> culled;       ///< S W > safe modulus: safe for sure (drawn grey)
-  std::vector<std::uint8_t> weak;         ///< S stress > allowable stress
+  std::vector<Vec3>
+      section_thin_axis;               ///< S unit in-plane direction the section is thinnest across
+  std::vector<double> section_aspect;  ///< S width / thickness (sqrt of J's eigenvalue ratio)
+  std::vector<double> moment_arm;      ///< S distance centroid -> load point d, mm
+  std::vector<double> moment;          ///< S bending moment M = F d, N mm
+  std::vector<double> stress;          ///< S peak bending stress M / W, MPa (NaN when skipped)
+  std::vector<std::uint8_t> culled;    ///< S W > safe modulus: safe for sure (drawn grey)
+  std::vector<std::uint8_t> weak;      ///< S stress > allowable stress
   std::vector<std::uint32_t> section_flags;  ///< S SectionFlag bits
   double max_moment = 0.0;                   ///< M_gmax, N mm
   double safe_modulus = 0.0;                 ///< W_k = M_gmax / [sigma], mm^3

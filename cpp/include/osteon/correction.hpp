@@ -13,6 +13,13 @@ struct CorrectionOptions {
   double max_scale = 3.0;      ///< largest cross-section scale of one bone
   int max_rounds = 100;        ///< largest number of scaling rounds
   double target_ratio = 0.99;  ///< aim each scaled section at this fraction of the allowable stress
+  /// Flat sections (width / thickness >= flat_aspect) are thickened across their thickness only,
+  /// by s = sqrt(stress / target) (W of a plate grows as t^2), instead of both axes by cbrt.
+  bool thin_direction = false;
+  double flat_aspect = 2.0;
+  /// B local X axes of the bones (e.g. Blender's, so that pose-bone scale X/Z reproduce the
+  /// result); empty: each bone's axes follow the first flat section scaled on it.
+  std::vector<Vec3> bone_x_axes;
 };
 
 /// One scaling round: which bone, by what factor, and the largest stress after it.
@@ -20,11 +27,15 @@ struct CorrectionRound {
   int bone = -1;
   double factor = 1.0;          ///< scale applied in this round (multiplied into the bone's scale)
   double max_stress_after = 0;  ///< MPa, after the round
+  int axis = 0;                 ///< 0: both axes across the bone; 1: its x axis only; 2: z only
 };
 
 /// Result of a correction: per-bone scales, the corrected vertices, and analyses before/after.
 struct CorrectionResult {
-  std::vector<double> bone_scale;       ///< B cross-section scale per bone (1 = unchanged)
+  std::vector<double> bone_scale;       ///< B cross-section scale per bone: sqrt(x * z)
+  std::vector<double> bone_scale_x;     ///< B scale along each bone's x axis
+  std::vector<double> bone_scale_z;     ///< B scale along each bone's z axis (= x for both axes)
+  std::vector<Vec3> bone_x_axis;        ///< B each bone's x axis (unit, across the bone)
   std::vector<double> vertices;         ///< #V by 3 row-major corrected vertices, mm
   std::vector<CorrectionRound> rounds;  ///< the rounds taken, in order
   bool converged = false;               ///< true when no section is weak after

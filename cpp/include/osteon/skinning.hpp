@@ -17,4 +17,16 @@ void skin_cross_section_scales(const double* rest, Index num_vertices, const Ske
                                const BoneWeights& weights, const std::vector<double>& bone_scale,
                                double* out);
 
+/// Per-bone scales across each bone along two axes, as Blender's pose-bone scale X and Z: x_axis
+/// is the bone's local X (unit, across the bone), Z = X x direction (Blender's X x Y).
+struct AxisScales {
+  std::vector<double> x;     ///< B scale along each bone's x axis (1 = unchanged)
+  std::vector<double> z;     ///< B scale along each bone's z axis
+  std::vector<Vec3> x_axis;  ///< B unit axis across each bone; not used where x == z
+};
+
+/// As skin_cross_section_scales, with a scale per axis; where x == z it is that function exactly.
+void skin_axis_scales(const double* rest, Index num_vertices, const Skeleton& skeleton,
+                      const BoneWeights& weights, const AxisScales& scales, double* out);
+
 }  // namespace osteon
