@@ -43,19 +43,25 @@ struct EdgeTable {
   struct Slot {
     std::uint64_t key;
     std::int32_t first;
+    std::uint32_t stamp;  // the slot is in use in this round only when stamp == round
   };
   std::vector<Slot> slots;
   std::uint64_t mask = 0;
   int bits = 0;
-  static constexpr std::uint64_t kEmpty = ~0ull;
+  std::uint32_t round = 0;
 
-  // `keys` = distinct edges expected (at most); the table stays at most half full.
+  // `keys` = distinct edges expected (at most); the table stays at most half full. Slots are
+  // not cleared: a new round number empties them all at once (the table is reused per thread).
   void reset(std::size_t keys) {
     bits = 4;
     while ((std::size_t(1) << bits) < 2 * keys + 16) ++bits;
     const std::size_t size = std::size_t(1) << bits;
     mask = size - 1;
-    slots.assign(size, Slot{kEmpty, -1});
+    if (slots.size() < size) slots.resize(size, Slot{0, -1, round});
+    if (++round == 0) {  // wrapped: make every stamp stale again
+      for (Slot& slot : slots) slot.stamp = 0;
+      round = 1;
+    }
   }
   // Pairs `occurrence` with the endpoint already on the edge (partner[] both ways); returns
   // false if the edge already had two endpoints (non-manifold).
@@ -63,9 +69,8 @@ struct EdgeTable {
     std::uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> (64 - bits);
     while (true) {
       Slot& slot = slots[h];
-      if (slot.key == kEmpty) {
-        slot.key = key;
-        slot.first = occurrence;
+      if (slot.stamp != round) {
+        slot = Slot{key, occurrence, round};
         return true;
       }
       if (slot.key == key) {
@@ -435,8 +440,8 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   // still non-manifold after that is flagged.
   const std::vector<CutSegment>* source = &input;
   std::vector<CutSegment> deduplicated;
-  EdgeTable table;
-  std::vector<std::int32_t> partner;
+  thread_local EdgeTable table;
+  thread_local std::vector<std::int32_t> partner;
   for (int attempt = 0; attempt < 2; ++attempt) {
     const std::vector<CutSegment>& segs = *source;
     const std::size_t count = segs.size();
@@ -467,7 +472,8 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   }
   const std::vector<CutSegment>& segments = *source;
   const std::size_t m = segments.size();
-  std::vector<std::uint8_t> used(m, 0);
+  thread_local std::vector<std::uint8_t> used;
+  used.assign(m, 0);
   std::vector<Vec2> forward, backward;
   for (std::size_t s0 = 0; s0 < m; ++s0) {
     if (used[s0]) continue;
