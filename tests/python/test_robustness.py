@@ -67,6 +67,11 @@ interval so small a bone gets > 10^6 sections ValueError "interval too small"
 gap_tolerance < 0 or NaN                      ValueError "gap_tolerance must be >= 0 mm"
 max_scale < 1 / NaN, max_rounds < 0 or not    ValueError naming the parameter
 an integer, target_ratio outside (0, 1]
+scaling not "thin"/"uniform", flat_aspect     ValueError "scaling must be ..." / "flat_aspect
+< 1, bone_x_axes wrong shape / NaN / along    must be >= 1" / "bone_x_axes must have shape"
+the bone; skin() bone_scale_z without axes    / "... contain NaN" / "... across the bone" /
+                                              "bone_scale_z needs bone_x_axes" (tested in
+                                              test_correction.py)
 threads < 0 or not an integer                 ValueError "threads must be an integer >= 0"
 extreme scales (1e-6 mm and 1e6 mm models)    exact scaling: stress ∝ 1/L², moment ∝ L,
                                               modulus ∝ L³, area ∝ L², same flags
