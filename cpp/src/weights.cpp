@@ -4,12 +4,60 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "parallel.hpp"
 
 namespace osteon {
+namespace {
+
+// Weights down to this are solver round-off (bounded biharmonic weights have ~-1e-9): read as 0.
+constexpr double kNegativeTolerance = 1e-6;
+
+std::invalid_argument bone_out_of_range(long long bone, int num_bones) {
+  return std::invalid_argument("weights: bone (column) index " + std::to_string(bone) +
+                               " out of range for " + std::to_string(num_bones) + " bones");
+}
+
+// CSR row offsets must start at 0 and never decrease.
+void check_indptr(const Index* indptr, Index num_vertices) {
+  if (indptr[0] != 0) throw std::invalid_argument("weights: CSR indptr must start at 0");
+  for (Index v = 0; v < num_vertices; ++v)
+    if (indptr[v + 1] < indptr[v])
+      throw std::invalid_argument("weights: CSR indptr must not decrease");
+}
+
+// Throws for the first bad entry (not finite, negative beyond round-off, bone out of range).
+template <class BoneIndex>
+void check_entries(const BoneIndex* bones, const double* data, Index nnz, int num_bones) {
+  for (Index k = 0; k < nnz; ++k) {
+    const double w = data[k];
+    if (!std::isfinite(w)) throw std::invalid_argument("weights contain NaN or infinity");
+    if (w < -kNegativeTolerance) {
+      std::ostringstream msg;
+      msg << "weights must not be negative (found " << w << ")";
+      throw std::invalid_argument(msg.str());
+    }
+    if (bones[k] < 0 || bones[k] >= num_bones) throw bone_out_of_range(bones[k], num_bones);
+  }
+}
+
+// Bone of the largest weight in entries [begin, end), -1 when none is above round-off.
+template <class BoneIndex>
+int row_argmax(Index begin, Index end, const BoneIndex* bones, const double* data) {
+  double best = 1e-12;  // round-off weights never make a bone dominant
+  Index arg = -1;
+  for (Index k = begin; k < end; ++k) {
+    const bool larger = data[k] > best;  // branch-free: the loop carries only `best`
+    best = larger ? data[k] : best;
+    arg = larger ? k : arg;
+  }
+  return arg >= 0 ? static_cast<int>(bones[arg]) : -1;
+}
+
+}  // namespace
 
 BoneWeights BoneWeights::from_dense(const double* dense, Index num_vertices, int num_bones) {
   BoneWeights w;
@@ -35,18 +83,13 @@ BoneWeights BoneWeights::from_csr(const Index* indptr, const Index* indices, con
   BoneWeights w;
   w.num_vertices = num_vertices;
   w.num_bones = num_bones;
-  if (indptr[0] != 0) throw std::invalid_argument("weights: CSR indptr must start at 0");
-  for (Index v = 0; v < num_vertices; ++v)
-    if (indptr[v + 1] < indptr[v])
-      throw std::invalid_argument("weights: CSR indptr must not decrease");
+  check_indptr(indptr, num_vertices);
   const Index nnz = indptr[num_vertices];
   w.row_start.assign(indptr, indptr + num_vertices + 1);
   w.bone.resize(nnz);
   w.weight.assign(data, data + nnz);
   for (Index k = 0; k < nnz; ++k) {
-    if (indices[k] < 0 || indices[k] >= num_bones)
-      throw std::invalid_argument("weights: bone (column) index " + std::to_string(indices[k]) +
-                                  " out of range for " + std::to_string(num_bones) + " bones");
+    if (indices[k] < 0 || indices[k] >= num_bones) throw bone_out_of_range(indices[k], num_bones);
     w.bone[k] = static_cast<int>(indices[k]);
   }
   return w;
@@ -69,38 +112,24 @@ void validate_weights(const BoneWeights& w, Index num_vertices, int num_bones) {
                                 " bones");
   if (static_cast<Index>(w.row_start.size()) != num_vertices + 1)
     throw std::invalid_argument("weights: row offsets do not match the vertex count");
-  for (std::size_t k = 0; k < w.weight.size(); ++k) {
-    if (!std::isfinite(w.weight[k])) throw std::invalid_argument("weights contain NaN or infinity");
-    if (w.weight[k] < -1e-6)  // solver round-off (~-1e-9) is tolerated and reads as 0
-      throw std::invalid_argument("weights must not be negative (found " +
-                                  std::to_string(w.weight[k]) + ")");
-    if (w.bone[k] < 0 || w.bone[k] >= num_bones)
-      throw std::invalid_argument("weights: bone index out of range");
-  }
+  if (w.bone.size() != w.weight.size() ||
+      w.row_start[num_vertices] != static_cast<Index>(w.weight.size()))
+    throw std::invalid_argument("weights: row offsets do not match the entries");
+  check_entries(w.bone.data(), w.weight.data(), static_cast<Index>(w.weight.size()), num_bones);
 }
 
 std::vector<int> dominant_bones(const BoneWeights& w) {
-  std::vector<int> dom(w.num_vertices, -1);
-  for (Index v = 0; v < w.num_vertices; ++v) {
-    double best = 1e-12;  // round-off weights never make a bone dominant
-    for (Index k = w.row_start[v]; k < w.row_start[v + 1]; ++k) {
-      if (w.weight[k] > best) {
-        best = w.weight[k];
-        dom[v] = w.bone[k];
-      }
-    }
-  }
+  std::vector<int> dom(w.num_vertices);
+  for (Index v = 0; v < w.num_vertices; ++v)
+    dom[v] = row_argmax(w.row_start[v], w.row_start[v + 1], w.bone.data(), w.weight.data());
   return dom;
 }
 
 std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, const double* data,
                                     Index num_vertices, int num_bones, int threads) {
-  if (indptr[0] != 0) throw std::invalid_argument("weights: CSR indptr must start at 0");
-  for (Index v = 0; v < num_vertices; ++v)
-    if (indptr[v + 1] < indptr[v])
-      throw std::invalid_argument("weights: CSR indptr must not decrease");
-  // Check all entries first in a branch-free pass (it vectorises); name the first bad one only
-  // when there is one.
+  check_indptr(indptr, num_vertices);
+  // Check all entries first in a branch-free pass (it vectorises); check_entries names the
+  // first bad one only when there is one.
   const Index nnz = indptr[num_vertices];
   const Index block = 8192;
   const long chunks = static_cast<long>((num_vertices + block - 1) / block);
@@ -110,33 +139,14 @@ std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, c
     const Index v0 = chunk * block, v1 = std::min(num_vertices, v0 + block);
     bool bad = false;
     for (Index k = indptr[v0]; k < indptr[v1]; ++k)
-      bad |= !(data[k] >= -1e-6 && data[k] <= std::numeric_limits<double>::max()) |
+      bad |= !(data[k] >= -kNegativeTolerance && data[k] <= std::numeric_limits<double>::max()) |
              (indices[k] < 0) | (indices[k] >= num_bones);
     chunk_bad[chunk] = bad;
     if (bad) return;
-    for (Index v = v0; v < v1; ++v) {
-      double best = 1e-12;  // round-off weights never make a bone dominant
-      Index arg = -1;
-      for (Index k = indptr[v]; k < indptr[v + 1]; ++k) {
-        const bool larger = data[k] > best;
-        best = larger ? data[k] : best;
-        arg = larger ? k : arg;
-      }
-      if (arg >= 0) dom[v] = static_cast<int>(indices[arg]);
-    }
+    for (Index v = v0; v < v1; ++v) dom[v] = row_argmax(indptr[v], indptr[v + 1], indices, data);
   });
-  if (std::find(chunk_bad.begin(), chunk_bad.end(), 1) != chunk_bad.end()) {
-    for (Index k = 0; k < nnz; ++k) {
-      const double w = data[k];
-      if (!std::isfinite(w)) throw std::invalid_argument("weights contain NaN or infinity");
-      if (w < -1e-6)
-        throw std::invalid_argument("weights must not be negative (found " + std::to_string(w) +
-                                    ")");
-      if (indices[k] < 0 || indices[k] >= num_bones)
-        throw std::invalid_argument("weights: bone (column) index " + std::to_string(indices[k]) +
-                                    " out of range for " + std::to_string(num_bones) + " bones");
-    }
-  }
+  if (std::find(chunk_bad.begin(), chunk_bad.end(), 1) != chunk_bad.end())
+    check_entries(indices, data, nnz, num_bones);
   return dom;
 }
 
