@@ -375,21 +375,23 @@ def _f(x):
     return x if np.isfinite(x) else None
 
 
+def _engine_args(args, model, allowable: float) -> tuple[tuple, dict]:
+    """The model and settings every command passes to the engine: (positional, keyword)."""
+    return (model.vertices, model.faces, model.skeleton, model.weights), {
+        "force": args.force,
+        "allowable_stress": allowable,
+        "interval": args.interval,
+        "root": _root(args, model),
+    }
+
+
 def _analyze(args, model, allowable: float):
     """Run the analysis with the command's settings; returns (Analysis, seconds)."""
     import osteon
 
+    positional, keyword = _engine_args(args, model, allowable)
     t = time.perf_counter()
-    a = osteon.analyze(
-        model.vertices,
-        model.faces,
-        model.skeleton,
-        model.weights,
-        force=args.force,
-        allowable_stress=allowable,
-        interval=args.interval,
-        root=_root(args, model),
-    )
+    a = osteon.analyze(*positional, **keyword)
     return a, time.perf_counter() - t
 
 
@@ -505,16 +507,11 @@ def cmd_correct(args, out):
             raise ValueError(f"--out {args.out}: use an .obj, .off, .ply or .stl file name")
         model = _load(args)
         prog.next()
+        positional, keyword = _engine_args(args, model, allowable)
         t = time.perf_counter()
         fix = osteon.correct(
-            model.vertices,
-            model.faces,
-            model.skeleton,
-            model.weights,
-            force=args.force,
-            allowable_stress=allowable,
-            interval=args.interval,
-            root=_root(args, model),
+            *positional,
+            **keyword,
             max_scale=args.max_scale,
             max_rounds=args.max_rounds,
             scaling=args.scaling or osteon.DEFAULT_SCALING,
@@ -522,14 +519,14 @@ def cmd_correct(args, out):
         secs = time.perf_counter() - t
         prog.next()
         write_mesh(args.out, fix.vertices, model.faces)
-        rounds = fix.rounds if isinstance(fix.rounds, int) else len(fix.rounds)
+        rounds = len(fix.rounds)
         if args.json:
             rep = _report(args, model, material, strength, allowable, fix.after, secs)
             rep.update(
                 {
                     "converged": bool(fix.converged),
                     "rounds": rounds,
-                    "reason": getattr(fix, "reason", ""),
+                    "reason": fix.reason,
                     "bone_scale": [float(s) for s in fix.bone_scale],
                     "bone_scale_xz": [
                         [float(x), float(z)] for x, z in zip(fix.bone_scale_x, fix.bone_scale_z)
@@ -576,7 +573,7 @@ def cmd_correct(args, out):
             f"{status} in {1000 * secs:.1f} ms",
             file=out,
         )
-        reason = getattr(fix, "reason", "")
+        reason = fix.reason
         if reason and not fix.converged:
             print(f"why: {reason}", file=out)
         print(
