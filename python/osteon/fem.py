@@ -630,6 +630,23 @@ def _unit_cases(nodes, tets, point, radius):
     return cases
 
 
+@dataclass
+class _Run:
+    """What every FEM solve of one cross-check shares: the model (mm), its sections, the load (N),
+    the material (MPa) and where and how to run."""
+
+    V: np.ndarray
+    F: np.ndarray
+    sections: list
+    force: float
+    workdir: str
+    threads: int
+    young: float
+    poisson: float
+    progress: object
+    fine_factor: float
+
+
 def cross_check(
     vertices,
     faces,
@@ -648,7 +665,6 @@ def cross_check(
     fine_factor=3.0,
     mode="crop",
     clamp_distance=4.0,
-    max_surface_triangles=12000,
 ):
     """Run the FEM cross-check; returns a :class:`FemReport`.
 
@@ -680,42 +696,12 @@ def cross_check(
     wd = tempfile.mkdtemp(prefix="osteon_fem_") if own_dir else workdir
     os.makedirs(wd, exist_ok=True)
     rep = FemReport(force_n=float(force), mode=mode)
+    run = _Run(V, F, sections, force, wd, threads, young, poisson, progress, fine_factor)
     try:
         if mode == "crop":
-            _cross_check_crop(
-                rep,
-                V,
-                F,
-                sections,
-                force,
-                wd,
-                threads,
-                young,
-                poisson,
-                progress,
-                fine_factor,
-                clamp_distance,
-                max_surface_triangles,
-            )
+            _cross_check_crop(rep, run, clamp_distance)
         elif mode == "full":
-            _cross_check_full(
-                rep,
-                V,
-                F,
-                sections,
-                force,
-                wd,
-                threads,
-                young,
-                poisson,
-                progress,
-                fine_factor,
-                hold_point,
-                hold_radius,
-                hold_plane,
-                mesh_size,
-                ext,
-            )
+            _cross_check_full(rep, run, hold_point, hold_radius, hold_plane, mesh_size, ext)
         else:
             raise ValueError(f"FEM mode must be 'crop' or 'full', got {mode!r}")
         return rep
@@ -724,21 +710,10 @@ def cross_check(
             shutil.rmtree(wd, ignore_errors=True)
 
 
-def _cross_check_crop(
-    rep,
-    V,
-    F,
-    sections,
-    force,
-    wd,
-    threads,
-    young,
-    poisson,
-    progress,
-    fine_factor,
-    clamp_distance,
-    max_tris,
-):
+def _cross_check_crop(rep, run: _Run, clamp_distance):
+    V, F, sections, wd, threads, progress = (run.V, run.F, run.sections, run.workdir, run.threads,
+                                             run.progress)
+    fine_factor = run.fine_factor
     for k, sec in enumerate(sections):
         c = np.asarray(sec["center"], float)
         n = np.asarray(sec["normal"], float)
@@ -805,31 +780,18 @@ def _cross_check_crop(
         if progress:
             progress(f"section {k + 1}/{len(sections)}: solving {len(nodes)} nodes")
         t1 = time.perf_counter()
-        S = solve(nodes, tets, fixed, cases, sub, young=young, poisson=poisson, threads=threads)
+        S = solve(nodes, tets, fixed, cases, sub, young=run.young, poisson=run.poisson,
+                  threads=threads)
         rep.solve_seconds += time.perf_counter() - t1
         sec = dict(sec, nodes=len(nodes), elements=len(tets))
-        _finish_section(rep, k, sec, nodes, tets, S, force)
+        _finish_section(rep, k, sec, nodes, tets, S, run.force)
         rep.mesh_size_mm = max(rep.mesh_size_mm, float(h))
 
 
-def _cross_check_full(
-    rep,
-    V,
-    F,
-    sections,
-    force,
-    wd,
-    threads,
-    young,
-    poisson,
-    progress,
-    fine_factor,
-    hold_point,
-    hold_radius,
-    hold_plane,
-    mesh_size,
-    ext,
-):
+def _cross_check_full(rep, run: _Run, hold_point, hold_radius, hold_plane, mesh_size, ext):
+    V, F, sections, wd, threads, progress = (run.V, run.F, run.sections, run.workdir, run.threads,
+                                             run.progress)
+    fine_factor = run.fine_factor
     if mesh_size is None:
         mesh_size = ext / 40.0
     refine = []
@@ -873,11 +835,12 @@ def _cross_check_full(
     if progress:
         progress(f"solving {len(cases)} load cases on {len(nodes)} nodes")
     t1 = time.perf_counter()
-    S = solve(nodes, tets, fixed, cases, wd, young=young, poisson=poisson, threads=threads)
+    S = solve(nodes, tets, fixed, cases, wd, young=run.young, poisson=run.poisson,
+              threads=threads)
     rep.solve_seconds = time.perf_counter() - t1
     for k, s in enumerate(sections):
         j = which[k]
-        _finish_section(rep, k, s, nodes, tets, S[3 * j : 3 * j + 3], force)
+        _finish_section(rep, k, s, nodes, tets, S[3 * j : 3 * j + 3], run.force)
 
 
 def hold_point(analysis, heads):
