@@ -87,20 +87,33 @@ Skeleton make_skeleton(const DoubleArray& heads, const DoubleArray& tails,
   return s;
 }
 
-// CSR triplets (indptr, indices, data) of a (V, B) sparse weight matrix, shape-checked.
+// CSR triplets (indptr, indices, data) of a (V, B) sparse weight matrix, shape-checked. With
+// `narrow`, 32-bit bone indices (SciPy's usual type) are kept as they are in `indices32`.
 struct CsrArrays {
   Int64Array indptr, indices;
+  Int32Array indices32;
   DoubleArray data;
+  bool narrow = false;
 };
 
-CsrArrays csr_arrays(const py::object& csr, Index num_vertices) {
+CsrArrays csr_arrays(const py::object& csr, Index num_vertices, bool allow_narrow = false) {
   auto parts = csr.cast<py::tuple>();
-  CsrArrays c{parts[0].cast<Int64Array>(), parts[1].cast<Int64Array>(),
-              parts[2].cast<DoubleArray>()};
+  CsrArrays c;
+  c.indptr = parts[0].cast<Int64Array>();
+  c.data = parts[2].cast<DoubleArray>();
+  c.narrow = allow_narrow && py::isinstance<py::array_t<std::int32_t>>(parts[1]);
+  py::ssize_t nnz = 0;
+  if (c.narrow) {
+    c.indices32 = parts[1].cast<Int32Array>();
+    nnz = c.indices32.ndim() == 1 ? c.indices32.shape(0) : -1;
+  } else {
+    c.indices = parts[1].cast<Int64Array>();
+    nnz = c.indices.ndim() == 1 ? c.indices.shape(0) : -1;
+  }
   if (c.indptr.ndim() != 1 || c.indptr.shape(0) != num_vertices + 1)
     throw std::invalid_argument("weights must have one row per vertex (" +
                                 std::to_string(num_vertices) + ")");
-  if (c.indices.shape(0) != c.data.shape(0) || c.indptr.at(num_vertices) != c.indices.shape(0))
+  if (c.data.ndim() != 1 || nnz != c.data.shape(0) || c.indptr.at(num_vertices) != nnz)
     throw std::invalid_argument("weights: sparse indices and data do not match");
   return c;
 }
@@ -179,9 +192,12 @@ class PyAnalyzer {
                                                  gap_tolerance, threads, local_cuts);
     if (dense.is_none() && !csr.is_none()) {
       // Sparse weights: the analysis needs only each vertex's dominant bone; no copy of them.
-      const CsrArrays c = csr_arrays(csr, num_vertices);
-      std::vector<int> dominant = dominant_bones_csr(
-          c.indptr.data(), c.indices.data(), c.data.data(), num_vertices, num_bones, threads);
+      const CsrArrays c = csr_arrays(csr, num_vertices, /*allow_narrow=*/true);
+      std::vector<int> dominant =
+          c.narrow ? dominant_bones_csr(c.indptr.data(), c.indices32.data(), c.data.data(),
+                                        num_vertices, num_bones, threads)
+                   : dominant_bones_csr(c.indptr.data(), c.indices.data(), c.data.data(),
+                                        num_vertices, num_bones, threads);
       analyzer_ = std::make_unique<Analyzer>(faces.data(), faces.shape(0), num_vertices,
                                              std::move(dominant), num_bones, options);
     } else {

@@ -125,11 +125,14 @@ std::vector<int> dominant_bones(const BoneWeights& w) {
   return dom;
 }
 
-std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, const double* data,
-                                    Index num_vertices, int num_bones, int threads) {
+namespace {
+
+template <class BoneIndex>
+std::vector<int> dominant_bones_of_csr(const Index* indptr, const BoneIndex* indices,
+                                       const double* data, Index num_vertices, int num_bones,
+                                       int threads) {
   check_indptr(indptr, num_vertices);
-  // Check all entries first in a branch-free pass (it vectorises); check_entries names the
-  // first bad one only when there is one.
+  // Entries are checked on the way; check_entries names the first bad one only when there is one.
   const Index nnz = indptr[num_vertices];
   const Index block = 8192;
   const long chunks = static_cast<long>((num_vertices + block - 1) / block);
@@ -138,16 +141,38 @@ std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, c
   detail::parallel_for(chunks, threads, [&](long chunk, int) {
     const Index v0 = chunk * block, v1 = std::min(num_vertices, v0 + block);
     bool bad = false;
-    for (Index k = indptr[v0]; k < indptr[v1]; ++k)
-      bad |= !(data[k] >= -kNegativeTolerance && data[k] <= std::numeric_limits<double>::max()) |
-             (indices[k] < 0) | (indices[k] >= num_bones);
+    // One pass: each row's argmax (as row_argmax) and the entry checks, without branches.
+    for (Index v = v0; v < v1; ++v) {
+      double best = 1e-12;
+      Index arg = -1;
+      for (Index k = indptr[v]; k < indptr[v + 1]; ++k) {
+        const double w = data[k];
+        bad |= !(w >= -kNegativeTolerance && w <= std::numeric_limits<double>::max()) |
+               (indices[k] < 0) | (indices[k] >= num_bones);
+        const bool larger = w > best;
+        best = larger ? w : best;
+        arg = larger ? k : arg;
+      }
+      dom[v] = arg >= 0 && !bad ? static_cast<int>(indices[arg]) : -1;
+    }
     chunk_bad[chunk] = bad;
-    if (bad) return;
-    for (Index v = v0; v < v1; ++v) dom[v] = row_argmax(indptr[v], indptr[v + 1], indices, data);
   });
   if (std::find(chunk_bad.begin(), chunk_bad.end(), 1) != chunk_bad.end())
     check_entries(indices, data, nnz, num_bones);
   return dom;
+}
+
+}  // namespace
+
+std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, const double* data,
+                                    Index num_vertices, int num_bones, int threads) {
+  return dominant_bones_of_csr(indptr, indices, data, num_vertices, num_bones, threads);
+}
+
+std::vector<int> dominant_bones_csr(const Index* indptr, const std::int32_t* indices,
+                                    const double* data, Index num_vertices, int num_bones,
+                                    int threads) {
+  return dominant_bones_of_csr(indptr, indices, data, num_vertices, num_bones, threads);
 }
 
 std::vector<int> nearest_bones(const MeshView& mesh, const Skeleton& s, int threads) {

@@ -5,6 +5,7 @@
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
 #include "osteon/skinning.hpp"
+#include "osteon/weights.hpp"
 #include "test_helpers.hpp"
 
 using namespace osteon;
@@ -64,4 +65,19 @@ TEST(Correction, BarFixedByCubeRootOfStressRatio) {
   EXPECT_EQ(c.rounds.size(), 1u);
   EXPECT_NEAR(c.bone_scale[0], std::cbrt(2.0), 0.02 * std::cbrt(2.0));
   EXPECT_LE(c.after.max_stress, o.allowable_stress);
+}
+
+TEST(Weights, DominantBoneFromCsrWithEitherIndexWidth) {
+  // Rows: a clear winner, a tie (the first listed wins), all-zero (no bone), round-off only.
+  const Index indptr[] = {0, 2, 4, 5, 6};
+  const Index wide[] = {0, 2, 1, 0, 2, 1};
+  const std::int32_t narrow[] = {0, 2, 1, 0, 2, 1};
+  const double data[] = {0.25, 0.75, 0.5, 0.5, 0.0, 1e-13};
+  const std::vector<int> expected = {2, 1, -1, -1};
+  EXPECT_EQ(dominant_bones_csr(indptr, wide, data, 4, 3, 1), expected);
+  EXPECT_EQ(dominant_bones_csr(indptr, narrow, data, 4, 3, 2), expected);
+  const std::int32_t out_of_range[] = {0, 3, 1, 0, 2, 1};
+  EXPECT_THROW(dominant_bones_csr(indptr, out_of_range, data, 4, 3), std::invalid_argument);
+  const double negative[] = {0.25, -0.5, 0.5, 0.5, 0.0, 0.0};
+  EXPECT_THROW(dominant_bones_csr(indptr, narrow, negative, 4, 3), std::invalid_argument);
 }

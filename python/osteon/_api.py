@@ -171,9 +171,11 @@ def _weights_args(weights: Any, num_vertices: int, num_bones: int):
         # Values (finite, not negative beyond solver round-off) and bone indices are checked by
         # the engine, which names the first bad entry.
         csr = weights.tocsr()
+        # 32-bit bone indices (SciPy's usual type) go to the engine as they are, without a copy.
+        index_type = np.int32 if csr.indices.dtype == np.int32 else np.int64
         return None, (
             np.ascontiguousarray(csr.indptr, dtype=np.int64),
-            np.ascontiguousarray(csr.indices, dtype=np.int64),
+            np.ascontiguousarray(csr.indices, dtype=index_type),
             np.ascontiguousarray(csr.data, dtype=np.float64),
         )
     w = np.asarray(weights)

@@ -191,7 +191,12 @@ def test_weights_dense_sparse_and_nearest_agree():
     a = osteon.analyze(v, f, sk, dense)
     b = osteon.analyze(v, f, sk, sparse.csr_matrix(dense))
     c = osteon.analyze(v, f, sk, sparse.coo_array(dense))
-    for other in (b, c):
+    wide = sparse.csr_matrix(dense)
+    wide.indices = wide.indices.astype(np.int64)  # 64-bit bone indices take the other path
+    wide.indptr = wide.indptr.astype(np.int64)
+    assert sparse.csr_matrix(dense).indices.dtype == np.int32
+    d = osteon.analyze(v, f, sk, wide)
+    for other in (b, c, d):
         assert np.array_equal(a.stress, other.stress, equal_nan=True)
         assert np.array_equal(a.vertex_stress, other.vertex_stress)
 

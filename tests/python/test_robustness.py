@@ -58,6 +58,8 @@ negative (< -1e-6)                            ValueError "weights must not be ne
 tiny negative (>= -1e-6, solver round-off)    read as 0
 NaN / inf                                     ValueError "weights contain NaN or infinity"
 non-numeric                                   ValueError "weights must be numeric"
+sparse bone (column) index >= B (SciPy does   ValueError "weights: bone (column) index i out of
+not check it unless asked)                    range for B bones"
 all-zero row                                  the vertex is bound to its nearest bone for the
                                               analysis; skinning/correction never move it
 **settings**
@@ -569,6 +571,16 @@ def test_weights_round_off_negative_reads_as_zero(clean):
     b = osteon.analyze(v, f, sk, w)
     np.testing.assert_array_equal(a.stress, b.stress)
     np.testing.assert_array_equal(a.vertex_bone, b.vertex_bone)
+
+
+@pytest.mark.parametrize("index_type", [np.int32, np.int64])
+def test_sparse_weights_bone_index_out_of_range(clean, index_type):
+    v, f, sk, _ = clean
+    w = sparse.csr_matrix(split_weights(v))
+    w.indices = w.indices.astype(index_type)
+    w.indices[7] = 5  # SciPy does not check column indices unless asked to
+    with pytest.raises(ValueError, match=r"weights: bone \(column\) index 5 out of range for 2"):
+        osteon.analyze(v, f, sk, w)
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf])

@@ -1,6 +1,7 @@
 // Skinning weights, stored sparse by vertex (CSR) so large meshes never need dense V x B memory.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "osteon/mesh.hpp"
@@ -37,6 +38,10 @@ std::vector<int> dominant_bones(const BoneWeights& weights);
 /// in AnalysisOptions (0 = all cores).
 std::vector<int> dominant_bones_csr(const Index* indptr, const Index* indices, const double* data,
                                     Index num_vertices, int num_bones, int threads = 0);
+/// The same with 32-bit bone indices (SciPy's usual index type), read without a conversion.
+std::vector<int> dominant_bones_csr(const Index* indptr, const std::int32_t* indices,
+                                    const double* data, Index num_vertices, int num_bones,
+                                    int threads = 0);
 
 /// Nearest bone (by distance to the bone segment) of every vertex; rows listed in `only` if given.
 std::vector<int> nearest_bones(const MeshView& mesh, const Skeleton& skeleton, int threads = 0);
