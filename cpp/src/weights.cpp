@@ -132,7 +132,8 @@ std::vector<int> dominant_bones_of_csr(const Index* indptr, const BoneIndex* ind
                                        const double* data, Index num_vertices, int num_bones,
                                        int threads) {
   check_indptr(indptr, num_vertices);
-  // Entries are checked on the way; check_entries names the first bad one only when there is one.
+  // Check all entries first in a branch-free pass (it vectorises); check_entries names the
+  // first bad one only when there is one.
   const Index nnz = indptr[num_vertices];
   const Index block = 8192;
   const long chunks = static_cast<long>((num_vertices + block - 1) / block);
@@ -141,21 +142,12 @@ std::vector<int> dominant_bones_of_csr(const Index* indptr, const BoneIndex* ind
   detail::parallel_for(chunks, threads, [&](long chunk, int) {
     const Index v0 = chunk * block, v1 = std::min(num_vertices, v0 + block);
     bool bad = false;
-    // One pass: each row's argmax (as row_argmax) and the entry checks, without branches.
-    for (Index v = v0; v < v1; ++v) {
-      double best = 1e-12;
-      Index arg = -1;
-      for (Index k = indptr[v]; k < indptr[v + 1]; ++k) {
-        const double w = data[k];
-        bad |= !(w >= -kNegativeTolerance && w <= std::numeric_limits<double>::max()) |
-               (indices[k] < 0) | (indices[k] >= num_bones);
-        const bool larger = w > best;
-        best = larger ? w : best;
-        arg = larger ? k : arg;
-      }
-      dom[v] = arg >= 0 && !bad ? static_cast<int>(indices[arg]) : -1;
-    }
+    for (Index k = indptr[v0]; k < indptr[v1]; ++k)
+      bad |= !(data[k] >= -kNegativeTolerance && data[k] <= std::numeric_limits<double>::max()) |
+             (indices[k] < 0) | (indices[k] >= num_bones);
     chunk_bad[chunk] = bad;
+    if (bad) return;
+    for (Index v = v0; v < v1; ++v) dom[v] = row_argmax(indptr[v], indptr[v + 1], indices, data);
   });
   if (std::find(chunk_bad.begin(), chunk_bad.end(), 1) != chunk_bad.end())
     check_entries(indices, data, nnz, num_bones);
