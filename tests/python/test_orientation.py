@@ -151,3 +151,12 @@ def test_flat_base_uses_hull_faces(l_rod):
 def test_bad_arguments(l_rod, kw, match):
     with pytest.raises(ValueError, match=match):
         best_orientation(l_rod[1], **kw)
+
+
+def test_sphere_map_picture(l_rod, tmp_path):
+    from osteon.plots import save_orientation_png
+
+    o = best_orientation(l_rod[1], layer_strength_ratio=0.5, samples=500)
+    out = tmp_path / "map.png"
+    save_orientation_png(out, o, title="L rod")
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
