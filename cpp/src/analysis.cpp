@@ -68,6 +68,7 @@ void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
     throw std::invalid_argument("force must be a positive finite number of newtons");
   if (!(o.allowable_stress > 0) || !std::isfinite(o.allowable_stress))
     throw std::invalid_argument("allowable_stress must be a positive finite stress in MPa");
+  validate_layer_options(o.build_direction, o.layer_strength_ratio);
   if (!(o.interval > 0) || !std::isfinite(o.interval))
     throw std::invalid_argument("interval must be a positive finite length in mm");
   if (o.held_bone < -1 || o.held_bone >= skeleton.num_bones())
@@ -637,19 +638,25 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
+  // Direction-dependent allowable (FDM layers): exactly allowable_stress when isotropic.
+  section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
+                     options.layer_strength_ratio, r.section_allowable, r.across_layers);
+  r.stress_ratio.assign(ns, kNaN);
   for (int i = 0; i < ns; ++i) {
     if (!states[i].found) continue;
     r.max_moment = std::max(r.max_moment, r.moment[i]);
-    if (r.weakest_section < 0 || r.stress[i] > r.max_stress) {
-      r.max_stress = r.stress[i];
+    r.max_stress = std::max(r.max_stress, r.stress[i]);
+    r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
+    if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
+      r.max_stress_ratio = r.stress_ratio[i];
       r.weakest_section = i;
     }
   }
   r.safe_modulus = r.max_moment / options.allowable_stress;
   for (int i = 0; i < ns; ++i) {
     if (!states[i].found) continue;
-    r.culled[i] = r.section_modulus[i] > r.safe_modulus;
-    r.weak[i] = r.stress[i] > options.allowable_stress;
+    r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
+    r.weak[i] = r.stress[i] > r.section_allowable[i];
   }
 
   timer.lap("moment arms");
