@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 #: Material presets: typical yield/tensile strength of printed parts, MPa (XY direction,
-#: manufacturers' data sheets; layer adhesion (Z) is often half of this — use --safety-factor).
+#: manufacturers' data sheets). Layer (Z) strength: osteon.orientation.LAYER_STRENGTH_RATIO.
 MATERIALS = {
     "PLA": 60.0,
     "PETG": 50.0,
@@ -110,6 +110,20 @@ def _add_common(p: argparse.ArgumentParser):
         metavar="BONE",
         help="bone (name or index) held at its head (default: the main root bone)",
     )
+    pr = p.add_argument_group("print direction (FDM layers; docs/printing.md)")
+    pr.add_argument(
+        "--build-direction",
+        default="0,0,1",
+        metavar="X,Y,Z",
+        help="build (layer stacking) direction in the model's frame (default 0,0,1: +Z)",
+    )
+    pr.add_argument(
+        "--layer-ratio",
+        type=float,
+        metavar="R",
+        help="layer / in-plane strength (default: the material preset's, e.g. PLA 0.55; "
+        "1 with --strength-mpa)",
+    )
     o = p.add_argument_group("output")
     o.add_argument("--json", metavar="FILE", help="write a JSON report")
     o.add_argument("--png", metavar="FILE", help="write a PNG of the stress map and chain plot")
@@ -140,6 +154,31 @@ def build_parser() -> argparse.ArgumentParser:
         "bones under a force on each branch, held at the root.",
     )
     _add_common(pa)
+    po = pa.add_argument_group("best print orientation (docs/printing.md)")
+    po.add_argument(
+        "--orient",
+        action="store_true",
+        help="search the build directions for the one with the lowest worst stress ratio and "
+        "print the best few",
+    )
+    po.add_argument(
+        "--orient-out",
+        metavar="FILE",
+        help="write the model turned so that the best direction is +Z (OBJ/OFF/PLY/STL, mm); "
+        "implies --orient",
+    )
+    po.add_argument(
+        "--orient-samples",
+        type=int,
+        default=4000,
+        metavar="N",
+        help="directions on the sphere before local refinement (default 4000)",
+    )
+    po.add_argument(
+        "--orient-flat",
+        action="store_true",
+        help="only orientations resting on a flat face of the convex hull",
+    )
     pc = sub.add_parser(
         "correct",
         help="thicken weak bones until no section is weak",
@@ -298,13 +337,36 @@ def _root(args, model):
     return args.root
 
 
+def _layers(args) -> tuple[list[float], float]:
+    """(build direction, layer strength ratio) from --build-direction and --layer-ratio."""
+    from .orientation import LAYER_STRENGTH_RATIO
+
+    try:
+        d = [float(x) for x in str(args.build_direction).split(",")]
+    except ValueError:
+        d = []
+    if len(d) != 3 or not np.all(np.isfinite(d)) or not np.linalg.norm(d) > 0:
+        raise ValueError(
+            f"--build-direction must be three numbers X,Y,Z, not all 0, got {args.build_direction!r}"
+        )
+    r = args.layer_ratio
+    if r is None:
+        key = {k.lower(): k for k in LAYER_STRENGTH_RATIO}.get(str(args.material).lower())
+        r = 1.0 if args.strength_mpa is not None or key is None else LAYER_STRENGTH_RATIO[key]
+    if not (r > 0 and np.isfinite(r)):
+        raise ValueError(f"--layer-ratio must be a positive number, got {r}")
+    return d, float(r)
+
+
 def _positive(v, name, unit):
     if not (v > 0 and np.isfinite(v)):
         raise ValueError(f"{name} must be a positive number of {unit}, got {v}")
 
 
 def bone_table(analysis, top=10, scales=None):
-    """Rows (worst first) of per-bone results: name, max stress, ratio, weak sections."""
+    """Rows (worst ratio first) of per-bone results: name, max stress, ratio (largest section
+    stress / its direction-dependent allowable), the limit governing that section, weak
+    sections."""
     names = analysis.bone_names
     ok = np.isfinite(analysis.stress)
     per = np.full(len(names), np.nan)
@@ -312,7 +374,10 @@ def bone_table(analysis, top=10, scales=None):
         sel = ok & (analysis.section_bone == b)
         if sel.any():
             per[b] = np.max(analysis.stress[sel])
-    order = [b for b in np.argsort(-np.nan_to_num(per, nan=-1.0)) if np.isfinite(per[b])]
+    ratio, where = analysis.bone_max_ratio()
+    ratio = np.where(np.isfinite(per), ratio, np.nan)
+    order = [b for b in np.argsort(-np.nan_to_num(ratio, nan=-1.0), kind="stable")
+             if np.isfinite(per[b])]
     rows = []
     for b in order[:top]:
         sel = analysis.section_bone == b
@@ -321,7 +386,8 @@ def bone_table(analysis, top=10, scales=None):
                 "bone": names[b],
                 "index": int(b),
                 "max_stress_mpa": float(per[b]),
-                "ratio": float(per[b] / analysis.allowable_stress),
+                "ratio": float(ratio[b]),
+                "limit": analysis.governing_limit(int(where[b])),
                 "weak_sections": int(np.sum(analysis.weak & sel)),
                 "sections": int(np.sum(sel)),
                 **({"scale": float(scales[b])} if scales is not None else {}),
@@ -330,13 +396,15 @@ def bone_table(analysis, top=10, scales=None):
     return rows
 
 
-def format_table(rows, allowable, scales=False):
+def format_table(rows, allowable, scales=False, layer_ratio=1.0):
     head = f"{'bone':<28} {'max σ MPa':>10} {'σ/[σ]':>7} {'weak':>9}"
     if scales:
         head += f" {'scale':>6}"
     lines = [head, "-" * len(head)]
     for r in rows:
         flag = "  WEAK" if r["ratio"] > 1 else ""
+        if flag and layer_ratio != 1.0:
+            flag += f" ({r['limit']})"
         line = (
             f"{r['bone'][:28]:<28} {r['max_stress_mpa']:>10.2f} {r['ratio']:>7.2f} "
             f"{r['weak_sections']:>4}/{r['sections']:<4}"
@@ -344,7 +412,11 @@ def format_table(rows, allowable, scales=False):
         if scales:
             line += f" {r['scale']:>6.3f}"
         lines.append(line + flag)
-    lines.append(f"(allowable stress [σ] = {allowable:g} MPa)")
+    note = f"(allowable stress [σ] = {allowable:g} MPa"
+    if layer_ratio != 1.0:
+        note += (f" along layers, {layer_ratio * allowable:g} MPa across layers; "
+                 "σ/[σ] uses each section's angle to the build direction")
+    lines.append(note + ")")
     return "\n".join(lines)
 
 
@@ -365,6 +437,9 @@ def _section_rows(a):
                 "stress_mpa": _f(a.stress[i]),
                 "culled": bool(a.culled[i]),
                 "weak": bool(a.weak[i]),
+                "allowable_mpa": _f(a.section_allowable[i]),
+                "stress_ratio": _f(a.stress_ratio[i]),
+                "limit": a.governing_limit(i),
             }
         )
     return rows
@@ -377,11 +452,14 @@ def _f(x):
 
 def _engine_args(args, model, allowable: float) -> tuple[tuple, dict]:
     """The model and settings every command passes to the engine: (positional, keyword)."""
+    direction, ratio = _layers(args)
     return (model.vertices, model.faces, model.skeleton, model.weights), {
         "force": args.force,
         "allowable_stress": allowable,
         "interval": args.interval,
         "root": _root(args, model),
+        "build_direction": direction,
+        "layer_strength_ratio": ratio,
     }
 
 
@@ -410,13 +488,16 @@ def _report(args, model, material, strength, allowable, analysis, seconds):
         "allowable_stress_mpa": allowable,
         "force_n": args.force,
         "interval_mm": args.interval,
+        "build_direction": [float(x) for x in analysis.build_direction],
+        "layer_strength_ratio": float(analysis.layer_strength_ratio),
         "max_stress_mpa": _f(analysis.max_stress),
+        "max_stress_ratio": _f(analysis.max_stress_ratio),
         "safe_modulus_mm3": _f(analysis.safe_modulus),
         "sections": len(analysis.stress),
         "weak_sections": int(np.sum(analysis.weak)),
         "culled_sections": int(np.sum(analysis.culled)),
         "weak_bones": [
-            {k: r[k] for k in ("bone", "index", "max_stress_mpa", "ratio")}
+            {k: r[k] for k in ("bone", "index", "max_stress_mpa", "ratio", "limit")}
             for r in bone_table(analysis, top=10**9)
             if r["ratio"] > 1
         ],
@@ -430,7 +511,66 @@ def _write_json(path, data):
     Path(path).write_text(json.dumps(data, indent=1, allow_nan=False))
 
 
-def _png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title=""):
+def _orient(args, model, analysis):
+    """best_orientation for ``analyze --orient``; writes --orient-out. Returns the result."""
+    from .orientation import best_orientation
+
+    if args.orient_samples < 1:
+        raise ValueError(f"--orient-samples must be >= 1, got {args.orient_samples}")
+    if args.orient_out and Path(args.orient_out).suffix.lower() not in (
+        ".obj", ".off", ".ply", ".stl"
+    ):
+        raise ValueError(f"--orient-out {args.orient_out}: use an .obj, .off, .ply or .stl name")
+    o = best_orientation(
+        analysis,
+        samples=args.orient_samples,
+        base="flat" if args.orient_flat else None,
+        vertices=model.vertices if args.orient_flat else None,
+    )
+    if args.orient_out:
+        from .io import write_mesh
+
+        write_mesh(args.orient_out, o.rotate(model.vertices), model.faces)
+    return o
+
+
+def orientation_table(o) -> str:
+    """The best few build directions, one line each, and the current one."""
+    head = f"{'#':>2} {'build direction (x, y, z)':<28} {'worst σ/[σ]':>11} {'turn °':>7}  "
+    lines = [head + "governing limit"]
+    lines.append("-" * len(lines[0]))
+    ref = o.reference_direction
+    for k, c in enumerate(o.candidates, 1):
+        d = c["direction"]
+        turn = np.degrees(np.arccos(np.clip(float(d @ ref), -1, 1)))
+        lim = "across layers" if c["across_layers"] else "along layers"
+        lines.append(f"{k:>2} ({d[0]:+.3f}, {d[1]:+.3f}, {d[2]:+.3f}){'':<6} "
+                     f"{c['worst_ratio']:>11.3f} {turn:>7.1f}  {lim}")
+    lines.append(f"current ({ref[0]:+.3f}, {ref[1]:+.3f}, {ref[2]:+.3f}): worst σ/[σ] "
+                 f"{o.reference_ratio:.3f}; best is {o.improvement:.2f}x stronger "
+                 f"(layer ratio {o.layer_strength_ratio:g})")
+    return "\n".join(lines)
+
+
+def _orientation_json(o) -> dict:
+    def cand(c):
+        out = {"direction": [float(x) for x in c["direction"]],
+               "rotation": [[float(x) for x in row] for row in c["rotation"]],
+               "worst_ratio": float(c["worst_ratio"]),
+               "worst_section": int(c["worst_section"]),
+               "limit": "across layers" if c["across_layers"] else "along layers"}
+        if "base_area_mm2" in c:
+            out["base_area_mm2"] = float(c["base_area_mm2"])
+        return out
+
+    return {"best": cand(o.candidates[0]), "candidates": [cand(c) for c in o.candidates],
+            "reference_direction": [float(x) for x in o.reference_direction],
+            "reference_ratio": float(o.reference_ratio), "samples": len(o.ratios),
+            "base": o.base}
+
+
+def _png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title="",
+         orientation=None):
     from .plots import save_stress_png
 
     save_stress_png(
@@ -446,6 +586,7 @@ def _png(args, model, analysis, allowable, before=None, vertices=None, marks=Non
         title=title,
         before=before,
         marks=marks,
+        orientation=orientation,
     )
 
 
@@ -459,8 +600,11 @@ def cmd_analyze(args, out):
         model = _load(args)
         prog.next()
         a, secs = _analyze(args, model, allowable)
+        orient = _orient(args, model, a) if (args.orient or args.orient_out) else None
         prog.next()
         rep = _report(args, model, material, strength, allowable, a, secs)
+        if orient is not None:
+            rep["orientation"] = _orientation_json(orient)
         if args.json:
             _write_json(args.json, rep)
         if args.png:
@@ -471,6 +615,7 @@ def cmd_analyze(args, out):
                 allowable,
                 title=f"{Path(args.model).name}: F = {args.force:g} N, {material} "
                 f"[σ] = {allowable:g} MPa",
+                orientation=orient,
             )
         prog.next()
     finally:
@@ -487,7 +632,14 @@ def cmd_analyze(args, out):
             "culled (safe for sure)",
             file=out,
         )
-        print(format_table(bone_table(a, args.top), allowable), file=out)
+        print(format_table(bone_table(a, args.top), allowable,
+                           layer_ratio=a.layer_strength_ratio), file=out)
+        if orient is not None:
+            print("best print orientations:", file=out)
+            print(orientation_table(orient), file=out)
+            if args.orient_out:
+                print(f"model turned to the best orientation written to {args.orient_out}",
+                      file=out)
     return 0
 
 
@@ -578,7 +730,8 @@ def cmd_correct(args, out):
             print(f"why: {reason}", file=out)
         print(
             format_table(
-                bone_table(fix.after, args.top, scales=fix.bone_scale), allowable, scales=True
+                bone_table(fix.after, args.top, scales=fix.bone_scale), allowable, scales=True,
+                layer_ratio=fix.after.layer_strength_ratio,
             ),
             file=out,
         )

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "LAYER_STRENGTH_RATIO",
     "Orientation",
     "best_orientation",
     "fibonacci_directions",
@@ -27,6 +28,14 @@ __all__ = [
 ]
 
 _Z = np.array([0.0, 0.0, 1.0])
+
+#: Layer (Z) strength / in-plane (XY) strength of the material presets, for FDM prints stood on
+#: the build plate. Sources and reasoning: docs/printing.md ("Layer strength ratios").
+#: PLA: Polymaker PolyTerra PLA TDS v5.3, X-Y 23.2 MPa vs Z 12.2 MPa (0.53); published XY/Z
+#: ranges 50-65 / 35-45 MPa. PETG: published XY 44-56 / Z 25-38 MPa (~0.6). ABS: Ahn et al.
+#: 2002, Torrado Perez et al. 2015 (similar or lower than PLA). Resin (SLA) and nylon (SLS):
+#: treated as isotropic.
+LAYER_STRENGTH_RATIO = {"PLA": 0.55, "PETG": 0.6, "ABS": 0.5, "resin": 1.0, "nylon": 1.0}
 
 
 def layer_allowable(in_plane: float, ratio: float, cos2: Any) -> np.ndarray:
@@ -315,6 +324,10 @@ def best_orientation(
             break
     seeds, seed_vals = dirs[picked], ratios[picked]
     if base is None and r != 1.0:
+        if allowed(ref[None])[0]:  # also descend from the current direction: the nearest optimum
+            picked.append(-1)
+            seeds = np.vstack([seeds, ref])
+            seed_vals = np.append(seed_vals, ref_ratio)
         seeds, seed_vals = _refine(terms, r, seeds, seed_vals, spacing, allowed)
     cands = []
     for i, d in zip(picked, seeds, strict=True):
@@ -334,7 +347,17 @@ def best_orientation(
                          "worst_ratio": ref_ratio,
                          "worst_section": int(_worst(terms, ref[None], r)[1][0]),
                          "across_layers": False})
-    cands.sort(key=lambda c: c["worst_ratio"])
+    # Best ratio first; ratios equal to 1e-6 (a plateau of the worst section) prefer the
+    # smaller turn from the current direction.
+    lo = min(c["worst_ratio"] for c in cands)
+
+    def key(c):
+        turn = math.acos(min(1.0, abs(float(c["direction"] @ ref)) if symmetric
+                             else float(c["direction"] @ ref)))
+        tied = c["worst_ratio"] <= lo * (1.0 + 1e-6)
+        return (0, turn) if tied else (1, c["worst_ratio"])
+
+    cands.sort(key=key)
     cands = cands[:top]
     best = cands[0]
     return Orientation(
