@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 
 __all__ = [
-    "LAYER_STRENGTH_RATIO",
     "Orientation",
     "best_orientation",
     "fibonacci_directions",
@@ -29,13 +28,6 @@ __all__ = [
 
 _Z = np.array([0.0, 0.0, 1.0])
 
-#: Layer (Z) strength / in-plane (XY) strength of the material presets, for FDM prints stood on
-#: the build plate. Sources and reasoning: docs/printing.md ("Layer strength ratios").
-#: PLA: Polymaker PolyTerra PLA TDS v5.3, X-Y 23.2 MPa vs Z 12.2 MPa (0.53); published XY/Z
-#: ranges 50-65 / 35-45 MPa. PETG: published XY 44-56 / Z 25-38 MPa (~0.6). ABS: Ahn et al.
-#: 2002, Torrado Perez et al. 2015 (similar or lower than PLA). Resin (SLA) and nylon (SLS):
-#: treated as isotropic.
-LAYER_STRENGTH_RATIO = {"PLA": 0.55, "PETG": 0.6, "ABS": 0.5, "resin": 1.0, "nylon": 1.0}
 
 
 def layer_allowable(in_plane: float, ratio: float, cos2: Any) -> np.ndarray:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from osteon.cli import MATERIALS, main
+from osteon.cli import DEFAULT_SAFETY_FACTOR, MATERIALS, main
 
 DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
 if not DATA.is_dir():
@@ -64,7 +64,7 @@ def test_analyze_arm(tmp_path, capsys):
         "units",
     ):
         assert key in rep
-    assert rep["allowable_stress_mpa"] == MATERIALS["PLA"]
+    assert rep["allowable_stress_mpa"] == MATERIALS["PLA"] / DEFAULT_SAFETY_FACTOR
     assert rep["sections"] == len(rep["section_table"]) > 0
     stresses = [r["stress_mpa"] for r in rep["section_table"] if r["stress_mpa"] is not None]
     assert rep["max_stress_mpa"] == pytest.approx(max(stresses))
@@ -147,7 +147,8 @@ def test_correct_scaling_option_reaches_the_engine(tmp_path, scaling):
     assert rc == (0 if rep["converged"] else 1)
     m = load_model(DOG, height_mm=120.0)
     fix = osteon.correct(m.vertices, m.faces, m.skeleton, m.weights, force=40.0,
-                         allowable_stress=rep["allowable_stress_mpa"], scaling=scaling)
+                         allowable_stress=rep["allowable_stress_mpa"], scaling=scaling,
+                         layer_strength_ratio=rep["layer_strength_ratio"])
     assert np.allclose(rep["bone_scale_xz"], np.column_stack([fix.bone_scale_x, fix.bone_scale_z]),
                        rtol=1e-12)
     if scaling == "uniform":

@@ -26,7 +26,8 @@ def l_rod_files(tmp_path):
 
 def _args(obj, *extra):
     # The longest side (x: 0 to 60 + r = 64 mm) stays 64 mm: 1 file unit = 1 mm.
-    return ["analyze", str(obj), "--height-mm", "64", "--force", "20", *extra]
+    return ["analyze", str(obj), "--height-mm", "64", "--force", "20", "--safety-factor", "1",
+            *extra]
 
 
 def test_layer_ratio_and_build_direction_reach_the_report(l_rod_files, tmp_path, capsys):
