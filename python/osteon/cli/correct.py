@@ -1,0 +1,79 @@
+"""``osteon correct``: thicken weak bones until no section is weak; write the mesh in mm."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from .common import (
+    _check,
+    _engine_args,
+    _load,
+    _png,
+    _Progress,
+    _report,
+    _settings,
+    _write_json,
+    bone_table,
+    format_table,
+)
+
+
+def cmd_correct(args, out):
+    import osteon
+
+    from ..io import write_mesh
+
+    prog = _Progress(["reading model", "correcting", "writing outputs"], args.quiet)
+    try:
+        settings = _settings(args)
+        _check(settings, correct=True)
+        allowable = settings.allowable_stress_mpa()
+        if Path(args.out).suffix.lower() not in (".obj", ".off", ".ply", ".stl"):
+            raise ValueError(f"--out {args.out}: use an .obj, .off, .ply or .stl file name")
+        model = _load(args)
+        prog.next()
+        positional, keyword = _engine_args(settings, model, correct=True)
+        t = time.perf_counter()
+        fix = osteon.correct(*positional, **keyword)
+        secs = time.perf_counter() - t
+        prog.next()
+        write_mesh(args.out, fix.vertices, model.faces)
+        rounds = len(fix.rounds)
+        if args.json:
+            rep = _report(args.model, model, settings, fix.before, secs, correction=fix,
+                          output=args.out)
+            _write_json(args.json, rep)
+        if args.png:
+            _png(
+                args,
+                model,
+                fix.after,
+                allowable,
+                before=fix.before,
+                vertices=fix.vertices,
+                title=f"{Path(args.model).name} corrected: F = {args.force:g} N, "
+                f"[σ] = {allowable:g} MPa",
+            )
+        prog.next()
+    finally:
+        prog.close()
+    if not args.quiet:
+        status = "converged" if fix.converged else "NOT converged"
+        print(
+            f"{Path(args.model).name}: max stress {fix.before.max_stress:.2f} -> "
+            f"{fix.after.max_stress:.2f} MPa ([σ] = {allowable:g} MPa); {rounds} rounds, "
+            f"{status} in {1000 * secs:.1f} ms",
+            file=out,
+        )
+        reason = fix.reason
+        if reason and not fix.converged:
+            print(f"why: {reason}", file=out)
+        print(
+            format_table(
+                bone_table(fix.after, args.top, scales=fix.bone_scale), allowable, scales=True
+            ),
+            file=out,
+        )
+        print(f"corrected mesh written to {args.out}", file=out)
+    return 0 if fix.converged else 1
