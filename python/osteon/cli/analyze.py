@@ -6,43 +6,32 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (
-    _analyze,
-    _check,
-    _load,
-    _png,
-    _Progress,
-    _report,
-    _settings,
-    _write_json,
-    bone_table,
-    format_table,
-)
+from . import common
 
 
 def analyze_model(model, settings, source):
     """Analyse a read model (``osteon.io.RiggedModel``, mm) with the settings
     (:class:`osteon.settings.Settings`) -> (Analysis, report dict, seconds). ``source`` names
     the model in the report (its file)."""
-    a, secs = _analyze(settings, model)
-    return a, _report(source, model, settings, a, secs), secs
+    a, secs = common.run_analysis(settings, model)
+    return a, common.report_of(source, model, settings, a, secs), secs
 
 
 def cmd_analyze(args, out):
 
-    prog = _Progress(["reading model", "analysing", "writing outputs"], args.quiet)
+    prog = common.Progress(["reading model", "analysing", "writing outputs"], args.quiet)
     try:
-        settings = _settings(args)
-        _check(settings)
+        settings = common.settings_from_args(args)
+        common.check(settings)
         material, allowable = settings.material_and_strength()[0], settings.allowable_stress_mpa()
-        model = _load(args)
+        model = common.load_model_of(args)
         prog.next()
         a, rep, secs = analyze_model(model, settings, args.model)
         prog.next()
         if args.json:
-            _write_json(args.json, rep)
+            common.write_json(args.json, rep)
         if args.png:
-            _png(
+            common.save_png(
                 args,
                 model,
                 a,
@@ -65,5 +54,5 @@ def cmd_analyze(args, out):
             "culled (safe for sure)",
             file=out,
         )
-        print(format_table(bone_table(a, args.top), allowable), file=out)
+        print(common.format_table(common.bone_table(a, args.top), allowable), file=out)
     return 0

@@ -18,7 +18,7 @@ class CliError(Exception):
     pass
 
 
-def _settings(args) -> Settings:
+def settings_from_args(args) -> Settings:
     """The command's options as the shared :class:`osteon.settings.Settings`."""
     given = args.strength_mpa is not None
     return Settings(
@@ -42,7 +42,7 @@ def _default_scaling() -> str:
     return osteon.DEFAULT_SCALING
 
 
-class _Progress:
+class Progress:
     """A stage bar on stderr (tqdm), silent when quiet or not a terminal."""
 
     def __init__(self, stages, quiet):
@@ -80,7 +80,7 @@ class _Progress:
             self.bar.close()
 
 
-def _load(args):
+def load_model_of(args):
     from ..io import load_model
 
     axis = None if args.axis == "longest" else args.axis
@@ -133,28 +133,28 @@ def _arguments(settings: Settings, bone_names, correct: bool) -> dict:
         raise ValueError(f"{opt}: {msg}" if opt else msg) from None
 
 
-def _check(settings: Settings, correct: bool = False) -> None:
+def check(settings: Settings, correct: bool = False) -> None:
     """Check the settings before the model is read (the held bone is checked once it is)."""
     _arguments(replace(settings, held_bone=None), [], correct)
 
 
-def _engine_args(settings: Settings, model, correct: bool = False) -> tuple[tuple, dict]:
+def engine_args(settings: Settings, model, correct: bool = False) -> tuple[tuple, dict]:
     """The model and settings every command passes to the engine: (positional, keyword)."""
     positional = (model.vertices, model.faces, model.skeleton, model.weights)
     return positional, _arguments(settings, model.bone_names, correct)
 
 
-def _analyze(settings: Settings, model):
+def run_analysis(settings: Settings, model):
     """Run the analysis with the command's settings; returns (Analysis, seconds)."""
     import osteon
 
-    positional, keyword = _engine_args(settings, model)
+    positional, keyword = engine_args(settings, model)
     t = time.perf_counter()
     a = osteon.analyze(*positional, **keyword)
     return a, time.perf_counter() - t
 
 
-def _report(source, model, settings: Settings, analysis, seconds, correction=None, output=None):
+def report_of(source, model, settings: Settings, analysis, seconds, correction=None, output=None):
     """The one report (:func:`osteon.report.build_report`) of a model read from ``source``."""
     return build_report(
         analysis=analysis, bone_names=model.bone_names,
@@ -164,11 +164,11 @@ def _report(source, model, settings: Settings, analysis, seconds, correction=Non
         correction=correction, output=output)
 
 
-def _write_json(path, data):
+def write_json(path, data):
     Path(path).write_text(to_json(data))
 
 
-def _png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title=""):
+def save_png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title=""):
     from ..plots import save_stress_png
 
     save_stress_png(

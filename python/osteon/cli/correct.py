@@ -5,18 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from .common import (
-    _check,
-    _engine_args,
-    _load,
-    _png,
-    _Progress,
-    _report,
-    _settings,
-    _write_json,
-    bone_table,
-    format_table,
-)
+from . import common
 
 
 def cmd_correct(args, out):
@@ -24,16 +13,16 @@ def cmd_correct(args, out):
 
     from ..io import write_mesh
 
-    prog = _Progress(["reading model", "correcting", "writing outputs"], args.quiet)
+    prog = common.Progress(["reading model", "correcting", "writing outputs"], args.quiet)
     try:
-        settings = _settings(args)
-        _check(settings, correct=True)
+        settings = common.settings_from_args(args)
+        common.check(settings, correct=True)
         allowable = settings.allowable_stress_mpa()
         if Path(args.out).suffix.lower() not in (".obj", ".off", ".ply", ".stl"):
             raise ValueError(f"--out {args.out}: use an .obj, .off, .ply or .stl file name")
-        model = _load(args)
+        model = common.load_model_of(args)
         prog.next()
-        positional, keyword = _engine_args(settings, model, correct=True)
+        positional, keyword = common.engine_args(settings, model, correct=True)
         t = time.perf_counter()
         fix = osteon.correct(*positional, **keyword)
         secs = time.perf_counter() - t
@@ -41,11 +30,11 @@ def cmd_correct(args, out):
         write_mesh(args.out, fix.vertices, model.faces)
         rounds = len(fix.rounds)
         if args.json:
-            rep = _report(args.model, model, settings, fix.before, secs, correction=fix,
+            rep = common.report_of(args.model, model, settings, fix.before, secs, correction=fix,
                           output=args.out)
-            _write_json(args.json, rep)
+            common.write_json(args.json, rep)
         if args.png:
-            _png(
+            common.save_png(
                 args,
                 model,
                 fix.after,
@@ -70,8 +59,8 @@ def cmd_correct(args, out):
         if reason and not fix.converged:
             print(f"why: {reason}", file=out)
         print(
-            format_table(
-                bone_table(fix.after, args.top, scales=fix.bone_scale), allowable, scales=True
+            common.format_table(
+                common.bone_table(fix.after, args.top, scales=fix.bone_scale), allowable, scales=True
             ),
             file=out,
         )

@@ -8,21 +8,21 @@ from pathlib import Path
 import numpy as np
 
 from ..report import finite
-from .common import _analyze, _check, _load, _png, _Progress, _settings, _write_json
+from . import common
 
 
 def cmd_validate(args, out):
 
     stages = ["reading model", "analysing"] + (["meshing + solving (FEM)"] if args.fem else [])
-    prog = _Progress(stages + ["writing outputs"], args.quiet)
+    prog = common.Progress(stages + ["writing outputs"], args.quiet)
     try:
-        settings = _settings(args)
-        _check(settings)
+        settings = common.settings_from_args(args)
+        common.check(settings)
         allowable = settings.allowable_stress_mpa()
-        model = _load(args)
+        model = common.load_model_of(args)
         checks = model_checks(model)
         prog.next()
-        a, secs = _analyze(settings, model)
+        a, secs = common.run_analysis(settings, model)
         prog.next()
         rep = {
             "model": str(args.model),
@@ -39,18 +39,13 @@ def cmd_validate(args, out):
 
             if not checks["watertight"]:
                 raise ValueError(f"{args.model}: the mesh is not closed; FEM needs a closed mesh")
-            tools = fem.find_tools()
-            missing = [k for k, v in tools.items() if v is None]
-            if missing:
-                raise ValueError(
-                    "--fem needs the programs "
-                    + " and ".join(missing)
-                    + " (apt-get install gmsh calculix-ccx)"
-                )
+            missing = fem.missing_tools_message("--fem")
+            if missing is not None:
+                raise ValueError(missing)
             secs_list = fem.pick_sections(a, model.heads, model.tails, n=args.sections)
             if not secs_list:
                 raise ValueError(
-                    "no section suitable for the FEM check (all near joints, the "
+                    "no section suitable for the FEM common.check (all near joints, the "
                     "held region or too stubby)"
                 )
             t = time.perf_counter()
@@ -70,10 +65,10 @@ def cmd_validate(args, out):
             rep["fem"]["seconds"] = time.perf_counter() - t
             prog.next()
         if args.json:
-            _write_json(args.json, rep)
+            common.write_json(args.json, rep)
         if args.png:
             marks = None if fem_rep is None else [s.center for s in fem_rep.sections]
-            _png(
+            common.save_png(
                 args,
                 model,
                 a,

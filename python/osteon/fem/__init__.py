@@ -36,7 +36,7 @@ from .mesh import read_msh2, tet_mesh
 from .pick import hold_point, pick_sections
 from .sections import section_cut
 from .solve import read_frd_stress, solve
-from .tools import find_tools
+from .tools import find_tools, missing_tools_message
 
 __all__ = [
     "FemReport",
@@ -47,6 +47,7 @@ __all__ = [
     "find_tools",
     "hold_point",
     "load_nodes",
+    "missing_tools_message",
     "pick_sections",
     "read_frd_stress",
     "read_msh2",

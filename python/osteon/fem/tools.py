@@ -14,13 +14,17 @@ def find_tools() -> dict:
     }
 
 
+def missing_tools_message(what: str = "FEM cross-check") -> str | None:
+    """``"<what> needs the programs ... (apt-get install ...)"``, or None when both are found."""
+    missing = [k for k, v in find_tools().items() if v is None]
+    if not missing:
+        return None
+    return (f"{what} needs the programs " + " and ".join(missing)
+            + " (Debian/Ubuntu: apt-get install gmsh calculix-ccx)")
+
+
 def _require_tools():
-    t = find_tools()
-    missing = [k for k, v in t.items() if v is None]
-    if missing:
-        raise RuntimeError(
-            "FEM cross-check needs the programs "
-            + " and ".join(missing)
-            + " (Debian/Ubuntu: apt-get install gmsh calculix-ccx)"
-        )
-    return t
+    msg = missing_tools_message()
+    if msg is not None:
+        raise RuntimeError(msg)
+    return find_tools()
