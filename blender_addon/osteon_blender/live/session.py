@@ -78,7 +78,7 @@ class Session:
                       arm.data.as_pointer()}
         self.dirty = True
         self.weights_stale = False
-        self.weights = bridge.WeightCache()
+        self.weights = state.of(scene).weights   # the scene's weight cache, shared with Analyze
         self.analyzer = None
         self.analyzer_key = None
         self.faces = None
