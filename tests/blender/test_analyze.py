@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from conftest import activate, import_rignet
 from osteon_blender import bridge, core
-from osteon_blender.ops import common
+from osteon_blender import service as common
 
 
 def _layer(obj):
