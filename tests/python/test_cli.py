@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 from osteon.cli import MATERIALS, main
 
-from conftest import DATA
 ARM = DATA / "libigl-tutorial-data" / "arm.obj"
 DOG = DATA / "RigNet" / "2982_ori.obj"
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"test data folder {DATA} absent")

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 from osteon.io import (
     RiggedModel,
     load_model,
@@ -21,7 +21,6 @@ from osteon.io import (
 from osteon.io.gltf import weld
 from osteon.io.rignet import read_rignet_rig
 
-from conftest import DATA
 LIBIGL = DATA / "libigl-tutorial-data"
 HIS = DATA / "Hyperspectral-Inverse-Skinning"
 RIGNET = DATA / "RigNet"
