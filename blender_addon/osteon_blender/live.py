@@ -249,7 +249,7 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
         skeleton = osteon.Skeleton(inp.heads * k, inp.tails * k, inp.parents, names=inp.names)
         if sess.analyzer is None:
             sess.analyzer = osteon.Analyzer(sess.faces, len(world), skeleton, inp.weights,
-                                            **inp.params)
+                                            keep_outlines=True, **inp.params)
             sess.analyzer_key = inp.analyzer_key
         t1 = time.perf_counter()
         analysis = sess.analyzer.run(world, skeleton)

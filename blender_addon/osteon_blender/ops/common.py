@@ -104,7 +104,8 @@ def engine_skeleton(osteon, inp: Inputs):
 def analyze_inputs(osteon, inp: Inputs, skeleton=None):
     skeleton = skeleton if skeleton is not None else engine_skeleton(osteon, inp)
     try:
-        return osteon.analyze(inp.vertices_mm, inp.faces, skeleton, inp.weights, **inp.params)
+        return osteon.analyze(inp.vertices_mm, inp.faces, skeleton, inp.weights,
+                              keep_outlines=True, **inp.params)
     except ValueError as e:
         raise OsteonError(f"osteon could not analyse '{inp.obj.name}': {e}") from e
 
@@ -199,7 +200,7 @@ def run_correct(context, progress=_no_progress) -> dict:
             fix = osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
                                  max_scale=float(s.max_scale), max_rounds=int(s.max_rounds),
                                  scaling=s.scaling.lower(), bone_x_axes=inp.skeleton.x_axes,
-                                 **inp.params)
+                                 keep_outlines=True, **inp.params)
         except ValueError as e:
             raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
         scales = {n: (float(x), float(z)) for n, x, z in
