@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -156,6 +157,10 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["stress"] = to_numpy(std::move(r.stress));
   d["culled"] = to_bool(r.culled);
   d["weak"] = to_bool(r.weak);
+  d["section_allowable"] = to_numpy(std::move(r.section_allowable));
+  d["stress_ratio"] = to_numpy(std::move(r.stress_ratio));
+  d["across_layers"] = to_bool(r.across_layers);
+  d["max_stress_ratio"] = r.max_stress_ratio;
   d["section_flags"] = to_numpy(std::move(r.section_flags));
   d["max_moment"] = r.max_moment;
   d["safe_modulus"] = r.safe_modulus;
@@ -252,7 +257,19 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("threads", &AnalysisOptions::threads, "0 = all cores")
       .def_readwrite("local_cuts", &AnalysisOptions::local_cuts)
       .def_readwrite("reuse_sections", &AnalysisOptions::reuse_sections)
-      .def_readwrite("keep_outlines", &AnalysisOptions::keep_outlines);
+      .def_readwrite("keep_outlines", &AnalysisOptions::keep_outlines)
+      .def_property(
+          "build_direction",
+          [](const AnalysisOptions& o) {
+            return std::array<double, 3>{o.build_direction.x(), o.build_direction.y(),
+                                         o.build_direction.z()};
+          },
+          [](AnalysisOptions& o, const std::array<double, 3>& d) {
+            o.build_direction = Vec3(d[0], d[1], d[2]);
+          },
+          "FDM build direction (3,), model frame")
+      .def_readwrite("layer_strength_ratio", &AnalysisOptions::layer_strength_ratio,
+                     "layer / in-plane strength (1 = isotropic)");
 
   py::class_<CorrectionOptions>(m, "CorrectionOptions", "Limits of the correction loop.")
       .def(py::init<>())
