@@ -117,8 +117,9 @@ def build_wheel(python: str, out: str) -> str:
     tag, have_build_deps = subprocess.run([python, "-c", probe], check=True, capture_output=True,
                                           text=True).stdout.split()
     before = set(glob.glob(os.path.join(out, f"osteon-*-{tag}-*.whl")))
+    build_dir = os.path.join(ROOT, "build", "wheel-blender-{wheel_tag}")
     cmd = [python, "-m", "pip", "wheel", ROOT, "--no-deps", "-w", out,
-           "-C", f"build-dir={os.path.join(ROOT, 'build', 'wheel-blender-{wheel_tag}')}"]
+           "--config-settings", f"build-dir={build_dir}"]
     if have_build_deps == "True":
         cmd.append("--no-build-isolation")
     print("+", " ".join(cmd), flush=True)
@@ -266,8 +267,12 @@ def main(argv: list[str] | None = None) -> int:
     for w in wheels:
         if not os.path.isfile(w):
             raise SystemExit(f"no such wheel: {w}")
+    copied = []
+    for w in wheels:
         if os.path.dirname(w) != out:
             shutil.copy2(w, out)
+        copied.append(os.path.join(out, os.path.basename(w)))
+    wheels = copied
 
     # one wheel per (platform, Python): the newest file wins
     chosen: dict[tuple[str, tuple[int, int]], str] = {}
@@ -284,8 +289,9 @@ def main(argv: list[str] | None = None) -> int:
             ext = build_extension(ext_wheels, plat, out, version)
             made.append(ext)
             vmin, vmax = blender_range({wheel_tags(w)[0] for w in ext_wheels})
-            print(f"[build_addon] {os.path.basename(ext)}: Blender {vmin} to "
-                  f"{'any later release on the same Python' if vmax is None else vmax + ' (excl.)'}")
+            upto = (f"up to (not incl.) {vmax}" if vmax else
+                    "and later (a Blender on another Python finds no wheel and refuses it)")
+            print(f"[build_addon] {os.path.basename(ext)}: Blender {vmin} {upto}")
             if a.validate_with:
                 ok, text = validate(ext, a.validate_with)
                 print(f"[build_addon] Blender validator ({a.validate_with}): "
