@@ -4,9 +4,11 @@ cibuildwheel is installed), and .github/workflows/wheels.yml."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import subprocess
+import sys
 
 import pytest
 
@@ -48,11 +50,16 @@ def test_cibuildwheel_config(cibw):
 
 @pytest.mark.parametrize("platform", sorted(IDENTIFIERS))
 def test_cibuildwheel_build_identifiers(platform, tmp_path):
-    exe = os.environ.get("OSTEON_CIBUILDWHEEL") or shutil.which("cibuildwheel")
-    if not exe:
+    if os.environ.get("OSTEON_CIBUILDWHEEL"):
+        cmd = [os.environ["OSTEON_CIBUILDWHEEL"]]
+    elif importlib.util.find_spec("cibuildwheel"):  # a test dependency (pyproject [test])
+        cmd = [sys.executable, "-m", "cibuildwheel"]
+    elif shutil.which("cibuildwheel"):
+        cmd = [shutil.which("cibuildwheel")]
+    else:
         pytest.skip("cibuildwheel not installed (pip install cibuildwheel; or OSTEON_CIBUILDWHEEL)")
     env = {k: v for k, v in os.environ.items() if not k.startswith("CIBW_")}
-    res = subprocess.run([exe, "--print-build-identifiers", "--platform", platform, ROOT],
+    res = subprocess.run([*cmd, "--print-build-identifiers", "--platform", platform, ROOT],
                          capture_output=True, text=True, cwd=tmp_path, env=env, timeout=120,
                          check=False)
     assert res.returncode == 0, res.stderr
