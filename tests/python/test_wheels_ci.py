@@ -18,12 +18,11 @@ yaml = pytest.importorskip("yaml")
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 WORKFLOW = os.path.join(ROOT, ".github", "workflows", "wheels.yml")
 
+PYTHONS = ("cp310", "cp311", "cp313")  # legacy 3.4-4.0; 4.1-5.0; 5.1+
 IDENTIFIERS = {
-    "linux": {"cp311-manylinux_x86_64", "cp313-manylinux_x86_64",
-              "cp311-manylinux_aarch64", "cp313-manylinux_aarch64"},
-    "windows": {"cp311-win_amd64", "cp313-win_amd64"},
-    "macos": {"cp311-macosx_x86_64", "cp313-macosx_x86_64",
-              "cp311-macosx_arm64", "cp313-macosx_arm64"},
+    "linux": {f"{py}-manylinux_{a}" for py in PYTHONS for a in ("x86_64", "aarch64")},
+    "windows": {f"{py}-win_amd64" for py in PYTHONS},
+    "macos": {f"{py}-macosx_{a}" for py in PYTHONS for a in ("x86_64", "arm64")},
 }
 
 
@@ -34,7 +33,7 @@ def cibw() -> dict:
 
 
 def test_cibuildwheel_config(cibw):
-    assert cibw["build"] == ["cp311-*", "cp313-*"]  # Blender 4.1-5.0 and 5.1+
+    assert cibw["build"] == [f"{py}-*" for py in PYTHONS]
     lin = cibw["linux"]
     assert set(lin["archs"]) == {"x86_64", "aarch64"}
     assert lin["manylinux-x86_64-image"] == lin["manylinux-aarch64-image"] == "manylinux_2_28"
