@@ -204,6 +204,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="threads for gmsh and CalculiX (default 2)",
     )
+    from .batch.cli import add_batch_parser
+
+    add_batch_parser(sub)
     return p
 
 
@@ -717,7 +720,14 @@ def model_checks(model):
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate}
+    from .batch.cli import cmd_batch
+
+    handler = {
+        "analyze": cmd_analyze,
+        "correct": cmd_correct,
+        "validate": cmd_validate,
+        "batch": cmd_batch,
+    }
     try:
         return handler[args.command](args, sys.stdout)
     except (ValueError, FileNotFoundError, RuntimeError) as e:
