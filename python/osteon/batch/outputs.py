@@ -174,7 +174,7 @@ _CSS = """
 body{font:14px sans-serif;margin:1em}table{border-collapse:collapse}
 td,th{border-bottom:1px solid #ddd;padding:4px 8px;vertical-align:top;text-align:left}
 th[data-k]{cursor:pointer;text-decoration:underline dotted}
-img{width:520px;display:block}.weak{color:#b00;font-weight:bold}.failed,.skipped{color:#777}
+img{width:360px;display:block}.weak{color:#b00;font-weight:bold}.failed,.skipped{color:#777}
 .n{text-align:right;font-variant-numeric:tabular-nums}
 """
 

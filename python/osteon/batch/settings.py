@@ -34,7 +34,7 @@ class BatchSettings:
     max_rounds: int = 100
     scaling: str | None = None
     png: bool = True
-    png_dpi: int = 50
+    png_dpi: int = 60
     allow_open: bool = False
     engine_threads: int = 1
 

@@ -135,14 +135,14 @@ def _section_flag_counts(analysis) -> dict[str, int]:
     }
 
 
-def _png_bytes(model, analysis, allowable, s: BatchSettings, title, before=None, vertices=None):
-    from ..plots import save_stress_png
+def _png_bytes(model, analysis, allowable, s: BatchSettings, title, vertices=None):
+    """The contact-sheet picture (``osteon.plots.save_stress_thumbnail``) as PNG bytes."""
+    from ..plots import save_stress_thumbnail
 
     buf = io.BytesIO()
-    save_stress_png(
-        buf, model.vertices if vertices is None else vertices, model.faces, analysis,
-        model.heads, model.tails, model.parents, model.bone_names, allowable, title=title,
-        before=before, dpi=s.png_dpi,
+    save_stress_thumbnail(
+        buf, model.vertices if vertices is None else vertices, model.faces, analysis, allowable,
+        title=title, dpi=s.png_dpi,
     )
     return buf.getvalue()
 
@@ -153,7 +153,7 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
     ``model`` (path), ``id``, ``status`` (``ok`` / ``skipped`` / ``failed``), ``reason`` (why
     not ok, else None), ``seconds`` (whole task) and ``read_seconds``, ``check_seconds``,
     ``analysis_seconds``, ``png_seconds``; when analysed also the fields of the analyze report
-    (``faces``, ``vertices``, ``bones``, ``max_stress_mpa``, ``allowable_stress_mpa``,
+    (``faces``, ``vertices``, ``bones`` (names), ``bone_count``, ``max_stress_mpa``, ``allowable_stress_mpa``,
     ``weak_bones``, ``section_table``, …) plus ``ratio`` (max stress / allowable) and ``flags``
     (what to look at: section flags with counts, ``open mesh``, ``nearest-bone weights``,
     ``auto skeleton``, ``not converged``). ``_files`` maps output names (``ID.png``,
@@ -250,7 +250,6 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
             title = f"{p.name}: F = {s.force_n:g} N, {material} [σ] = {allowable:g} MPa"
             files[f"{rec['id']}.png"] = _png_bytes(
                 model, analysis, allowable, s, title,
-                before=None if fix is None else fix.before,
                 vertices=None if fix is None else fix.vertices,
             )
             times["png_seconds"] = time.perf_counter() - t
