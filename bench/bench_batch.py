@@ -247,6 +247,12 @@ def main(argv=None):
     for r in recs:
         statuses[r["status"]] = statuses.get(r["status"], 0) + 1
     print("statuses: " + ", ".join(f"{v} {k}" for k, v in statuses.items()))
+    reasons = {}
+    for r in recs:
+        if r["reason"]:
+            key = r["reason"].split(":")[0][:40]
+            reasons[key] = reasons.get(key, 0) + 1
+    print("reasons: " + ", ".join(f"{v} {k}" for k, v in sorted(reasons.items(), key=lambda x: -x[1])))
     ok = [r for r in recs if r["status"] == "ok"]
     same = all(
         {r["model"]: r.get("max_stress_mpa") for r in rr} == {r["model"]: r.get("max_stress_mpa")

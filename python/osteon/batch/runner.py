@@ -34,7 +34,7 @@ def _pool_context():
         # forkserver: workers are forked from a clean server that has imported osteon once
         # (no fork of a process whose engine threads are running, no re-import per worker)
         ctx = mp.get_context("forkserver")
-        ctx.set_forkserver_preload(["osteon.batch.task"])
+        ctx.set_forkserver_preload(["osteon.batch._warm"])
         return ctx
     return mp.get_context("spawn")
 
