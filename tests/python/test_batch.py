@@ -16,11 +16,13 @@ import numpy as np
 import osteon
 import pytest
 from batch_library import make_library, rigged_bar
-from osteon import batch
+from osteon import batch, materials
 from osteon.cli import main as cli_main
 from osteon.io import load_model
 
-SETTINGS = {"force_n": 20.0, "material": "PLA", "height_mm": 120.0, "interval_mm": 2.0}
+SETTINGS = {"force_n": 20.0, "material": "PLA", "print_size_mm": 120.0, "interval_mm": 2.0,
+            "safety_factor": 1.0}
+PLA_MPA = materials.get("PLA").strength_mpa
 
 
 @pytest.fixture()
@@ -74,10 +76,11 @@ def test_numbers_equal_direct_analysis(library):
         path = lib / name
         m = load_model(path, height_mm=120.0)
         a = osteon.analyze(m.vertices, m.faces, m.skeleton, m.weights, force=20.0,
-                           allowable_stress=60.0, interval=2.0)
+                           allowable_stress=PLA_MPA, interval=2.0)
         r = recs[path.name]
         assert r["max_stress_mpa"] == pytest.approx(a.max_stress, rel=1e-12)
-        assert r["ratio"] == pytest.approx(a.max_stress / 60.0, rel=1e-12)
+        assert r["stress_ratio"] == pytest.approx(a.max_stress / PLA_MPA, rel=1e-12)
+        assert r["schema_version"] == 1 and r["run"]["front_end"] == "batch"
         assert r["faces"] == len(m.faces) and r["bone_count"] == 2
         assert r["sections"] == len(a.stress)
     # a thinner bar of the same length is more stressed (W ~ r^3)
@@ -118,9 +121,9 @@ def test_correction_writes_meshes(tmp_path):
     rigged_bar(lib, "thin", radius=2.5)
     out = tmp_path / "out"
     (r,) = batch.run_all([lib], {**SETTINGS, "correct": True, "force_n": 60.0}, workers=1, out=out)
-    assert r["status"] == "ok" and r["ratio_before"] > 1
-    assert r["converged"] and r["ratio"] <= 1.0
-    corrected = out / "models" / r["corrected_mesh"]
+    assert r["status"] == "ok" and r["max_stress_before_mpa"] > r["allowable_stress_mpa"]
+    assert r["converged"] and r["stress_ratio"] <= 1.0 and r["corrected"]
+    corrected = out / "models" / r["output"]
     assert corrected.stat().st_size > 0
 
 
@@ -141,7 +144,8 @@ def test_cli_batch(library, tmp_path, capsys):
     n_ok = sum(v == "ok" for v in expected.values())
     assert f"{len(expected)} models" in text and f"{n_ok} analysed" in text
     recs = batch.read_results(out)
-    assert {r["allowable_stress_mpa"] for r in recs if r["status"] == "ok"} == {50.0}
+    petg = materials.get("PETG").strength_mpa / materials.DEFAULT_SAFETY_FACTOR
+    assert {r["allowable_stress_mpa"] for r in recs if r["status"] == "ok"} == {petg}
     assert cli_main(["batch", str(lib), "--out", str(out), "--material", "cheese"]) == 2
 
 

@@ -2,7 +2,7 @@
 
 >>> from osteon import batch
 >>> for rec in batch.run(["library/"], {"force_n": 20, "material": "PLA"}, out="report"):
-...     print(rec["id"], rec["status"], rec.get("ratio"))
+...     print(rec["id"], rec["status"], rec.get("stress_ratio"))
 
 Each model is one task (:func:`process_model`) that takes a path and returns a record; tasks run
 in this process, on a local process pool (all cores by default) or on a Dask ``distributed``

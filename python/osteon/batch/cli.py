@@ -19,6 +19,7 @@ examples:
 
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
+    from .. import materials
     from ..cli import MATERIALS
 
     p = sub.add_parser(
@@ -38,13 +39,15 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
                    help="which extent --height-mm sets (default: longest)")
     p.add_argument("--force", type=float, default=20.0, metavar="N",
                    help="force in newtons on the worst point of each branch (default 20)")
-    p.add_argument("--material", default="PLA", metavar="NAME",
+    p.add_argument("--material", default=materials.DEFAULT_MATERIAL, metavar="NAME",
                    help="material preset: " + ", ".join(f"{k} {v:g} MPa" for k, v in
-                                                         MATERIALS.items()) + " (default PLA)")
+                                                         MATERIALS.items())
+                   + f" (default {materials.DEFAULT_MATERIAL}; see osteon/materials.py)")
     p.add_argument("--strength-mpa", type=float, metavar="MPA",
                    help="material strength in MPa (overrides the preset)")
-    p.add_argument("--safety-factor", type=float, default=1.0, metavar="K",
-                   help="allowable stress = strength / K (default 1)")
+    p.add_argument("--safety-factor", type=float, default=materials.DEFAULT_SAFETY_FACTOR,
+                   metavar="K", help="allowable stress = strength / K "
+                   f"(default {materials.DEFAULT_SAFETY_FACTOR:g})")
     p.add_argument("--interval", type=float, default=2.0, metavar="MM",
                    help="distance in mm between sections along each bone (default 2)")
     p.add_argument("--root", metavar="BONE", help="bone (name or index) held at its head")
@@ -71,18 +74,15 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
 
 
 def settings_from_args(args):
+    """The batch settings: the shared Settings built as ``analyze`` builds them, plus the
+    batch's own options."""
+    from ..cli import _check, _settings
     from .settings import BatchSettings
 
-    root = args.root
-    if root is not None and root.lstrip("-").isdigit():
-        root = int(root)
-    return BatchSettings(
-        height_mm=args.height_mm, axis=None if args.axis == "longest" else args.axis,
-        force_n=args.force, material=args.material, strength_mpa=args.strength_mpa,
-        safety_factor=args.safety_factor, interval_mm=args.interval, root=root,
-        correct=args.correct, max_scale=args.max_scale, max_rounds=args.max_rounds,
-        scaling=args.scaling, png=not args.no_png, allow_open=args.allow_open,
-    )
+    shared = _settings(args)
+    _check(shared, correct=args.correct)  # errors name the option
+    return BatchSettings(settings=shared, correct=args.correct, png=not args.no_png,
+                         allow_open=args.allow_open)
 
 
 def cmd_batch(args, out=sys.stdout) -> int:
@@ -100,7 +100,7 @@ def cmd_batch(args, out=sys.stdout) -> int:
         for rec in run(args.inputs, settings, client=client, workers=args.jobs, out=args.out,
                        resume=args.resume, progress=not args.quiet):
             counts[rec["status"]] = counts.get(rec["status"], 0) + 1
-            weak += (rec.get("ratio") or 0) > 1
+            weak += (rec.get("stress_ratio") or 0) > 1
     finally:
         if client is not None:
             cluster = getattr(client, "cluster", None)

@@ -19,10 +19,10 @@ from __future__ import annotations
 import csv
 import html
 import json
-import math
 import os
 from pathlib import Path
 
+from ..report import finite, to_json
 from .task import summary_line
 
 RESULTS = "results.jsonl"
@@ -32,7 +32,7 @@ MODELS_DIR = "models"
 def _clean(x):
     """JSON-safe copy: non-finite floats become None (the report's finite-number rule)."""
     if isinstance(x, float):
-        return x if math.isfinite(x) else None
+        return finite(x)
     if isinstance(x, dict):
         return {k: _clean(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
@@ -92,9 +92,7 @@ class OutputWriter:
         rec = _clean(record)
         if rec.get("status") == "ok":
             rec["json"] = f"{MODELS_DIR}/{rec['id']}.json"
-            (self.models / f"{rec['id']}.json").write_text(
-                json.dumps(rec, indent=1, allow_nan=False), encoding="utf-8"
-            )
+            (self.models / f"{rec['id']}.json").write_text(to_json(rec), encoding="utf-8")
         self._fh.write(json.dumps(summary_line(rec), allow_nan=False) + "\n")
         self._fh.flush()
         return rec
@@ -108,7 +106,7 @@ CSV_COLUMNS = [
     ("faces", "faces"),
     ("bones", "bone_count"),
     ("max_stress_mpa", "max_stress_mpa"),
-    ("ratio", "ratio"),
+    ("ratio", "stress_ratio"),
     ("weak_bones", "weak_bones"),
     ("flags", "flags"),
     ("status", "status"),
@@ -120,7 +118,7 @@ def _order(records):
     """Weakest first (highest stress ratio); models without a ratio (skipped, failed) last."""
     return sorted(
         records,
-        key=lambda r: (r.get("ratio") is None, -(r.get("ratio") or 0.0), r.get("model", "")),
+        key=lambda r: (r.get("stress_ratio") is None, -(r.get("stress_ratio") or 0.0), r.get("model", "")),
     )
 
 
@@ -183,11 +181,11 @@ def write_html(out, records, title="osteon batch") -> Path:
     """The contact sheet: one row per model, weakest first; click a column head to sort."""
     recs = _order(records)
     n_ok = sum(r["status"] == "ok" for r in recs)
-    n_weak = sum((r.get("ratio") or 0) > 1 for r in recs)
+    n_weak = sum((r.get("stress_ratio") or 0) > 1 for r in recs)
     e = html.escape
     rows = []
     for r in recs:
-        ratio = r.get("ratio")
+        ratio = r.get("stress_ratio")
         cls = r["status"] if r["status"] != "ok" else ("weak" if (ratio or 0) > 1 else "")
         pic = (
             f'<a href="{e(MODELS_DIR)}/{e(r["png"])}"><img loading="lazy" '

@@ -144,8 +144,8 @@ def run(
     are written when the iterator is exhausted or closed. ``progress``: a tqdm bar on stderr.
 
     A record is a dict: ``model``, ``id``, ``status`` (ok / skipped / failed), ``reason``,
-    ``seconds`` and, for analysed models, the analyze report's fields plus ``ratio`` and
-    ``flags`` (see :func:`osteon.batch.process_model`). Bad settings raise ValueError before
+    ``seconds`` and, for analysed models, the report fields (``stress_ratio``, …) plus
+    ``bone_count``, ``flags`` (see :func:`osteon.batch.process_model`). Bad settings raise ValueError before
     any model is read; a bad model never raises.
     """
     s = BatchSettings.from_any(settings)

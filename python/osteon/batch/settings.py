@@ -1,38 +1,39 @@
-"""The settings of a batch run (the same as ``osteon analyze`` / ``correct``), in mm, N, MPa."""
+"""The settings of a batch run: the shared :class:`osteon.settings.Settings` (the same as
+``osteon analyze`` / ``correct`` and the add-on) plus what only a batch decides. mm, N, MPa."""
 
 from __future__ import annotations
 
-import math
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, dataclass, field, fields, replace
+
+from ..settings import Settings, engine_arguments
+
+#: the CLI's defaults for the two settings the shared Settings leaves to the front end
+DEFAULT_FORCE_N = 20.0
+DEFAULT_INTERVAL_MM = 2.0
+_SIZE_MODES = {"LARGEST": None, "HEIGHT": "z", "X": "x", "Y": "y", "Z": "z"}
+
+
+def _default_settings() -> Settings:
+    import osteon
+
+    return Settings(force_n=DEFAULT_FORCE_N, interval_mm=DEFAULT_INTERVAL_MM,
+                    scaling=osteon.DEFAULT_SCALING)
 
 
 @dataclass(frozen=True)
 class BatchSettings:
-    """What every model of a batch is analysed with. Units: mm, N, MPa.
+    """What every model of a batch is analysed with.
 
-    ``height_mm``: printed size of the model's largest bounding-box side (or of its extent along
-    ``axis``: 'x', 'y', 'z'; None = longest); ``force_n``: force on the worst point of each
-    branch; ``material`` (a preset name) or ``strength_mpa`` (overrides it) and
-    ``safety_factor``: allowable stress = strength / factor; ``interval_mm``: distance between
-    sections; ``root``: bone name or index held at its head (None: the main root bone);
-    ``correct``: also run the correction (``max_scale``, ``max_rounds``, ``scaling``) and write
-    the corrected mesh; ``png``: render the stress picture (``png_dpi``); ``allow_open``: analyse
-    open meshes too (flagged) instead of failing them; ``engine_threads``: threads of the engine
-    inside one task (1: the batch runs models in parallel instead; 0: all cores).
+    ``settings``: the shared :class:`osteon.settings.Settings` (force N, interval mm, material,
+    strength MPa, safety factor, held bone, print size mm and how it is measured, correction
+    limits). Batch only: ``correct`` (also run the correction and write the corrected mesh);
+    ``png`` (render the contact-sheet picture, ``png_dpi``); ``allow_open`` (analyse open
+    meshes too, flagged, instead of failing them); ``engine_threads`` (threads of the engine
+    inside one task: 1, since the batch runs models in parallel; 0 = all cores).
     """
 
-    height_mm: float | None = 120.0
-    axis: str | None = None
-    force_n: float = 20.0
-    material: str = "PLA"
-    strength_mpa: float | None = None
-    safety_factor: float = 1.0
-    interval_mm: float = 2.0
-    root: str | int | None = None
+    settings: Settings = field(default_factory=_default_settings)
     correct: bool = False
-    max_scale: float = 3.0
-    max_rounds: int = 100
-    scaling: str | None = None
     png: bool = True
     png_dpi: int = 60
     allow_open: bool = False
@@ -40,48 +41,63 @@ class BatchSettings:
 
     @classmethod
     def from_any(cls, settings) -> BatchSettings:
-        """A BatchSettings from None, a BatchSettings or a dict of its fields."""
+        """From None, a BatchSettings, a :class:`osteon.settings.Settings`, or a dict whose
+        keys are fields of either (``{"force_n": 20, "material": "PETG", "png": False}``)."""
         if settings is None:
             return cls()
         if isinstance(settings, cls):
             return settings
+        if isinstance(settings, Settings):
+            return cls(settings=settings)
         if isinstance(settings, dict):
-            names = {f.name for f in fields(cls)}
-            unknown = sorted(set(settings) - names)
+            mine = {f.name for f in fields(cls)} - {"settings"}
+            shared = {f.name for f in fields(Settings)}
+            unknown = sorted(set(settings) - mine - shared)
             if unknown:
                 raise ValueError(
-                    f"unknown batch setting(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}"
+                    f"unknown batch setting(s) {', '.join(unknown)}; known: "
+                    f"{', '.join(sorted(mine | shared))}"
                 )
-            return cls(**settings)
-        raise ValueError(f"settings must be a BatchSettings or a dict, got {type(settings).__name__}")
+            base = replace(_default_settings(), **{k: v for k, v in settings.items()
+                                                   if k in shared})
+            return cls(settings=base, **{k: v for k, v in settings.items() if k in mine})
+        raise ValueError(
+            f"settings must be a BatchSettings, Settings or dict, got {type(settings).__name__}"
+        )
 
     def replace(self, **kw) -> BatchSettings:
         return replace(self, **kw)
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        d = asdict(self)
+        d["settings"] = self.settings.as_dict()
+        return d
 
-    def material_and_allowable(self) -> tuple[str, float, float]:
-        """(material name, strength MPa, allowable stress MPa); ValueError on bad values."""
-        from .._materials_shim import material_strength
+    @property
+    def allowable_mpa(self) -> float:
+        return self.settings.allowable_stress_mpa()
 
-        material, strength = material_strength(self.material, self.strength_mpa)
-        if not (self.safety_factor > 0 and math.isfinite(self.safety_factor)):
-            raise ValueError(f"safety factor must be positive, got {self.safety_factor}")
-        return material, strength, strength / self.safety_factor
+    def height_and_axis(self) -> tuple[float | None, str | None]:
+        """``load_model``'s (height_mm, axis) from the shared size mode."""
+        mode = str(self.settings.size_mode).upper()
+        if mode == "UNITS":
+            return None, None
+        if mode not in _SIZE_MODES:
+            raise ValueError(f"size mode must be one of {', '.join(_SIZE_MODES)} or UNITS, "
+                             f"got {self.settings.size_mode!r}")
+        return float(self.settings.print_size_mm), _SIZE_MODES[mode]
+
+    def engine_kwargs(self, bone_names) -> dict:
+        """The engine's keyword arguments for one model (``osteon.settings.engine_arguments``)."""
+        kw = engine_arguments(self.settings, bone_names, correct=self.correct)
+        kw["threads"] = int(self.engine_threads)
+        return kw
 
     def check(self) -> None:
         """Raise ValueError naming the first bad setting (before any model is read)."""
-        self.material_and_allowable()
-        for name, unit in (("force_n", "N"), ("interval_mm", "mm")):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and v > 0 and math.isfinite(v)):
-                raise ValueError(f"{name} must be a positive number of {unit}, got {v}")
-        if self.height_mm is not None and not (self.height_mm > 0 and math.isfinite(self.height_mm)):
-            raise ValueError(f"height_mm must be a positive number of mm, got {self.height_mm}")
-        if self.axis not in (None, "longest", "x", "y", "z"):
-            raise ValueError(f"axis must be x, y, z or longest, got {self.axis!r}")
-        if self.correct and not self.max_scale >= 1:
-            raise ValueError(f"max_scale must be >= 1, got {self.max_scale}")
-        if self.scaling not in (None, "thin", "uniform"):
-            raise ValueError(f"scaling must be 'thin' or 'uniform', got {self.scaling!r}")
+        engine_arguments(replace(self.settings, held_bone=None), [], correct=self.correct)
+        h, _ = self.height_and_axis()
+        if h is not None and not h > 0:
+            raise ValueError(f"print size must be a positive number of mm, got {h}")
+        if self.engine_threads < 0:
+            raise ValueError(f"engine_threads must be >= 0, got {self.engine_threads}")

@@ -27,16 +27,12 @@ STATUSES = ("ok", "skipped", "failed")
 NO_SKELETON = "no skeleton (auto_skeleton not available)"
 
 # keys of the full report that stay out of results.jsonl (they are in the per-model JSON)
-BULKY_KEYS = ("section_table", "bone_results", "before", "bone_scale", "bone_scale_xz")
+BULKY_KEYS = ("section_table", "bones", "bone_results", "bone_names", "correction",
+              "bone_scale", "bone_scale_xz")
 
 
 class _Skip(Exception):
     pass
-
-
-def _f(x):
-    x = float(x)
-    return x if np.isfinite(x) else None
 
 
 def mesh_boundary(faces: np.ndarray, n_vertices: int) -> tuple[int, int]:
@@ -74,13 +70,13 @@ def _auto_rigged(path: Path, s: BatchSettings):
         V, F = read_mesh(path)  # read first: a file that is not a mesh is "unreadable"
     if not hasattr(osteon, "auto_skeleton"):
         raise _Skip(NO_SKELETON)
+    height, axis = s.height_and_axis()
     ext = V.max(0) - V.min(0)
-    axis = {"x": 0, "y": 1, "z": 2}.get(s.axis or "", None)
-    size = float(ext.max() if axis is None else ext[axis])
-    if s.height_mm is not None:
+    size = float(ext.max() if axis is None else ext["xyz".index(axis)])
+    if height is not None:
         if size <= 0:
             raise ValueError("mesh has zero size; cannot scale it")
-        V = V * (s.height_mm / size)
+        V = V * (height / size)
     sk, W = osteon.auto_skeleton(V, F)
     names = list(getattr(sk, "names", None) or [f"bone_{i}" for i in range(len(sk.parents))])
     return RiggedModel(
@@ -93,35 +89,27 @@ def _load(path: Path, s: BatchSettings):
 
     if _is_unrigged(path):
         return _auto_rigged(path, s)
+    height, axis = s.height_and_axis()
     try:
-        return load_model(path, height_mm=s.height_mm, axis=None if s.axis == "longest" else s.axis)
+        return load_model(path, height_mm=height, axis=axis)
     except ValueError as e:
         if "has no skin" in str(e):  # a glTF without a skeleton
             return _auto_rigged(path, s)
         raise
 
 
-def _root(s: BatchSettings, model):
-    if s.root is None:
-        return None
-    if isinstance(s.root, int) or str(s.root).lstrip("-").isdigit():
-        return int(s.root)
-    if s.root not in model.bone_names:
-        raise ValueError(f"no bone named {s.root!r} (root)")
-    return s.root
+def _report(path, model, s: BatchSettings, analysis, seconds, fix=None):
+    """The per-model report: the one schema of :func:`osteon.report.build_report`."""
+    from ..report import build_report
 
-
-def _report(path, model, s: BatchSettings, material, strength, allowable, analysis, seconds):
-    """The per-model report (the ``osteon analyze --json`` schema)."""
-    from types import SimpleNamespace
-
-    from ..cli import _report as cli_report
-
-    args = SimpleNamespace(
-        model=path, height_mm=s.height_mm, safety_factor=s.safety_factor, force=s.force_n,
-        interval=s.interval_mm,
+    settings = s.settings.as_dict()
+    settings["correct"] = s.correct
+    return build_report(
+        analysis=analysis if fix is None else fix.before, bone_names=model.bone_names,
+        allowable_mpa=s.allowable_mpa, settings=settings, front_end="batch", model=str(path),
+        mm_per_unit=model.scale, vertices=len(model.vertices), faces=len(model.faces),
+        seconds=seconds, correction=fix,
     )
-    return cli_report(args, model, material, strength, allowable, analysis, seconds)
 
 
 def _section_flag_counts(analysis) -> dict[str, int]:
@@ -152,23 +140,25 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
 
     ``model`` (path), ``id``, ``status`` (``ok`` / ``skipped`` / ``failed``), ``reason`` (why
     not ok, else None), ``seconds`` (whole task) and ``read_seconds``, ``check_seconds``,
-    ``analysis_seconds``, ``png_seconds``; when analysed also the fields of the analyze report
-    (``faces``, ``vertices``, ``bones`` (names), ``bone_count``, ``max_stress_mpa``, ``allowable_stress_mpa``,
-    ``weak_bones``, ``section_table``, …) plus ``ratio`` (max stress / allowable) and ``flags``
-    (what to look at: section flags with counts, ``open mesh``, ``nearest-bone weights``,
-    ``auto skeleton``, ``not converged``). ``_files`` maps output names (``ID.png``,
-    ``ID_corrected.EXT``) to bytes for the caller to write.
+    ``analysis_seconds``, ``png_seconds``; when analysed also the report's fields
+    (:func:`osteon.report.build_report`: ``faces``, ``vertices``, ``max_stress_mpa``,
+    ``stress_ratio``, ``allowable_stress_mpa``, ``weak_bones``, ``bones``, ``section_table``,
+    …) plus ``bone_count`` and ``flags`` (what to look at: section flags with counts,
+    ``open mesh:N``, ``non-manifold edges:N``, ``nearest-bone weights``, ``auto skeleton``,
+    ``not converged``). ``_files`` maps output names (``ID.png``, ``ID_corrected.EXT``) to
+    bytes for the caller to write.
     """
     t0 = time.perf_counter()
     p = Path(path)
-    s = BatchSettings.from_any(settings)
     rec: dict = {"model": str(path), "id": model_id or p.stem, "status": "ok", "reason": None}
-    times = {"read_seconds": 0.0, "check_seconds": 0.0, "analysis_seconds": 0.0, "png_seconds": 0.0}
+    times = {"read_seconds": 0.0, "check_seconds": 0.0, "analysis_seconds": 0.0,
+             "png_seconds": 0.0}
     files: dict[str, bytes] = {}
     try:
         import osteon
 
-        material, strength, allowable = s.material_and_allowable()
+        s = BatchSettings.from_any(settings)
+        allowable = s.allowable_mpa
         t = time.perf_counter()
         try:
             model = _load(p, s)
@@ -196,31 +186,22 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
             flags.append(f"open mesh:{boundary}")
         if nonmanifold:
             flags.append(f"non-manifold edges:{nonmanifold}")
-        engine = {
-            "force": s.force_n, "allowable_stress": allowable, "interval": s.interval_mm,
-            "root": _root(s, model), "threads": int(s.engine_threads),
-        }
+        engine = s.engine_kwargs(model.bone_names)
         positional = (model.vertices, model.faces, model.skeleton, model.weights)
         t = time.perf_counter()
         fix = None
         if s.correct:
-            fix = osteon.correct(
-                *positional, **engine, max_scale=s.max_scale, max_rounds=s.max_rounds,
-                scaling=s.scaling or osteon.DEFAULT_SCALING,
-            )
+            fix = osteon.correct(*positional, **engine)
             analysis = fix.after
         else:
             analysis = osteon.analyze(*positional, **engine)
         times["analysis_seconds"] = time.perf_counter() - t
-        rep = _report(path, model, s, material, strength, allowable, analysis,
-                      times["analysis_seconds"])
+        rep = _report(path, model, s, analysis, times["analysis_seconds"], fix)
         rep["bone_count"] = len(model.bone_names)
-        rep["ratio"] = _f(analysis.max_stress / allowable)
         for name, n in _section_flag_counts(analysis).items():
             flags.append(f"{name}:{n}")
         if fix is not None:
-            converged = bool(fix.converged)
-            if not converged:
+            if not fix.converged:
                 flags.append("not converged")
             ext = p.suffix.lower() if p.suffix.lower() in (".obj", ".off", ".ply", ".stl") else ".obj"
             from ..io import write_mesh
@@ -228,26 +209,14 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
             tmp = io.BytesIO()
             _write_mesh_bytes(write_mesh, tmp, fix.vertices, model.faces, ext)
             files[f"{rec['id']}_corrected{ext}"] = tmp.getvalue()
-            rep.update(
-                {
-                    "converged": converged,
-                    "rounds": len(fix.rounds),
-                    "correction_reason": fix.reason,
-                    "bone_scale": [float(v) for v in fix.bone_scale],
-                    "bone_scale_xz": [
-                        [float(x), float(z)] for x, z in zip(fix.bone_scale_x, fix.bone_scale_z)
-                    ],
-                    "max_stress_before_mpa": _f(fix.before.max_stress),
-                    "ratio_before": _f(fix.before.max_stress / allowable),
-                    "corrected_mesh": f"{rec['id']}_corrected{ext}",
-                }
-            )
+            rep["output"] = f"{rec['id']}_corrected{ext}"
         rec.update(rep)
-        rec["model"] = str(path)
         rec["flags"] = flags
         if s.png:
             t = time.perf_counter()
-            title = f"{p.name}: F = {s.force_n:g} N, {material} [σ] = {allowable:g} MPa"
+            material = s.settings.material_and_strength()[0]
+            title = (f"{p.name}: F = {s.settings.force_n:g} N, {material} "
+                     f"[σ] = {allowable:g} MPa")
             files[f"{rec['id']}.png"] = _png_bytes(
                 model, analysis, allowable, s, title,
                 vertices=None if fix is None else fix.vertices,
