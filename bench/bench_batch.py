@@ -181,7 +181,6 @@ def analysis_only_rate(lib, settings, repeat=3):
     from osteon.batch.task import _load
 
     s = batch.BatchSettings.from_any(settings)
-    _, _, allowable = s.material_and_allowable()
     models = []
     for m in batch.discover([lib]):
         try:
@@ -194,8 +193,8 @@ def analysis_only_rate(lib, settings, repeat=3):
     for _ in range(repeat):
         t = time.perf_counter()
         for mod in models:
-            osteon.analyze(mod.vertices, mod.faces, mod.skeleton, mod.weights, force=s.force_n,
-                           allowable_stress=allowable, interval=s.interval_mm, threads=1)
+            osteon.analyze(mod.vertices, mod.faces, mod.skeleton, mod.weights,
+                           **s.engine_kwargs(mod.bone_names))
         times.append(time.perf_counter() - t)
     return len(models), statistics.median(times)
 

@@ -62,6 +62,27 @@ def test_statuses_and_reasons(library):
         assert r["seconds"] >= 0 and "_files" not in r
 
 
+def test_unrigged_mesh_uses_auto_skeleton_when_there_is_one(library, monkeypatch):
+    """When osteon.auto_skeleton exists (issue 17), an unrigged mesh is rigged with it."""
+    lib, _ = library
+    calls = []
+
+    def fake_auto_skeleton(vertices, faces):
+        calls.append(len(vertices))
+        x0, x1 = vertices[:, 0].min(), vertices[:, 0].max()
+        mid = 0.5 * (x0 + x1)
+        sk = osteon.Skeleton([[x0, 0, 0], [mid, 0, 0]], [[mid, 0, 0], [x1, 0, 0]], [-1, 0])
+        return sk, None
+
+    monkeypatch.setattr(osteon, "auto_skeleton", fake_auto_skeleton, raising=False)
+    (r,) = batch.run_all([lib / "unrigged.stl"], SETTINGS, workers=1)
+    assert r["status"] == "ok", r["reason"]
+    assert "auto skeleton" in r["flags"]
+    assert calls and r["bone_count"] == 2
+    # the bar is scaled to 120 mm before the skeleton is made (mm in, mm out)
+    assert r["faces"] > 0 and r["max_stress_mpa"] > 0
+
+
 def test_open_mesh_allowed_is_flagged(library):
     lib, _ = library
     (r,) = batch.run_all([lib / "open.obj"], {**SETTINGS, "allow_open": True}, workers=1)

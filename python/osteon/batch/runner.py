@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import sys
+import uuid
 from collections.abc import Iterator
 
 from .discover import ModelFile, discover
@@ -90,7 +91,8 @@ def _dask(models, s, client):
     pending = {}
 
     def submit(m):
-        f = client.submit(process_model, m.path, s, m.id, pure=False, key=f"osteon-{m.id}-{id(m)}")
+        f = client.submit(process_model, m.path, s, m.id, pure=False,
+                          key=f"osteon-batch-{m.id}-{uuid.uuid4().hex}")
         pending[f.key] = m
         return f
 

@@ -48,6 +48,13 @@ def mesh_boundary(faces: np.ndarray, n_vertices: int) -> tuple[int, int]:
     return int(np.sum(counts == 1)), int(np.sum(counts > 2))
 
 
+def welded_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) with vertices at the same position merged (STL stores every triangle's
+    corners apart, so its topology only shows once they are merged)."""
+    uniq, inverse = np.unique(np.asarray(vertices), axis=0, return_inverse=True)
+    return uniq, inverse.ravel()[np.asarray(faces)].astype(np.int32)
+
+
 def _is_unrigged(path: Path) -> bool:
     """True when a mesh file has no skeleton next to it (load_model would refuse it)."""
     from ..io.loader import MESH_EXTENSIONS, _sidecar
@@ -70,6 +77,7 @@ def _auto_rigged(path: Path, s: BatchSettings):
         V, F = read_mesh(path)  # read first: a file that is not a mesh is "unreadable"
     if not hasattr(osteon, "auto_skeleton"):
         raise _Skip(NO_SKELETON)
+    V, F = welded_faces(V, F)  # no weights to keep in line: the skeleton needs the topology
     height, axis = s.height_and_axis()
     ext = V.max(0) - V.min(0)
     size = float(ext.max() if axis is None else ext["xyz".index(axis)])
@@ -176,6 +184,9 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
         if model.weights is None:
             flags.append("nearest-bone weights")
         boundary, nonmanifold = mesh_boundary(model.faces, len(model.vertices))
+        if boundary:  # corners stored apart (STL)? the topology of the merged positions counts
+            Vw, Fw = welded_faces(model.vertices, model.faces)
+            boundary, nonmanifold = mesh_boundary(Fw, len(Vw))
         times["check_seconds"] = time.perf_counter() - t
         if boundary:
             if not s.allow_open:
