@@ -56,3 +56,14 @@ def make_library(root: Path) -> dict[str, str]:
     expected["empty.obj"] = "failed"
     (root / "notes.txt").write_text("not a model\n")  # not picked up from a folder
     return expected
+
+
+def crashing_task(path, settings, model_id=None):
+    """The batch task, except that a model whose name has "crash" kills its worker process."""
+    import os
+
+    from osteon.batch import process_model
+
+    if "crash" in os.path.basename(path):
+        os._exit(3)
+    return process_model(path, settings, model_id)

@@ -148,6 +148,23 @@ def test_correction_writes_meshes(tmp_path):
     assert corrected.stat().st_size > 0
 
 
+def test_a_crashing_worker_fails_only_its_model(tmp_path):
+    from batch_library import crashing_task
+    from osteon.batch.runner import _pool
+
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    for i in range(3):
+        rigged_bar(lib, f"bar{i}", radius=3.0 + i)
+    rigged_bar(lib, "crash", radius=4.0)
+    s = batch.BatchSettings.from_any({**SETTINGS, "png": False})
+    recs = _by_name(_pool(batch.discover([lib]), s, 2, task=crashing_task))
+    assert len(recs) == 4
+    assert recs["crash.obj"]["status"] == "failed"
+    assert "crashed" in recs["crash.obj"]["reason"]
+    assert all(r["status"] == "ok" for k, r in recs.items() if k != "crash.obj")
+
+
 def test_bad_settings_raise_before_reading(library):
     lib, _ = library
     with pytest.raises(ValueError, match="unknown material"):

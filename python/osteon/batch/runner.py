@@ -40,7 +40,7 @@ def _pool_context():
     return mp.get_context("spawn")
 
 
-def _pool(models, s, workers: int):
+def _pool(models, s, workers: int, task=process_model):
     """A ProcessPoolExecutor with a bounded window of models in flight. A worker that dies
     (a crash in a reader or the engine) breaks the pool: the models then in flight are re-run
     one at a time in a fresh pool, so only the one that crashes is marked failed."""
@@ -57,7 +57,7 @@ def _pool(models, s, workers: int):
             while todo or pending:
                 while todo and len(pending) < window:
                     m = todo.pop()
-                    pending[ex.submit(process_model, m.path, s, m.id)] = m
+                    pending[ex.submit(task, m.path, s, m.id)] = m
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
                 broken = False
                 for f in done:
@@ -74,7 +74,7 @@ def _pool(models, s, workers: int):
         for m in crashed:  # isolate: one model per fresh single-worker pool
             with ProcessPoolExecutor(max_workers=1, mp_context=ctx) as one:
                 try:
-                    yield one.submit(process_model, m.path, s, m.id).result()
+                    yield one.submit(task, m.path, s, m.id).result()
                 except BrokenProcessPool:
                     yield _crash_record(m, "the worker process crashed on this model")
 
