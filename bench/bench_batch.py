@@ -235,7 +235,7 @@ def main(argv=None):
             with distributed.LocalCluster(n_workers=args.jobs, threads_per_worker=1,
                                           processes=True, dashboard_address=None) as cl, \
                     distributed.Client(cl) as client:
-                client.run(lambda: __import__("osteon.batch.task"))
+                client.run(lambda: __import__("osteon.batch._warm"))  # as the pool's server
                 start = time.perf_counter() - t
                 secsd, recsd = timed_run(lib, settings, client=client)
             rows.append((f"Dask LocalCluster, {args.jobs} workers (+{start:.1f} s start)",
