@@ -187,6 +187,14 @@ def test_cli_batch(library, tmp_path, capsys):
     assert cli_main(["batch", str(lib), "--out", str(out), "--material", "cheese"]) == 2
 
 
+def test_cli_dask_without_distributed_names_the_extra(library, tmp_path, monkeypatch, capsys):
+    lib, _ = library
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    assert cli_main(["batch", str(lib), "--out", str(tmp_path / "o"), "--dask", "local"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "osteon[batch]" in err[0] and err[0].startswith("osteon: error:")
+
+
 def _resume_library(root: Path, n: int):
     root.mkdir(parents=True)
     for i in range(n):
