@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -139,8 +140,12 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
 }
 
 AnalysisOptions make_options(double force, double allowable_stress, double interval, int held_bone,
-                             double gap_tolerance, int threads, bool local_cuts = true) {
+                             double gap_tolerance, int threads, bool local_cuts = true,
+                             const std::array<double, 3>& build_direction = {0, 0, 1},
+                             double layer_strength_ratio = 1.0) {
   AnalysisOptions o;
+  o.build_direction = Vec3(build_direction[0], build_direction[1], build_direction[2]);
+  o.layer_strength_ratio = layer_strength_ratio;
   o.local_cuts = local_cuts;
   o.force = force;
   o.allowable_stress = allowable_stress;
@@ -169,6 +174,10 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["stress"] = to_numpy(std::move(r.stress));
   d["culled"] = to_bool(r.culled);
   d["weak"] = to_bool(r.weak);
+  d["section_allowable"] = to_numpy(std::move(r.section_allowable));
+  d["stress_ratio"] = to_numpy(std::move(r.stress_ratio));
+  d["across_layers"] = to_bool(r.across_layers);
+  d["max_stress_ratio"] = r.max_stress_ratio;
   d["section_flags"] = to_numpy(std::move(r.section_flags));
   d["max_moment"] = r.max_moment;
   d["safe_modulus"] = r.safe_modulus;
@@ -186,10 +195,12 @@ class PyAnalyzer {
  public:
   PyAnalyzer(const Int32Array& faces, Index num_vertices, int num_bones, const py::object& dense,
              const py::object& csr, double force, double allowable_stress, double interval,
-             int held_bone, double gap_tolerance, int threads, bool local_cuts) {
+             int held_bone, double gap_tolerance, int threads, bool local_cuts,
+             const std::array<double, 3>& build_direction, double layer_strength_ratio) {
     require_rows3(faces, "faces");
-    const AnalysisOptions options = make_options(force, allowable_stress, interval, held_bone,
-                                                 gap_tolerance, threads, local_cuts);
+    const AnalysisOptions options =
+        make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads,
+                     local_cuts, build_direction, layer_strength_ratio);
     if (dense.is_none() && !csr.is_none()) {
       // Sparse weights: the analysis needs only each vertex's dominant bone; no copy of them.
       const CsrArrays c = csr_arrays(csr, num_vertices, /*allow_narrow=*/true);
@@ -253,11 +264,13 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<PyAnalyzer>(m, "Analyzer", "Reusable analysis of one mesh topology.")
       .def(py::init<const Int32Array&, Index, int, const py::object&, const py::object&, double,
-                    double, double, int, double, int, bool>(),
+                    double, double, int, double, int, bool, const std::array<double, 3>&, double>(),
            py::arg("faces"), py::arg("num_vertices"), py::arg("num_bones"), py::arg("dense"),
            py::arg("csr"), py::arg("force"), py::arg("allowable_stress"), py::arg("interval"),
            py::arg("held_bone"), py::arg("gap_tolerance"), py::arg("threads"),
-           py::arg("local_cuts") = true)
+           py::arg("local_cuts") = true,
+           py::arg("build_direction") = std::array<double, 3>{0, 0, 1},
+           py::arg("layer_strength_ratio") = 1.0)
       .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("heads"), py::arg("tails"),
            py::arg("parents"), py::arg("names"),
            "Analyse vertices (V,3 mm) with a posed skeleton.");
@@ -269,7 +282,8 @@ PYBIND11_MODULE(_core, m) {
          const py::object& dense, const py::object& csr, double force, double allowable_stress,
          double interval, int held_bone, double gap_tolerance, int threads, double max_scale,
          int max_rounds, double target_ratio, bool thin_direction, double flat_aspect,
-         const py::object& bone_x_axes) {
+         const py::object& bone_x_axes, const std::array<double, 3>& build_direction,
+         double layer_strength_ratio) {
         require_rows3(vertices, "vertices");
         require_rows3(faces, "faces");
         const Skeleton s = make_skeleton(heads, tails, parents, names);
@@ -277,7 +291,8 @@ PYBIND11_MODULE(_core, m) {
         if (!weights) throw std::invalid_argument("correct() needs skinning weights");
         const MeshView mesh{vertices.data(), vertices.shape(0), faces.data(), faces.shape(0)};
         const AnalysisOptions o =
-            make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads);
+            make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads, true,
+                         build_direction, layer_strength_ratio);
         CorrectionOptions co;
         co.max_scale = max_scale;
         co.max_rounds = max_rounds;
@@ -320,7 +335,9 @@ PYBIND11_MODULE(_core, m) {
       py::arg("allowable_stress"), py::arg("interval"), py::arg("held_bone"),
       py::arg("gap_tolerance"), py::arg("threads"), py::arg("max_scale"), py::arg("max_rounds"),
       py::arg("target_ratio"), py::arg("thin_direction") = false, py::arg("flat_aspect") = 2.0,
-      py::arg("bone_x_axes") = py::none(), "Correction loop (paper §5); see osteon.correct.");
+      py::arg("bone_x_axes") = py::none(),
+      py::arg("build_direction") = std::array<double, 3>{0, 0, 1},
+      py::arg("layer_strength_ratio") = 1.0, "Correction loop (paper §5); see osteon.correct.");
 
   m.def(
       "skin",

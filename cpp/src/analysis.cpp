@@ -14,6 +14,7 @@ void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
     throw std::invalid_argument("force must be a positive finite number of newtons");
   if (!(o.allowable_stress > 0) || !std::isfinite(o.allowable_stress))
     throw std::invalid_argument("allowable_stress must be a positive finite stress in MPa");
+  validate_layer_options(o.build_direction, o.layer_strength_ratio);
   if (!(o.interval > 0) || !std::isfinite(o.interval))
     throw std::invalid_argument("interval must be a positive finite length in mm");
   if (o.held_bone < -1 || o.held_bone >= skeleton.num_bones())

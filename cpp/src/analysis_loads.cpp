@@ -58,19 +58,26 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
+  // Direction-dependent allowable (FDM layers, osteon/layers.hpp): exactly allowable_stress
+  // when isotropic.
+  section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
+                     options.layer_strength_ratio, r.section_allowable, r.across_layers);
+  r.stress_ratio.assign(ns, kNaN);
   for (int i = 0; i < ns; ++i) {
     if (!states[i].found) continue;
     r.max_moment = std::max(r.max_moment, r.moment[i]);
-    if (r.weakest_section < 0 || r.stress[i] > r.max_stress) {
-      r.max_stress = r.stress[i];
+    r.max_stress = std::max(r.max_stress, r.stress[i]);
+    r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
+    if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
+      r.max_stress_ratio = r.stress_ratio[i];
       r.weakest_section = i;
     }
   }
   r.safe_modulus = r.max_moment / options.allowable_stress;
   for (int i = 0; i < ns; ++i) {
     if (!states[i].found) continue;
-    r.culled[i] = r.section_modulus[i] > r.safe_modulus;
-    r.weak[i] = r.stress[i] > options.allowable_stress;
+    r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
+    r.weak[i] = r.stress[i] > r.section_allowable[i];
   }
   return r;
 }

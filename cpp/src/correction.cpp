@@ -82,7 +82,6 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
   res.vertices.assign(mesh.vertices, mesh.vertices + 3 * mesh.num_vertices);
   res.before = impl.run(mesh.vertices, sk, nullptr);
   AnalysisResult current = res.before;
-  const double allowable = options.allowable_stress;
   std::vector<std::uint8_t> unfixable(current.stress.size(), 0);
   std::vector<std::string> why(current.stress.size());
   std::vector<double> next(3 * mesh.num_vertices);
@@ -97,7 +96,8 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
       if (!current.weak[i]) continue;
       any_weak = true;
       if (unfixable[i]) continue;
-      if (worst < 0 || current.stress[i] > current.stress[worst]) worst = static_cast<int>(i);
+      if (worst < 0 || current.stress_ratio[i] > current.stress_ratio[worst])
+        worst = static_cast<int>(i);
     }
     if (!any_weak) {
       res.reason = "no weak section";
@@ -110,7 +110,8 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     if (round >= co.max_rounds) break;
     const MeshView current_mesh{res.vertices.data(), mesh.num_vertices, mesh.faces, mesh.num_faces};
     const int bone = domain_bone(current_mesh, weights, current, worst, options.interval);
-    const double ratio = current.stress[worst] / (co.target_ratio * allowable);
+    const double ratio =
+        current.stress[worst] / (co.target_ratio * current.section_allowable[worst]);
     // Which axes to scale: both (the paper), or only the one across a flat section's thickness.
     int axis = 0;
     AxisScales trial = scales;

@@ -18,6 +18,7 @@ from ._api import (
     skin,
     slice_section,
 )
+from .orientation import Orientation, best_orientation
 
 __version__ = "0.1.0"
 
@@ -28,8 +29,10 @@ __all__ = [
     "Analysis",
     "Analyzer",
     "Correction",
+    "Orientation",
     "Skeleton",
     "analyze",
+    "best_orientation",
     "correct",
     "section_properties",
     "skin",

@@ -198,6 +198,26 @@ def _positive(value: float, name: str, unit: str) -> float:
     return v
 
 
+def _layer_options(build_direction: Any, layer_strength_ratio: Any) -> tuple[np.ndarray, float]:
+    """(unit build direction (3,), layer strength ratio) checked; ValueError naming the problem."""
+    try:
+        d = np.asarray(build_direction, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"build_direction must be a 3-vector, got {build_direction!r}") from None
+    if d.shape != (3,) or not np.isfinite(d).all() or not np.linalg.norm(d) > 0:
+        raise ValueError(
+            f"build_direction must be a finite non-zero 3-vector, got {build_direction!r}")
+    try:
+        r = float(layer_strength_ratio)
+    except (TypeError, ValueError):
+        raise ValueError("layer_strength_ratio must be a number (layer / in-plane strength)"
+                         ) from None
+    if not (r > 0 and math.isfinite(r)):
+        raise ValueError(
+            f"layer_strength_ratio must be a positive finite number, got {layer_strength_ratio!r}")
+    return d / np.linalg.norm(d), r
+
+
 def _held_bone(root: int | str | None, skeleton: Skeleton) -> int:
     if root is None:
         return -1
@@ -258,16 +278,34 @@ class Analysis:
     vertex_stress: np.ndarray
     vertex_culled: np.ndarray
     vertex_bone: np.ndarray
+    section_allowable: np.ndarray | None = None
+    stress_ratio: np.ndarray | None = None
+    across_layers: np.ndarray | None = None
+    max_stress_ratio: float = 0.0
     allowable_stress: float = 60.0
     force: float = 20.0
     interval: float = 2.0
     bone_names: list = field(default_factory=list)
+    build_direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+    layer_strength_ratio: float = 1.0
 
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
-                   interval: float) -> Analysis:
+                   interval: float, build_direction: Any = (0.0, 0.0, 1.0),
+                   layer_strength_ratio: float = 1.0) -> Analysis:
         return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
-                   bone_names=list(skeleton.names))
+                   bone_names=list(skeleton.names),
+                   build_direction=np.array(build_direction, dtype=float),
+                   layer_strength_ratio=float(layer_strength_ratio))
+
+    def __post_init__(self) -> None:
+        # Results built without the layer fields (older callers): isotropic values.
+        if self.section_allowable is None:
+            self.section_allowable = np.full(len(self.stress), float(self.allowable_stress))
+        if self.stress_ratio is None:
+            self.stress_ratio = self.stress / self.section_allowable
+        if self.across_layers is None:
+            self.across_layers = np.zeros(len(self.stress), bool)
 
     @property
     def num_sections(self) -> int:
@@ -279,10 +317,10 @@ class Analysis:
         """(S,) bool: sections that were computed (not skipped)."""
         return np.isfinite(self.stress)
 
-    @property
-    def stress_ratio(self) -> np.ndarray:
-        """(S,) stress / allowable stress (> 1 means weak)."""
-        return self.stress / self.allowable_stress
+    def governing_limit(self, section: int) -> str:
+        """"across layers" when the layer (Z) strength governs the section's allowable, else
+        "along layers" (always, for isotropic material)."""
+        return "across layers" if bool(self.across_layers[section]) else "along layers"
 
     def flag_names(self, section: int) -> list[str]:
         """Names of the flags set on one section."""
@@ -296,13 +334,28 @@ class Analysis:
         np.maximum.at(out, self.section_bone[ok], self.stress[ok])
         return out
 
+    def bone_max_ratio(self) -> tuple[np.ndarray, np.ndarray]:
+        """(B,) largest stress ratio per bone (0 without valid sections) and (B,) the section
+        where it occurs (-1 if none)."""
+        nb = len(self.bone_names)
+        out, where = np.zeros(nb), np.full(nb, -1)
+        ok = np.flatnonzero(self.valid)
+        order = ok[np.argsort(self.stress_ratio[ok], kind="stable")]
+        for i in order:  # ascending: the last write per bone is its worst section
+            out[self.section_bone[i]] = self.stress_ratio[i]
+            where[self.section_bone[i]] = i
+        return out, where
+
     def weak_bones(self) -> list[dict]:
-        """Bones with a weak section, worst first: ``{bone, index, max_stress_mpa, ratio}``."""
+        """Bones with a weak section, worst ratio first: ``{bone, index, max_stress_mpa, ratio,
+        limit}`` (ratio = the bone's largest stress / its section's direction-dependent
+        allowable; limit = "across layers" or "along layers" at that section)."""
         from .report import bone_table  # the one per-bone table
 
         rows = bone_table(self.section_bone, np.where(self.valid, self.stress, np.nan), self.weak,
-                          self.bone_names, self.allowable_stress)
-        keep = ("bone", "index", "max_stress_mpa", "ratio")
+                          self.bone_names, self.allowable_stress,
+                          stress_ratio=self.stress_ratio, across_layers=self.across_layers)
+        keep = ("bone", "index", "max_stress_mpa", "ratio", "limit")
         return [{k: r[k] for k in keep} for r in rows if r["weak"]]
 
     def summary(self) -> dict:
@@ -322,6 +375,9 @@ class Analysis:
             "culled_sections": int(self.culled.sum()),
             "skipped_sections": int((~self.valid).sum()),
             "weak_bones": self.weak_bones(),
+            "max_stress_ratio": finite(self.max_stress_ratio),
+            "build_direction": [float(x) for x in self.build_direction],
+            "layer_strength_ratio": float(self.layer_strength_ratio),
         }
 
     def __repr__(self) -> str:
@@ -406,6 +462,8 @@ class Analyzer:
         gap_tolerance: float | None = None,
         threads: int = 0,
         local_cuts: bool = True,
+        build_direction: Any = (0.0, 0.0, 1.0),
+        layer_strength_ratio: float = 1.0,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -418,13 +476,15 @@ class Analyzer:
         self.interval = _positive(interval, "interval", "mm")
         if gap_tolerance is not None and not (float(gap_tolerance) >= 0):
             raise ValueError("gap_tolerance must be >= 0 mm")
+        self.build_direction, self.layer_strength_ratio = _layer_options(
+            build_direction, layer_strength_ratio)
         dense, csr = _weights_args(weights, self.num_vertices, skeleton.num_bones)
         self._skeleton = skeleton
         self._core = _core.Analyzer(
             self.faces, self.num_vertices, skeleton.num_bones, dense, csr, self.force,
             self.allowable_stress, self.interval, _held_bone(root, skeleton),
             -1.0 if gap_tolerance is None else float(gap_tolerance), _count(threads, "threads"),
-            bool(local_cuts),
+            bool(local_cuts), list(self.build_direction), self.layer_strength_ratio,
         )
 
     def run(self, vertices: Any, skeleton: Skeleton | None = None) -> Analysis:
@@ -444,7 +504,9 @@ class Analyzer:
             )
         d = self._core.run(v, sk.heads, sk.tails, sk.parents, sk.names)
         return Analysis._from_core(d, skeleton=sk, allowable_stress=self.allowable_stress,
-                                   force=self.force, interval=self.interval)
+                                   force=self.force, interval=self.interval,
+                                   build_direction=self.build_direction,
+                                   layer_strength_ratio=self.layer_strength_ratio)
 
 
 def analyze(
@@ -460,6 +522,8 @@ def analyze(
     gap_tolerance: float | None = None,
     threads: int = 0,
     local_cuts: bool = True,
+    build_direction: Any = (0.0, 0.0, 1.0),
+    layer_strength_ratio: float = 1.0,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -467,14 +531,20 @@ def analyze(
     None (each vertex bound to its nearest bone) or (V,B) dense / SciPy sparse; ``force`` N on the
     worst point of each branch; ``allowable_stress`` MPa (strength / safety factor); ``interval``
     mm between sections along each bone; ``root`` the bone (index or name) held at its head
-    (default: the main root bone). Raises ValueError on bad input.
+    (default: the main root bone). ``build_direction`` (3,) the FDM print's build direction in
+    the model's frame (default +Z) and ``layer_strength_ratio`` layer / in-plane strength (1.0 =
+    isotropic): each section's allowable then depends on the angle between its normal and the
+    build direction (``section_allowable``, ``stress_ratio``, ``across_layers``;
+    docs/printing.md). Raises ValueError on bad input.
     """
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
         raise ValueError("empty mesh: vertices has no rows")
     analyzer = Analyzer(faces, len(v), skeleton, weights, force=force,
                         allowable_stress=allowable_stress, interval=interval, root=root,
-                        gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts)
+                        gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
+                        build_direction=build_direction,
+                        layer_strength_ratio=layer_strength_ratio)
     return analyzer.run(v)
 
 
@@ -496,6 +566,8 @@ def correct(
     scaling: str = DEFAULT_SCALING,
     flat_aspect: float = 2.0,
     bone_x_axes: Any = None,
+    build_direction: Any = (0.0, 0.0, 1.0),
+    layer_strength_ratio: float = 1.0,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -509,7 +581,9 @@ def correct(
     by ``sqrt(stress / target)`` (a plate's W grows as t²), along the bone's local x or z axis
     nearest to it (round sections still get both axes). ``bone_x_axes`` (B,3) gives each bone's
     local x axis (e.g. Blender's, so that pose-bone scale X/Z reproduce the result); None lets
-    each bone's axes follow the first flat section scaled on it.
+    each bone's axes follow the first flat section scaled on it. ``build_direction`` and
+    ``layer_strength_ratio`` as in :func:`analyze`: the loop is driven by the stress ratio
+    against each section's direction-dependent allowable.
     """
     if scaling not in ("uniform", "thin"):
         raise ValueError(f"scaling must be 'uniform' or 'thin', got {scaling!r}")
@@ -535,6 +609,7 @@ def correct(
         raise ValueError(f"max_scale must be a finite number >= 1, got {max_scale!r}")
     max_rounds = _count(max_rounds, "max_rounds")
     threads = _count(threads, "threads")
+    build_direction, layer_strength_ratio = _layer_options(build_direction, layer_strength_ratio)
     if weights is None:
         from scipy import sparse
 
@@ -549,9 +624,11 @@ def correct(
         force, allowable_stress, interval, _held_bone(root, skeleton),
         -1.0 if gap_tolerance is None else float(gap_tolerance), threads, float(max_scale),
         max_rounds, float(target_ratio), scaling == "thin", float(flat_aspect), axes,
+        list(build_direction), layer_strength_ratio,
     )
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
-              "interval": interval}
+          "interval": interval, "build_direction": build_direction,
+          "layer_strength_ratio": layer_strength_ratio}
     d["before"] = Analysis._from_core(d["before"], **kw)
     d["after"] = Analysis._from_core(d["after"], **kw)
     return Correction(**d)

@@ -109,6 +109,20 @@ def _add_common(p: argparse.ArgumentParser):
         metavar="BONE",
         help="bone (name or index) held at its head (default: the main root bone)",
     )
+    pr = p.add_argument_group("print direction (FDM layers; docs/printing.md)")
+    pr.add_argument(
+        "--build-direction",
+        default="0,0,1",
+        metavar="X,Y,Z",
+        help="build (layer stacking) direction in the model's frame (default 0,0,1: +Z)",
+    )
+    pr.add_argument(
+        "--layer-ratio",
+        type=float,
+        metavar="R",
+        help="layer / in-plane strength (default: the material preset's, e.g. PLA 0.55; "
+        "1 with --strength-mpa)",
+    )
     o = p.add_argument_group("output")
     o.add_argument("--json", metavar="FILE", help="write a JSON report")
     o.add_argument("--png", metavar="FILE", help="write a PNG of the stress map and chain plot")
@@ -139,6 +153,31 @@ def build_parser() -> argparse.ArgumentParser:
         "bones under a force on each branch, held at the root.",
     )
     _add_common(pa)
+    po = pa.add_argument_group("best print orientation (docs/printing.md)")
+    po.add_argument(
+        "--orient",
+        action="store_true",
+        help="search the build directions for the one with the lowest worst stress ratio and "
+        "print the best few",
+    )
+    po.add_argument(
+        "--orient-out",
+        metavar="FILE",
+        help="write the model turned so that the best direction is +Z (OBJ/OFF/PLY/STL, mm); "
+        "implies --orient",
+    )
+    po.add_argument(
+        "--orient-samples",
+        type=int,
+        default=4000,
+        metavar="N",
+        help="directions on the sphere before local refinement (default 4000)",
+    )
+    po.add_argument(
+        "--orient-flat",
+        action="store_true",
+        help="only orientations resting on a flat face of the convex hull",
+    )
     pc = sub.add_parser(
         "correct",
         help="thicken weak bones until no section is weak",
@@ -233,7 +272,19 @@ def _settings(args) -> Settings:
         max_scale=getattr(args, "max_scale", 3.0),
         max_rounds=getattr(args, "max_rounds", 100),
         scaling=getattr(args, "scaling", None) or _default_scaling(),
+        build_direction=_build_direction(getattr(args, "build_direction", "0,0,1")),
+        layer_strength_ratio=getattr(args, "layer_ratio", None),  # None: the material preset's
     )
+
+
+def _build_direction(text) -> tuple:
+    try:
+        d = tuple(float(x) for x in str(text).split(","))
+    except ValueError:
+        d = ()
+    if len(d) != 3 or not np.all(np.isfinite(d)) or not np.linalg.norm(d) > 0:
+        raise ValueError(f"--build-direction must be three numbers X,Y,Z, not all 0, got {text!r}")
+    return d
 
 
 def _default_scaling() -> str:
@@ -296,17 +347,20 @@ def _load(args):
 def bone_table(analysis, top=10, scales=None):
     """Rows (worst first) of per-bone results (:func:`osteon.report.bone_table`)."""
     rows = _bone_rows(analysis.section_bone, analysis.stress, analysis.weak,
-                      analysis.bone_names, analysis.allowable_stress, scales)
+                      analysis.bone_names, analysis.allowable_stress, scales,
+                      analysis.stress_ratio, analysis.across_layers)
     return [r for r in rows if r["max_stress_mpa"] is not None][:top]
 
 
-def format_table(rows, allowable, scales=False):
+def format_table(rows, allowable, scales=False, layer_ratio=1.0):
     head = f"{'bone':<28} {'max σ MPa':>10} {'σ/[σ]':>7} {'weak':>9}"
     if scales:
         head += f" {'scale':>6}"
     lines = [head, "-" * len(head)]
     for r in rows:
         flag = "  WEAK" if r["ratio"] > 1 else ""
+        if flag and layer_ratio != 1.0:
+            flag += f" ({r['limit']})"
         line = (
             f"{r['bone'][:28]:<28} {r['max_stress_mpa']:>10.2f} {r['ratio']:>7.2f} "
             f"{r['weak_sections']:>4}/{r['sections']:<4}"
@@ -314,14 +368,19 @@ def format_table(rows, allowable, scales=False):
         if scales:
             line += f" {r['scale']:>6.3f}"
         lines.append(line + flag)
-    lines.append(f"(allowable stress [σ] = {allowable:g} MPa)")
+    note = f"(allowable stress [σ] = {allowable:g} MPa"
+    if layer_ratio != 1.0:
+        note += (f" along layers, {layer_ratio * allowable:g} MPa across layers; "
+                 "σ/[σ] uses each section's angle to the build direction")
+    lines.append(note + ")")
     return "\n".join(lines)
 
 
 #: the shared checks name a setting; the CLI names its option
 _OPTIONS = {"force": "--force", "section interval": "--interval",
             "material strength": "--strength-mpa", "safety factor": "--safety-factor",
-            "max scale": "--max-scale", "max rounds": "--max-rounds", "Held bone": "--root"}
+            "max scale": "--max-scale", "max rounds": "--max-rounds", "Held bone": "--root",
+            "layer strength ratio": "--layer-ratio", "build direction": "--build-direction"}
 
 
 def _arguments(settings: Settings, bone_names, correct: bool) -> dict:
@@ -367,7 +426,66 @@ def _write_json(path, data):
     Path(path).write_text(to_json(data))
 
 
-def _png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title=""):
+def _orient(args, model, analysis):
+    """best_orientation for ``analyze --orient``; writes --orient-out. Returns the result."""
+    from .orientation import best_orientation
+
+    if args.orient_samples < 1:
+        raise ValueError(f"--orient-samples must be >= 1, got {args.orient_samples}")
+    if args.orient_out and Path(args.orient_out).suffix.lower() not in (
+        ".obj", ".off", ".ply", ".stl"
+    ):
+        raise ValueError(f"--orient-out {args.orient_out}: use an .obj, .off, .ply or .stl name")
+    o = best_orientation(
+        analysis,
+        samples=args.orient_samples,
+        base="flat" if args.orient_flat else None,
+        vertices=model.vertices if args.orient_flat else None,
+    )
+    if args.orient_out:
+        from .io import write_mesh
+
+        write_mesh(args.orient_out, o.rotate(model.vertices), model.faces)
+    return o
+
+
+def orientation_table(o) -> str:
+    """The best few build directions, one line each, and the current one."""
+    head = f"{'#':>2} {'build direction (x, y, z)':<28} {'worst σ/[σ]':>11} {'turn °':>7}  "
+    lines = [head + "governing limit"]
+    lines.append("-" * len(lines[0]))
+    ref = o.reference_direction
+    for k, c in enumerate(o.candidates, 1):
+        d = c["direction"]
+        turn = np.degrees(np.arccos(np.clip(float(d @ ref), -1, 1)))
+        lim = "across layers" if c["across_layers"] else "along layers"
+        lines.append(f"{k:>2} ({d[0]:+.3f}, {d[1]:+.3f}, {d[2]:+.3f}){'':<6} "
+                     f"{c['worst_ratio']:>11.3f} {turn:>7.1f}  {lim}")
+    lines.append(f"current ({ref[0]:+.3f}, {ref[1]:+.3f}, {ref[2]:+.3f}): worst σ/[σ] "
+                 f"{o.reference_ratio:.3f}; best is {o.improvement:.2f}x stronger "
+                 f"(layer ratio {o.layer_strength_ratio:g})")
+    return "\n".join(lines)
+
+
+def _orientation_json(o) -> dict:
+    def cand(c):
+        out = {"direction": [float(x) for x in c["direction"]],
+               "rotation": [[float(x) for x in row] for row in c["rotation"]],
+               "worst_ratio": float(c["worst_ratio"]),
+               "worst_section": int(c["worst_section"]),
+               "limit": "across layers" if c["across_layers"] else "along layers"}
+        if "base_area_mm2" in c:
+            out["base_area_mm2"] = float(c["base_area_mm2"])
+        return out
+
+    return {"best": cand(o.candidates[0]), "candidates": [cand(c) for c in o.candidates],
+            "reference_direction": [float(x) for x in o.reference_direction],
+            "reference_ratio": float(o.reference_ratio), "samples": len(o.ratios),
+            "base": o.base}
+
+
+def _png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title="",
+         orientation=None):
     from .plots import save_stress_png
 
     save_stress_png(
@@ -383,6 +501,7 @@ def _png(args, model, analysis, allowable, before=None, vertices=None, marks=Non
         title=title,
         before=before,
         marks=marks,
+        orientation=orientation,
     )
 
 
@@ -396,8 +515,11 @@ def cmd_analyze(args, out):
         model = _load(args)
         prog.next()
         a, secs = _analyze(settings, model)
+        orient = _orient(args, model, a) if (args.orient or args.orient_out) else None
         prog.next()
         rep = _report(args, model, settings, a, secs)
+        if orient is not None:
+            rep["orientation"] = _orientation_json(orient)
         if args.json:
             _write_json(args.json, rep)
         if args.png:
@@ -408,6 +530,7 @@ def cmd_analyze(args, out):
                 allowable,
                 title=f"{Path(args.model).name}: F = {args.force:g} N, {material} "
                 f"[σ] = {allowable:g} MPa",
+                orientation=orient,
             )
         prog.next()
     finally:
@@ -424,7 +547,14 @@ def cmd_analyze(args, out):
             "culled (safe for sure)",
             file=out,
         )
-        print(format_table(bone_table(a, args.top), allowable), file=out)
+        print(format_table(bone_table(a, args.top), allowable,
+                           layer_ratio=a.layer_strength_ratio), file=out)
+        if orient is not None:
+            print("best print orientations:", file=out)
+            print(orientation_table(orient), file=out)
+            if args.orient_out:
+                print(f"model turned to the best orientation written to {args.orient_out}",
+                      file=out)
     return 0
 
 
@@ -479,7 +609,8 @@ def cmd_correct(args, out):
             print(f"why: {reason}", file=out)
         print(
             format_table(
-                bone_table(fix.after, args.top, scales=fix.bone_scale), allowable, scales=True
+                bone_table(fix.after, args.top, scales=fix.bone_scale), allowable, scales=True,
+                layer_ratio=fix.after.layer_strength_ratio,
             ),
             file=out,
         )

@@ -4,8 +4,8 @@ Units: MPa for strengths, mm for thicknesses. Every number carries its source.
 
 Strengths are the tensile (yield) strength of *printed* parts along the layers (FDM) or of the
 cured/sintered part (resin, SLS), as manufacturers' data sheets list them. Across FDM layers a
-part is weaker; until the layer model of issue 18 sets ``layer_strength_ratio`` per material,
-the safety factor covers that.
+part is weaker: ``layer_strength_ratio`` (Z / XY strength, issue 18) is used by the layer
+model of docs/printing.md when a front end asks for the material's ratio.
 
 Decision (issue 15): before this table the CLI had nylon at 70 MPa with a safety factor of 1 and
 the add-on nylon at 48 MPa with a safety factor of 2, so PLA's default allowable stress was 60 MPa
@@ -33,8 +33,8 @@ class Material:
     """One print material.
 
     ``strength_mpa``: tensile strength in MPa of a printed part (along the layers for FDM);
-    ``layer_strength_ratio``: strength across the layers / ``strength_mpa`` (1 = no weaker; FDM
-    values arrive with issue 18); ``min_thickness_mm``: thinnest wall in mm the process prints
+    ``layer_strength_ratio``: strength across the layers / ``strength_mpa`` (1 = no weaker;
+    sources in ``layer_strength_source`` and docs/printing.md); ``min_thickness_mm``: thinnest wall in mm the process prints
     reliably (used by the printability check of issue 12).
     """
 
@@ -50,7 +50,12 @@ class Material:
     note: str
 
 
-_LAYER_TBD = "1.0 until issue 18 measures it per material"
+_PLA_LAYER = ("Polymaker PolyTerra PLA TDS v5.3: tensile X-Y 23.2 MPa, Z 12.2 MPa (0.53); "
+              "published FDM PLA XY 50-65 / Z 35-45 MPa (0.54-0.9); docs/printing.md")
+_PETG_LAYER = "published FDM PETG XY 44-56 / Z 25-38 MPa (0.45-0.86, mid 0.6); docs/printing.md"
+_ABS_LAYER = ("Ahn et al. 2002, Torrado Perez et al. 2015: FDM ABS bonds between roads fail "
+              "first, similar to or below PLA; docs/printing.md")
+_SLS_LAYER = "SLS parts are near-isotropic; treated as isotropic (docs/printing.md)"
 _FDM_WALL = "two perimeters of a 0.4 mm nozzle (FDM design rules: supported walls >= 0.8 mm)"
 _RESIN_WALL = "Formlabs design guide: supported walls 0.2 mm, unsupported 0.4 mm"
 _SLS_WALL = "SLS design rules (Hubs, EOS): walls >= 0.7 mm"
@@ -58,13 +63,13 @@ _SLS_WALL = "SLS design rules (Hubs, EOS): walls >= 0.7 mm"
 MATERIALS: tuple[Material, ...] = (
     Material("PLA", "PLA", "FDM", 60.0,
              "paper §6 (PLA yield 60 MPa); Prusament PLA data sheet: yield 57 ± 1 MPa",
-             1.0, _LAYER_TBD, 0.8, _FDM_WALL, "FDM PLA, ~50-65 MPa along layers"),
+             0.55, _PLA_LAYER, 0.8, _FDM_WALL, "FDM PLA, ~50-65 MPa along layers"),
     Material("PETG", "PETG", "FDM", 50.0,
              "Prusament PETG data sheet: yield 47 ± 2 MPa; FDM PETG data sheets 45-55 MPa",
-             1.0, _LAYER_TBD, 0.8, _FDM_WALL, "FDM PETG, ~45-55 MPa"),
+             0.6, _PETG_LAYER, 0.8, _FDM_WALL, "FDM PETG, ~45-55 MPa"),
     Material("ABS", "ABS", "FDM", 40.0,
              "FDM ABS data sheets (e.g. Ultimaker ABS, Prusament ASA): 35-45 MPa at yield",
-             1.0, _LAYER_TBD, 0.8, _FDM_WALL, "FDM ABS, ~35-45 MPa"),
+             0.5, _ABS_LAYER, 0.8, _FDM_WALL, "FDM ABS, ~35-45 MPa"),
     Material("RESIN", "Resin", "resin", 45.0,
              "standard SLA/DLP resins: Formlabs Grey V4 65 MPa post-cured (38 green), "
              "hobby MSLA resins 30-50 MPa; 45 MPa is a cured mid value",
@@ -72,7 +77,7 @@ MATERIALS: tuple[Material, ...] = (
              "standard SLA/DLP resin, ~40-65 MPa"),
     Material("NYLON", "Nylon (PA12)", "SLS", 48.0,
              "EOS PA 2200 (SLS PA12) data sheet: tensile strength 48 MPa",
-             1.0, _LAYER_TBD, 0.7, _SLS_WALL, "SLS PA12, ~45-50 MPa"),
+             1.0, _SLS_LAYER, 0.7, _SLS_WALL, "SLS PA12, ~45-50 MPa"),
 )
 
 _BY_KEY = {m.key: m for m in MATERIALS}

@@ -141,11 +141,14 @@ def save_stress_png(
     before=None,
     marks=None,
     dpi=90,
+    orientation=None,
 ):
     """Write a PNG: two orthographic views coloured by per-vertex stress and the chain plot.
 
     ``before``: an earlier Analysis drawn dashed in the chain plot (correction);
-    ``marks``: (k,3) points (mm) to mark on the views (e.g. FEM-tested sections).
+    ``marks``: (k,3) points (mm) to mark on the views (e.g. FEM-tested sections);
+    ``orientation``: an :class:`osteon.orientation.Orientation` drawn as a fourth panel (the
+    sphere map of the worst stress ratio by build direction).
     """
     _, plt = _mpl()
     V = np.asarray(vertices, float)
@@ -160,8 +163,13 @@ def save_stress_png(
     others = [a for a in range(3) if a != up]
     ext = V.max(0) - V.min(0)
     others.sort(key=lambda a: -ext[a])
-    fig = plt.figure(figsize=(13, 4.8), layout="constrained")
-    gs = fig.add_gridspec(1, 3, width_ratios=[1, 1, 1.35])
+    if orientation is None:
+        fig = plt.figure(figsize=(13, 4.8), layout="constrained")
+        gs = fig.add_gridspec(1, 3, width_ratios=[1, 1, 1.35])
+    else:
+        fig = plt.figure(figsize=(17.5, 4.8), layout="constrained")
+        gs = fig.add_gridspec(1, 4, width_ratios=[1, 1, 1.35, 1.3])
+        plot_orientation_map(fig.add_subplot(gs[0, 3]), orientation)
     ax1, ax2, ax3 = (fig.add_subplot(gs[0, i]) for i in range(3))
     # views: look along the shorter horizontal axis, then along the longer one
     _view(ax1, V, Fc, rgba, [others[0], up], others[1], False, "side view")
@@ -242,4 +250,48 @@ def save_stress_thumbnail(path, vertices, faces, analysis, allowable, title="", 
     if title:
         fig.suptitle(title, fontsize=8, y=0.98)
     fig.savefig(path, dpi=dpi, format="png")
+    plt.close(fig)
+
+
+def plot_orientation_map(ax, orientation, *, cmap="viridis_r"):
+    """Sphere map of the worst stress ratio over build directions (an
+    :class:`osteon.orientation.Orientation`): longitude/latitude of each sampled direction
+    coloured by its worst ratio, the best direction (star) and the model's current one (+)."""
+    d = np.asarray(orientation.directions, float)
+    r = np.asarray(orientation.ratios, float)
+    lon = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
+    lat = np.degrees(np.arcsin(np.clip(d[:, 2], -1, 1)))
+    sc = ax.scatter(lon, lat, c=r, s=4, cmap=cmap, linewidths=0)
+    for p, mark, label in ((orientation.direction, "r*", "best"),
+                           (orientation.reference_direction, "k+", "current")):
+        p = np.asarray(p, float)
+        ax.plot(np.degrees(np.arctan2(p[1], p[0])), np.degrees(np.arcsin(np.clip(p[2], -1, 1))),
+                mark, ms=10, label=f"{label}: {_ratio_at(orientation, p):.3g}")
+    ax.set_xlim(-180, 180)
+    ax.set_ylim(-90, 90)
+    ax.set_xlabel("build direction longitude (°)")
+    ax.set_ylabel("latitude (°)")
+    ax.set_title(f"worst stress ratio by build direction (Z/X = "
+                 f"{orientation.layer_strength_ratio:g})", fontsize=9)
+    ax.legend(fontsize=7, loc="lower left")
+    ax.tick_params(labelsize=7)
+    cb = ax.figure.colorbar(sc, ax=ax, fraction=0.05)
+    cb.set_label("worst σ / [σ](θ)", fontsize=8)
+    return sc
+
+
+def _ratio_at(orientation, p):
+    if np.allclose(p, orientation.direction):
+        return orientation.worst_ratio
+    return orientation.reference_ratio
+
+
+def save_orientation_png(path, orientation, title="", dpi=90):
+    """Write a PNG with the sphere map of :func:`plot_orientation_map`."""
+    _, plt = _mpl()
+    fig, ax = plt.subplots(figsize=(6.4, 3.6), layout="constrained")
+    plot_orientation_map(ax, orientation)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)

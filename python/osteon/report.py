@@ -37,14 +37,17 @@ def finite(x) -> float | None:
 
 
 def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
-               bone_scale=None) -> list[dict]:
+               bone_scale=None, stress_ratio=None, across_layers=None) -> list[dict]:
     """One row per bone that has sections, highest stress ratio first (bones whose sections
     have no finite stress last, with ``null`` stress).
 
     ``section_bone`` (S,) int, ``stress`` (S,) MPa, ``weak`` (S,) bool, ``bone_names`` (B,),
-    ``bone_scale`` (B,) or None. Row: ``bone``, ``index``, ``max_stress_mpa``, ``ratio``
-    (max stress / allowable), ``weak`` (a weak section), ``weak_sections``, ``sections``,
-    ``scale`` (the correction's cross-section scale, 1 = unchanged)."""
+    ``bone_scale`` (B,) or None; ``stress_ratio`` (S,) stress / the section's allowable
+    (FDM layers, docs/printing.md; None: stress / ``allowable_mpa``), ``across_layers`` (S,)
+    bool or None. Row: ``bone``, ``index``, ``max_stress_mpa``, ``ratio`` (the bone's largest
+    stress ratio), ``limit`` ("across layers" / "along layers" at that section), ``weak`` (a
+    weak section), ``weak_sections``, ``sections``, ``scale`` (the correction's cross-section
+    scale, 1 = unchanged)."""
     section_bone = np.asarray(section_bone, dtype=np.int64)
     stress = np.asarray(stress, dtype=np.float64)
     weak = np.asarray(weak, dtype=bool)
@@ -54,8 +57,18 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
     ok = np.isfinite(stress)
     mx = np.full(nb, -np.inf)
     np.maximum.at(mx, section_bone[ok], stress[ok])
+    ratio_s = (stress / float(allowable_mpa) if stress_ratio is None
+               else np.asarray(stress_ratio, dtype=np.float64))
+    across = (np.zeros(len(stress), bool) if across_layers is None
+              else np.asarray(across_layers, dtype=bool))
+    rmax = np.full(nb, -np.inf)
+    where = np.full(nb, -1)
+    idx = np.flatnonzero(ok & np.isfinite(ratio_s))
+    for i in idx[np.argsort(ratio_s[idx], kind="stable")]:  # ascending: last write = worst
+        rmax[section_bone[i]] = ratio_s[i]
+        where[section_bone[i]] = i
     have = np.flatnonzero(count > 0)
-    key = np.where(np.isfinite(mx[have]), -mx[have], np.inf)
+    key = np.where(np.isfinite(rmax[have]), -rmax[have], np.inf)
     rows = []
     for b in have[np.argsort(key, kind="stable")]:
         m = finite(mx[b])
@@ -63,7 +76,9 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
             "bone": bone_names[b],
             "index": int(b),
             "max_stress_mpa": m,
-            "ratio": None if m is None else m / float(allowable_mpa),
+            "ratio": None if m is None else finite(rmax[b]),
+            "limit": None if where[b] < 0 else
+            ("across layers" if across[where[b]] else "along layers"),
             "weak": bool(nweak[b] > 0),
             "weak_sections": int(nweak[b]),
             "sections": int(count[b]),
@@ -73,7 +88,8 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
 
 
 def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
-    return bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale)
+    return bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale,
+                      getattr(a, "stress_ratio", None), getattr(a, "across_layers", None))
 
 
 def section_rows(a, bone_names) -> list[dict]:
@@ -84,6 +100,9 @@ def section_rows(a, bone_names) -> list[dict]:
         return []
     n = len(a.stress)
     param = getattr(a, "section_param", None)
+    allow = getattr(a, "section_allowable", None)
+    ratio = getattr(a, "stress_ratio", None)
+    across = getattr(a, "across_layers", None)
     rows = []
     for i in range(n):
         b = int(a.section_bone[i])
@@ -100,6 +119,10 @@ def section_rows(a, bone_names) -> list[dict]:
             "stress_mpa": finite(a.stress[i]),
             "culled": bool(a.culled[i]),
             "weak": bool(a.weak[i]),
+            "allowable_mpa": finite(allow[i]) if allow is not None else None,
+            "stress_ratio": finite(ratio[i]) if ratio is not None else None,
+            "limit": None if across is None else
+            ("across layers" if across[i] else "along layers"),
         })
     return rows
 
@@ -126,7 +149,8 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     rows = _analysis_table(shown, bone_names, allowable_mpa, scale)
     if correction is None:
         weak_bones = [{"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"],
-                       "ratio": r["ratio"], "scale": r["scale"], "weak": True}
+                       "ratio": r["ratio"], "limit": r["limit"], "scale": r["scale"],
+                       "weak": True}
                       for r in rows if r["weak"]]
         before_rows = None
     else:
@@ -134,7 +158,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         before = {r["bone"]: r for r in before_rows}
         weak_bones = [
             {"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"], "ratio": r["ratio"],
-             "scale": r["scale"], "weak": r["weak"],
+             "limit": r["limit"], "scale": r["scale"], "weak": r["weak"],
              "max_stress_before_mpa": before[r["bone"]]["max_stress_mpa"]
              if r["bone"] in before else None}
             for r in rows if r["weak"] or (r["bone"] in before and before[r["bone"]]["weak"])
@@ -157,7 +181,12 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         "force_n": finite(settings.get("force_n")),
         "allowable_stress_mpa": float(allowable_mpa),
         "max_stress_mpa": max_stress,
-        "stress_ratio": None if max_stress is None else max_stress / float(allowable_mpa),
+        "stress_ratio": None if max_stress is None else
+        finite(getattr(shown, "max_stress_ratio", max_stress / float(allowable_mpa))),
+        # FDM layers (docs/printing.md): the build direction in the model's frame and the layer /
+        # in-plane strength; stress ratios use each section's angle to the build direction
+        "build_direction": [float(x) for x in getattr(shown, "build_direction", (0, 0, 1))],
+        "layer_strength_ratio": float(getattr(shown, "layer_strength_ratio", 1.0)),
         "safe_modulus_mm3": finite(shown.safe_modulus),
         "sections": len(shown.stress),
         "weak_sections": int(np.count_nonzero(shown.weak)),

@@ -24,7 +24,10 @@ class Settings:
     ``interval_mm``: mm between sections; ``held_bone``: bone name or index held at its head
     (``None`` or ``""``: the main root); ``size_mode``/``print_size_mm``: how the model's units
     become mm (front-end specific: "HEIGHT", "LARGEST", "UNITS", "X", "Y"); ``max_scale``,
-    ``max_rounds``, ``scaling``: the correction's limits and mode ("thin"/"uniform").
+    ``max_rounds``, ``scaling``: the correction's limits and mode ("thin"/"uniform");
+    ``build_direction`` (3,) the FDM build direction in the model's frame and
+    ``layer_strength_ratio`` layer / in-plane strength (1.0 isotropic, ``None`` = the material
+    preset's; docs/printing.md).
     """
 
     force_n: float
@@ -38,6 +41,20 @@ class Settings:
     max_scale: float = 3.0
     max_rounds: int = 100
     scaling: str = "thin"
+    build_direction: tuple = (0.0, 0.0, 1.0)
+    layer_strength_ratio: float | None = 1.0
+
+    def layer_ratio(self) -> float:
+        """Layer / in-plane strength used: the given one; ``None``: the material preset's (1.0
+        for a custom strength)."""
+        if self.layer_strength_ratio is not None:
+            return float(self.layer_strength_ratio)
+        if self.strength_mpa is not None and str(self.material).upper() == materials.CUSTOM:
+            return 1.0
+        try:
+            return materials.get(self.material).layer_strength_ratio
+        except ValueError:
+            return 1.0
 
     def material_and_strength(self) -> tuple[str, float]:
         """(material key, strength in MPa): the given strength, else the preset's."""
@@ -60,6 +77,8 @@ class Settings:
         d["safety_factor"] = float(self.safety_factor)
         d["held_bone"] = "" if self.held_bone is None else self.held_bone
         d["scaling"] = str(self.scaling).upper()
+        d["build_direction"] = [float(x) for x in self.build_direction]
+        d["layer_strength_ratio"] = self.layer_ratio()
         return d
 
 
@@ -68,6 +87,16 @@ def _positive(value, what: str, unit: str) -> float:
     if not (v > 0.0 and math.isfinite(v)):
         raise ValueError(f"{what} must be a positive number of {unit}, got {value}")
     return v
+
+
+def _direction(value) -> list[float]:
+    try:
+        d = [float(x) for x in value]
+    except (TypeError, ValueError):
+        d = []
+    if len(d) != 3 or not all(math.isfinite(x) for x in d) or not any(d):
+        raise ValueError(f"build direction must be three finite numbers, not all 0, got {value!r}")
+    return d
 
 
 def held_bone_index(held_bone, bone_names) -> int | None:
@@ -98,6 +127,9 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
         "allowable_stress": settings.allowable_stress_mpa(),
         "interval": _positive(settings.interval_mm, "section interval", "mm"),
         "root": held_bone_index(settings.held_bone, bone_names),
+        "build_direction": _direction(settings.build_direction),
+        "layer_strength_ratio": _positive(settings.layer_ratio(), "layer strength ratio",
+                                          "(layer / in-plane strength)"),
     }
     if correct:
         if not (float(settings.max_scale) >= 1.0):

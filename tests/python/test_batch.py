@@ -185,6 +185,7 @@ def test_cli_batch(library, tmp_path, capsys):
     petg = materials.get("PETG").strength_mpa / materials.DEFAULT_SAFETY_FACTOR
     assert {r["allowable_stress_mpa"] for r in recs if r["status"] == "ok"} == {petg}
     assert cli_main(["batch", str(lib), "--out", str(out), "--material", "cheese"]) == 2
+    assert cli_main(["batch", str(lib), "--out", str(out), "--build-direction", "0,0"]) == 2
 
 
 def test_cli_dask_without_distributed_names_the_extra(library, tmp_path, monkeypatch, capsys):

@@ -147,7 +147,8 @@ def test_correct_scaling_option_reaches_the_engine(tmp_path, scaling):
     assert rc == (0 if rep["converged"] else 1)
     m = load_model(DOG, height_mm=120.0)
     fix = osteon.correct(m.vertices, m.faces, m.skeleton, m.weights, force=40.0,
-                         allowable_stress=rep["allowable_stress_mpa"], scaling=scaling)
+                         allowable_stress=rep["allowable_stress_mpa"], scaling=scaling,
+                         layer_strength_ratio=rep["layer_strength_ratio"])
     assert np.allclose(rep["bone_scale_xz"], np.column_stack([fix.bone_scale_x, fix.bone_scale_z]),
                        rtol=1e-12)
     if scaling == "uniform":

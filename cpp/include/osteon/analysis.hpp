@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "osteon/layers.hpp"
 #include "osteon/mesh.hpp"
 #include "osteon/skeleton.hpp"
 #include "osteon/weights.hpp"
@@ -22,6 +23,11 @@ struct AnalysisOptions {
   int threads = 0;                 ///< worker threads; 0 = all cores
   bool local_cuts = true;  ///< cut near the bone first (same result, faster); false: whole planes
   bool reuse_sections = true;  ///< Analyzer::run re-cuts only sections a change can reach (exact)
+  /// FDM build direction in the model frame (any non-zero vector; default +Z) and layer strength
+  /// ratio Z/X (1 = isotropic): each section's allowable is layer_allowable() of the angle
+  /// between its normal and this direction (osteon/layers.hpp, docs/printing.md).
+  Vec3 build_direction = Vec3(0, 0, 1);
+  double layer_strength_ratio = 1.0;  ///< layer / in-plane strength; allowable_stress is in-plane
 };
 
 /// Where a section sits on its bone.
@@ -49,12 +55,16 @@ struct AnalysisResult {
   std::vector<double> moment;          ///< S bending moment M = F d, N mm
   std::vector<double> stress;          ///< S peak bending stress M / W, MPa (NaN when skipped)
   std::vector<std::uint8_t> culled;    ///< S W > safe modulus: safe for sure (drawn grey)
-  std::vector<std::uint8_t> weak;      ///< S stress > allowable stress
+  std::vector<std::uint8_t> weak;      ///< S stress > section_allowable
+  std::vector<double> section_allowable;     ///< S [sigma](theta) for the build direction, MPa
+  std::vector<double> stress_ratio;          ///< S stress / section_allowable (NaN when skipped)
+  std::vector<std::uint8_t> across_layers;   ///< S the layer (Z) strength governs the allowable
   std::vector<std::uint32_t> section_flags;  ///< S SectionFlag bits
   double max_moment = 0.0;                   ///< M_gmax, N mm
   double safe_modulus = 0.0;                 ///< W_k = M_gmax / [sigma], mm^3
   double max_stress = 0.0;                   ///< largest section stress, MPa
-  int weakest_section = -1;                  ///< index of the largest stress, -1 if none
+  double max_stress_ratio = 0.0;             ///< largest stress_ratio
+  int weakest_section = -1;                  ///< index of the largest stress_ratio, -1 if none
   int held_bone = -1;                        ///< bone the object was held by
   std::vector<double> vertex_stress;         ///< V stress interpolated along the vertex's bone, MPa
   std::vector<std::uint8_t> vertex_culled;   ///< V vertex lies among culled sections

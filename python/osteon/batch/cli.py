@@ -51,6 +51,10 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--interval", type=float, default=2.0, metavar="MM",
                    help="distance in mm between sections along each bone (default 2)")
     p.add_argument("--root", metavar="BONE", help="bone (name or index) held at its head")
+    p.add_argument("--build-direction", default="0,0,1", metavar="X,Y,Z",
+                   help="build (layer stacking) direction in each model's frame (default +Z)")
+    p.add_argument("--layer-ratio", type=float, metavar="R",
+                   help="layer / in-plane strength (default: the material preset's)")
     p.add_argument("--correct", action="store_true",
                    help="also thicken weak bones and write each corrected mesh")
     p.add_argument("--max-scale", type=float, default=3.0, metavar="S",
