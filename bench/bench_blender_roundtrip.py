@@ -42,7 +42,7 @@ import make_sample_rig
 import osteon
 import osteon_blender
 from osteon_blender import bridge, core
-from osteon_blender.ops import common
+from osteon_blender import service as common
 
 
 def main(argv: list[str]) -> int:

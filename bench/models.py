@@ -1,4 +1,4 @@
-"""Benchmark models: real rigged models from ../shared/data, scaled to a 120 mm print, and
+"""Benchmark models: real rigged models from tests/data (or $OSTEON_DATA), scaled to a 120 mm print, and
 midpoint-subdivided copies (weights interpolated) for the ~100k and 1M+ face sizes."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import osteon
 from osteon.io import load_model
 from scipy import sparse
 
-DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
+DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[1] / "tests" / "data"))
 
 
 def subdivide(vertices: np.ndarray, faces: np.ndarray, weights):

@@ -8,8 +8,13 @@
 #  3. Debian's Blender imports the engine from /usr/local/lib/python3.X/dist-packages, which is
 #     on its sys.path: `pip install --no-deps --target` of the wheel there.
 #  4. the bpy 4.5 wheel in its own venv (.venv-bpy: bpy==4.5.*, pytest, scipy, osteon wheel).
+#  5. Blender 5.1+ embeds Python 3.13: a cp313 osteon wheel built with a Python 3.13
+#     (OSTEON_PY313, else python3.13 on PATH, else pyenv's 3.13) in a build venv
+#     (.venv-py313: scikit-build-core, pybind11, cmake, ninja), and the bpy 5.2 wheel in its own
+#     venv (.venv-bpy52: bpy==5.2.*, pytest, scipy, the cp313 osteon wheel).
 # Env: OSTEON_PYTHON (builds the wheel; default .venv/bin/python), OSTEON_BPY_VENV,
-#      OSTEON_BLENDER_SITE (where Debian's Blender gets the engine), OSTEON_SKIP_BPY=1.
+#      OSTEON_BPY52_VENV, OSTEON_PY313, OSTEON_BLENDER_SITE (where Debian's Blender gets the
+#      engine), OSTEON_SKIP_BPY=1 (skips 4 and 5).
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$ROOT"
@@ -78,4 +83,42 @@ if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
     "$BPY_VENV/bin/python" -m pip install -q "bpy==4.5.*" pytest scipy
   "$BPY_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL"
   log "bpy wheel ready in $BPY_VENV"
+fi
+
+# 5. Python 3.13: cp313 engine wheel + bpy 5.2 wheel ------------------------------------------
+if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
+  PY313="${OSTEON_PY313:-}"
+  if [ -z "$PY313" ]; then
+    PY313="$(command -v python3.13 || true)"
+    if [ -z "$PY313" ]; then
+      PY313="$(ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.13*/bin/python 2>/dev/null | sort -V | tail -1 || true)"
+    fi
+  fi
+  if [ -z "$PY313" ] || [ ! -x "$PY313" ]; then
+    log "no Python 3.13 found (set OSTEON_PY313; e.g. pyenv install 3.13)"; exit 1
+  fi
+  BUILD313="$ROOT/.venv-py313"
+  if [ ! -x "$BUILD313/bin/python" ]; then
+    log "creating the cp313 build venv $BUILD313 with $("$PY313" --version)"
+    "$PY313" -m venv "$BUILD313"
+  fi
+  "$BUILD313/bin/python" -c 'import scikit_build_core, pybind11, cmake, ninja' >/dev/null 2>&1 ||
+    "$BUILD313/bin/python" -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12" cmake ninja
+  WHEEL313="$(ls -t dist/osteon-*-cp313-*.whl 2>/dev/null | head -1 || true)"
+  if [ -z "$WHEEL313" ] || [ -n "$(newer_than "$WHEEL313" cpp bindings python CMakeLists.txt pyproject.toml)" ]; then
+    log "building the cp313 osteon wheel"
+    "$BUILD313/bin/python" -m pip wheel -q "$ROOT" --no-deps --no-build-isolation -w dist \
+      -C "build-dir=$ROOT/build/wheel-blender-{wheel_tag}"
+    WHEEL313="$(ls -t dist/osteon-*-cp313-*.whl | head -1)"
+  fi
+  log "cp313 engine wheel: $WHEEL313"
+  BPY52_VENV="${OSTEON_BPY52_VENV:-$ROOT/.venv-bpy52}"
+  if [ ! -x "$BPY52_VENV/bin/python" ]; then
+    log "creating $BPY52_VENV"
+    "$PY313" -m venv "$BPY52_VENV"
+  fi
+  "$BPY52_VENV/bin/python" -c 'import bpy, pytest, scipy' >/dev/null 2>&1 ||
+    "$BPY52_VENV/bin/python" -m pip install -q "bpy==5.2.*" pytest scipy
+  "$BPY52_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL313"
+  log "bpy 5.2 wheel ready in $BPY52_VENV"
 fi

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test: C++ unit tests (GoogleTest via ctest), the Python suite on the installed
 # wheel (engine, readers, CLI, FEM cross-check, robustness, hypothesis), the Blender add-on tests
-# in Debian's Blender 3.4 and the bpy 4.5 wheel, a libFuzzer smoke run of the slicer, and the
+# in Debian's Blender 3.4, the bpy 4.5 wheel (Python 3.11) and the bpy 5.2 wheel (Python 3.13;
+# scripts/blender_tests.sh builds the cp313 engine wheel for it), a libFuzzer smoke run of the slicer, and the
 # C++ tests + Python suite again under AddressSanitizer + UndefinedBehaviorSanitizer.
 # Installs what it needs first (scripts/setup.sh). OSTEON_QUICK=1 skips fuzzing and sanitizers.
 set -euo pipefail
@@ -19,7 +20,7 @@ echo "== Lint (ruff)"
 echo "== Python tests"
 .venv/bin/python -m pytest tests/python -q
 
-echo "== Blender add-on tests"
+echo "== Blender add-on tests (Debian Blender 3.4.1, bpy 4.5, bpy 5.2)"
 bash scripts/blender_tests.sh
 
 if [ "${OSTEON_QUICK:-0}" != 1 ]; then

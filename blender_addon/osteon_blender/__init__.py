@@ -22,7 +22,7 @@ bl_info = {
     "category": "Mesh",
 }
 
-_classes = ui.classes + ops.classes + live.classes + live_panel.classes
+_classes = ui.classes + ops.classes + live_panel.classes
 
 
 _atexit_hooked = False
@@ -56,7 +56,6 @@ def unregister():
     for cls in reversed(_classes):
         if getattr(cls, "is_registered", True):
             bpy.utils.unregister_class(cls)
-    from .ops import common
+    from . import state
 
-    common.LAST.clear()
-    common.WEIGHTS.clear()
+    state.clear()

@@ -27,13 +27,11 @@ from mathutils import Vector
 if __package__ in (None, ""):  # run as a script: make the package importable
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     import osteon_blender
-    from osteon_blender import bridge, core
+    from osteon_blender import bridge, core, service
     from osteon_blender.core import OsteonError
-    from osteon_blender.ops import common
 else:
-    from . import bridge, core
+    from . import bridge, core, service
     from .core import OsteonError
-    from .ops import common
 
     osteon_blender = sys.modules[__package__]
 
@@ -267,14 +265,14 @@ def run(argv: list[str]) -> int:
         o.select_set(o == obj)
     context.view_layer.objects.active = obj
     apply_settings(scene.osteon, a)
-    report = common.run_correct(context) if a.correct else common.run_analyze(context)
+    report = service.run_correct(context) if a.correct else service.run_analyze(context)
     report["run"].update(seconds=time.perf_counter() - t0,
                          blender_version=bpy.app.version_string, blend_file=bpy.data.filepath)
     if a.report:
         os.makedirs(os.path.dirname(os.path.abspath(a.report)), exist_ok=True)
         with open(a.report, "w", encoding="utf-8") as fh:
             fh.write(core.report.to_json(report, indent=2))
-    print(common.summary(report))
+    print(service.summary(report))
     for w in report.get("warnings", []):
         print(f"osteon: warning: {w}", file=sys.stderr)
     if a.png:

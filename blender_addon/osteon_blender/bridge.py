@@ -24,6 +24,10 @@ from .core import OsteonError
 LAYER = "osteon_stress"
 SAVED_POSE_KEY = "osteon_saved_pose"
 
+# A deform bone shorter than this fraction of the skeleton's size has no usable axis.  Blender
+# up to 4.x deletes zero-length bones when leaving Edit Mode; 5.2 keeps them (length ~2e-6).
+MIN_BONE_LENGTH_REL = 1e-5
+
 # modifiers that only move vertices (everything else may change the vertex count)
 _DEFORM_ONLY = {
     "ARMATURE", "CAST", "CURVE", "DISPLACE", "HOOK", "LAPLACIANDEFORM", "LAPLACIANSMOOTH",
@@ -206,9 +210,25 @@ def skeleton_arrays(arm) -> SkeletonArrays:
         if anc is not None:
             parents[i] = idx[anc.name]
     mw = _matrix_np(arm.matrix_world)
+    head_w, tail_w = _transform(head, mw), _transform(tail, mw)
+    _check_bone_lengths(arm.name, deform, head_w, tail_w)
     x_world = x_axes @ mw[:3, :3].T
     x_world /= np.linalg.norm(x_world, axis=1, keepdims=True)
-    return SkeletonArrays(deform, _transform(head, mw), _transform(tail, mw), parents, x_world)
+    return SkeletonArrays(deform, head_w, tail_w, parents, x_world)
+
+
+def _check_bone_lengths(arm_name: str, names: list[str], head: np.ndarray,
+                        tail: np.ndarray) -> None:
+    """OsteonError naming the first deform bone whose (posed, world) length is below
+    ``MIN_BONE_LENGTH_REL`` times the skeleton's largest extent (Blender units)."""
+    length = np.linalg.norm(tail - head, axis=1)
+    size = float(np.ptp(np.concatenate([head, tail]), axis=0).max())
+    short = np.flatnonzero(~(length > MIN_BONE_LENGTH_REL * size))
+    if short.size:
+        i = int(short[0])
+        raise OsteonError(f"Bone '{names[i]}' of armature '{arm_name}' has (nearly) zero length "
+                          f"({length[i]:.3g} Blender units): a bone needs a head and a tail "
+                          f"apart to have an axis; delete or lengthen it")
 
 
 # --------------------------------------------------------------------------- weights

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import core
+from . import core, state
 
 WIDTH = 2.0        # px, ordinary sections
 WEAK_WIDTH = 5.0   # px, weak sections
@@ -213,31 +213,26 @@ def compute_outlines(analysis, vertices_mm: np.ndarray, faces: np.ndarray,
 
 # --------------------------------------------------------------------------- state
 
-# scene name -> (the analysis object outlined, Outlines)
-_OUTLINES: dict[str, tuple] = {}
-# scene name -> the operator result (common.LAST) analysis already looked at
-_SEEN_LAST: dict[str, object] = {}
+# per scene (state.SceneState): ``outlines`` = (the analysis outlined, Outlines) and
+# ``outlined_last`` = the operator result's analysis already looked at
 _handle = None
 _batches: dict = {"version": None}
 _pending_refresh: set = set()
 
 
 def set_outlines(scene_name: str, analysis, outlines: Outlines | None) -> None:
-    if outlines is None:
-        _OUTLINES.pop(scene_name, None)
-    else:
-        _OUTLINES[scene_name] = (analysis, outlines)
+    state.of(scene_name).outlines = None if outlines is None else (analysis, outlines)
     bridge_redraw()
 
 
 def get_outlines(scene_name: str) -> Outlines | None:
-    entry = _OUTLINES.get(scene_name)
-    return entry[1] if entry else None
+    st = state.get(scene_name)
+    return st.outlines[1] if st is not None and st.outlines else None
 
 
 def clear() -> None:
-    _OUTLINES.clear()
-    _SEEN_LAST.clear()
+    for st in state.all_states():
+        st.outlines = st.outlined_last = None
     _pending_refresh.clear()
     _batches.clear()
     _batches["version"] = None
@@ -251,15 +246,14 @@ def bridge_redraw() -> None:
 
 
 def refresh_from_last(scene_name: str):
-    """Outlines of the Analyze/Correct operators' last result (``ops.common.LAST``)."""
+    """Outlines of the Analyze/Correct operators' last result (the scene state's ``last``)."""
     _pending_refresh.discard(scene_name)
-    from .ops import common
-
-    entry = common.LAST.get(scene_name)
+    st = state.get(scene_name)
+    entry = st.last if st is not None else None
     if not entry:
         return
     analysis, inp = entry["analysis"], entry["inputs"]
-    _SEEN_LAST[scene_name] = analysis
+    st.outlined_last = analysis
     try:
         out = compute_outlines(analysis, inp.vertices_mm, inp.faces, inp.skeleton.parents,
                                inp.mm_per_unit)
@@ -353,10 +347,9 @@ def _draw():
 
 def _maybe_schedule_refresh(scene_name: str) -> None:
     """A new Analyze/Correct result: compute its outlines in a one-shot timer, not here."""
-    from .ops import common
-
-    entry = common.LAST.get(scene_name)
-    if not entry or _SEEN_LAST.get(scene_name) is entry["analysis"]:
+    st = state.get(scene_name)
+    entry = st.last if st is not None else None
+    if not entry or st.outlined_last is entry["analysis"]:
         return
     if scene_name in _pending_refresh:
         return

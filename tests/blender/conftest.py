@@ -19,11 +19,24 @@ for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
     if p not in sys.path:
         sys.path.insert(0, p)
 
+# Importing bpy 5.2 sets OCIO (its own colour config) in the C environment, which the child
+# inherits and which makes Debian's Blender 3.4.1 abort: child Blenders get blender_env().
+_OCIO_BEFORE = os.environ.get("OCIO")
 bpy = pytest.importorskip("bpy")
 
-DATA = os.environ.get("OSTEON_DATA", os.path.join(os.path.dirname(ROOT), "shared", "data"))
-if not os.path.isdir(DATA):
-    DATA = "/work/shared/data"
+
+def blender_env(**extra) -> dict:
+    """Environment for a child Blender process: os.environ without an OCIO that importing
+    bpy set (a user's own OCIO is kept), plus ``extra``."""
+    env = dict(os.environ, **extra)
+    if _OCIO_BEFORE is None:
+        env.pop("OCIO", None)
+    else:
+        env["OCIO"] = _OCIO_BEFORE
+    return env
+
+# test models live in the repository (tests/data/SOURCES.md); OSTEON_DATA may override
+DATA = os.environ.get("OSTEON_DATA", os.path.join(ROOT, "tests", "data"))
 
 
 @pytest.fixture(scope="session")
@@ -61,7 +74,7 @@ def sample(addon):
 
 
 def import_rignet(model: str):
-    """Import a RigNet FBX from shared data into an empty scene -> (mesh, armature)."""
+    """Import a RigNet FBX from tests/data into an empty scene -> (mesh, armature)."""
     import addon_utils
 
     path = os.path.join(DATA, "RigNet", f"{model}_ori.fbx")

@@ -4,8 +4,8 @@ import bpy
 import numpy as np
 import pytest
 from conftest import activate, import_rignet
-from osteon_blender import bridge, core
-from osteon_blender.ops import common
+from osteon_blender import bridge, compat, core
+from osteon_blender import service as common
 
 
 def _layer(obj):
@@ -96,7 +96,7 @@ def test_clicking_a_weak_bone_row_selects_the_bone(sample):
         s.weak_bones_index = i
         name = s.weak_bones[i].name
         assert arm.data.bones.active.name == name
-        assert [b.name for b in arm.data.bones if b.select] == [name]
+        assert [b.name for b in arm.data.bones if compat.bone_selected(arm, b.name)] == [name]
     assert bpy.ops.osteon.select_bone(bone="forearm.L") == {"FINISHED"}
     assert arm.data.bones.active.name == "forearm.L"
 

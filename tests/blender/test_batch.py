@@ -8,7 +8,7 @@ import subprocess
 import bpy
 import numpy as np
 import pytest
-from conftest import ROOT
+from conftest import ROOT, blender_env
 from osteon_blender import batch, bridge
 
 BATCH = os.path.join(ROOT, "blender_addon", "osteon_blender", "batch.py")
@@ -75,7 +75,7 @@ def _blender():
 @pytest.mark.skipif(not _blender(), reason="no Blender binary to run the batch command with")
 def test_batch_command_exit_codes(tmp_path):
     exe = _blender()
-    env = dict(os.environ)
+    env = blender_env()
     bad = subprocess.run([exe, "-b", "--factory-startup", "--python", BATCH, "--",
                           "--report", str(tmp_path / "r.json")], check=False,
                          capture_output=True, text=True, env=env, timeout=300)
@@ -86,7 +86,7 @@ def test_batch_command_exit_codes(tmp_path):
     build = subprocess.run([exe, "-b", "--factory-startup", "--python",
                             os.path.join(ROOT, "scripts", "make_sample_rig.py"), "--",
                             "--out", str(blend)],
-                           check=False, capture_output=True, text=True, timeout=300)
+                           check=False, capture_output=True, text=True, env=env, timeout=300)
     assert build.returncode == 0, build.stderr
     ok = subprocess.run([exe, "-b", str(blend), "--python", BATCH, "--",
                          "--report", str(tmp_path / "r.json")], check=False,

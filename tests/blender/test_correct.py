@@ -4,7 +4,7 @@ import bpy
 import numpy as np
 import pytest
 from osteon_blender import bridge
-from osteon_blender.ops import common
+from osteon_blender import service as common
 
 
 def _eval(obj):

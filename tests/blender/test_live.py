@@ -223,7 +223,7 @@ def test_overlay_outlines_of_the_analyze_button(sample, engine):
     obj, _arm = sample
     activate(obj)
     assert bpy.ops.osteon.analyze() == {"FINISHED"}
-    from osteon_blender.ops import common
+    from osteon_blender import service as common
 
     overlay.refresh_from_last(bpy.context.scene.name)
     out = overlay.get_outlines(bpy.context.scene.name)

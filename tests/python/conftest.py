@@ -15,11 +15,13 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parents[1] / "bench"))
 
-DATA = Path(os.environ.get("OSTEON_DATA", HERE.parents[2] / "shared" / "data"))
+# The test models live in the repository (tests/data, origins and licences in its SOURCES.md);
+# OSTEON_DATA may point elsewhere (a folder with the same layout).
+DATA = Path(os.environ.get("OSTEON_DATA", HERE.parent / "data"))
 
 
 @pytest.fixture(scope="session")
 def data_dir():
     if not DATA.is_dir():
-        pytest.fail(f"shared data not found at {DATA} (set OSTEON_DATA)")
+        pytest.fail(f"test data not found at {DATA} (tests/data, or set OSTEON_DATA)")
     return DATA

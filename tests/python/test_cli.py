@@ -3,19 +3,16 @@
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 from osteon.cli import DEFAULT_SAFETY_FACTOR, MATERIALS, main
 
-DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
-if not DATA.is_dir():
-    DATA = Path("/work/shared/data")
 ARM = DATA / "libigl-tutorial-data" / "arm.obj"
 DOG = DATA / "RigNet" / "2982_ori.obj"
-needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"shared data folder {DATA} absent")
+needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"test data folder {DATA} absent")
 
 
 def _png_ok(path):
@@ -189,7 +186,7 @@ def test_help(capsys):
 )
 def test_clean_errors(argv, needle, capsys):
     if not DATA.is_dir() and str(ARM) in argv:
-        pytest.skip("shared data absent")
+        pytest.skip("test data absent")
     rc = main(argv)
     err = capsys.readouterr().err
     assert rc == 2

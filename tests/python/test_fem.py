@@ -135,19 +135,11 @@ def test_read_frd(tmp_path):
 def test_validate_fem_cli_on_arm(tmp_path, capsys):
     """`osteon validate --fem` end to end on a real closed model (one section, ~20 s)."""
     import json
-    import os
-    from pathlib import Path
 
+    from conftest import DATA
     from osteon.cli import main
 
-    data = Path(
-        os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[3] / "shared" / "data")
-    )
-    if not data.is_dir():
-        data = Path("/work/shared/data")
-    arm = data / "libigl-tutorial-data" / "arm.obj"
-    if not arm.is_file():
-        pytest.skip("shared data absent")
+    arm = DATA / "libigl-tutorial-data" / "arm.obj"
     js, png = tmp_path / "v.json", tmp_path / "v.png"
     rc = main(
         ["validate", str(arm), "--fem", "--sections", "1", "--json", str(js), "--png", str(png)]

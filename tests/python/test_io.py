@@ -1,13 +1,13 @@
-"""Readers on the real models in ../shared/data (counts, joint trees, weights) and round trips."""
+"""Readers on the real models in tests/data (counts, joint trees, weights) and round trips."""
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import DATA
 from osteon.io import (
     RiggedModel,
     load_model,
@@ -21,15 +21,12 @@ from osteon.io import (
 from osteon.io.gltf import weld
 from osteon.io.rignet import read_rignet_rig
 
-DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
-if not DATA.is_dir():
-    DATA = Path("/work/shared/data")
 LIBIGL = DATA / "libigl-tutorial-data"
 HIS = DATA / "Hyperspectral-Inverse-Skinning"
 RIGNET = DATA / "RigNet"
 FOX = DATA / "glTF-Sample-Models" / "Fox.glb"
 
-needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"shared data folder {DATA} absent")
+needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"test data folder {DATA} absent")
 
 
 def _count(path, prefix):

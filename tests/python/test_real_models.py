@@ -1,4 +1,4 @@
-"""Every closed rigged model of ../shared/data analyses with finite results (SPEC §9)."""
+"""Every closed rigged model of tests/data analyses with finite results (SPEC §9)."""
 
 import numpy as np
 import osteon

@@ -1,6 +1,6 @@
 import bpy
 
-from . import common
+from .. import service
 from ._base import OsteonOperator
 
 
@@ -12,4 +12,4 @@ class OSTEON_OT_analyze(OsteonOperator, bpy.types.Operator):
     bl_label = "Analyze"
 
     def run(self, context):
-        return common.summary(common.run_analyze(context, progress=self.progress))
+        return service.summary(service.run_analyze(context, progress=self.progress))

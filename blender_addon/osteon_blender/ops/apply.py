@@ -1,6 +1,6 @@
 import bpy
 
-from . import common
+from .. import service
 from ._base import OsteonOperator
 
 
@@ -15,5 +15,5 @@ class OSTEON_OT_apply(OsteonOperator, bpy.types.Operator):
         return context.window_manager.invoke_confirm(self, event)
 
     def run(self, context):
-        report = common.run_apply(context)
-        return "osteon: correction applied to the mesh; " + common.summary(report)
+        report = service.run_apply(context)
+        return "osteon: correction applied to the mesh; " + service.summary(report)

@@ -1,6 +1,6 @@
 import bpy
 
-from . import common
+from .. import service
 from ._base import OsteonOperator
 
 
@@ -12,7 +12,7 @@ class OSTEON_OT_correct(OsteonOperator, bpy.types.Operator):
     bl_label = "Correct"
 
     def run(self, context):
-        report = common.run_correct(context, progress=self.progress)
+        report = service.run_correct(context, progress=self.progress)
         c = report["correction"]
         scaled = ", ".join(f"{n} x{s:.2f}" for n, s in sorted(c["bone_scale"].items()))
         state = "converged" if c["converged"] else "NOT converged (see weak bones)"

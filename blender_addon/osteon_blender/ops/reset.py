@@ -1,6 +1,6 @@
 import bpy
 
-from . import common
+from .. import service
 from ._base import OsteonOperator
 
 
@@ -11,5 +11,5 @@ class OSTEON_OT_reset(OsteonOperator, bpy.types.Operator):
     bl_label = "Reset"
 
     def run(self, context):
-        changed = common.run_reset(context)
+        changed = service.run_reset(context)
         return "osteon: restored" if changed else "osteon: nothing to reset"

@@ -1,6 +1,6 @@
 import bpy
 
-from .. import bridge
+from .. import bridge, compat
 from ..core import OsteonError
 from ._base import OsteonOperator
 
@@ -12,8 +12,8 @@ def select_bone(context, arm, name: str) -> None:
     if bone is None:
         raise OsteonError(f"Armature '{arm.name}' has no bone '{name}'")
     for b in bones:
-        b.select = b.select_head = b.select_tail = False
-    bone.select = bone.select_head = bone.select_tail = True
+        compat.set_bone_selected(arm, b.name, False)
+    compat.set_bone_selected(arm, name, True)
     bones.active = bone
 
 

@@ -1,3 +1,3 @@
-from . import panel, properties
+from . import live_properties, panel, properties
 
-classes = properties.classes + panel.classes
+classes = properties.classes + live_properties.classes + panel.classes

@@ -20,7 +20,7 @@ examples:
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
-    from ..cli import MATERIALS
+    from ..cli.parser import MATERIALS
 
     p = sub.add_parser(
         "batch",
@@ -80,11 +80,11 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
 def settings_from_args(args):
     """The batch settings: the shared Settings built as ``analyze`` builds them, plus the
     batch's own options."""
-    from ..cli import _check, _settings
+    from ..cli.common import check, settings_from_args
     from .settings import BatchSettings
 
-    shared = _settings(args)
-    _check(shared, correct=args.correct)  # errors name the option
+    shared = settings_from_args(args)
+    check(shared, correct=args.correct)  # errors name the option
     return BatchSettings(settings=shared, correct=args.correct, png=not args.no_png,
                          allow_open=args.allow_open)
 

@@ -1,5 +1,6 @@
-"""Shared steps of the operators and the batch script: gather the inputs from
-Blender (through the bridge), call the engine, publish the results.
+"""The add-on's service module: the steps behind the operators and the batch script.
+Gather the inputs from Blender (through the bridge), call the engine, publish the
+results (stress layer, sidebar list, the scene's state in ``state``).
 
 Nothing here writes to Blender until the engine has answered, so a failing
 operator leaves the scene as it was."""
@@ -11,13 +12,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import bridge, core
-from ..core import OsteonError
+from . import bridge, core, state
+from .core import OsteonError
 
-# last results per scene (by scene name): the report dict and the Analysis, for the
-# batch script, the UI and the coming live mode / overlay (issue 7)
-LAST: dict[str, dict] = {}
-WEIGHTS = bridge.WeightCache()
+# read-only view: scene name -> the last result (report, Analysis, inputs, correction),
+# kept in the scene's state object
+LAST = state.LAST
 
 
 @dataclass
@@ -43,7 +43,7 @@ def gather(context, use_weight_cache: bool = False, mm_per_unit: float | None = 
     obj, arm = bridge.find_target(context)
     sk = bridge.skeleton_arrays(arm)
     params = core.engine_params(s, arm, sk.names)
-    csr = (WEIGHTS.get(obj, sk.names) if use_weight_cache
+    csr = (state.of(context.scene).weights.get(obj, sk.names) if use_weight_cache
            else bridge.vertex_weights_csr(obj, sk.names))
     t1 = time.perf_counter()
     depsgraph = context.evaluated_depsgraph_get()
@@ -114,8 +114,8 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
     s.sections = report["sections"]
     s.weak_sections = report["weak_sections"]
     s.converged = report["converged"]
-    LAST[context.scene.name] = {"report": report, "analysis": analysis, "inputs": inp,
-                                "correction": correction}
+    state.of(context.scene).last = {"report": report, "analysis": analysis, "inputs": inp,
+                                    "correction": correction}
     return report
 
 
@@ -127,7 +127,9 @@ def clear_results(context):
     s.max_stress_mpa = 0.0
     s.sections = 0
     s.weak_sections = 0
-    LAST.pop(context.scene.name, None)
+    st = state.get(context.scene)
+    if st is not None:
+        st.last = None
 
 
 def summary(report: dict) -> str:
@@ -235,5 +237,5 @@ def run_apply(context) -> dict:
     co = bridge.bake_scales_into_mesh(obj, arm, ratios, sk.names, csr)
     bridge.set_local_positions(obj.data, co)
     bridge.restore_pose(context, arm)
-    WEIGHTS.clear()
+    state.of(context.scene).weights.clear()
     return run_analyze(context)

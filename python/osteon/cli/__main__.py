@@ -1,0 +1,7 @@
+"""``python -m osteon.cli``."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

@@ -1,0 +1,70 @@
+"""``osteon analyze``: section stresses, weak bones, the report and the picture."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from . import common, orient
+
+
+def analyze_model(model, settings, source):
+    """Analyse a read model (``osteon.io.RiggedModel``, mm) with the settings
+    (:class:`osteon.settings.Settings`) -> (Analysis, report dict, seconds). ``source`` names
+    the model in the report (its file)."""
+    a, secs = common.run_analysis(settings, model)
+    return a, common.report_of(source, model, settings, a, secs), secs
+
+
+def cmd_analyze(args, out):
+
+    prog = common.Progress(["reading model", "analysing", "writing outputs"], args.quiet)
+    try:
+        settings = common.settings_from_args(args)
+        common.check(settings)
+        material, allowable = settings.material_and_strength()[0], settings.allowable_stress_mpa()
+        model = common.load_model_of(args)
+        prog.next()
+        a, rep, secs = analyze_model(model, settings, args.model)
+        best = orient.best_orientation_of(args, model, a) if (args.orient or args.orient_out) \
+            else None
+        if best is not None:
+            rep["orientation"] = orient.orientation_json(best)
+        prog.next()
+        if args.json:
+            common.write_json(args.json, rep)
+        if args.png:
+            common.save_png(
+                args,
+                model,
+                a,
+                allowable,
+                title=f"{Path(args.model).name}: F = {args.force:g} N, {material} "
+                f"[σ] = {allowable:g} MPa",
+                orientation=best,
+            )
+        prog.next()
+    finally:
+        prog.close()
+    if not args.quiet:
+        print(
+            f"{Path(args.model).name}: {len(model.vertices)} vertices, {len(model.faces)} "
+            f"faces, {model.n_bones} bones, size {args.height_mm:g} mm",
+            file=out,
+        )
+        print(
+            f"{len(a.stress)} sections in {1000 * secs:.1f} ms; max stress "
+            f"{a.max_stress:.2f} MPa; {int(np.sum(a.weak))} weak, {int(np.sum(a.culled))} "
+            "culled (safe for sure)",
+            file=out,
+        )
+        print(common.format_table(common.bone_table(a, args.top), allowable,
+                                  layer_ratio=a.layer_strength_ratio), file=out)
+        if best is not None:
+            print("best print orientations:", file=out)
+            print(orient.orientation_table(best), file=out)
+            if args.orient_out:
+                print(f"model turned to the best orientation written to {args.orient_out}",
+                      file=out)
+    return 0

@@ -1,0 +1,211 @@
+"""What the commands share: options -> settings, reading the model, running the engine, the
+report, the terminal table, the picture, the progress bar. Units: mm, N, MPa."""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from .. import materials
+from ..report import bone_table as _bone_rows
+from ..report import build_report, to_json
+from ..settings import Settings, engine_arguments
+
+
+class CliError(Exception):
+    pass
+
+
+def settings_from_args(args) -> Settings:
+    """The command's options as the shared :class:`osteon.settings.Settings`."""
+    given = args.strength_mpa is not None
+    return Settings(
+        force_n=args.force,
+        interval_mm=args.interval,
+        material=materials.CUSTOM if given else args.material,
+        strength_mpa=args.strength_mpa,
+        safety_factor=args.safety_factor,
+        held_bone=args.root,
+        size_mode={"longest": "LARGEST", "z": "HEIGHT"}.get(args.axis, args.axis.upper()),
+        print_size_mm=args.height_mm,
+        max_scale=getattr(args, "max_scale", 3.0),
+        max_rounds=getattr(args, "max_rounds", 100),
+        scaling=getattr(args, "scaling", None) or _default_scaling(),
+        build_direction=_build_direction(getattr(args, "build_direction", "0,0,1")),
+        layer_strength_ratio=getattr(args, "layer_ratio", None),  # None: the material preset's
+    )
+
+
+def _build_direction(text) -> tuple:
+    try:
+        d = tuple(float(x) for x in str(text).split(","))
+    except ValueError:
+        d = ()
+    if len(d) != 3 or not np.all(np.isfinite(d)) or not np.linalg.norm(d) > 0:
+        raise ValueError(f"--build-direction must be three numbers X,Y,Z, not all 0, got {text!r}")
+    return d
+
+
+def _default_scaling() -> str:
+    import osteon
+
+    return osteon.DEFAULT_SCALING
+
+
+class Progress:
+    """A stage bar on stderr (tqdm), silent when quiet or not a terminal."""
+
+    def __init__(self, stages, quiet):
+        self.bar = None
+        if not quiet:
+            try:
+                from tqdm import tqdm
+
+                self.bar = tqdm(
+                    total=len(stages),
+                    desc=stages[0],
+                    unit="step",
+                    leave=False,
+                    disable=None,
+                    file=sys.stderr,
+                )
+            except ImportError:
+                self.bar = None
+        self.stages = stages
+        self.k = 0
+
+    def next(self, note=None):
+        self.k += 1
+        if self.bar is not None:
+            self.bar.update(1)
+            if self.k < len(self.stages):
+                self.bar.set_description(note or self.stages[self.k])
+
+    def write(self, msg):
+        if self.bar is not None:
+            self.bar.set_description(msg[:60])
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
+def load_model_of(args):
+    from ..io import load_model
+
+    axis = None if args.axis == "longest" else args.axis
+    return load_model(
+        args.model,
+        skeleton=args.skeleton,
+        weights=args.weights,
+        height_mm=args.height_mm,
+        axis=axis,
+    )
+
+
+def bone_table(analysis, top=10, scales=None):
+    """Rows (worst first) of per-bone results (:func:`osteon.report.bone_table`)."""
+    rows = _bone_rows(analysis.section_bone, analysis.stress, analysis.weak,
+                      analysis.bone_names, analysis.allowable_stress, scales,
+                      analysis.stress_ratio, analysis.across_layers)
+    return [r for r in rows if r["max_stress_mpa"] is not None][:top]
+
+
+def format_table(rows, allowable, scales=False, layer_ratio=1.0):
+    head = f"{'bone':<28} {'max σ MPa':>10} {'σ/[σ]':>7} {'weak':>9}"
+    if scales:
+        head += f" {'scale':>6}"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        flag = "  WEAK" if r["ratio"] > 1 else ""
+        if flag and layer_ratio != 1.0:
+            flag += f" ({r['limit']})"
+        line = (
+            f"{r['bone'][:28]:<28} {r['max_stress_mpa']:>10.2f} {r['ratio']:>7.2f} "
+            f"{r['weak_sections']:>4}/{r['sections']:<4}"
+        )
+        if scales:
+            line += f" {r['scale']:>6.3f}"
+        lines.append(line + flag)
+    note = f"(allowable stress [σ] = {allowable:g} MPa"
+    if layer_ratio != 1.0:
+        note += (f" along layers, {layer_ratio * allowable:g} MPa across layers; "
+                 "σ/[σ] uses each section's angle to the build direction")
+    lines.append(note + ")")
+    return "\n".join(lines)
+
+
+#: the shared checks name a setting; the CLI names its option
+_OPTIONS = {"force": "--force", "section interval": "--interval",
+            "material strength": "--strength-mpa", "safety factor": "--safety-factor",
+            "max scale": "--max-scale", "max rounds": "--max-rounds", "Held bone": "--root",
+            "layer strength ratio": "--layer-ratio", "build direction": "--build-direction"}
+
+
+def _arguments(settings: Settings, bone_names, correct: bool) -> dict:
+    try:
+        return engine_arguments(settings, bone_names, correct=correct)
+    except ValueError as e:
+        msg = str(e)
+        opt = next((o for w, o in _OPTIONS.items() if msg.startswith(w)), None)
+        raise ValueError(f"{opt}: {msg}" if opt else msg) from None
+
+
+def check(settings: Settings, correct: bool = False) -> None:
+    """Check the settings before the model is read (the held bone is checked once it is)."""
+    _arguments(replace(settings, held_bone=None), [], correct)
+
+
+def engine_args(settings: Settings, model, correct: bool = False) -> tuple[tuple, dict]:
+    """The model and settings every command passes to the engine: (positional, keyword)."""
+    positional = (model.vertices, model.faces, model.skeleton, model.weights)
+    return positional, _arguments(settings, model.bone_names, correct)
+
+
+def run_analysis(settings: Settings, model):
+    """Run the analysis with the command's settings; returns (Analysis, seconds)."""
+    import osteon
+
+    positional, keyword = engine_args(settings, model)
+    t = time.perf_counter()
+    a = osteon.analyze(*positional, **keyword)
+    return a, time.perf_counter() - t
+
+
+def report_of(source, model, settings: Settings, analysis, seconds, correction=None, output=None):
+    """The one report (:func:`osteon.report.build_report`) of a model read from ``source``."""
+    return build_report(
+        analysis=analysis, bone_names=model.bone_names,
+        allowable_mpa=settings.allowable_stress_mpa(), settings=settings.as_dict(),
+        front_end="cli", model=str(source), mm_per_unit=model.scale,
+        vertices=len(model.vertices), faces=len(model.faces), seconds=seconds,
+        correction=correction, output=output)
+
+
+def write_json(path, data):
+    Path(path).write_text(to_json(data))
+
+
+def save_png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title="",
+             orientation=None):
+    from ..plots import save_stress_png
+
+    save_stress_png(
+        args.png,
+        model.vertices if vertices is None else vertices,
+        model.faces,
+        analysis,
+        model.heads,
+        model.tails,
+        model.parents,
+        model.bone_names,
+        allowable,
+        title=title,
+        before=before,
+        marks=marks,
+        orientation=orientation,
+    )

@@ -1,0 +1,135 @@
+"""``osteon validate``: input checks and, with ``--fem``, the FEM cross-check."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..report import finite
+from . import common
+
+
+def cmd_validate(args, out):
+
+    stages = ["reading model", "analysing"] + (["meshing + solving (FEM)"] if args.fem else [])
+    prog = common.Progress(stages + ["writing outputs"], args.quiet)
+    try:
+        settings = common.settings_from_args(args)
+        common.check(settings)
+        allowable = settings.allowable_stress_mpa()
+        model = common.load_model_of(args)
+        checks = model_checks(model)
+        prog.next()
+        a, secs = common.run_analysis(settings, model)
+        prog.next()
+        rep = {
+            "model": str(args.model),
+            "checks": checks,
+            "analysis_seconds": secs,
+            "max_stress_mpa": finite(a.max_stress),
+            "allowable_stress_mpa": allowable,
+            "force_n": args.force,
+            "sections": len(a.stress),
+        }
+        fem_rep = None
+        if args.fem:
+            from .. import fem
+
+            if not checks["watertight"]:
+                raise ValueError(f"{args.model}: the mesh is not closed; FEM needs a closed mesh")
+            missing = fem.missing_tools_message("--fem")
+            if missing is not None:
+                raise ValueError(missing)
+            secs_list = fem.pick_sections(a, model.heads, model.tails, n=args.sections)
+            if not secs_list:
+                raise ValueError(
+                    "no section suitable for the FEM common.check (all near joints, the "
+                    "held region or too stubby)"
+                )
+            t = time.perf_counter()
+            fem_rep = fem.cross_check(
+                model.vertices,
+                model.faces,
+                secs_list,
+                force=args.force,
+                hold_point=fem.hold_point(a, model.heads),
+                mesh_size=args.mesh_size,
+                threads=args.threads,
+                progress=prog.write,
+            )
+            rep["fem"] = fem_rep.as_dict()
+            for row in rep["fem"]["sections"] + rep["fem"]["failed_sections"]:
+                row["bone_name"] = model.bone_names[row["bone"]] if row["bone"] >= 0 else None
+            rep["fem"]["seconds"] = time.perf_counter() - t
+            prog.next()
+        if args.json:
+            common.write_json(args.json, rep)
+        if args.png:
+            marks = None if fem_rep is None else [s.center for s in fem_rep.sections]
+            common.save_png(
+                args,
+                model,
+                a,
+                allowable,
+                marks=marks,
+                title=f"{Path(args.model).name}: F = {args.force:g} N",
+            )
+            if fem_rep is not None:
+                from ..plots import save_fem_png
+
+                p = Path(args.png)
+                save_fem_png(p.with_name(p.stem + "_fem" + p.suffix), fem_rep)
+        prog.next()
+    finally:
+        prog.close()
+    if not args.quiet:
+        for k, v in checks.items():
+            print(f"{k:<24} {v}", file=out)
+        print(f"analysis: {len(a.stress)} sections in {1000 * secs:.1f} ms", file=out)
+        if fem_rep is not None:
+            print(format_fem_table(fem_rep, a.bone_names), file=out)
+    return 0
+
+
+def format_fem_table(rep, bone_names):
+    head = f"{'#':>2} {'bone':<22} {'arm mm':>7} {'osteon MPa':>11} {'FEM MPa':>9} {'error':>7}"
+    lines = [head, "-" * len(head)]
+    for i, s in enumerate(rep.sections, 1):
+        name = bone_names[s.bone] if 0 <= s.bone < len(bone_names) else str(s.bone)
+        lines.append(
+            f"{i:>2} {name[:22]:<22} {s.moment_arm_mm:>7.1f} {s.osteon_stress_mpa:>11.2f} "
+            f"{s.fem_stress_mpa:>9.2f} {100 * s.rel_error:>+6.1f}%"
+        )
+    for f in rep.failed:
+        name = bone_names[f["bone"]] if 0 <= f["bone"] < len(bone_names) else str(f["bone"])
+        lines.append(f" - {name[:22]:<22} FEM meshing failed: {f['reason'][:60]}")
+    lines.append(
+        f"median |error| {100 * rep.median_error:.1f} %, worst {100 * rep.worst_error:.1f} %"
+        f"; FEM {rep.nodes} nodes, {rep.elements} C3D10 tets, mesh "
+        f"{rep.mesh_seconds:.1f} s + solve {rep.solve_seconds:.1f} s"
+    )
+    return "\n".join(lines)
+
+
+def model_checks(model):
+    """Cheap input checks: closed mesh, pieces, weights, bones inside the bounding box."""
+    import trimesh
+
+    m = trimesh.Trimesh(model.vertices, model.faces, process=False)
+    res = {
+        "vertices": len(model.vertices),
+        "faces": len(model.faces),
+        "bones": model.n_bones,
+        "watertight": bool(m.is_watertight),
+        "pieces": int(m.body_count),
+        "size_mm": [round(float(x), 3) for x in model.vertices.max(0) - model.vertices.min(0)],
+    }
+    if model.weights is not None:
+        s = np.asarray(model.weights.sum(axis=1)).ravel()
+        res["unweighted_vertices"] = int(np.sum(s == 0))
+        res["weight_rows_sum_to_1"] = bool(np.allclose(s[s > 0], 1.0))
+    else:
+        res["weights"] = "none (nearest bone)"
+    return res
