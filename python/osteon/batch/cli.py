@@ -72,7 +72,7 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
                    help="worker processes (default: all cores; 1 = no pool)")
     p.add_argument("--dask", metavar="ADDRESS",
                    help="run the tasks on a Dask scheduler (tcp://host:8786) or 'local' "
-                   "(a LocalCluster of --jobs processes); needs osteon[batch]")
+                   "(a LocalCluster of --jobs processes)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     return p
 

@@ -13,8 +13,8 @@ from .settings import BatchSettings
 from .task import process_model
 
 DASK_MISSING = (
-    "the Dask path needs the 'distributed' package: pip install 'osteon[batch]' "
-    "(or pip install distributed)"
+    "the Dask path needs the 'distributed' package (a dependency of osteon): "
+    "pip install distributed"
 )
 
 
