@@ -122,3 +122,10 @@ if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
   "$BPY52_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL313"
   log "bpy 5.2 wheel ready in $BPY52_VENV"
 fi
+
+# 6. the add-on zips from both engine wheels (scripts/build_addon.py): the extension zip carries
+#    cp311 (Blender 4.2-5.0) and cp313 (5.1+), the legacy zip cp311 (4.1, Debian's 3.4.1);
+#    tests/blender/test_packaging.py checks exactly that. Zipping takes about a second.
+if [ -n "${WHEEL313:-}" ]; then
+  "$PY" scripts/build_addon.py --out dist --wheel "$WHEEL" --wheel "$WHEEL313"
+fi

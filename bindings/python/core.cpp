@@ -139,23 +139,6 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
   return nullptr;
 }
 
-AnalysisOptions make_options(double force, double allowable_stress, double interval, int held_bone,
-                             double gap_tolerance, int threads, bool local_cuts = true,
-                             const std::array<double, 3>& build_direction = {0, 0, 1},
-                             double layer_strength_ratio = 1.0) {
-  AnalysisOptions o;
-  o.build_direction = Vec3(build_direction[0], build_direction[1], build_direction[2]);
-  o.layer_strength_ratio = layer_strength_ratio;
-  o.local_cuts = local_cuts;
-  o.force = force;
-  o.allowable_stress = allowable_stress;
-  o.interval = interval;
-  o.held_bone = held_bone;
-  o.gap_tolerance = gap_tolerance;
-  o.threads = threads;
-  return o;
-}
-
 py::dict result_to_dict(AnalysisResult&& r) {
   py::dict d;
   d["section_bone"] = to_numpy(std::move(r.section_bone));
@@ -187,6 +170,9 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["vertex_stress"] = to_numpy(std::move(r.vertex_stress));
   d["vertex_culled"] = to_bool(r.vertex_culled);
   d["vertex_bone"] = to_numpy(std::move(r.vertex_bone));
+  d["outline_points"] = to_numpy(std::move(r.outline_points));
+  d["outline_loop_start"] = to_numpy(std::move(r.outline_loop_start));
+  d["outline_section_start"] = to_numpy(std::move(r.outline_section_start));
   return d;
 }
 
@@ -194,13 +180,9 @@ py::dict result_to_dict(AnalysisResult&& r) {
 class PyAnalyzer {
  public:
   PyAnalyzer(const Int32Array& faces, Index num_vertices, int num_bones, const py::object& dense,
-             const py::object& csr, double force, double allowable_stress, double interval,
-             int held_bone, double gap_tolerance, int threads, bool local_cuts,
-             const std::array<double, 3>& build_direction, double layer_strength_ratio) {
+             const py::object& csr, const AnalysisOptions& options) {
     require_rows3(faces, "faces");
-    const AnalysisOptions options =
-        make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads,
-                     local_cuts, build_direction, layer_strength_ratio);
+    const int threads = options.threads;
     if (dense.is_none() && !csr.is_none()) {
       // Sparse weights: the analysis needs only each vertex's dominant bone; no copy of them.
       const CsrArrays c = csr_arrays(csr, num_vertices, /*allow_narrow=*/true);
@@ -218,14 +200,12 @@ class PyAnalyzer {
     }
     num_vertices_ = num_vertices;
   }
-  py::dict run(const DoubleArray& vertices, const DoubleArray& heads, const DoubleArray& tails,
-               const Int32Array& parents, const std::vector<std::string>& names) {
+  py::dict run(const DoubleArray& vertices, const Skeleton& s) {
     require_rows3(vertices, "vertices");
     if (vertices.shape(0) != num_vertices_)
       throw std::invalid_argument("vertices has " + std::to_string(vertices.shape(0)) +
                                   " rows but the analyzer was built for " +
                                   std::to_string(num_vertices_));
-    const Skeleton s = make_skeleton(heads, tails, parents, names);
     AnalysisResult r;
     {
       py::gil_scoped_release release;
@@ -254,58 +234,82 @@ PYBIND11_MODULE(_core, m) {
     }
   });
 
-  m.def(
-      "validate_skeleton",
-      [](const DoubleArray& heads, const DoubleArray& tails, const Int32Array& parents,
-         const std::vector<std::string>& names) {
-        validate_skeleton(make_skeleton(heads, tails, parents, names));
-      },
-      "Raises ValueError naming the problem with a skeleton (cycle, zero-length bone, ...).");
+  py::class_<Skeleton>(m, "Skeleton",
+                       "A bone skeleton, checked once when made (engine form of osteon.Skeleton).")
+      .def(py::init([](const DoubleArray& heads, const DoubleArray& tails,
+                       const Int32Array& parents, const std::vector<std::string>& names) {
+             Skeleton s = make_skeleton(heads, tails, parents, names);
+             validate_skeleton(s);
+             return s;
+           }),
+           py::arg("heads"), py::arg("tails"), py::arg("parents"), py::arg("names"),
+           "heads, tails (B,3) mm, parents (B,) int (-1 = root), names (B); ValueError naming "
+           "the problem (cycle, zero-length bone, ...).")
+      .def_property_readonly("num_bones", &Skeleton::num_bones, "Number of bones B.");
+
+  py::class_<AnalysisOptions>(m, "AnalysisOptions", "Settings of one analysis (N, MPa, mm).")
+      .def(py::init<>())
+      .def_readwrite("force", &AnalysisOptions::force, "N")
+      .def_readwrite("allowable_stress", &AnalysisOptions::allowable_stress, "MPa")
+      .def_readwrite("interval", &AnalysisOptions::interval, "mm")
+      .def_readwrite("held_bone", &AnalysisOptions::held_bone, "bone index; -1 = main root")
+      .def_readwrite("gap_tolerance", &AnalysisOptions::gap_tolerance, "mm; < 0: 1 % of size")
+      .def_readwrite("threads", &AnalysisOptions::threads, "0 = all cores")
+      .def_readwrite("local_cuts", &AnalysisOptions::local_cuts)
+      .def_readwrite("reuse_sections", &AnalysisOptions::reuse_sections)
+      .def_readwrite("keep_outlines", &AnalysisOptions::keep_outlines)
+      .def_property(
+          "build_direction",
+          [](const AnalysisOptions& o) {
+            return std::array<double, 3>{o.build_direction.x(), o.build_direction.y(),
+                                         o.build_direction.z()};
+          },
+          [](AnalysisOptions& o, const std::array<double, 3>& d) {
+            o.build_direction = Vec3(d[0], d[1], d[2]);
+          },
+          "FDM build direction (3,), model frame")
+      .def_readwrite("layer_strength_ratio", &AnalysisOptions::layer_strength_ratio,
+                     "layer / in-plane strength (1 = isotropic)");
+
+  py::class_<CorrectionOptions>(m, "CorrectionOptions", "Limits of the correction loop.")
+      .def(py::init<>())
+      .def_readwrite("max_scale", &CorrectionOptions::max_scale)
+      .def_readwrite("max_rounds", &CorrectionOptions::max_rounds)
+      .def_readwrite("target_ratio", &CorrectionOptions::target_ratio)
+      .def_readwrite("thin_direction", &CorrectionOptions::thin_direction)
+      .def_readwrite("flat_aspect", &CorrectionOptions::flat_aspect)
+      .def_property(
+          "bone_x_axes",
+          [](const CorrectionOptions& o) { return to_numpy(std::vector<Vec3>(o.bone_x_axes)); },
+          [](CorrectionOptions& o, const py::object& axes) {
+            o.bone_x_axes.clear();
+            if (axes.is_none()) return;
+            const DoubleArray a = axes.cast<DoubleArray>();
+            require_rows3(a, "bone_x_axes");
+            auto u = a.unchecked<2>();
+            for (py::ssize_t b = 0; b < a.shape(0); ++b)
+              o.bone_x_axes.emplace_back(u(b, 0), u(b, 1), u(b, 2));
+          },
+          "(B,3) local x axes of the bones, or empty");
 
   py::class_<PyAnalyzer>(m, "Analyzer", "Reusable analysis of one mesh topology.")
-      .def(py::init<const Int32Array&, Index, int, const py::object&, const py::object&, double,
-                    double, double, int, double, int, bool, const std::array<double, 3>&, double>(),
+      .def(py::init<const Int32Array&, Index, int, const py::object&, const py::object&,
+                    const AnalysisOptions&>(),
            py::arg("faces"), py::arg("num_vertices"), py::arg("num_bones"), py::arg("dense"),
-           py::arg("csr"), py::arg("force"), py::arg("allowable_stress"), py::arg("interval"),
-           py::arg("held_bone"), py::arg("gap_tolerance"), py::arg("threads"),
-           py::arg("local_cuts") = true,
-           py::arg("build_direction") = std::array<double, 3>{0, 0, 1},
-           py::arg("layer_strength_ratio") = 1.0)
-      .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("heads"), py::arg("tails"),
-           py::arg("parents"), py::arg("names"),
-           "Analyse vertices (V,3 mm) with a posed skeleton.");
+           py::arg("csr"), py::arg("options"))
+      .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("skeleton"),
+           "Analyse vertices (V,3 mm) with a posed Skeleton.");
 
   m.def(
       "correct",
-      [](const DoubleArray& vertices, const Int32Array& faces, const DoubleArray& heads,
-         const DoubleArray& tails, const Int32Array& parents, const std::vector<std::string>& names,
-         const py::object& dense, const py::object& csr, double force, double allowable_stress,
-         double interval, int held_bone, double gap_tolerance, int threads, double max_scale,
-         int max_rounds, double target_ratio, bool thin_direction, double flat_aspect,
-         const py::object& bone_x_axes, const std::array<double, 3>& build_direction,
-         double layer_strength_ratio) {
+      [](const DoubleArray& vertices, const Int32Array& faces, const Skeleton& s,
+         const py::object& dense, const py::object& csr, const AnalysisOptions& o,
+         const CorrectionOptions& co) {
         require_rows3(vertices, "vertices");
         require_rows3(faces, "faces");
-        const Skeleton s = make_skeleton(heads, tails, parents, names);
         auto weights = make_weights(dense, csr, vertices.shape(0), s.num_bones());
         if (!weights) throw std::invalid_argument("correct() needs skinning weights");
         const MeshView mesh{vertices.data(), vertices.shape(0), faces.data(), faces.shape(0)};
-        const AnalysisOptions o =
-            make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads, true,
-                         build_direction, layer_strength_ratio);
-        CorrectionOptions co;
-        co.max_scale = max_scale;
-        co.max_rounds = max_rounds;
-        co.target_ratio = target_ratio;
-        co.thin_direction = thin_direction;
-        co.flat_aspect = flat_aspect;
-        if (!bone_x_axes.is_none()) {
-          const DoubleArray axes = bone_x_axes.cast<DoubleArray>();
-          require_rows3(axes, "bone_x_axes");
-          auto a = axes.unchecked<2>();
-          for (py::ssize_t b = 0; b < axes.shape(0); ++b)
-            co.bone_x_axes.emplace_back(a(b, 0), a(b, 1), a(b, 2));
-        }
         CorrectionResult r;
         {
           py::gil_scoped_release release;
@@ -330,24 +334,16 @@ PYBIND11_MODULE(_core, m) {
         d["after"] = result_to_dict(std::move(r.after));
         return d;
       },
-      py::arg("vertices"), py::arg("faces"), py::arg("heads"), py::arg("tails"), py::arg("parents"),
-      py::arg("names"), py::arg("dense"), py::arg("csr"), py::arg("force"),
-      py::arg("allowable_stress"), py::arg("interval"), py::arg("held_bone"),
-      py::arg("gap_tolerance"), py::arg("threads"), py::arg("max_scale"), py::arg("max_rounds"),
-      py::arg("target_ratio"), py::arg("thin_direction") = false, py::arg("flat_aspect") = 2.0,
-      py::arg("bone_x_axes") = py::none(),
-      py::arg("build_direction") = std::array<double, 3>{0, 0, 1},
-      py::arg("layer_strength_ratio") = 1.0, "Correction loop (paper §5); see osteon.correct.");
+      py::arg("vertices"), py::arg("faces"), py::arg("skeleton"), py::arg("dense"), py::arg("csr"),
+      py::arg("options"), py::arg("correction_options"),
+      "Correction loop (paper §5); see osteon.correct.");
 
   m.def(
       "skin",
-      [](const DoubleArray& vertices, const DoubleArray& heads, const DoubleArray& tails,
-         const Int32Array& parents, const py::object& dense, const py::object& csr,
-         const std::vector<double>& bone_scale, const py::object& bone_scale_z,
-         const py::object& bone_x_axes) {
+      [](const DoubleArray& vertices, const Skeleton& s, const py::object& dense,
+         const py::object& csr, const std::vector<double>& bone_scale,
+         const py::object& bone_scale_z, const py::object& bone_x_axes) {
         require_rows3(vertices, "vertices");
-        const Skeleton s = make_skeleton(heads, tails, parents, {});
-        validate_skeleton(s);
         auto weights = make_weights(dense, csr, vertices.shape(0), s.num_bones());
         if (!weights) throw std::invalid_argument("skin() needs skinning weights");
         validate_weights(*weights, vertices.shape(0), s.num_bones());
@@ -371,8 +367,8 @@ PYBIND11_MODULE(_core, m) {
         }
         return to_numpy_rows3(std::move(out));
       },
-      py::arg("vertices"), py::arg("heads"), py::arg("tails"), py::arg("parents"), py::arg("dense"),
-      py::arg("csr"), py::arg("bone_scale"), py::arg("bone_scale_z") = py::none(),
+      py::arg("vertices"), py::arg("skeleton"), py::arg("dense"), py::arg("csr"),
+      py::arg("bone_scale"), py::arg("bone_scale_z") = py::none(),
       py::arg("bone_x_axes") = py::none(),
       "Linear blend skinning with per-bone cross-section scales (x, optionally z and x axes).");
 

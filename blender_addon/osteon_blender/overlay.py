@@ -50,165 +50,53 @@ class Outlines:
 # --------------------------------------------------------------------------- geometry (no bpy)
 
 
-def _bone_domains(vertex_bone: np.ndarray, faces: np.ndarray, parents: np.ndarray) -> list:
-    """Per bone, (faces, vertices) touching a vertex of the bone, its parent, children or
-    siblings (where its sections can reach): rows of ``faces`` and their vertex ids."""
-    nb = len(parents)
-    fb = vertex_bone[faces]                                   # (F, 3)
-    near = [{b} for b in range(nb)]
-    children: dict[int, list[int]] = {}
-    for b, p in enumerate(parents):
-        if p >= 0:
-            near[b].add(int(p))
-            near[int(p)].add(b)
-            children.setdefault(int(p), []).append(b)
-    for sibs in children.values():
-        for b in sibs:
-            near[b].update(sibs)
-    member = np.zeros((nb, nb), dtype=bool)                   # member[b, c]: c is near b
-    for b, cs in enumerate(near):
-        member[b, list(cs)] = True
-    out = []
-    for b in range(nb):
-        m = member[b]
-        hit = np.flatnonzero(m[fb[:, 0]] | m[fb[:, 1]] | m[fb[:, 2]])
-        out.append((faces[hit], np.unique(faces[hit])))
-    return out
+def compute_outlines(analysis, mm_per_unit: float = 1.0) -> Outlines:
+    """Outline of every computed section of ``analysis`` (an ``osteon.Analysis`` made with
+    ``keep_outlines=True``), in world space (Blender units = mm / ``mm_per_unit``).
 
-
-class DomainCache:
-    """Per-bone face domains, kept while the dominant-bone map and topology stay the same."""
-
-    def __init__(self):
-        self._key = None
-        self._vb = None
-        self.domains: list = []
-
-    def get(self, vertex_bone, faces, parents) -> list:
-        key = (faces.shape, id(faces), tuple(int(p) for p in parents))
-        if key != self._key or self._vb is None or not np.array_equal(self._vb, vertex_bone):
-            self.domains = _bone_domains(np.asarray(vertex_bone), faces, np.asarray(parents))
-            self._vb = np.array(vertex_bone, copy=True)
-            self._key = key
-        return self.domains
-
-
-def _loop_segments(loop: np.ndarray) -> np.ndarray:
-    """(N, 3) closed loop -> (2N, 3) LINES endpoints."""
-    seg = np.empty((2 * len(loop), 3), dtype=np.float64)
-    seg[0::2] = loop
-    seg[1::2] = np.roll(loop, -1, axis=0)
-    return seg
-
-
-def compute_outlines(analysis, vertices_mm: np.ndarray, faces: np.ndarray,
-                     parents: np.ndarray, mm_per_unit: float,
-                     domains: DomainCache | None = None,
-                     gap_tolerance: float | None = None) -> Outlines:
-    """Outline of every computed section of ``analysis`` (an ``osteon.Analysis`` of
-    ``vertices_mm``/``faces``), in world space (Blender units = mm / ``mm_per_unit``).
-
-    Each section is re-cut with ``osteon.slice_section`` at the engine's own plane
-    (``section_point``, ``section_normal``) and gap tolerance (1 % of the bounding-box
-    diagonal), but only through the faces of its bone's neighbourhood that cross a slab
-    around the plane, so the whole pass costs a few ms instead of one whole-mesh cut per
-    section.  Pure NumPy + engine: safe to run in a worker thread."""
-    import osteon  # the engine (imported by the caller through core.import_engine)
-
-    v = np.asarray(vertices_mm, dtype=np.float64)
-    faces = np.asarray(faces)
-    parents = np.asarray(parents)
+    The loops are the ones the engine analysed (``outline_points`` / ``outline_loop_start`` /
+    ``outline_section_start``): nothing is cut again here.  Without them (an analysis made
+    without ``keep_outlines``) there is nothing to draw.  Pure NumPy: safe to run in a worker
+    thread."""
+    k = np.float32(mm_per_unit)
+    empty3, empty4 = np.empty((0, 3), np.float32), np.empty((0, 4), np.float32)
+    ss = getattr(analysis, "outline_section_start", None)
+    if ss is None or len(ss) < 2:
+        none = np.empty(0, dtype=np.int64)
+        return Outlines(lines=empty3, colors=empty4, weak_lines=empty3, weak_colors=empty4,
+                        section_ids=none, weak_ids=none)
+    pts = np.asarray(analysis.outline_points, dtype=np.float64)
+    ls = np.asarray(analysis.outline_loop_start, dtype=np.int64)
+    ss = np.asarray(ss, dtype=np.int64)
+    # Segment p -> next point of its loop (the last point joins the first).
+    nxt = np.arange(1, len(pts) + 1)
+    nxt[ls[1:] - 1] = ls[:-1]
+    loop_section = np.repeat(np.arange(len(ss) - 1), np.diff(ss))
+    point_section = np.repeat(loop_section, np.diff(ls))
     stress = np.asarray(analysis.stress, dtype=np.float64)
     ratio = stress / float(analysis.allowable_stress)
-    valid = np.isfinite(stress)
-    if gap_tolerance is None:
-        extent = [float(c.max()) - float(c.min()) for c in v.T]   # per column: fast
-        gap_tolerance = 0.01 * float(np.linalg.norm(extent))
-    doms = (domains or DomainCache()).get(analysis.vertex_bone, faces, parents)
-    sb = np.asarray(analysis.section_bone)
-    points = np.asarray(analysis.section_point, dtype=np.float64)
-    normals = np.asarray(analysis.section_normal, dtype=np.float64)
-    normals = normals / np.maximum(np.linalg.norm(normals, axis=1), 1e-300)[:, None]
-
-    ids, weak_ids, segs, weak_segs, cols, weak_cols = [], [], [], [], [], []
     culled = np.asarray(analysis.culled, dtype=bool)
     weak = np.asarray(analysis.weak, dtype=bool)
-    for b in np.unique(sb[valid]):
-        secs = np.flatnonzero(valid & (sb == b))
-        dfaces, dverts = doms[int(b)]                         # (Fd, 3), (Vd,)
-        if len(dfaces) == 0:
-            continue
-        axis = normals[secs].sum(axis=0)
-        axis /= max(np.linalg.norm(axis), 1e-300)
-        tf = (v @ axis)[dfaces]                                # axial coordinates
-        tmin = np.minimum(np.minimum(tf[:, 0], tf[:, 1]), tf[:, 2])
-        tmax = np.maximum(np.maximum(tf[:, 0], tf[:, 1]), tf[:, 2])
-        # bucket the faces along the axis (radix sort of int16 keys: linear time)
-        t0 = float(tmin.min())
-        width = max(float(analysis.interval), 1e-9)
-        nbins = int(min((float(tmax.max()) - t0) / width + 1, 30000))
-        key = np.minimum(((tmin - t0) / width).astype(np.int64), nbins - 1).astype(np.int16)
-        order = np.argsort(key, kind="stable")
-        start = np.zeros(nbins + 1, dtype=np.int64)
-        np.cumsum(np.bincount(key, minlength=nbins), out=start[1:])
-        reach = float((tmax - tmin).max())                     # longest face along the axis
-        radius = None   # how far the domain reaches from the axis (for tilted planes)
-        for s in secs:
-            n = normals[s]
-            c = float(n @ axis)
-            ts = float(points[s] @ axis)
-            if c < 0.26:                                       # plane nearly along the bone
-                cand = dfaces
-            else:
-                if radius is None:
-                    rel = v[dverts] - points[secs[0]]
-                    r2 = np.einsum("ij,ij->i", rel, rel) - (rel @ axis) ** 2
-                    radius = float(np.sqrt(max(float(r2.max()), 0.0)))
-                m = radius * np.sqrt(max(0.0, 1.0 - c * c)) / c + 1e-9
-                lo = int(np.clip((ts - m - reach - t0) // width, 0, nbins))
-                hi = int(np.clip((ts + m - t0) // width + 1, 0, nbins))
-                sel = order[start[lo]:start[hi]]
-                sel = sel[(tmin[sel] <= ts + m) & (tmax[sel] >= ts - m)]
-                cand = dfaces[sel]
-            if len(cand) == 0:
-                continue
-            d = v[cand] @ n - float(points[s] @ n)             # (f, 3) signed distances
-            below, above = d <= 0.0, d >= 0.0
-            cand = cand[(below[:, 0] | below[:, 1] | below[:, 2])
-                        & (above[:, 0] | above[:, 1] | above[:, 2])]
-            if len(cand) == 0:
-                continue
-            used, local = np.unique(cand, return_inverse=True)
-            cut = osteon.slice_section(v[used], local.reshape(-1, 3).astype(np.int32),
-                                       points[s], n, gap_tolerance)
-            if not cut["found"] or len(cut["outer"]) < 2:
-                continue
-            loops = [cut["outer"], *cut["holes"]]
-            seg = np.concatenate([_loop_segments(np.asarray(lp)) for lp in loops if len(lp) >= 2])
-            if weak[s]:
-                weak_ids.append(s)
-                weak_segs.append(seg)
-                weak_cols.append(np.broadcast_to(np.float32(WEAK_RGBA), (len(seg), 4)))
-            else:
-                ids.append(s)
-                segs.append(seg)
-                rgba = (CULLED_RGBA if culled[s]
-                        else (*(SHADE * core.ramp(np.array([ratio[s]]))[0]).tolist(), 1.0))
-                cols.append(np.broadcast_to(np.float32(rgba), (len(seg), 4)))
+    rgba = np.ones((len(stress), 4), dtype=np.float32)
+    rgba[:, :3] = SHADE * core.ramp(ratio)
+    rgba[culled] = CULLED_RGBA
 
-    k = float(mm_per_unit)
+    def lines_of(mask):
+        sel = np.flatnonzero(mask[point_section])
+        seg = np.empty((2 * len(sel), 3), dtype=np.float32)
+        seg[0::2] = pts[sel]
+        seg[1::2] = pts[nxt[sel]]
+        return seg / k, sel
 
-    def pack(parts, width):
-        if not parts:
-            return np.empty((0, width), dtype=np.float32)
-        return np.ascontiguousarray(np.concatenate(parts), dtype=np.float32)
-
-    lines = pack(segs, 3) / np.float32(k)
-    weak_lines = pack(weak_segs, 3) / np.float32(k)
-    all_ids = np.array(sorted(ids + weak_ids), dtype=np.int64)
-    return Outlines(lines=lines, colors=pack(cols, 4), weak_lines=weak_lines,
-                    weak_colors=pack(weak_cols, 4), section_ids=all_ids,
-                    weak_ids=np.array(sorted(weak_ids), dtype=np.int64))
+    outlined = np.diff(ss) > 0
+    lines, sel = lines_of(outlined & ~weak)
+    colors = np.repeat(rgba[point_section[sel]], 2, axis=0)
+    weak_lines, _ = lines_of(outlined & weak)
+    weak_colors = np.broadcast_to(np.float32(WEAK_RGBA), (len(weak_lines), 4)).copy()
+    return Outlines(lines=np.ascontiguousarray(lines), colors=np.ascontiguousarray(colors),
+                    weak_lines=np.ascontiguousarray(weak_lines), weak_colors=weak_colors,
+                    section_ids=np.flatnonzero(outlined).astype(np.int64),
+                    weak_ids=np.flatnonzero(outlined & weak).astype(np.int64))
 
 
 # --------------------------------------------------------------------------- state
@@ -255,8 +143,7 @@ def refresh_from_last(scene_name: str):
     analysis, inp = entry["analysis"], entry["inputs"]
     st.outlined_last = analysis
     try:
-        out = compute_outlines(analysis, inp.vertices_mm, inp.faces, inp.skeleton.parents,
-                               inp.mm_per_unit)
+        out = compute_outlines(analysis, inp.mm_per_unit)
     except Exception as e:  # noqa: BLE001 -- a drawing aid must never break the UI
         print(f"osteon overlay: no outlines ({type(e).__name__}: {e})")
         return

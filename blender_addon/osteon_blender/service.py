@@ -78,7 +78,8 @@ def engine_skeleton(osteon, inp: Inputs):
 def analyze_inputs(osteon, inp: Inputs, skeleton=None):
     skeleton = skeleton if skeleton is not None else engine_skeleton(osteon, inp)
     try:
-        return osteon.analyze(inp.vertices_mm, inp.faces, skeleton, inp.weights, **inp.params)
+        return osteon.analyze(inp.vertices_mm, inp.faces, skeleton, inp.weights,
+                              keep_outlines=True, **inp.params)
     except ValueError as e:
         raise OsteonError(f"osteon could not analyse '{inp.obj.name}': {e}") from e
 
@@ -173,7 +174,7 @@ def run_correct(context, progress=_no_progress) -> dict:
             # The bones' own X axes: a thin-direction scale must be one Blender's pose scale
             # X or Z can reproduce.
             fix = osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
-                                 bone_x_axes=inp.skeleton.x_axes,
+                                 bone_x_axes=inp.skeleton.x_axes, keep_outlines=True,
                                  **core.engine_params(s, arm, inp.skeleton.names, correct=True))
         except ValueError as e:
             raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e

@@ -98,7 +98,10 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
 
 void Analyzer::Impl::check_inputs(RunState& run) {
   const Skeleton& sk = run.sk;
-  validate_skeleton(sk);
+  // The last run checked its skeleton: an unchanged one (live mode's usual case) is not re-checked.
+  const bool same_skeleton = !last_heads.empty() && sk.heads == last_heads &&
+                             sk.tails == last_tails && sk.parents == last_parents;
+  if (!same_skeleton) validate_skeleton(sk);
   if (sk.num_bones() != num_bones)
     throw std::invalid_argument("skeleton has " + std::to_string(sk.num_bones()) +
                                 " bones but the analyzer was built for " +

@@ -50,7 +50,9 @@ bool local_ok(RunState& run, const PlaneCut& cut, const SectionGeometry& geom, b
 }
 
 // Section state of a found (or skipped) section geometry; region null: the whole plane was cut.
-SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const CutRegion* region) {
+// With `keep`, the region's loops are kept in 3D (AnalysisOptions::keep_outlines).
+SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const CutRegion* region,
+                    bool keep) {
   SectionState st;
   st.flags = geom.flags;
   st.whole_plane = region == nullptr;
@@ -69,6 +71,15 @@ SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const 
       st.thin_axis = (thin.x() * frame.u + thin.y() * frame.v).normalized();
       const double lo = std::max(eig.eigenvalues()(0), 0.0), hi = eig.eigenvalues()(1);
       st.aspect = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
+      if (keep) {
+        auto to_world = [&](const std::vector<Vec2>& loop) {
+          std::vector<Vec3> out(loop.size());
+          for (std::size_t k = 0; k < loop.size(); ++k) out[k] = frame.to_world(loop[k]);
+          return out;
+        };
+        st.loops.push_back(to_world(geom.polygon.outer));
+        for (const auto& hole : geom.polygon.holes) st.loops.push_back(to_world(hole));
+      }
     } else {
       st.flags |= kFlagDegenerate;
     }
@@ -77,11 +88,11 @@ SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const 
 }
 
 // The whole-plane section from all of a plane's segments (gaps closed: nothing is clipped).
-SectionState finish_whole(const PlaneFrame& frame, const std::vector<CutSegment>& segs,
-                          double gap) {
+SectionState finish_whole(const PlaneFrame& frame, const std::vector<CutSegment>& segs, double gap,
+                          bool keep) {
   SectionGeometry geom = select_section(assemble_loops(segs, gap));
   if (segs.empty()) geom.flags |= kFlagEmpty;
-  return finish(frame, geom, nullptr);
+  return finish(frame, geom, nullptr, keep);
 }
 
 }  // namespace
@@ -129,6 +140,7 @@ void Analyzer::Impl::cut_local(RunState& run) {
   const Skeleton& sk = run.sk;
   const double h = options.interval;
   const long jobs = static_cast<long>(job_bone.size());
+  const bool keep = options.keep_outlines;
   // Phase 1 (parallel over bones and joints): one local cut per family of parallel planes.
   // Sections whose local cut is not provably right, and all joints, are queued for phase 2.
   detail::parallel_for(jobs, options.threads, [&](long job, int worker) {
@@ -152,13 +164,13 @@ void Analyzer::Impl::cut_local(RunState& run) {
       PlaneFrame frame = base;
       frame.origin = specs[si].point;
       if (!local) {
-        states[si] = finish_whole(frame, segs[k - 1], run.gap);
+        states[si] = finish_whole(frame, segs[k - 1], run.gap, keep);
         continue;
       }
       const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
       const SectionGeometry geom = select_section(cut);
       if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
-        states[si] = finish(frame, geom, &region);
+        states[si] = finish(frame, geom, &region, keep);
         continue;
       }
       run.retry[si] = geom.found ? kWholePlane : kGrowFamily;
@@ -175,6 +187,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
   const long jobs = static_cast<long>(job_bone.size());
   const std::vector<std::uint8_t>& retry = run.retry;
   const std::vector<double>& reach = run.reach;
+  const bool keep = options.keep_outlines;
   // Phase 2 units: a family's queued planes are re-cut together in masked passes (a cylinder
   // three times wider, then the whole plane); a joint grows a ball around its point, then cuts
   // the whole plane. Families first: they are the larger units, joints balance the cores last.
@@ -221,14 +234,14 @@ void Analyzer::Impl::cut_retries(RunState& run) {
               previous = ball;
               done = &previous;
               if (local_ok(run, cut, geom, inside)) {
-                states[first] = finish(frame, geom, &ball);
+                states[first] = finish(frame, geom, &ball, keep);
                 return;
               }
               if (geom.found) break;  // found but not provably right: cut the whole plane
             }
           }
           cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
-          states[first] = finish_whole(frame, segs, run.gap);
+          states[first] = finish_whole(frame, segs, run.gap, keep);
           return;
         }
         const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
@@ -260,7 +273,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
             const SectionGeometry geom = select_section(cut);
             if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
-              states[first + k - 1] = finish(frame_of(k), geom, &wide);
+              states[first + k - 1] = finish(frame_of(k), geom, &wide, keep);
               wanted[k - 1] = 0;
             }
           }
@@ -270,7 +283,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
         for (int k = 1; k <= n; ++k) {
           if (!wanted[k - 1]) continue;
           add_kept(k);
-          states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap);
+          states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap, keep);
         }
       });
   if (run.timer.on) {

@@ -79,6 +79,19 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
     r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
     r.weak[i] = r.stress[i] > r.section_allowable[i];
   }
+  if (options.keep_outlines) {
+    r.outline_section_start.reserve(ns + 1);
+    r.outline_loop_start.push_back(0);
+    for (int i = 0; i < ns; ++i) {
+      r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
+      if (!states[i].found) continue;
+      for (const auto& loop : states[i].loops) {
+        r.outline_points.insert(r.outline_points.end(), loop.begin(), loop.end());
+        r.outline_loop_start.push_back(static_cast<std::int64_t>(r.outline_points.size()));
+      }
+    }
+    r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
+  }
   return r;
 }
 

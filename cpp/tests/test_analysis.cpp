@@ -115,3 +115,51 @@ TEST(Weights, DominantBoneFromCsrWithEitherIndexWidth) {
   const double negative[] = {0.25, -0.5, 0.5, 0.5, 0.0, 0.0};
   EXPECT_THROW(dominant_bones_csr(indptr, narrow, negative, 4, 3), std::invalid_argument);
 }
+
+namespace {
+// Area (mm^2) of a closed planar 3D loop, by the shoelace formula projected on the unit normal.
+double loop_area(const AnalysisResult& r, std::int64_t loop, const Vec3& normal) {
+  const std::int64_t a = r.outline_loop_start[loop], b = r.outline_loop_start[loop + 1];
+  Vec3 sum = Vec3::Zero();
+  for (std::int64_t k = a; k < b; ++k)
+    sum += r.outline_points[k].cross(r.outline_points[k + 1 < b ? k + 1 : a]);
+  return 0.5 * std::abs(sum.dot(normal));
+}
+}  // namespace
+
+TEST(Analysis, OutlinesEncloseTheSectionArea) {
+  // An L of two bones: interior sections, an oblique joint section and free ends.
+  const auto m = prism(osteon::testing::regular_polygon(4.0, 24), 60, 21);
+  Skeleton s;
+  s.heads = {Vec3::Zero(), Vec3(30, 0, 0)};
+  s.tails = {Vec3(30, 0, 0), Vec3(60, 0.5, 0)};
+  s.parents = {-1, 0};
+  AnalysisOptions o;
+  o.interval = 4;
+  const AnalysisResult plain = analyze(m.view(), s, nullptr, o);
+  EXPECT_TRUE(plain.outline_points.empty());
+  EXPECT_TRUE(plain.outline_section_start.empty());
+  o.keep_outlines = true;
+  const AnalysisResult r = analyze(m.view(), s, nullptr, o);
+  const std::size_t ns = r.section_area.size();
+  ASSERT_EQ(r.outline_section_start.size(), ns + 1);
+  ASSERT_EQ(r.outline_loop_start.back(), static_cast<std::int64_t>(r.outline_points.size()));
+  int checked = 0;
+  for (std::size_t i = 0; i < ns; ++i) {
+    EXPECT_EQ(r.section_area[i], plain.section_area[i]);
+    const std::int64_t first = r.outline_section_start[i], last = r.outline_section_start[i + 1];
+    if (!std::isfinite(r.stress[i])) {
+      EXPECT_EQ(first, last);
+      continue;
+    }
+    ASSERT_GT(last, first);
+    double area = loop_area(r, first, r.section_normal[i]);
+    for (std::int64_t l = first + 1; l < last; ++l) area -= loop_area(r, l, r.section_normal[i]);
+    EXPECT_NEAR(area, r.section_area[i], 1e-9 * r.section_area[i]);
+    // The points lie on the section plane.
+    for (std::int64_t k = r.outline_loop_start[first]; k < r.outline_loop_start[last]; ++k)
+      EXPECT_NEAR((r.outline_points[k] - r.section_point[i]).dot(r.section_normal[i]), 0.0, 1e-9);
+    ++checked;
+  }
+  EXPECT_GE(checked, 14);
+}

@@ -119,7 +119,18 @@ class Skeleton:
         if len(names) != len(self.heads):
             raise ValueError(f"names has {len(names)} entries for {len(self.heads)} bones")
         self.names = names
-        _core.validate_skeleton(self.heads, self.tails, self.parents, self.names)
+        self._engine()  # checked once, here
+
+    def _engine(self) -> _core.Skeleton:
+        """The engine's (checked) copy of this skeleton; made again only if the arrays changed."""
+        c = self.__dict__.get("_engine_copy")
+        if c is None or not (np.array_equal(c[1], self.heads) and np.array_equal(c[2], self.tails)
+                             and np.array_equal(c[3], self.parents) and c[4] == self.names):
+            core = _core.Skeleton(self.heads, self.tails, self.parents, self.names)
+            c = (core, np.array(self.heads), np.array(self.tails), np.array(self.parents),
+                 list(self.names))
+            self._engine_copy = c
+        return c[0]
 
     @property
     def num_bones(self) -> int:
@@ -235,6 +246,19 @@ def _count(value: Any, name: str) -> int:
     return int(value)
 
 
+def _options(force: float, allowable_stress: float, interval: float, held_bone: int,
+             gap_tolerance: float | None, threads: int, build_direction: Any = (0.0, 0.0, 1.0),
+             layer_strength_ratio: float = 1.0) -> _core.AnalysisOptions:
+    """The engine's options object (values already converted by the callers)."""
+    o = _core.AnalysisOptions()
+    o.build_direction = [float(x) for x in build_direction]
+    o.layer_strength_ratio = float(layer_strength_ratio)
+    o.force, o.allowable_stress, o.interval = force, allowable_stress, interval
+    o.held_bone, o.threads = held_bone, threads
+    o.gap_tolerance = -1.0 if gap_tolerance is None else float(gap_tolerance)
+    return o
+
+
 @dataclass
 class Analysis:
     """Result of :func:`analyze`: one row per section (S), one per vertex (V). mm, N, MPa.
@@ -289,10 +313,16 @@ class Analysis:
     build_direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     layer_strength_ratio: float = 1.0
 
+    outline_points: np.ndarray | None = None
+    outline_loop_start: np.ndarray | None = None
+    outline_section_start: np.ndarray | None = None
+
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
                    interval: float, build_direction: Any = (0.0, 0.0, 1.0),
                    layer_strength_ratio: float = 1.0) -> Analysis:
+        if len(d["outline_section_start"]) == 0:  # outlines not asked for
+            d["outline_points"] = d["outline_loop_start"] = d["outline_section_start"] = None
         return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
                    bone_names=list(skeleton.names),
                    build_direction=np.array(build_direction, dtype=float),
@@ -311,6 +341,19 @@ class Analysis:
     def num_sections(self) -> int:
         """Number of sections S."""
         return len(self.stress)
+
+    @property
+    def section_loops(self) -> list[list[np.ndarray]] | None:
+        """With ``keep_outlines=True``: per section (S), the loops of the region it analysed,
+        each (N,3) mm on the section plane (last point joins the first): the outer boundary
+        first, then the holes; ``[]`` for a skipped section. ``None`` without outlines.
+        Packed form: ``outline_points`` (P,3) mm, ``outline_loop_start`` (L+1,) and
+        ``outline_section_start`` (S+1,) (section s owns loops ``[start[s], start[s+1])``)."""
+        if self.outline_section_start is None:
+            return None
+        pts, ls, ss = self.outline_points, self.outline_loop_start, self.outline_section_start
+        return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
+                for s in range(len(ss) - 1)]
 
     @property
     def valid(self) -> np.ndarray:
@@ -445,7 +488,8 @@ class Analyzer:
     ``allowable_stress`` MPa; ``interval`` mm; ``root`` bone index or name to hold;
     ``gap_tolerance`` mm (None: 1 % of the model size); ``threads`` (0 = all cores);
     ``local_cuts`` cut near each bone first and fall back to the whole plane only when needed
-    (same result, faster; False always cuts whole planes).
+    (same result, faster; False always cuts whole planes); ``keep_outlines`` return each
+    section's loops (:attr:`Analysis.section_loops`).
     """
 
     def __init__(
@@ -464,6 +508,7 @@ class Analyzer:
         local_cuts: bool = True,
         build_direction: Any = (0.0, 0.0, 1.0),
         layer_strength_ratio: float = 1.0,
+        keep_outlines: bool = False,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -480,12 +525,13 @@ class Analyzer:
             build_direction, layer_strength_ratio)
         dense, csr = _weights_args(weights, self.num_vertices, skeleton.num_bones)
         self._skeleton = skeleton
-        self._core = _core.Analyzer(
-            self.faces, self.num_vertices, skeleton.num_bones, dense, csr, self.force,
-            self.allowable_stress, self.interval, _held_bone(root, skeleton),
-            -1.0 if gap_tolerance is None else float(gap_tolerance), _count(threads, "threads"),
-            bool(local_cuts), list(self.build_direction), self.layer_strength_ratio,
-        )
+        options = _options(self.force, self.allowable_stress, self.interval,
+                           _held_bone(root, skeleton), gap_tolerance, _count(threads, "threads"),
+                           self.build_direction, self.layer_strength_ratio)
+        options.local_cuts = bool(local_cuts)
+        options.keep_outlines = bool(keep_outlines)
+        self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
+                                    options)
 
     def run(self, vertices: Any, skeleton: Skeleton | None = None) -> Analysis:
         """Analyse ``vertices`` (V,3) mm with ``skeleton`` (default: the one given at creation)."""
@@ -502,7 +548,7 @@ class Analyzer:
             raise ValueError(
                 f"vertices has {len(v)} rows, the analyzer was built for {self.num_vertices}"
             )
-        d = self._core.run(v, sk.heads, sk.tails, sk.parents, sk.names)
+        d = self._core.run(v, sk._engine())
         return Analysis._from_core(d, skeleton=sk, allowable_stress=self.allowable_stress,
                                    force=self.force, interval=self.interval,
                                    build_direction=self.build_direction,
@@ -524,6 +570,7 @@ def analyze(
     local_cuts: bool = True,
     build_direction: Any = (0.0, 0.0, 1.0),
     layer_strength_ratio: float = 1.0,
+    keep_outlines: bool = False,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -535,7 +582,8 @@ def analyze(
     the model's frame (default +Z) and ``layer_strength_ratio`` layer / in-plane strength (1.0 =
     isotropic): each section's allowable then depends on the angle between its normal and the
     build direction (``section_allowable``, ``stress_ratio``, ``across_layers``;
-    docs/printing.md). Raises ValueError on bad input.
+    docs/printing.md); ``keep_outlines`` also return each section's loops
+    (:attr:`Analysis.section_loops`). Raises ValueError on bad input.
     """
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
@@ -544,7 +592,7 @@ def analyze(
                         allowable_stress=allowable_stress, interval=interval, root=root,
                         gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
                         build_direction=build_direction,
-                        layer_strength_ratio=layer_strength_ratio)
+                        layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines)
     return analyzer.run(v)
 
 
@@ -568,6 +616,7 @@ def correct(
     bone_x_axes: Any = None,
     build_direction: Any = (0.0, 0.0, 1.0),
     layer_strength_ratio: float = 1.0,
+    keep_outlines: bool = False,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -583,7 +632,8 @@ def correct(
     local x axis (e.g. Blender's, so that pose-bone scale X/Z reproduce the result); None lets
     each bone's axes follow the first flat section scaled on it. ``build_direction`` and
     ``layer_strength_ratio`` as in :func:`analyze`: the loop is driven by the stress ratio
-    against each section's direction-dependent allowable.
+    against each section's direction-dependent allowable. ``keep_outlines``: ``before``
+    and ``after`` carry their sections' loops (:attr:`Analysis.section_loops`).
     """
     if scaling not in ("uniform", "thin"):
         raise ValueError(f"scaling must be 'uniform' or 'thin', got {scaling!r}")
@@ -619,13 +669,14 @@ def correct(
             (np.ones(len(v)), (np.arange(len(v)), nearest)), shape=(len(v), skeleton.num_bones)
         )
     dense, csr = _weights_args(weights, len(v), skeleton.num_bones)
-    d = _core.correct(
-        v, f, skeleton.heads, skeleton.tails, skeleton.parents, skeleton.names, dense, csr,
-        force, allowable_stress, interval, _held_bone(root, skeleton),
-        -1.0 if gap_tolerance is None else float(gap_tolerance), threads, float(max_scale),
-        max_rounds, float(target_ratio), scaling == "thin", float(flat_aspect), axes,
-        list(build_direction), layer_strength_ratio,
-    )
+    options = _options(force, allowable_stress, interval, _held_bone(root, skeleton),
+                       gap_tolerance, threads, build_direction, layer_strength_ratio)
+    options.keep_outlines = bool(keep_outlines)
+    co = _core.CorrectionOptions()
+    co.max_scale, co.max_rounds = float(max_scale), max_rounds
+    co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"
+    co.flat_aspect, co.bone_x_axes = float(flat_aspect), axes
+    d = _core.correct(v, f, skeleton._engine(), dense, csr, options, co)
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
           "interval": interval, "build_direction": build_direction,
           "layer_strength_ratio": layer_strength_ratio}
@@ -660,8 +711,7 @@ def skin(vertices: Any, skeleton: Skeleton, weights: Any, bone_scale: Any, *,
         if bone_x_axes is None:
             raise ValueError("bone_scale_z needs bone_x_axes (B,3): the axes it scales along")
         axes = _float_rows(bone_x_axes, "bone_x_axes")
-    return _core.skin(v, skeleton.heads, skeleton.tails, skeleton.parents, dense, csr, scales[0],
-                      scales[1], axes)
+    return _core.skin(v, skeleton._engine(), dense, csr, scales[0], scales[1], axes)
 
 
 def section_properties(outer: Any, holes: Sequence[Any] = ()) -> dict:

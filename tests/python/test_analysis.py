@@ -312,3 +312,53 @@ def test_analyzer_reuses_unchanged_sections_exactly(data_dir):
     assert np.allclose(again.vertex_stress, fresh.vertex_stress, rtol=1e-12)
     # and the pose really changed the result
     assert not np.allclose(again.stress, an.run(v, sk).stress, equal_nan=True)
+
+
+def _shoelace_area(loop: np.ndarray, normal: np.ndarray) -> float:
+    """Area (mm^2) of a closed planar 3D loop: half the cross-product sum, along the normal."""
+    return 0.5 * abs(float(np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0) @ normal))
+
+
+def _outline_areas(res) -> np.ndarray:
+    out = np.zeros(res.num_sections)
+    for s, loops in enumerate(res.section_loops):
+        if loops:
+            n = res.section_normal[s]
+            out[s] = _shoelace_area(loops[0], n) - sum(_shoelace_area(h, n) for h in loops[1:])
+    return out
+
+
+def test_section_outlines_enclose_the_section_area():
+    # A tube (every section has a hole) on a bent two-bone skeleton (an oblique joint section).
+    v, f = prism(circle(6.0, 48), 60.0, hole=circle(3.0, 48), stations=31)
+    sk = osteon.Skeleton([[0, 0, 0], [30, 0, 0]], [[30, 0, 0], [60, 0.5, 0]], [-1, 0])
+    assert osteon.analyze(v, f, sk, interval=4.0).section_loops is None  # only when asked
+    res = osteon.analyze(v, f, sk, interval=4.0, keep_outlines=True)
+    loops = res.section_loops
+    assert len(loops) == res.num_sections
+    valid = res.valid
+    assert valid.sum() >= 14
+    assert all(len(loops[s]) >= 1 for s in np.flatnonzero(valid))
+    interior = np.flatnonzero(res.section_kind == 0)
+    assert len(interior) == 14 and all(len(loops[s]) == 2 for s in interior)  # outer + hole
+    assert all(len(loops[s]) == 0 for s in np.flatnonzero(~valid))
+    np.testing.assert_allclose(_outline_areas(res)[valid], res.section_area[valid], rtol=1e-9)
+    for s in np.flatnonzero(valid):  # on the section plane
+        d = (np.concatenate(loops[s]) - res.section_point[s]) @ res.section_normal[s]
+        np.testing.assert_allclose(d, 0.0, atol=1e-9)
+
+
+def test_section_outlines_on_a_real_model(data_dir):
+    from models import load
+
+    v, f, sk, w = load("arm", height_mm=120.0)
+    res = osteon.analyze(v, f, sk, w, interval=2.0, keep_outlines=True)
+    plain = osteon.analyze(v, f, sk, w, interval=2.0)
+    np.testing.assert_array_equal(res.stress, plain.stress)  # outlines change nothing else
+    valid = res.valid
+    np.testing.assert_allclose(_outline_areas(res)[valid], res.section_area[valid], rtol=1e-8)
+    # Live mode: a re-run that reuses sections keeps their outlines.
+    an = osteon.Analyzer(f, len(v), sk, w, interval=2.0, keep_outlines=True)
+    an.run(v)
+    again = an.run(v)
+    np.testing.assert_array_equal(again.outline_points, res.outline_points)

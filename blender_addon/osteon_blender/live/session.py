@@ -82,7 +82,6 @@ class Session:
         self.analyzer = None
         self.analyzer_key = None
         self.faces = None
-        self.domains = overlay.DomainCache()
         self.last_sig = None            # (co, matrix, heads, tails, settings) last analysed
         self.settings_key = None
         self.future = None              # running analysis job
@@ -212,7 +211,7 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
         skeleton = osteon.Skeleton(inp.heads * k, inp.tails * k, inp.parents, names=inp.names)
         if sess.analyzer is None:
             sess.analyzer = osteon.Analyzer(sess.faces, len(world), skeleton, inp.weights,
-                                            **inp.params)
+                                            keep_outlines=True, **inp.params)
             sess.analyzer_key = inp.analyzer_key
         t1 = time.perf_counter()
         analysis = sess.analyzer.run(world, skeleton)
@@ -232,8 +231,7 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
 
 def outlines_of(sess: Session, res: LiveResult):
     """Worker-safe: the overlay outlines of a live result."""
-    return overlay.compute_outlines(res.analysis, res.vertices_mm, sess.faces, res.parents,
-                                    res.mm_per_unit, domains=sess.domains)
+    return overlay.compute_outlines(res.analysis, res.mm_per_unit)
 
 
 def publish(sess: Session, res: LiveResult) -> None:

@@ -23,6 +23,7 @@ struct AnalysisOptions {
   int threads = 0;                 ///< worker threads; 0 = all cores
   bool local_cuts = true;  ///< cut near the bone first (same result, faster); false: whole planes
   bool reuse_sections = true;  ///< Analyzer::run re-cuts only sections a change can reach (exact)
+  bool keep_outlines = false;  ///< fill AnalysisResult's outline_* (the loops of each section)
   /// FDM build direction in the model frame (any non-zero vector; default +Z) and layer strength
   /// ratio Z/X (1 = isotropic): each section's allowable is layer_allowable() of the angle
   /// between its normal and this direction (osteon/layers.hpp, docs/printing.md).
@@ -69,6 +70,16 @@ struct AnalysisResult {
   std::vector<double> vertex_stress;         ///< V stress interpolated along the vertex's bone, MPa
   std::vector<std::uint8_t> vertex_culled;   ///< V vertex lies among culled sections
   std::vector<int> vertex_bone;              ///< V bone whose sections colour the vertex
+
+  /// Section outlines (only with AnalysisOptions::keep_outlines; otherwise all three are empty):
+  /// the loops of the region each section analysed, packed. Section s owns the loops
+  /// outline_section_start[s] .. outline_section_start[s+1] (S+1 entries): first its outer
+  /// boundary, then its holes; none when the section was skipped. Loop l is the points
+  /// outline_points[outline_loop_start[l] .. outline_loop_start[l+1]) (L+1 entries), in order,
+  /// the last joining the first. Points are 3D on the section plane, mm (P of them).
+  std::vector<Vec3> outline_points;                 ///< P loop points, mm
+  std::vector<std::int64_t> outline_loop_start;     ///< L+1 first point of each loop
+  std::vector<std::int64_t> outline_section_start;  ///< S+1 first loop of each section
 };
 
 /// Throws std::invalid_argument when an option is out of range (force, stress, interval <= 0...).
