@@ -38,7 +38,8 @@ struct PlaneFrame {
 /// One triangle's cut: two endpoints, each on a mesh edge identified by its vertex pair.
 struct CutSegment {
   std::uint64_t edge[2];  ///< (min vertex << 32) | max vertex of the edge each endpoint lies on
-  Vec2 point[2];          ///< endpoints in plane coordinates, mm
+  Vec2 point[2];  ///< endpoints in plane coordinates, mm; point[0] -> point[1] keeps the face's
+                  ///< orientation (outward-facing surfaces give counter-clockwise loops)
 };
 
 /// The closed loops (and leftover open polylines) of one plane cut, in plane coordinates.
