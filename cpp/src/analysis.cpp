@@ -13,6 +13,7 @@
 #include <string>
 
 #include "analysis_impl.hpp"
+#include "osteon/regions.hpp"
 #include "parallel.hpp"
 
 namespace osteon {
@@ -435,6 +436,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
         st.thin_axis = (thin.x() * frame.u + thin.y() * frame.v).normalized();
         const double lo = std::max(eig.eigenvalues()(0), 0.0), hi = eig.eigenvalues()(1);
         st.aspect = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
+        st.thickness = region_thickness(geom.polygon);
       } else {
         st.flags |= kFlagDegenerate;
       }
@@ -443,7 +445,9 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   };
   // The whole-plane section from all of a plane's segments (gaps closed: nothing is clipped).
   auto finish_whole = [&](int si, const PlaneFrame& frame, const std::vector<CutSegment>& segs) {
-    SectionGeometry geom = select_section(assemble_loops(segs, gap));
+    // A bone outside the mesh takes the region cut from its own skinning domain.
+    const BoneDomain domain{&segs, vertex_bone.data(), specs[si].bone};
+    SectionGeometry geom = select_region(assemble_loops(segs, gap), &domain);
     if (segs.empty()) geom.flags |= kFlagEmpty;
     finish(si, frame, geom, nullptr);
   };
@@ -606,6 +610,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   r.section_modulus.resize(ns);
   r.section_thin_axis.resize(ns);
   r.section_aspect.resize(ns);
+  r.section_thickness.resize(ns);
   r.moment_arm.resize(ns);
   r.moment.resize(ns);
   r.stress.resize(ns);
@@ -634,11 +639,43 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
       r.section_modulus[i] = st.found ? st.modulus : kNaN;
       r.section_thin_axis[i] = st.found ? st.thin_axis : Vec3(kNaN, kNaN, kNaN);
       r.section_aspect[i] = st.found ? st.aspect : kNaN;
+      r.section_thickness[i] = st.found ? st.thickness : kNaN;
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
+  // Sections that drive results: found, not doubted (unreliable), not too thin to print. An
+  // outside section far smaller than its bone's sections inside the mesh (below a tenth of their
+  // median area) is a sliver the bone only grazes: unreliable, no number.
+  std::vector<std::uint8_t> usable(ns, 0);
+  {
+    std::vector<std::vector<double>> inner(nb);
+    for (int i = 0; i < ns; ++i)
+      if (states[i].found && !(states[i].flags & kFlagOutside))
+        inner[specs[i].bone].push_back(states[i].area);
+    std::vector<double> median(nb, 0.0);
+    for (int b = 0; b < nb; ++b) {
+      auto& a = inner[b];
+      if (a.empty()) continue;
+      std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+      median[b] = a[a.size() / 2];
+    }
+    for (int i = 0; i < ns; ++i) {
+      if (!states[i].found) continue;
+      std::uint32_t& flags = r.section_flags[i];
+      if ((flags & kFlagOutside) && states[i].area < 0.1 * median[specs[i].bone]) {
+        flags |= kFlagUnreliable;
+        r.section_area[i] = 0.0;
+        r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
+        r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
+        continue;
+      }
+      if (options.min_thickness > 0 && states[i].thickness < options.min_thickness)
+        flags |= kFlagTooThin;
+      usable[i] = !(flags & kFlagTooThin);
+    }
+  }
   for (int i = 0; i < ns; ++i) {
-    if (!states[i].found) continue;
+    if (!usable[i]) continue;
     r.max_moment = std::max(r.max_moment, r.moment[i]);
     if (r.weakest_section < 0 || r.stress[i] > r.max_stress) {
       r.max_stress = r.stress[i];
@@ -647,7 +684,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   }
   r.safe_modulus = r.max_moment / options.allowable_stress;
   for (int i = 0; i < ns; ++i) {
-    if (!states[i].found) continue;
+    if (!usable[i]) continue;
     r.culled[i] = r.section_modulus[i] > r.safe_modulus;
     r.weak[i] = r.stress[i] > options.allowable_stress;
   }
@@ -656,7 +693,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   // 5. Per-vertex stress: linear along the vertex's bone between its sections.
   std::vector<std::vector<int>> bone_sections(nb);
   for (int i = 0; i < ns; ++i)
-    if (states[i].found) bone_sections[specs[i].bone].push_back(i);
+    if (usable[i]) bone_sections[specs[i].bone].push_back(i);
   std::vector<std::vector<double>> sp(nb), ss(nb);
   std::vector<std::vector<std::uint8_t>> sc(nb);
   for (int b = 0; b < nb; ++b) {

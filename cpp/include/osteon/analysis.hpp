@@ -22,6 +22,7 @@ struct AnalysisOptions {
   int threads = 0;                 ///< worker threads; 0 = all cores
   bool local_cuts = true;  ///< cut near the bone first (same result, faster); false: whole planes
   bool reuse_sections = true;  ///< Analyzer::run re-cuts only sections a change can reach (exact)
+  double min_thickness = 0.8;  ///< thinner sections (mm) are flagged too_thin; 0 = no check
 };
 
 /// Where a section sits on its bone.
@@ -45,11 +46,12 @@ struct AnalysisResult {
   std::vector<Vec3>
       section_thin_axis;               ///< S unit in-plane direction the section is thinnest across
   std::vector<double> section_aspect;  ///< S width / thickness (sqrt of J's eigenvalue ratio)
-  std::vector<double> moment_arm;      ///< S distance centroid -> load point d, mm
-  std::vector<double> moment;          ///< S bending moment M = F d, N mm
-  std::vector<double> stress;          ///< S peak bending stress M / W, MPa (NaN when skipped)
-  std::vector<std::uint8_t> culled;    ///< S W > safe modulus: safe for sure (drawn grey)
-  std::vector<std::uint8_t> weak;      ///< S stress > allowable stress
+  std::vector<double> section_thickness;  ///< S minimum width of the region, mm (NaN: skipped)
+  std::vector<double> moment_arm;         ///< S distance centroid -> load point d, mm
+  std::vector<double> moment;             ///< S bending moment M = F d, N mm
+  std::vector<double> stress;  ///< S peak bending stress M / W, MPa (NaN when skipped/unreliable)
+  std::vector<std::uint8_t> culled;          ///< S W > safe modulus: safe for sure (drawn grey)
+  std::vector<std::uint8_t> weak;            ///< S stress > allowable stress
   std::vector<std::uint32_t> section_flags;  ///< S SectionFlag bits
   double max_moment = 0.0;                   ///< M_gmax, N mm
   double safe_modulus = 0.0;                 ///< W_k = M_gmax / [sigma], mm^3
@@ -59,6 +61,9 @@ struct AnalysisResult {
   std::vector<double> vertex_stress;         ///< V stress interpolated along the vertex's bone, MPa
   std::vector<std::uint8_t> vertex_culled;   ///< V vertex lies among culled sections
   std::vector<int> vertex_bone;              ///< V bone whose sections colour the vertex
+  /// Vertex indices of each loose piece: a shell that neither touches nor overlaps the held piece
+  /// (it would fall off the print); its sections are still computed like any other.
+  std::vector<std::vector<std::int32_t>> loose_pieces;
 };
 
 /// Throws std::invalid_argument when an option is out of range (force, stress, interval <= 0...).

@@ -10,12 +10,6 @@
 
 namespace osteon {
 
-/// Extra per-section flags set by the region choice and the analysis (SectionFlag continues).
-enum RegionFlag : std::uint32_t {
-  kFlagUnreliable = 1u << 7,  ///< bone point in no material and no region tied to the bone
-  kFlagTooThin = 1u << 8,     ///< section thinner than the minimum printable thickness
-};
-
 /// Which faces belong to the section's bone, to tie a region to a bone outside the mesh: a cut
 /// segment belongs to `bone` when at least two of the three vertices of its triangle (found from
 /// the two mesh edges it crosses) have vertex_bone == bone.
