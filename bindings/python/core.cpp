@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -139,8 +140,12 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
 }
 
 AnalysisOptions make_options(double force, double allowable_stress, double interval, int held_bone,
-                             double gap_tolerance, int threads, bool local_cuts = true) {
+                             double gap_tolerance, int threads, bool local_cuts = true,
+                             double min_thickness = 0.8) {
   AnalysisOptions o;
+  if (!(min_thickness >= 0) || !std::isfinite(min_thickness))
+    throw std::invalid_argument("min_thickness must be a finite length >= 0 mm");
+  o.min_thickness = min_thickness;
   o.local_cuts = local_cuts;
   o.force = force;
   o.allowable_stress = allowable_stress;
@@ -164,6 +169,7 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["section_modulus"] = to_numpy(std::move(r.section_modulus));
   d["section_thin_axis"] = to_numpy(std::move(r.section_thin_axis));
   d["section_aspect"] = to_numpy(std::move(r.section_aspect));
+  d["section_thickness"] = to_numpy(std::move(r.section_thickness));
   d["moment_arm"] = to_numpy(std::move(r.moment_arm));
   d["moment"] = to_numpy(std::move(r.moment));
   d["stress"] = to_numpy(std::move(r.stress));
@@ -178,6 +184,9 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["vertex_stress"] = to_numpy(std::move(r.vertex_stress));
   d["vertex_culled"] = to_bool(r.vertex_culled);
   d["vertex_bone"] = to_numpy(std::move(r.vertex_bone));
+  py::list loose;
+  for (auto& piece : r.loose_pieces) loose.append(to_numpy(std::move(piece)));
+  d["loose_pieces"] = loose;
   return d;
 }
 
@@ -186,10 +195,11 @@ class PyAnalyzer {
  public:
   PyAnalyzer(const Int32Array& faces, Index num_vertices, int num_bones, const py::object& dense,
              const py::object& csr, double force, double allowable_stress, double interval,
-             int held_bone, double gap_tolerance, int threads, bool local_cuts) {
+             int held_bone, double gap_tolerance, int threads, bool local_cuts,
+             double min_thickness) {
     require_rows3(faces, "faces");
     const AnalysisOptions options = make_options(force, allowable_stress, interval, held_bone,
-                                                 gap_tolerance, threads, local_cuts);
+                                                 gap_tolerance, threads, local_cuts, min_thickness);
     if (dense.is_none() && !csr.is_none()) {
       // Sparse weights: the analysis needs only each vertex's dominant bone; no copy of them.
       const CsrArrays c = csr_arrays(csr, num_vertices, /*allow_narrow=*/true);
@@ -253,11 +263,11 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<PyAnalyzer>(m, "Analyzer", "Reusable analysis of one mesh topology.")
       .def(py::init<const Int32Array&, Index, int, const py::object&, const py::object&, double,
-                    double, double, int, double, int, bool>(),
+                    double, double, int, double, int, bool, double>(),
            py::arg("faces"), py::arg("num_vertices"), py::arg("num_bones"), py::arg("dense"),
            py::arg("csr"), py::arg("force"), py::arg("allowable_stress"), py::arg("interval"),
            py::arg("held_bone"), py::arg("gap_tolerance"), py::arg("threads"),
-           py::arg("local_cuts") = true)
+           py::arg("local_cuts") = true, py::arg("min_thickness") = 0.8)
       .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("heads"), py::arg("tails"),
            py::arg("parents"), py::arg("names"),
            "Analyse vertices (V,3 mm) with a posed skeleton.");
@@ -269,15 +279,15 @@ PYBIND11_MODULE(_core, m) {
          const py::object& dense, const py::object& csr, double force, double allowable_stress,
          double interval, int held_bone, double gap_tolerance, int threads, double max_scale,
          int max_rounds, double target_ratio, bool thin_direction, double flat_aspect,
-         const py::object& bone_x_axes) {
+         const py::object& bone_x_axes, double min_thickness) {
         require_rows3(vertices, "vertices");
         require_rows3(faces, "faces");
         const Skeleton s = make_skeleton(heads, tails, parents, names);
         auto weights = make_weights(dense, csr, vertices.shape(0), s.num_bones());
         if (!weights) throw std::invalid_argument("correct() needs skinning weights");
         const MeshView mesh{vertices.data(), vertices.shape(0), faces.data(), faces.shape(0)};
-        const AnalysisOptions o =
-            make_options(force, allowable_stress, interval, held_bone, gap_tolerance, threads);
+        const AnalysisOptions o = make_options(force, allowable_stress, interval, held_bone,
+                                               gap_tolerance, threads, true, min_thickness);
         CorrectionOptions co;
         co.max_scale = max_scale;
         co.max_rounds = max_rounds;
@@ -320,7 +330,8 @@ PYBIND11_MODULE(_core, m) {
       py::arg("allowable_stress"), py::arg("interval"), py::arg("held_bone"),
       py::arg("gap_tolerance"), py::arg("threads"), py::arg("max_scale"), py::arg("max_rounds"),
       py::arg("target_ratio"), py::arg("thin_direction") = false, py::arg("flat_aspect") = 2.0,
-      py::arg("bone_x_axes") = py::none(), "Correction loop (paper §5); see osteon.correct.");
+      py::arg("bone_x_axes") = py::none(), py::arg("min_thickness") = 0.8,
+      "Correction loop (paper §5); see osteon.correct.");
 
   m.def(
       "skin",
@@ -424,4 +435,6 @@ PYBIND11_MODULE(_core, m) {
   m.attr("FLAG_EMPTY") = static_cast<int>(kFlagEmpty);
   m.attr("FLAG_DEGENERATE") = static_cast<int>(kFlagDegenerate);
   m.attr("FLAG_NON_MANIFOLD") = static_cast<int>(kFlagNonManifold);
+  m.attr("FLAG_UNRELIABLE") = static_cast<int>(kFlagUnreliable);
+  m.attr("FLAG_TOO_THIN") = static_cast<int>(kFlagTooThin);
 }

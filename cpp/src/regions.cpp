@@ -321,3 +321,129 @@ double region_thickness(const SectionPolygon& polygon) {
 }
 
 }  // namespace osteon
+
+namespace osteon {
+namespace {
+
+int find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+// True when point p lies inside the closed triangle set `faces` (parity of crossings of a ray).
+bool inside_shell(const MeshView& mesh, const std::vector<std::int32_t>& faces, const Vec3& p) {
+  const Vec3 dir = Vec3(1.0, 0.3141592653589793, 0.2718281828459045).normalized();
+  int hits = 0;
+  for (std::size_t k = 0; k < faces.size(); k += 3) {
+    const Vec3 a = mesh.vertex(faces[k]);
+    const Vec3 e1 = mesh.vertex(faces[k + 1]) - a, e2 = mesh.vertex(faces[k + 2]) - a;
+    const Vec3 q = dir.cross(e2);
+    const double det = e1.dot(q);
+    if (det == 0.0) continue;
+    const double inv = 1.0 / det;
+    const Vec3 s = p - a;
+    const double u = s.dot(q) * inv;
+    if (u < 0.0 || u > 1.0) continue;
+    const Vec3 r = s.cross(e1);
+    const double v = dir.dot(r) * inv;
+    if (v < 0.0 || u + v > 1.0) continue;
+    if (e2.dot(r) * inv > 0.0) ++hits;
+  }
+  return hits % 2 == 1;
+}
+
+}  // namespace
+
+std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
+                                                    const std::vector<int>& vertex_bone,
+                                                    int held_bone) {
+  const Index nv = mesh.num_vertices, nf = mesh.num_faces;
+  std::vector<std::int32_t> parent(nv);
+  for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
+  auto join = [&](std::int32_t a, std::int32_t b) {
+    a = find_root(parent, a);
+    b = find_root(parent, b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  };
+  for (Index f = 0; f < nf; ++f) {
+    join(mesh.faces[3 * f], mesh.faces[3 * f + 1]);
+    join(mesh.faces[3 * f], mesh.faces[3 * f + 2]);
+  }
+  auto count_roots = [&]() {
+    Index roots = 0;
+    for (Index v = 0; v < nv; ++v) roots += find_root(parent, static_cast<std::int32_t>(v)) == v;
+    return roots;
+  };
+  if (count_roots() <= 1) return {};
+  // Shells touching at exactly the same position (unwelded meshes) are one piece.
+  std::vector<std::int32_t> order(nv);
+  for (Index v = 0; v < nv; ++v) order[v] = static_cast<std::int32_t>(v);
+  auto less = [&](std::int32_t a, std::int32_t b) {
+    const double* p = mesh.vertices + 3 * static_cast<Index>(a);
+    const double* q = mesh.vertices + 3 * static_cast<Index>(b);
+    return std::lexicographical_compare(p, p + 3, q, q + 3);
+  };
+  std::sort(order.begin(), order.end(), less);
+  for (Index k = 1; k < nv; ++k)
+    if (!less(order[k - 1], order[k])) join(order[k - 1], order[k]);
+  // Pieces: vertices, faces and boxes.
+  std::vector<std::int32_t> piece_of(nv, -1), root_piece(nv, -1);
+  std::vector<std::vector<std::int32_t>> verts;
+  for (Index v = 0; v < nv; ++v) {
+    const std::int32_t r = find_root(parent, static_cast<std::int32_t>(v));
+    if (root_piece[r] < 0) {
+      root_piece[r] = static_cast<std::int32_t>(verts.size());
+      verts.emplace_back();
+    }
+    piece_of[v] = root_piece[r];
+    verts[piece_of[v]].push_back(static_cast<std::int32_t>(v));
+  }
+  const std::size_t np = verts.size();
+  if (np <= 1) return {};
+  std::vector<std::vector<std::int32_t>> faces(np);
+  for (Index f = 0; f < nf; ++f) {
+    auto& out = faces[piece_of[mesh.faces[3 * f]]];
+    out.insert(out.end(), mesh.faces + 3 * f, mesh.faces + 3 * f + 3);
+  }
+  std::vector<Vec3> lo(np, Vec3::Constant(std::numeric_limits<double>::infinity())),
+      hi(np, Vec3::Constant(-std::numeric_limits<double>::infinity()));
+  std::vector<Index> held_count(np, 0);
+  for (Index v = 0; v < nv; ++v) {
+    const int p = piece_of[v];
+    lo[p] = lo[p].cwiseMin(mesh.vertex(v));
+    hi[p] = hi[p].cwiseMax(mesh.vertex(v));
+    held_count[p] += vertex_bone[v] == held_bone;
+  }
+  std::size_t held = 0;
+  for (std::size_t p = 1; p < np; ++p)
+    if (held_count[p] > held_count[held] ||
+        (held_count[p] == held_count[held] && verts[p].size() > verts[held].size()))
+      held = p;
+  auto overlap = [&](std::size_t a, std::size_t b) {
+    if ((lo[a].array() > hi[b].array()).any() || (lo[b].array() > hi[a].array()).any())
+      return false;
+    for (int pass = 0; pass < 2; ++pass) {
+      const std::size_t from = pass == 0 ? a : b, into = pass == 0 ? b : a;
+      if (faces[into].empty()) continue;
+      const std::size_t n = verts[from].size(), step = std::max<std::size_t>(1, n / 64);
+      for (std::size_t k = 0; k < n; k += step)
+        if (inside_shell(mesh, faces[into], mesh.vertex(verts[from][k]))) return true;
+    }
+    return false;
+  };
+  std::vector<std::uint8_t> attached(np, 0);
+  std::vector<std::size_t> queue{held};
+  attached[held] = 1;
+  for (std::size_t q = 0; q < queue.size(); ++q)
+    for (std::size_t p = 0; p < np; ++p)
+      if (!attached[p] && overlap(queue[q], p)) {
+        attached[p] = 1;
+        queue.push_back(p);
+      }
+  std::vector<std::vector<std::int32_t>> loose;
+  for (std::size_t p = 0; p < np; ++p)
+    if (!attached[p] && !faces[p].empty()) loose.push_back(std::move(verts[p]));
+  return loose;
+}
+
+}  // namespace osteon

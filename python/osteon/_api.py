@@ -16,6 +16,8 @@ import numpy as np
 from . import _core
 
 __all__ = [
+    "DEFAULT_MIN_THICKNESS",
+    "FLAG_REASONS",
     "SECTION_FLAGS",
     "SECTION_KINDS",
     "Analysis",
@@ -38,6 +40,22 @@ SECTION_FLAGS = {
     "empty": _core.FLAG_EMPTY,
     "degenerate": _core.FLAG_DEGENERATE,
     "non_manifold": _core.FLAG_NON_MANIFOLD,
+    "unreliable": _core.FLAG_UNRELIABLE,
+    "too_thin": _core.FLAG_TOO_THIN,
+}
+
+#: Plain-language reason of each flag (``Analysis.flag_reasons``, the JSON ``sections`` rows).
+FLAG_REASONS = {
+    "gap_closed": "the cut had open ends, joined across a small gap (mesh not closed here)",
+    "open": "an open mesh edge touches this section: it may be incomplete",
+    "outside": "the bone runs outside the mesh here: the section is its own part's cut",
+    "hollow": "the bone runs through a hole: the wall around it is the section",
+    "empty": "nothing usable was cut here: no number",
+    "degenerate": "zero area or a flat section: no number",
+    "non_manifold": "non-manifold edges (more than two faces on an edge) are cut here",
+    "unreliable": "the bone is outside the mesh and no part here belongs to it: no number, "
+                  "left out of every result",
+    "too_thin": "too thin to print ({thickness} mm < {minimum} mm)",
 }
 #: Values of ``Analysis.section_kind``.
 SECTION_KINDS = {0: "interior", 1: "joint", 2: "end"}
@@ -198,6 +216,23 @@ def _positive(value: float, name: str, unit: str) -> float:
     return v
 
 
+#: Default minimum printable thickness, mm (FDM: two perimeters of a 0.4 mm nozzle).
+DEFAULT_MIN_THICKNESS = 0.8
+
+
+def _min_thickness(value: Any) -> float:
+    """``min_thickness`` in mm: None -> the default; must be a finite number >= 0."""
+    if value is None:
+        return DEFAULT_MIN_THICKNESS
+    try:
+        t = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"min_thickness must be a number of mm, got {value!r}") from None
+    if not (t >= 0.0 and math.isfinite(t)):
+        raise ValueError(f"min_thickness must be a finite length >= 0 mm, got {value!r}")
+    return t
+
+
 def _held_bone(root: int | str | None, skeleton: Skeleton) -> int:
     if root is None:
         return -1
@@ -226,8 +261,13 @@ class Analysis:
     (S,) mm³, ``section_thin_axis`` (S,3) unit in-plane direction across the section's thinnest
     width, ``section_aspect`` (S,) width / thickness (1 for a circle or square), ``moment_arm`` (S,) mm, ``moment`` (S,) N·mm, ``stress`` (S,) MPa, ``culled`` (S,)
     bool (W > safe modulus: safe for sure), ``weak`` (S,) bool (stress > allowable),
-    ``section_flags`` (S,) bit mask (see ``SECTION_FLAGS``). Skipped sections (flag ``empty`` or
-    ``degenerate``) have NaN modulus and stress and are never weak or culled.
+    ``section_flags`` (S,) bit mask (see ``SECTION_FLAGS``), ``section_thickness`` (S,) mm: the
+    region's minimum width (narrowest distance between two parallel lines enclosing it; a solid
+    round section's diameter, a plate's thickness). Skipped sections (flag ``empty``,
+    ``degenerate`` or ``unreliable``) have NaN modulus and stress and are never weak or culled;
+    ``too_thin`` sections (thinner than ``min_thickness`` mm) keep their stress but are never
+    weak, culled, the maximum or corrected. ``loose_pieces``: list of (n,) vertex index arrays,
+    one per shell that neither touches nor overlaps the held piece (it would fall off).
     Per vertex: ``vertex_stress`` (V,) MPa, ``vertex_culled`` (V,) bool, ``vertex_bone`` (V,).
     Scalars: ``max_moment`` N·mm, ``safe_modulus`` mm³, ``max_stress`` MPa, ``allowable_stress``
     MPa, ``force`` N, ``interval`` mm, ``held_bone`` index.
@@ -250,6 +290,7 @@ class Analysis:
     culled: np.ndarray
     weak: np.ndarray
     section_flags: np.ndarray
+    section_thickness: np.ndarray
     max_moment: float
     safe_modulus: float
     max_stress: float
@@ -258,16 +299,18 @@ class Analysis:
     vertex_stress: np.ndarray
     vertex_culled: np.ndarray
     vertex_bone: np.ndarray
+    loose_pieces: list = field(default_factory=list)
     allowable_stress: float = 60.0
     force: float = 20.0
     interval: float = 2.0
     bone_names: list = field(default_factory=list)
+    min_thickness: float = DEFAULT_MIN_THICKNESS
 
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
-                   interval: float) -> Analysis:
+                   interval: float, min_thickness: float = DEFAULT_MIN_THICKNESS) -> Analysis:
         return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
-                   bone_names=list(skeleton.names))
+                   bone_names=list(skeleton.names), min_thickness=min_thickness)
 
     @property
     def num_sections(self) -> int:
@@ -288,6 +331,22 @@ class Analysis:
         """Names of the flags set on one section."""
         f = int(self.section_flags[section])
         return [name for name, bit in SECTION_FLAGS.items() if f & bit]
+
+    def flag_reasons(self, section: int) -> list[str]:
+        """Plain-language reason of each flag set on one section (see ``FLAG_REASONS``)."""
+        t = float(self.section_thickness[section])
+        return [FLAG_REASONS[name].format(thickness=f"{t:.2g}", minimum=f"{self.min_thickness:g}")
+                for name in self.flag_names(section)]
+
+    @property
+    def too_thin(self) -> np.ndarray:
+        """(S,) bool: sections thinner than ``min_thickness`` mm (too thin to print)."""
+        return (self.section_flags & SECTION_FLAGS["too_thin"]) != 0
+
+    @property
+    def unreliable(self) -> np.ndarray:
+        """(S,) bool: sections no material could be tied to (bone outside the mesh)."""
+        return (self.section_flags & SECTION_FLAGS["unreliable"]) != 0
 
     def bone_max_stress(self) -> np.ndarray:
         """(B,) largest section stress per bone, MPa (0 for bones without valid sections)."""
@@ -406,6 +465,7 @@ class Analyzer:
         gap_tolerance: float | None = None,
         threads: int = 0,
         local_cuts: bool = True,
+        min_thickness: float | None = None,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -418,13 +478,14 @@ class Analyzer:
         self.interval = _positive(interval, "interval", "mm")
         if gap_tolerance is not None and not (float(gap_tolerance) >= 0):
             raise ValueError("gap_tolerance must be >= 0 mm")
+        self.min_thickness = _min_thickness(min_thickness)
         dense, csr = _weights_args(weights, self.num_vertices, skeleton.num_bones)
         self._skeleton = skeleton
         self._core = _core.Analyzer(
             self.faces, self.num_vertices, skeleton.num_bones, dense, csr, self.force,
             self.allowable_stress, self.interval, _held_bone(root, skeleton),
             -1.0 if gap_tolerance is None else float(gap_tolerance), _count(threads, "threads"),
-            bool(local_cuts),
+            bool(local_cuts), self.min_thickness,
         )
 
     def run(self, vertices: Any, skeleton: Skeleton | None = None) -> Analysis:
@@ -444,7 +505,8 @@ class Analyzer:
             )
         d = self._core.run(v, sk.heads, sk.tails, sk.parents, sk.names)
         return Analysis._from_core(d, skeleton=sk, allowable_stress=self.allowable_stress,
-                                   force=self.force, interval=self.interval)
+                                   force=self.force, interval=self.interval,
+                                   min_thickness=self.min_thickness)
 
 
 def analyze(
@@ -460,6 +522,7 @@ def analyze(
     gap_tolerance: float | None = None,
     threads: int = 0,
     local_cuts: bool = True,
+    min_thickness: float | None = None,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -467,14 +530,17 @@ def analyze(
     None (each vertex bound to its nearest bone) or (V,B) dense / SciPy sparse; ``force`` N on the
     worst point of each branch; ``allowable_stress`` MPa (strength / safety factor); ``interval``
     mm between sections along each bone; ``root`` the bone (index or name) held at its head
-    (default: the main root bone). Raises ValueError on bad input.
+    (default: the main root bone); ``min_thickness`` mm: sections thinner than this are flagged
+    ``too_thin`` (None: 0.8 mm, FDM; the material presets carry their own; 0 = no check).
+    Raises ValueError on bad input.
     """
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
         raise ValueError("empty mesh: vertices has no rows")
     analyzer = Analyzer(faces, len(v), skeleton, weights, force=force,
                         allowable_stress=allowable_stress, interval=interval, root=root,
-                        gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts)
+                        gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
+                        min_thickness=min_thickness)
     return analyzer.run(v)
 
 
@@ -496,6 +562,7 @@ def correct(
     scaling: str = DEFAULT_SCALING,
     flat_aspect: float = 2.0,
     bone_x_axes: Any = None,
+    min_thickness: float | None = None,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -549,9 +616,10 @@ def correct(
         force, allowable_stress, interval, _held_bone(root, skeleton),
         -1.0 if gap_tolerance is None else float(gap_tolerance), threads, float(max_scale),
         max_rounds, float(target_ratio), scaling == "thin", float(flat_aspect), axes,
+        _min_thickness(min_thickness),
     )
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
-              "interval": interval}
+          "interval": interval, "min_thickness": _min_thickness(min_thickness)}
     d["before"] = Analysis._from_core(d["before"], **kw)
     d["after"] = Analysis._from_core(d["after"], **kw)
     return Correction(**d)
