@@ -125,15 +125,15 @@ def printability(a, bone_names) -> dict:
         out["too_thin"].append({
             "bone": bone_names[b], "section": int(i), "param_mm": finite(a.section_param[i]),
             "thickness_mm": finite(a.section_thickness[i]),
-            "reason": [r for n, r in zip(a.flag_names(i), a.flag_reasons(i))
-                       if n == "too_thin"][0]})
+            "reason": next(r for n, r in zip(a.flag_names(i), a.flag_reasons(i))
+                           if n == "too_thin")})
     for i in np.flatnonzero(flags & SECTION_FLAGS["unreliable"]):
         b = int(a.section_bone[i])
         out["unreliable"].append({"bone": bone_names[b], "section": int(i),
                                   "param_mm": finite(a.section_param[i])})
     for piece in getattr(a, "loose_pieces", []):
         piece = np.asarray(piece)
-        out["loose_pieces"].append({"vertices": int(len(piece)),
+        out["loose_pieces"].append({"vertices": len(piece),
                                     "first_vertex": int(piece[0]) if len(piece) else None,
                                     "vertex_indices": [int(v) for v in piece]})
     return out
