@@ -104,7 +104,8 @@ void check_analysis(const AnalysisResult& r, Index num_vertices, int num_bones) 
     check(r.section_area[i] >= 0.0, "section area >= 0");
     check(std::isfinite(r.moment_arm[i]) && r.moment_arm[i] >= 0.0, "moment arm finite >= 0");
     check(r.section_center[i].allFinite(), "finite section centre");
-    const bool skipped = (r.section_flags[i] & (kFlagEmpty | kFlagDegenerate)) != 0;
+    const bool skipped =
+        (r.section_flags[i] & (kFlagEmpty | kFlagDegenerate | kFlagUnreliable)) != 0;
     check(std::isnan(r.stress[i]) == skipped, "NaN stress <=> skipped flag");
     check(std::isnan(r.section_modulus[i]) == skipped, "NaN modulus <=> skipped flag");
     if (!skipped) {
