@@ -716,7 +716,8 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   r.vertex_stress.assign(num_vertices, 0.0);
   r.vertex_culled.assign(num_vertices, 0);
   r.vertex_bone = vertex_bone;
-  r.loose_pieces = loose_pieces(mesh, vertex_bone, tree.held_bone);
+  // Loose pieces: full runs only (the correction's partial re-cuts move no piece apart).
+  if (!partial) r.loose_pieces = loose_pieces(mesh, vertex_bone, tree.held_bone);
   const Index block = 8192;
   detail::parallel_for(
       static_cast<long>((num_vertices + block - 1) / block), threads, [&](long chunk, int) {
