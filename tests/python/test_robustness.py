@@ -683,9 +683,9 @@ def test_extreme_scales(clean, scale):
     """Geometric scaling by s: area s², modulus s³, moment arm s, moment s, stress 1/s²."""
     v, f, _, _ = clean
     sk = off_grid_bones()
-    ref = osteon.analyze(v, f, sk)
+    ref = osteon.analyze(v, f, sk, min_thickness=0)
     assert (ref.section_flags == 0).all()
-    res = osteon.analyze(v * scale, f, sk.scaled(scale), interval=2.0 * scale)
+    res = osteon.analyze(v * scale, f, sk.scaled(scale), interval=2.0 * scale, min_thickness=0)
     assert_well_formed(res, len(v))
     assert res.num_sections == ref.num_sections
     np.testing.assert_array_equal(res.section_flags, ref.section_flags)
@@ -702,7 +702,7 @@ def test_extreme_scale_planes_through_vertices(clean):
     their cut when the face grid rounded a cell box below the plane."""
     v, f, sk, ref = clean  # bones on integers: planes every 2 mm through the 1 mm vertex rings
     s = 1e-6
-    res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s)
+    res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s, min_thickness=0)
     np.testing.assert_array_equal(res.section_flags, ref.section_flags)
     np.testing.assert_allclose(res.stress, ref.stress / s**2, rtol=1e-9)
 
@@ -710,7 +710,7 @@ def test_extreme_scale_planes_through_vertices(clean):
 def test_overflowing_coordinates_are_flagged(clean):
     v, f, sk, _ = clean
     s = 1e80  # J ~ r^4 overflows to inf
-    res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s)
+    res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s, min_thickness=0)
     assert_well_formed(res, len(v))
     assert has_flag(res, "degenerate").all()
 
