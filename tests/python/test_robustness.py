@@ -418,9 +418,11 @@ def test_self_intersecting_shells(clean):
     res = osteon.analyze(v2, f2, sk)
     assert_well_formed(res, len(v2))
     interior = res.section_kind == 0
-    assert has_flag(res, "hollow")[interior].all()
-    # The section is one shell (not the union): the same area as the single bar.
-    np.testing.assert_allclose(res.section_area[interior], ref.section_area[interior], rtol=1e-9)
+    assert not has_flag(res, "hollow")[interior].any()
+    # The section is the union of the shells, as a slicer prints it (issue 12): more than one
+    # bar, less than two (exact union areas: tests/python/test_printed_sections.py).
+    a, one = res.section_area[interior], ref.section_area[interior]
+    assert (a > 1.02 * one).all() and (a < 2 * one).all()
 
 
 # --- skeleton ------------------------------------------------------------------------------------
