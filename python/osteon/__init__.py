@@ -5,7 +5,9 @@ printed object, newtons, MPa. See :func:`analyze`, :func:`correct`, :class:`Skel
 """
 
 from ._api import (
+    DEFAULT_MIN_THICKNESS,
     DEFAULT_SCALING,
+    FLAG_REASONS,
     SECTION_FLAGS,
     SECTION_KINDS,
     Analysis,
@@ -23,7 +25,9 @@ from .orientation import Orientation, best_orientation
 __version__ = "0.1.0"
 
 __all__ = [
+    "DEFAULT_MIN_THICKNESS",
     "DEFAULT_SCALING",
+    "FLAG_REASONS",
     "SECTION_FLAGS",
     "SECTION_KINDS",
     "Analysis",

@@ -123,8 +123,43 @@ def section_rows(a, bone_names) -> list[dict]:
             "stress_ratio": finite(ratio[i]) if ratio is not None else None,
             "limit": None if across is None else
             ("across layers" if across[i] else "along layers"),
+            "thickness_mm": finite(a.section_thickness[i])
+            if hasattr(a, "section_thickness") else None,
+            "flags": a.flag_names(i) if hasattr(a, "flag_names") else [],
+            "reasons": a.flag_reasons(i) if hasattr(a, "flag_reasons") else [],
         })
     return rows
+
+
+def printability(a, bone_names) -> dict:
+    """What the print cannot do, apart from overloading: ``too_thin`` (sections thinner than the
+    minimum printable thickness: bone, position mm, thickness mm, reason), ``unreliable``
+    (sections no material could be tied to) and ``loose_pieces`` (vertex count and the first
+    vertex index of each shell that would fall off; the vertex lists are in
+    ``Analysis.loose_pieces``)."""
+    out = {"too_thin": [], "unreliable": [], "loose_pieces": []}
+    flags = getattr(a, "section_flags", None)
+    if flags is None or not hasattr(a, "flag_reasons"):
+        return out
+    from . import SECTION_FLAGS
+
+    for i in np.flatnonzero(flags & SECTION_FLAGS["too_thin"]):
+        b = int(a.section_bone[i])
+        out["too_thin"].append({
+            "bone": bone_names[b], "section": int(i), "param_mm": finite(a.section_param[i]),
+            "thickness_mm": finite(a.section_thickness[i]),
+            "reason": next(r for n, r in zip(a.flag_names(i), a.flag_reasons(i))
+                           if n == "too_thin")})
+    for i in np.flatnonzero(flags & SECTION_FLAGS["unreliable"]):
+        b = int(a.section_bone[i])
+        out["unreliable"].append({"bone": bone_names[b], "section": int(i),
+                                  "param_mm": finite(a.section_param[i])})
+    for piece in getattr(a, "loose_pieces", []):
+        piece = np.asarray(piece)
+        out["loose_pieces"].append({"vertices": len(piece),
+                                    "first_vertex": int(piece[0]) if len(piece) else None,
+                                    "vertex_indices": [int(v) for v in piece]})
+    return out
 
 
 def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
@@ -205,6 +240,11 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         "bone_scale_xz": None,
         "warnings": [],
     }
+    # Printability, reported apart from the overloaded sections (issue 12).
+    printable = printability(shown, bone_names)
+    report["too_thin_sections"] = printable["too_thin"]
+    report["unreliable_sections"] = printable["unreliable"]
+    report["loose_pieces"] = printable["loose_pieces"]
     if correction is not None:
         rounds = correction.rounds
         sx = getattr(correction, "bone_scale_x", None)
