@@ -223,6 +223,33 @@ SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain) {
     geom.flags |= kFlagEmpty | (cut.open_chains.empty() ? 0u : kFlagOpen);
     return geom;
   }
+  if (!containing.empty()) {
+    // The region around the point comes only from the loops whose boxes reach, directly or
+    // through each other, a loop around it: loops apart from that cluster cannot touch it, so
+    // only the cluster is merged (the whole plane of a large model has many far loops).
+    std::vector<std::uint8_t> in(n, 0);
+    std::vector<int> cluster(containing);
+    for (int i : containing) in[i] = 1;
+    for (std::size_t k = 0; k < cluster.size(); ++k)
+      for (std::size_t j = 0; j < n; ++j)
+        if (!in[j] && boxes[j].overlaps(boxes[cluster[k]])) {
+          in[j] = 1;
+          cluster.push_back(static_cast<int>(j));
+        }
+    if (cluster.size() < n) {
+      std::vector<std::vector<Vec2>> near;
+      near.reserve(cluster.size());
+      for (int i : cluster) near.push_back(cut.loops[i]);
+      const Scaler sn(near);
+      PolyTree64 tree;
+      union_nonzero(near, sn, tree);
+      bool hollow = false;
+      if (const PolyPath64* outer = locate(tree, sn.to(origin), hollow)) {
+        if (hollow) geom.flags |= kFlagHollow;
+        return finish(polygon_of(*outer, sn));
+      }
+    }
+  }
   const Scaler s(cut.loops);
   PolyTree64 tree;
   union_nonzero(cut.loops, s, tree);
