@@ -18,6 +18,7 @@ from ._api import (
     skin,
     slice_section,
 )
+from .autoskeleton import auto_skeleton
 
 __version__ = "0.1.0"
 
@@ -30,6 +31,7 @@ __all__ = [
     "Correction",
     "Skeleton",
     "analyze",
+    "auto_skeleton",
     "correct",
     "section_properties",
     "skin",
