@@ -9,7 +9,9 @@ quadric-simplified copy of the mesh, then turns it into a bone tree:
    point farthest from the root along the skeleton, and its two halves become two branches.
 2. Short spurs are pruned: a leaf branch whose tip (the farthest surface point beyond the leaf)
    lies less than ``spur`` × the body radius at its junction from that junction is a bump of the
-   body, not a limb; pruning repeats until every leaf branch is a limb.
+   body, not a limb; a leaf node much thinner than its parent and owning fewer vertices (a
+   node in a corner of a limb's end) is folded into its parent; pruning repeats until nothing
+   changes.
 3. Branches (paths between the root, junctions and leaves) are split into bones where they bend
    (Ramer–Douglas–Peucker, tolerance ``bend`` × the branch's radius), and every leaf bone is
    extended to the farthest surface point along its direction, so bones reach the limbs' tips.
@@ -73,6 +75,10 @@ def _check_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError("degenerate mesh: all vertices coincide (size 0 mm)")
     if not area.sum() > 1e-12 * size * size:
         raise ValueError("degenerate mesh: total face area is zero")
+    pts = v[np.unique(f)]
+    thickness = np.linalg.svd(pts - pts.mean(0), compute_uv=False)[-1] / math.sqrt(len(pts))
+    if thickness < 1e-6 * size:
+        raise ValueError("degenerate mesh: all vertices lie in one plane (flat, no volume)")
     volume = abs(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0
     if volume < 1e-9 * size**3:
         raise ValueError(
@@ -284,6 +290,18 @@ def auto_skeleton(
             return 0.0
         return max(0.0, float(((pts - npos[leaf]) @ direction).max()))
 
+    def tip_point(leaf: int, direction: np.ndarray) -> np.ndarray:
+        """The middle of the limb's end cap beyond ``leaf``: the mean of its surface vertices
+        within half a radius of the farthest one along ``direction`` (mm)."""
+        pts = spos[owner == leaf]
+        if len(pts) == 0:
+            return npos[leaf]
+        proj = (pts - npos[leaf]) @ direction
+        if proj.max() <= 0:
+            return npos[leaf]
+        cap = pts[proj >= proj.max() - max(0.5 * nradius[leaf], 1e-3 * size)]
+        return cap.mean(0)
+
     def leaf_direction(leaf: int) -> np.ndarray:
         # Direction of the last stretch of the branch (up to ~2 radii back).
         p = leaf
@@ -306,6 +324,15 @@ def auto_skeleton(
             leaf = int(leaf)
             if ch[leaf] or leaf == root_node:
                 continue
+            par = int(parent[leaf])
+            if (par >= 0 and nradius[leaf] < 0.5 * nradius[par]
+                    and (owner == leaf).sum() < (owner == par).sum()):
+                # A node in a corner of the limb's end (thin, few vertices): fold it into its
+                # parent; the tip is still reached by the tip extension below.
+                alive[leaf] = False
+                owner[owner == leaf] = par
+                changed = True
+                break
             path = [leaf]
             while parent[path[-1]] >= 0 and len(ch[parent[path[-1]]]) == 1:
                 path.append(int(parent[path[-1]]))
@@ -344,16 +371,13 @@ def auto_skeleton(
             pts = npos[path].copy()
             end = path[-1]
             if not ch[end]:  # leaf: reach the tip
-                d = pts[-1] - pts[max(0, len(pts) - 3)]
-                dn = np.linalg.norm(d)
-                d = d / dn if dn > 0 else leaf_direction(end)
-                pts[-1] = pts[-1] + d * 0.97 * tip_extent(end, d)
-            if start == root_node and len(ch[start]) == 1 and root == "base":
+                pts[-1] = tip_point(end, leaf_direction(end))
+            if start == root_node and len(ch[start]) == 1:  # the root is an end: reach it
                 d = pts[0] - pts[min(2, len(pts) - 1)]
                 dn = np.linalg.norm(d)
                 if dn > 0:
                     d /= dn
-                    pts[0] = pts[0] + d * 0.97 * tip_extent(root_node, d)
+                    pts[0] = tip_point(root_node, d)
             rad = float(np.median(nradius[path]))
             keep = _rdp(pts, bend * max(rad, 1e-3 * size))
             # Drop breakpoints that would make bones shorter than 1e-3 of the model.
