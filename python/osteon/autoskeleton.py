@@ -299,8 +299,12 @@ def auto_skeleton(
         proj = (pts - npos[leaf]) @ direction
         if proj.max() <= 0:
             return npos[leaf]
-        cap = pts[proj >= proj.max() - max(0.5 * nradius[leaf], 1e-3 * size)]
-        return cap.mean(0)
+        margin = max(0.5 * nradius[leaf], 1e-3 * size)
+        cap = pts[proj >= proj.max() - margin]
+        # Stop a tip radius inside the surface: a section cut at the surface itself would be a
+        # sliver (on a pointed tip, F·d/W grows without bound as the cut nears the point).
+        tip = cap.mean(0) - direction * (margin + nradius[leaf])
+        return tip if (tip - npos[leaf]) @ direction > 0 else npos[leaf]
 
     def leaf_direction(leaf: int) -> np.ndarray:
         # Direction of the last stretch of the branch (up to ~2 radii back).

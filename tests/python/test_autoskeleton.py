@@ -139,7 +139,7 @@ def test_t_shape_gets_one_junction_and_three_branches():
     pts, degree = joints(sk)
     junctions = pts[degree >= 3]
     assert len(junctions) == 1, junctions
-    assert np.linalg.norm(junctions[0] - [0, 0, 36]) < 8.0
+    assert np.linalg.norm(junctions[0] - [0, 0, 36]) < 12.0  # within one bar thickness
 
 
 def test_torus_loop_is_cut_into_a_tree():
