@@ -14,7 +14,6 @@ Options (units: mm, N, MPa): --object NAME, --material {PLA,PETG,ABS,RESIN,NYLON
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -46,7 +45,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     ap.add_argument("--correct", action="store_true", help="thicken weak bones (pose scales)")
     ap.add_argument("--save", help="save the .blend (with stress layer and correction) here")
     ap.add_argument("--object", help="mesh object to analyse (default: active rigged mesh)")
-    ap.add_argument("--material", choices=[m.key for m in core.MATERIALS])
+    ap.add_argument("--material", choices=[item[0] for item in core.MATERIAL_ITEMS])
     ap.add_argument("--strength", type=float, help="material strength, MPa")
     ap.add_argument("--safety", type=float, help="safety factor (allowable = strength / safety)")
     ap.add_argument("--force", type=float, help="load, N")
@@ -269,13 +268,12 @@ def run(argv: list[str]) -> int:
     context.view_layer.objects.active = obj
     apply_settings(scene.osteon, a)
     report = common.run_correct(context) if a.correct else common.run_analyze(context)
-    report["timing_s"] = time.perf_counter() - t0
-    report["blender"] = bpy.app.version_string
-    report["file"] = bpy.data.filepath
+    report["run"].update(seconds=time.perf_counter() - t0,
+                         blender_version=bpy.app.version_string, blend_file=bpy.data.filepath)
     if a.report:
         os.makedirs(os.path.dirname(os.path.abspath(a.report)), exist_ok=True)
         with open(a.report, "w", encoding="utf-8") as fh:
-            json.dump(report, fh, indent=2)
+            fh.write(core.report.to_json(report, indent=2))
     print(common.summary(report))
     for w in report.get("warnings", []):
         print(f"osteon: warning: {w}", file=sys.stderr)

@@ -1,7 +1,9 @@
-"""bpy-free logic of the osteon add-on: materials, units, colours, reports.
+"""bpy-free logic of the osteon add-on that is Blender's own: size modes, the colour
+ramp, importing the engine.  Materials, the allowable stress and the report come from
+the wheel (``osteon.materials``, ``osteon.report``, ``osteon.settings``).
 
 Nothing here imports ``bpy``: it is unit-tested with plain Python and shared by
-the operators, the batch script and (later) the live mode.  Units: mm of the
+the operators, the batch script and the live mode.  Units: mm of the
 printed object, N, MPa (= N/mm^2).
 """
 
@@ -10,43 +12,8 @@ from __future__ import annotations
 import importlib
 import os
 import sys
-from dataclasses import dataclass
 
 import numpy as np
-
-# --------------------------------------------------------------------------- materials
-
-
-@dataclass(frozen=True)
-class Material:
-    key: str
-    label: str
-    strength_mpa: float
-    note: str
-
-
-# Typical tensile strengths of *printed* parts (datasheet values along the layers;
-# across layers FDM parts are weaker, which is what the safety factor is for).
-MATERIALS: tuple[Material, ...] = (
-    Material("PLA", "PLA", 60.0, "FDM PLA, ~50-65 MPa along layers"),
-    Material("PETG", "PETG", 50.0, "FDM PETG, ~45-55 MPa"),
-    Material("ABS", "ABS", 40.0, "FDM ABS, ~35-45 MPa"),
-    Material("RESIN", "Resin", 45.0, "standard SLA/DLP resin, ~40-65 MPa"),
-    Material("NYLON", "Nylon (PA12)", 48.0, "SLS PA12, ~45-50 MPa"),
-    Material("CUSTOM", "Custom", 60.0, "your own strength value"),
-)
-MATERIAL_BY_KEY = {m.key: m for m in MATERIALS}
-DEFAULT_SAFETY_FACTOR = 2.0
-
-
-def allowable_stress(strength_mpa: float, safety_factor: float) -> float:
-    """Allowable stress [sigma] in MPa = material strength / safety factor."""
-    if not (strength_mpa > 0.0):
-        raise ValueError(f"material strength must be > 0 MPa, got {strength_mpa}")
-    if not (safety_factor > 0.0):
-        raise ValueError(f"safety factor must be > 0, got {safety_factor}")
-    return float(strength_mpa) / float(safety_factor)
-
 
 # --------------------------------------------------------------------------- units
 
@@ -163,110 +130,53 @@ def import_engine():
     ) from error
 
 
-# --------------------------------------------------------------------------- results
+# --------------------------------------------------------------------------- the wheel's facts
 
+# Materials, allowable stress, the per-bone table and the report schema are the wheel's
+# (osteon.materials, osteon.report, osteon.settings): the CLI and batch runs use the same ones.
+import_engine()
+from osteon import materials, report
+from osteon.settings import Settings, engine_arguments
 
-@dataclass
-class BoneResult:
-    index: int
-    name: str
-    max_stress_mpa: float
-    ratio: float
-    weak: bool
-    scale: float
-
-
-def bone_results(section_bone: np.ndarray, stress: np.ndarray, weak: np.ndarray,
-                 bone_names: list[str], allowable_mpa: float,
-                 bone_scale: np.ndarray | None = None) -> list[BoneResult]:
-    """One row per bone that has sections, sorted by stress ratio, highest first."""
-    section_bone = np.asarray(section_bone, dtype=np.int64)
-    stress = np.asarray(stress, dtype=np.float64)
-    weak = np.asarray(weak, dtype=bool)
-    nb = len(bone_names)
-    finite = np.where(np.isfinite(stress), stress, 0.0)
-    mx = np.full(nb, -np.inf)
-    np.maximum.at(mx, section_bone, finite)
-    anyweak = np.zeros(nb, dtype=bool)
-    np.logical_or.at(anyweak, section_bone, weak)
-    rows = []
-    for b in np.flatnonzero(np.isfinite(mx)):
-        sc = float(bone_scale[b]) if bone_scale is not None else 1.0
-        rows.append(BoneResult(int(b), bone_names[b], float(mx[b]), float(mx[b] / allowable_mpa),
-                               bool(anyweak[b]), sc))
-    rows.sort(key=lambda r: -r.ratio)
-    return rows
-
-
-def _finite(x) -> float:
-    """JSON has no NaN/inf: non-finite numbers become 0.0."""
-    x = float(x)
-    return x if np.isfinite(x) else 0.0
+MATERIALS = materials.MATERIALS
+MATERIAL_BY_KEY = {m.key: m for m in MATERIALS}
+DEFAULT_SAFETY_FACTOR = materials.DEFAULT_SAFETY_FACTOR
+allowable_stress = report.allowable_stress
+#: the material enum: the presets, then "Custom" (your own strength)
+MATERIAL_ITEMS = [(m.key, m.label, f"{m.note}; strength {m.strength_mpa:g} MPa ({m.strength_source})")
+                  for m in MATERIALS]
+MATERIAL_ITEMS.append((materials.CUSTOM, "Custom", "your own strength value"))
 
 
 def build_report(*, object_name: str, armature_name: str, bone_names: list[str],
                  analysis, allowable_mpa: float, settings: dict, mm_per_unit: float,
-                 correction=None, corrected_analysis=None) -> dict:
-    """The JSON report of SPEC section 8 (plus details).
+                 correction=None, corrected_analysis=None, vertices=None, faces=None,
+                 seconds=None) -> dict:
+    """:func:`osteon.report.build_report` for a Blender mesh object and its armature
+    (``mm_per_unit``: mm of the print per Blender unit)."""
+    return report.build_report(
+        analysis=analysis, bone_names=bone_names, allowable_mpa=allowable_mpa,
+        settings=settings, front_end="blender", model=object_name, object_name=object_name,
+        armature_name=armature_name, mm_per_unit=mm_per_unit, vertices=vertices, faces=faces,
+        seconds=seconds, correction=correction, corrected_analysis=corrected_analysis)
 
-    ``analysis`` is the ``osteon.Analysis`` of the model as it was; with a correction,
-    ``corrected_analysis`` is the state after it (what ``max_stress_mpa`` etc. describe)
-    and ``weak_bones`` lists every bone weak before or after, with its scale, its
-    stress now (``max_stress_mpa``), before (``max_stress_before_mpa``) and ``weak`` now."""
-    shown = corrected_analysis if corrected_analysis is not None else analysis
-    scale = np.asarray(correction.bone_scale) if correction is not None else None
-    rows = bone_results(shown.section_bone, shown.stress, shown.weak, bone_names,
-                        allowable_mpa, scale)
-    weak_rows = [r for r in rows if r.weak]
-    weak_bones = [{"bone": r.name, "max_stress_mpa": r.max_stress_mpa, "ratio": r.ratio,
-                   "scale": r.scale, "weak": True} for r in weak_rows]
-    if correction is not None:
-        before = {r.name: r for r in bone_results(analysis.section_bone, analysis.stress,
-                                                  analysis.weak, bone_names, allowable_mpa)}
-        weak_bones = [
-            {"bone": r.name, "max_stress_mpa": r.max_stress_mpa, "ratio": r.ratio,
-             "scale": r.scale, "weak": r.weak,
-             "max_stress_before_mpa": before[r.name].max_stress_mpa if r.name in before else 0.0}
-            for r in rows if r.weak or (r.name in before and before[r.name].weak)
-        ]
-    report = {
-        "object": object_name,
-        "armature": armature_name,
-        "units": {"length": "mm", "force": "N", "stress": "MPa"},
-        "settings": settings,
-        "mm_per_blender_unit": float(mm_per_unit),
-        "max_stress_mpa": _finite(shown.max_stress),
-        "allowable_stress_mpa": float(allowable_mpa),
-        "stress_ratio": _finite(shown.max_stress) / float(allowable_mpa),
-        "sections": len(shown.stress),
-        "weak_sections": int(np.count_nonzero(shown.weak)),
-        "culled_sections": int(np.count_nonzero(shown.culled)),
-        "safe_modulus_mm3": _finite(shown.safe_modulus),
-        "weak_bones": weak_bones,
-        "bones": [
-            {"bone": r.name, "max_stress_mpa": r.max_stress_mpa, "ratio": r.ratio,
-             "weak": r.weak, "scale": r.scale}
-            for r in rows
-        ],
-        "converged": bool(not weak_rows) if correction is None else bool(correction.converged),
-        "corrected": correction is not None,
-    }
-    if correction is not None:
-        rounds = correction.rounds
-        report["correction"] = {
-            "rounds": len(rounds) if hasattr(rounds, "__len__") else int(rounds),
-            "reason": str(getattr(correction, "reason", "")),
-            "converged": bool(correction.converged),
-            "max_stress_before_mpa": _finite(analysis.max_stress),
-            "max_stress_after_mpa": _finite(shown.max_stress),
-            "engine_max_stress_after_mpa": _finite(correction.after.max_stress),
-            "bone_scale": {bone_names[i]: float(s) for i, s in enumerate(scale) if s != 1.0},
-        }
-        sx, sz = getattr(correction, "bone_scale_x", None), getattr(correction, "bone_scale_z", None)
-        if sx is not None and sz is not None:
-            # pose scale X and Z of each scaled bone (they differ where a flat part was
-            # thickened across its thickness only)
-            report["correction"]["bone_scale_xz"] = {
-                bone_names[i]: [float(sx[i]), float(sz[i])]
-                for i in range(len(bone_names)) if sx[i] != 1.0 or sz[i] != 1.0}
-    return report
+
+def settings_of(s) -> Settings:
+    """``scene.osteon`` as the wheel's :class:`osteon.settings.Settings`."""
+    return Settings(
+        force_n=float(s.force_n), interval_mm=float(s.interval_mm), material=s.material,
+        strength_mpa=float(s.strength_mpa), safety_factor=float(s.safety_factor),
+        held_bone=s.held_bone or None, size_mode=s.size_mode,
+        print_size_mm=float(s.print_size_mm), max_scale=float(s.max_scale),
+        max_rounds=int(s.max_rounds), scaling=str(s.scaling))
+
+
+def engine_params(s, arm, bone_names, correct: bool = False) -> dict:
+    """The engine's keyword arguments from ``scene.osteon`` (checked once, in the wheel)."""
+    try:
+        return engine_arguments(settings_of(s), bone_names, correct=correct)
+    except ValueError as e:
+        msg = str(e)
+        if msg.startswith("Held bone"):
+            msg = f"Held bone '{s.held_bone}' is not a deform bone of '{arm.name}'"
+        raise OsteonError(msg) from e

@@ -182,18 +182,9 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
             raise Paused(f"scene '{sess.scene_name}' is not shown")
         depsgraph = bpy.context.evaluated_depsgraph_get()
     s = scene.osteon
-    try:
-        allowable = core.allowable_stress(s.strength_mpa, s.safety_factor)
-    except ValueError as e:
-        raise OsteonError(str(e)) from e
-    if not (s.force_n > 0.0) or not (s.interval_mm > 0.0):
-        raise OsteonError("force and section interval must be > 0")
     sk = bridge.skeleton_arrays(arm)
-    root = None
-    if s.held_bone:
-        if s.held_bone not in sk.names:
-            raise OsteonError(f"Held bone '{s.held_bone}' is not a deform bone of '{arm.name}'")
-        root = sk.names.index(s.held_bone)
+    params = core.engine_params(s, arm, sk.names)
+    allowable, root = params["allowable_stress"], params["root"]
     co, matrix = bridge.evaluated_positions_into(obj, depsgraph)
     settings = _settings_key(scene)
     want = _want_outlines(scene)
@@ -211,8 +202,7 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
         co=co, matrix=matrix, heads=sk.heads, tails=sk.tails, parents=sk.parents,
         names=list(sk.names), size_mode=s.size_mode, print_size_mm=float(s.print_size_mm),
         unit_scale=float(scene.unit_settings.scale_length),
-        params={"force": float(s.force_n), "allowable_stress": allowable,
-                "interval": float(s.interval_mm), "root": root},
+        params=params,
         analyzer_key=key, want_outlines=want)
     if rebuild:
         if sess.weights_stale:

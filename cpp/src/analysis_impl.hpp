@@ -1,7 +1,24 @@
 // Internal state of an Analyzer, shared with the correction loop (not a public header).
+//
+// A run is a pipeline of named stages, each a method of Analyzer::Impl in its own file
+// (the way Manifold's impl.h maps methods to files):
+//
+//   analysis.cpp                Analyzer, validate_options, analyze, Impl::run (the pipeline),
+//                               Impl::check_inputs
+//   analysis_plan.cpp           Impl::assign_vertex_bones, Impl::plan_sections
+//   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run, Impl::remember_inputs
+//   analysis_cut.cpp            Impl::prepare_cuts, Impl::cut_local (phase 1),
+//                               Impl::cut_retries (phase 2)
+//   analysis_loads.cpp          Impl::compute_loads
+//   analysis_vertex_stress.cpp  Impl::compute_vertex_stress
 #pragma once
 
+#include <atomic>
+#include <chrono>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
 #include <vector>
 
 #include "osteon/analysis.hpp"
@@ -19,6 +36,19 @@ struct Box3 {
     hi = hi.cwiseMax(p);
   }
   bool empty() const { return lo.x() > hi.x(); }
+};
+
+/// Stage timer: OSTEON_PROFILE=1 prints the time of each stage of a run to stderr.
+struct StageTimer {
+  bool on = std::getenv("OSTEON_PROFILE") != nullptr;
+  std::chrono::steady_clock::time_point last = std::chrono::steady_clock::now();
+  void lap(const char* stage) {
+    if (!on) return;
+    const auto now = std::chrono::steady_clock::now();
+    std::fprintf(stderr, "osteon %-14s %8.3f ms\n", stage,
+                 std::chrono::duration<double, std::milli>(now - last).count());
+    last = now;
+  }
 };
 
 /// Where a section is and how its downstream side is found.
@@ -45,6 +75,48 @@ struct SectionState {
   double aspect = 1.0;            // width / thickness
 };
 
+/// Working data of one run, handed from stage to stage (see Analyzer::Impl::run).
+struct RunState {
+  RunState(const double* vertices_in, const Skeleton& skeleton, const Box3* dirty_in)
+      : vertices(vertices_in), sk(skeleton), dirty(dirty_in) {}
+
+  const double* vertices;  // #V by 3 row-major, mm
+  const Skeleton& sk;      // posed skeleton
+  const Box3* dirty;       // partial run: only sections crossing this box are re-cut
+  MeshView mesh;
+  double diag = 0.0;  // bounding-box diagonal, mm
+  double gap = 0.0;   // gap tolerance in use, mm
+  StageTimer timer;
+
+  // Vertex bones (assign_vertex_bones).
+  std::vector<int> vertex_bone;  // V bone of each vertex
+  std::vector<Index> per_bone;   // B number of vertices of each bone
+
+  // Reuse (plan_sections, mark_dirty, reuse_last_run).
+  bool partial = false;    // re-cut only what `dirty` reaches; the plan is the last run's
+  bool may_reuse = false;  // exact reuse of the last run's sections (live mode)
+  std::vector<SectionSpec> prev_specs;
+  std::vector<SectionState> prev_states;
+  std::vector<std::uint8_t> job_dirty;      // per job: must be cut
+  std::vector<std::uint8_t> section_dirty;  // per section: must be cut
+
+  // Cuts (prepare_cuts, cut_local, cut_retries).
+  int workers = 1;
+  FaceGrid grid;
+  std::vector<double> reach;                   // B radius of the local cut around the bone, mm
+  std::vector<Vec3> axis;                      // B unit bone directions
+  std::vector<std::vector<double>> crossings;  // B sorted bone-axis crossings of the mesh, mm
+  std::vector<std::uint8_t> retry;             // per section: Retry of phase 2
+  std::vector<std::vector<CutSegment>> kept;   // per section: segments of its narrower cuts
+  std::vector<std::vector<std::vector<CutSegment>>> family_segments;  // per worker scratch
+  std::vector<std::vector<CutSegment>> single_segments;               // per worker scratch
+  std::atomic<int> local_used{0}, local_failed{0};
+  long retried = 0;
+
+  // Loads (built during cut_retries, used by compute_loads).
+  std::unique_ptr<MomentArmIndex> arms;
+};
+
 struct Analyzer::Impl {
   AnalysisOptions options;
   std::vector<std::int32_t> faces;
@@ -68,8 +140,33 @@ struct Analyzer::Impl {
   double last_gap = -1.0;
 
   /// Full or partial run: with `dirty` set, only sections whose plane crosses the box are re-cut
-  /// (the skeleton must be the one of the previous run).
+  /// (the skeleton must be the one of the previous run). Calls the stages below in order.
   AnalysisResult run(const double* vertices, const Skeleton& skeleton, const Box3* dirty);
+
+  // Stages of a run, in order (files listed at the top of this header).
+  /// Checks the skeleton, options and vertices; sets the mesh view, size and gap tolerance.
+  void check_inputs(RunState& run);
+  /// 1. Each vertex's bone: its dominant weight, or the nearest bone where it has none.
+  void assign_vertex_bones(RunState& run);
+  /// 2. Full runs: the load tree and the sections (interior planes, joints, free ends), with the
+  /// last run's sections kept aside for reuse.
+  void plan_sections(RunState& run);
+  /// Partial runs: marks the sections whose cut the dirty box can change.
+  void mark_dirty(RunState& run);
+  /// Live mode: keeps the last run's geometry of every section no moved triangle can reach.
+  void reuse_last_run(RunState& run);
+  /// 3a. The face grid, each bone's local-cut radius and its axis crossings.
+  void prepare_cuts(RunState& run);
+  /// 3b. Phase 1: one local cut per family of parallel planes; queues what it cannot prove.
+  void cut_local(RunState& run);
+  /// 3c. Phase 2: queued sections re-cut wider or whole (and the moment-arm index built).
+  void cut_retries(RunState& run);
+  /// 4. Per section: load point, moment arm, moment, stress, culled and weak flags.
+  AnalysisResult compute_loads(RunState& run);
+  /// 5. Per vertex: stress interpolated along its bone between its sections.
+  void compute_vertex_stress(RunState& run, AnalysisResult& result);
+  /// Keeps this run's inputs so that the next run re-cuts only what changed.
+  void remember_inputs(const RunState& run);
 };
 
 }  // namespace osteon

@@ -298,27 +298,24 @@ class Analysis:
 
     def weak_bones(self) -> list[dict]:
         """Bones with a weak section, worst first: ``{bone, index, max_stress_mpa, ratio}``."""
-        per_bone = self.bone_max_stress()
-        bones = sorted({int(b) for b in self.section_bone[self.weak]}, key=lambda b: -per_bone[b])
-        return [
-            {
-                "bone": self.bone_names[b],
-                "index": b,
-                "max_stress_mpa": float(per_bone[b]),
-                "ratio": float(per_bone[b] / self.allowable_stress),
-            }
-            for b in bones
-        ]
+        from .report import bone_table  # the one per-bone table
+
+        rows = bone_table(self.section_bone, np.where(self.valid, self.stress, np.nan), self.weak,
+                          self.bone_names, self.allowable_stress)
+        keep = ("bone", "index", "max_stress_mpa", "ratio")
+        return [{k: r[k] for k in keep} for r in rows if r["weak"]]
 
     def summary(self) -> dict:
         """JSON-ready summary (numbers in mm, N, MPa)."""
+        from .report import finite  # the one rule: non-finite -> None (JSON null)
+
         return {
-            "max_stress_mpa": float(self.max_stress),
+            "max_stress_mpa": finite(self.max_stress),
             "allowable_stress_mpa": float(self.allowable_stress),
             "force_n": float(self.force),
             "interval_mm": float(self.interval),
-            "max_moment_nmm": float(self.max_moment),
-            "safe_modulus_mm3": float(self.safe_modulus),
+            "max_moment_nmm": finite(self.max_moment),
+            "safe_modulus_mm3": finite(self.safe_modulus),
             "held_bone": self.bone_names[self.held_bone] if self.held_bone >= 0 else None,
             "sections": int(self.num_sections),
             "weak_sections": int(self.weak.sum()),

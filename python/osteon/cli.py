@@ -6,23 +6,21 @@ Units everywhere: millimetres of the printed object, newtons, MPa.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-#: Material presets: typical yield/tensile strength of printed parts, MPa (XY direction,
-#: manufacturers' data sheets; layer adhesion (Z) is often half of this — use --safety-factor).
-MATERIALS = {
-    "PLA": 60.0,
-    "PETG": 50.0,
-    "ABS": 40.0,
-    "resin": 45.0,
-    "nylon": 70.0,
-}
-DEFAULT_SAFETY_FACTOR = 1.0  # like the paper: the allowable stress is the material strength
+from . import materials
+from .report import bone_table as _bone_rows
+from .report import build_report, finite, to_json
+from .settings import Settings, engine_arguments
+
+#: preset -> strength in MPa, from the one table in :mod:`osteon.materials`
+MATERIALS = materials.strengths_mpa()
+DEFAULT_SAFETY_FACTOR = materials.DEFAULT_SAFETY_FACTOR
 
 EXAMPLES = """\
 examples:
@@ -79,7 +77,7 @@ def _add_common(p: argparse.ArgumentParser):
     )
     a.add_argument(
         "--material",
-        default="PLA",
+        default=materials.DEFAULT_MATERIAL,
         metavar="NAME",
         help="material preset: "
         + ", ".join(f"{k} {v:g} MPa" for k, v in MATERIALS.items())
@@ -96,7 +94,8 @@ def _add_common(p: argparse.ArgumentParser):
         type=float,
         default=DEFAULT_SAFETY_FACTOR,
         metavar="K",
-        help="allowable stress = strength / K (default 1, as in the paper)",
+        help=f"allowable stress = strength / K (default {DEFAULT_SAFETY_FACTOR:g}; "
+        "see osteon/materials.py)",
     )
     a.add_argument(
         "--interval",
@@ -216,23 +215,28 @@ def _version():
         return "unknown"
 
 
-def _allowable(args):
-    if args.strength_mpa is not None:
-        strength = args.strength_mpa
-        material = "custom"
-    else:
-        key = {k.lower(): k for k in MATERIALS}.get(args.material.lower())
-        if key is None:
-            raise ValueError(
-                f"unknown material {args.material!r}; choose one of {', '.join(MATERIALS)} "
-                "or give --strength-mpa"
-            )
-        strength, material = MATERIALS[key], key
-    if not (strength > 0 and np.isfinite(strength)):
-        raise ValueError(f"--strength-mpa must be a positive number of MPa, got {strength}")
-    if not (args.safety_factor > 0 and np.isfinite(args.safety_factor)):
-        raise ValueError(f"--safety-factor must be positive, got {args.safety_factor}")
-    return material, strength, strength / args.safety_factor
+def _settings(args) -> Settings:
+    """The command's options as the shared :class:`osteon.settings.Settings`."""
+    given = args.strength_mpa is not None
+    return Settings(
+        force_n=args.force,
+        interval_mm=args.interval,
+        material=materials.CUSTOM if given else args.material,
+        strength_mpa=args.strength_mpa,
+        safety_factor=args.safety_factor,
+        held_bone=args.root,
+        size_mode={"longest": "LARGEST", "z": "HEIGHT"}.get(args.axis, args.axis.upper()),
+        print_size_mm=args.height_mm,
+        max_scale=getattr(args, "max_scale", 3.0),
+        max_rounds=getattr(args, "max_rounds", 100),
+        scaling=getattr(args, "scaling", None) or _default_scaling(),
+    )
+
+
+def _default_scaling() -> str:
+    import osteon
+
+    return osteon.DEFAULT_SCALING
 
 
 class _Progress:
@@ -286,48 +290,11 @@ def _load(args):
     )
 
 
-def _root(args, model):
-    if args.root is None:
-        return None
-    if args.root.lstrip("-").isdigit():
-        return int(args.root)
-    if args.root not in model.bone_names:
-        raise ValueError(
-            f"--root: no bone named {args.root!r}; bones: " + ", ".join(model.bone_names[:12])
-        )
-    return args.root
-
-
-def _positive(v, name, unit):
-    if not (v > 0 and np.isfinite(v)):
-        raise ValueError(f"{name} must be a positive number of {unit}, got {v}")
-
-
 def bone_table(analysis, top=10, scales=None):
-    """Rows (worst first) of per-bone results: name, max stress, ratio, weak sections."""
-    names = analysis.bone_names
-    ok = np.isfinite(analysis.stress)
-    per = np.full(len(names), np.nan)
-    for b in range(len(names)):
-        sel = ok & (analysis.section_bone == b)
-        if sel.any():
-            per[b] = np.max(analysis.stress[sel])
-    order = [b for b in np.argsort(-np.nan_to_num(per, nan=-1.0)) if np.isfinite(per[b])]
-    rows = []
-    for b in order[:top]:
-        sel = analysis.section_bone == b
-        rows.append(
-            {
-                "bone": names[b],
-                "index": int(b),
-                "max_stress_mpa": float(per[b]),
-                "ratio": float(per[b] / analysis.allowable_stress),
-                "weak_sections": int(np.sum(analysis.weak & sel)),
-                "sections": int(np.sum(sel)),
-                **({"scale": float(scales[b])} if scales is not None else {}),
-            }
-        )
-    return rows
+    """Rows (worst first) of per-bone results (:func:`osteon.report.bone_table`)."""
+    rows = _bone_rows(analysis.section_bone, analysis.stress, analysis.weak,
+                      analysis.bone_names, analysis.allowable_stress, scales)
+    return [r for r in rows if r["max_stress_mpa"] is not None][:top]
 
 
 def format_table(rows, allowable, scales=False):
@@ -348,86 +315,53 @@ def format_table(rows, allowable, scales=False):
     return "\n".join(lines)
 
 
-def _section_rows(a):
-    rows = []
-    for i in range(len(a.stress)):
-        rows.append(
-            {
-                "bone": a.bone_names[int(a.section_bone[i])],
-                "bone_index": int(a.section_bone[i]),
-                "param_mm": _f(getattr(a, "section_param", [np.nan] * (i + 1))[i]),
-                "center_mm": [_f(x) for x in a.section_center[i]],
-                "normal": [_f(x) for x in a.section_normal[i]],
-                "area_mm2": _f(a.section_area[i]),
-                "modulus_mm3": _f(a.section_modulus[i]),
-                "moment_arm_mm": _f(a.moment_arm[i]),
-                "moment_nmm": _f(a.moment[i]),
-                "stress_mpa": _f(a.stress[i]),
-                "culled": bool(a.culled[i]),
-                "weak": bool(a.weak[i]),
-            }
-        )
-    return rows
+#: the shared checks name a setting; the CLI names its option
+_OPTIONS = {"force": "--force", "section interval": "--interval",
+            "material strength": "--strength-mpa", "safety factor": "--safety-factor",
+            "max scale": "--max-scale", "max rounds": "--max-rounds", "Held bone": "--root"}
 
 
-def _f(x):
-    x = float(x)
-    return x if np.isfinite(x) else None
+def _arguments(settings: Settings, bone_names, correct: bool) -> dict:
+    try:
+        return engine_arguments(settings, bone_names, correct=correct)
+    except ValueError as e:
+        msg = str(e)
+        opt = next((o for w, o in _OPTIONS.items() if msg.startswith(w)), None)
+        raise ValueError(f"{opt}: {msg}" if opt else msg) from None
 
 
-def _engine_args(args, model, allowable: float) -> tuple[tuple, dict]:
+def _check(settings: Settings, correct: bool = False) -> None:
+    """Check the settings before the model is read (the held bone is checked once it is)."""
+    _arguments(replace(settings, held_bone=None), [], correct)
+
+
+def _engine_args(settings: Settings, model, correct: bool = False) -> tuple[tuple, dict]:
     """The model and settings every command passes to the engine: (positional, keyword)."""
-    return (model.vertices, model.faces, model.skeleton, model.weights), {
-        "force": args.force,
-        "allowable_stress": allowable,
-        "interval": args.interval,
-        "root": _root(args, model),
-    }
+    positional = (model.vertices, model.faces, model.skeleton, model.weights)
+    return positional, _arguments(settings, model.bone_names, correct)
 
 
-def _analyze(args, model, allowable: float):
+def _analyze(settings: Settings, model):
     """Run the analysis with the command's settings; returns (Analysis, seconds)."""
     import osteon
 
-    positional, keyword = _engine_args(args, model, allowable)
+    positional, keyword = _engine_args(settings, model)
     t = time.perf_counter()
     a = osteon.analyze(*positional, **keyword)
     return a, time.perf_counter() - t
 
 
-def _report(args, model, material, strength, allowable, analysis, seconds):
-    return {
-        "model": str(args.model),
-        "units": {"length": "mm", "force": "N", "stress": "MPa"},
-        "height_mm": args.height_mm,
-        "scale_mm_per_file_unit": model.scale,
-        "vertices": len(model.vertices),
-        "faces": len(model.faces),
-        "bones": model.bone_names,
-        "material": material,
-        "strength_mpa": strength,
-        "safety_factor": args.safety_factor,
-        "allowable_stress_mpa": allowable,
-        "force_n": args.force,
-        "interval_mm": args.interval,
-        "max_stress_mpa": _f(analysis.max_stress),
-        "safe_modulus_mm3": _f(analysis.safe_modulus),
-        "sections": len(analysis.stress),
-        "weak_sections": int(np.sum(analysis.weak)),
-        "culled_sections": int(np.sum(analysis.culled)),
-        "weak_bones": [
-            {k: r[k] for k in ("bone", "index", "max_stress_mpa", "ratio")}
-            for r in bone_table(analysis, top=10**9)
-            if r["ratio"] > 1
-        ],
-        "bone_results": bone_table(analysis, top=10**9),
-        "analysis_seconds": seconds,
-        "section_table": _section_rows(analysis),
-    }
+def _report(args, model, settings: Settings, analysis, seconds, correction=None):
+    return build_report(
+        analysis=analysis, bone_names=model.bone_names,
+        allowable_mpa=settings.allowable_stress_mpa(), settings=settings.as_dict(),
+        front_end="cli", model=str(args.model), mm_per_unit=model.scale,
+        vertices=len(model.vertices), faces=len(model.faces), seconds=seconds,
+        correction=correction, output=getattr(args, "out", None))
 
 
 def _write_json(path, data):
-    Path(path).write_text(json.dumps(data, indent=1, allow_nan=False))
+    Path(path).write_text(to_json(data))
 
 
 def _png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title=""):
@@ -453,14 +387,14 @@ def cmd_analyze(args, out):
 
     prog = _Progress(["reading model", "analysing", "writing outputs"], args.quiet)
     try:
-        material, strength, allowable = _allowable(args)
-        _positive(args.force, "--force", "N")
-        _positive(args.interval, "--interval", "mm")
+        settings = _settings(args)
+        _check(settings)
+        material, allowable = settings.material_and_strength()[0], settings.allowable_stress_mpa()
         model = _load(args)
         prog.next()
-        a, secs = _analyze(args, model, allowable)
+        a, secs = _analyze(settings, model)
         prog.next()
-        rep = _report(args, model, material, strength, allowable, a, secs)
+        rep = _report(args, model, settings, a, secs)
         if args.json:
             _write_json(args.json, rep)
         if args.png:
@@ -498,58 +432,22 @@ def cmd_correct(args, out):
 
     prog = _Progress(["reading model", "correcting", "writing outputs"], args.quiet)
     try:
-        material, strength, allowable = _allowable(args)
-        _positive(args.force, "--force", "N")
-        _positive(args.interval, "--interval", "mm")
-        if not (args.max_scale >= 1):
-            raise ValueError(f"--max-scale must be >= 1, got {args.max_scale}")
+        settings = _settings(args)
+        _check(settings, correct=True)
+        allowable = settings.allowable_stress_mpa()
         if Path(args.out).suffix.lower() not in (".obj", ".off", ".ply", ".stl"):
             raise ValueError(f"--out {args.out}: use an .obj, .off, .ply or .stl file name")
         model = _load(args)
         prog.next()
-        positional, keyword = _engine_args(args, model, allowable)
+        positional, keyword = _engine_args(settings, model, correct=True)
         t = time.perf_counter()
-        fix = osteon.correct(
-            *positional,
-            **keyword,
-            max_scale=args.max_scale,
-            max_rounds=args.max_rounds,
-            scaling=args.scaling or osteon.DEFAULT_SCALING,
-        )
+        fix = osteon.correct(*positional, **keyword)
         secs = time.perf_counter() - t
         prog.next()
         write_mesh(args.out, fix.vertices, model.faces)
         rounds = len(fix.rounds)
         if args.json:
-            rep = _report(args, model, material, strength, allowable, fix.after, secs)
-            rep.update(
-                {
-                    "converged": bool(fix.converged),
-                    "rounds": rounds,
-                    "reason": fix.reason,
-                    "bone_scale": [float(s) for s in fix.bone_scale],
-                    "bone_scale_xz": [
-                        [float(x), float(z)] for x, z in zip(fix.bone_scale_x, fix.bone_scale_z)
-                    ],
-                    "max_stress_before_mpa": _f(fix.before.max_stress),
-                    "output": str(args.out),
-                    "before": {
-                        "max_stress_mpa": _f(fix.before.max_stress),
-                        "weak_sections": int(np.sum(fix.before.weak)),
-                        "bone_results": bone_table(fix.before, 10**9),
-                    },
-                }
-            )
-            before_tab = {r["bone"]: r["max_stress_mpa"] for r in bone_table(fix.before, 10**9)}
-            rep["weak_bones"] = [
-                {
-                    "bone": model.bone_names[b],
-                    "index": int(b),
-                    "max_stress_mpa": before_tab.get(model.bone_names[b]),
-                    "scale": float(fix.bone_scale[b]),
-                }
-                for b in np.flatnonzero(np.asarray(fix.bone_scale) != 1.0)
-            ]
+            rep = _report(args, model, settings, fix.before, secs, correction=fix)
             _write_json(args.json, rep)
         if args.png:
             _png(
@@ -591,18 +489,19 @@ def cmd_validate(args, out):
     stages = ["reading model", "analysing"] + (["meshing + solving (FEM)"] if args.fem else [])
     prog = _Progress(stages + ["writing outputs"], args.quiet)
     try:
-        _material, _strength, allowable = _allowable(args)
-        _positive(args.force, "--force", "N")
+        settings = _settings(args)
+        _check(settings)
+        allowable = settings.allowable_stress_mpa()
         model = _load(args)
         checks = model_checks(model)
         prog.next()
-        a, secs = _analyze(args, model, allowable)
+        a, secs = _analyze(settings, model)
         prog.next()
         rep = {
             "model": str(args.model),
             "checks": checks,
             "analysis_seconds": secs,
-            "max_stress_mpa": _f(a.max_stress),
+            "max_stress_mpa": finite(a.max_stress),
             "allowable_stress_mpa": allowable,
             "force_n": args.force,
             "sections": len(a.stress),

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from osteon.cli import MATERIALS, main
+from osteon.cli import DEFAULT_SAFETY_FACTOR, MATERIALS, main
 
 DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
 if not DATA.is_dir():
@@ -64,7 +64,7 @@ def test_analyze_arm(tmp_path, capsys):
         "units",
     ):
         assert key in rep
-    assert rep["allowable_stress_mpa"] == MATERIALS["PLA"]
+    assert rep["allowable_stress_mpa"] == MATERIALS["PLA"] / DEFAULT_SAFETY_FACTOR
     assert rep["sections"] == len(rep["section_table"]) > 0
     stresses = [r["stress_mpa"] for r in rep["section_table"] if r["stress_mpa"] is not None]
     assert rep["max_stress_mpa"] == pytest.approx(max(stresses))

@@ -35,34 +35,14 @@ class Inputs:
     timings: dict = field(default_factory=dict)
 
 
-def settings_dict(s) -> dict:
-    return {
-        "material": s.material,
-        "strength_mpa": float(s.strength_mpa),
-        "safety_factor": float(s.safety_factor),
-        "force_n": float(s.force_n),
-        "size_mode": s.size_mode,
-        "print_size_mm": float(s.print_size_mm),
-        "interval_mm": float(s.interval_mm),
-        "held_bone": s.held_bone,
-        "max_scale": float(s.max_scale),
-        "max_rounds": int(s.max_rounds),
-        "scaling": str(s.scaling),
-    }
-
-
 def gather(context, use_weight_cache: bool = False, mm_per_unit: float | None = None) -> Inputs:
     """Read the active rigged mesh (posed, evaluated, world space) in mm.  ``mm_per_unit``
     fixes the scale (after a correction, so that the thicker model keeps its scale)."""
     s = context.scene.osteon
     t0 = time.perf_counter()
     obj, arm = bridge.find_target(context)
-    allowable = core.allowable_stress(s.strength_mpa, s.safety_factor)
-    if not (s.force_n > 0.0):
-        raise OsteonError(f"force must be > 0 N, got {s.force_n}")
-    if not (s.interval_mm > 0.0):
-        raise OsteonError(f"section interval must be > 0 mm, got {s.interval_mm}")
     sk = bridge.skeleton_arrays(arm)
+    params = core.engine_params(s, arm, sk.names)
     csr = (WEIGHTS.get(obj, sk.names) if use_weight_cache
            else bridge.vertex_weights_csr(obj, sk.names))
     t1 = time.perf_counter()
@@ -77,17 +57,11 @@ def gather(context, use_weight_cache: bool = False, mm_per_unit: float | None = 
                              context.scene.unit_settings.scale_length)
     except ValueError as e:
         raise OsteonError(str(e)) from e
-    root = None
-    if s.held_bone:
-        if s.held_bone not in sk.names:
-            raise OsteonError(f"Held bone '{s.held_bone}' is not a deform bone of '{arm.name}'")
-        root = sk.names.index(s.held_bone)
     t2 = time.perf_counter()
     return Inputs(
         obj=obj, arm=arm, skeleton=sk, vertices_mm=verts * k, faces=faces, csr=csr,
-        weights=bridge.sparse_weights(csr, len(sk.names)), mm_per_unit=k, root=root,
-        params={"force": float(s.force_n), "allowable_stress": allowable,
-                "interval": float(s.interval_mm), "root": root},
+        weights=bridge.sparse_weights(csr, len(sk.names)), mm_per_unit=k, root=params["root"],
+        params=params,
         timings={"read_weights_s": t1 - t0, "read_mesh_s": t2 - t1},
     )
 
@@ -121,8 +95,8 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
         object_name=inp.obj.name, armature_name=inp.arm.name, bone_names=inp.skeleton.names,
         analysis=first_analysis if first_analysis is not None else analysis,
         corrected_analysis=analysis if correction is not None else None,
-        allowable_mpa=allowable, settings=settings_dict(s), mm_per_unit=inp.mm_per_unit,
-        correction=correction)
+        allowable_mpa=allowable, settings=core.settings_of(s).as_dict(), mm_per_unit=inp.mm_per_unit,
+        correction=correction, vertices=len(inp.vertices_mm), faces=len(inp.faces))
     s.weak_bones.clear()
     for row in report["weak_bones"]:
         item = s.weak_bones.add()
@@ -197,9 +171,8 @@ def run_correct(context, progress=_no_progress) -> dict:
             # The bones' own X axes: a thin-direction scale must be one Blender's pose scale
             # X or Z can reproduce.
             fix = osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
-                                 max_scale=float(s.max_scale), max_rounds=int(s.max_rounds),
-                                 scaling=s.scaling.lower(), bone_x_axes=inp.skeleton.x_axes,
-                                 **inp.params)
+                                 bone_x_axes=inp.skeleton.x_axes,
+                                 **core.engine_params(s, arm, inp.skeleton.names, correct=True))
         except ValueError as e:
             raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
         scales = {n: (float(x), float(z)) for n, x, z in

@@ -12,13 +12,13 @@ from bpy.props import (
 
 from .. import core
 
-_MATERIAL_ITEMS = [(m.key, m.label, f"{m.note}; strength {m.strength_mpa:g} MPa")
-                   for m in core.MATERIALS]
+_MATERIAL_ITEMS = core.MATERIAL_ITEMS
+_DEFAULT = core.materials.get(core.materials.DEFAULT_MATERIAL)
 
 
 def _on_material(self, _context):
     m = core.MATERIAL_BY_KEY.get(self.material)
-    if m is not None and m.key != "CUSTOM":
+    if m is not None:
         self.strength_mpa = m.strength_mpa
 
 
@@ -48,10 +48,10 @@ class OsteonBoneResult(bpy.types.PropertyGroup):
 
 
 class OsteonSettings(bpy.types.PropertyGroup):
-    material: EnumProperty(name="Material", items=_MATERIAL_ITEMS, default="PLA",
+    material: EnumProperty(name="Material", items=_MATERIAL_ITEMS, default=_DEFAULT.key,
                            update=_on_material, description="Print material preset: sets the "
                            "strength (MPa)")
-    strength_mpa: FloatProperty(name="Strength (MPa)", default=60.0, min=0.001, soft_max=200.0,
+    strength_mpa: FloatProperty(name="Strength (MPa)", default=_DEFAULT.strength_mpa, min=0.001, soft_max=200.0,
                                 description="Tensile strength of the printed material, MPa")
     safety_factor: FloatProperty(name="Safety factor", default=core.DEFAULT_SAFETY_FACTOR,
                                  min=0.01, soft_max=10.0, description="Allowable stress = "

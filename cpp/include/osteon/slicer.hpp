@@ -1,4 +1,7 @@
 // Plane-mesh slicing into closed loops, and the choice of the section around a bone (SPEC §3).
+// Implemented in cpp/src/slicer_grid.cpp (FaceGrid, line_crossings), slicer_cut.cpp (PlaneFrame,
+// cut_mesh, cut_mesh_parallel), slicer_loops.cpp (assemble_loops) and slicer.cpp
+// (select_section, slice_section).
 #pragma once
 
 #include <cstdint>

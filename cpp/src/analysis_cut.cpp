@@ -1,0 +1,283 @@
+// Stage 3 of a run: cutting the section planes, locally first (phase 1), then wider or whole
+// where the local cut is not provably right (phase 2) (Analyzer::Impl).
+//
+// Cuts are first made locally, inside a cylinder (joints: a ball) around the bone that holds
+// the bone's own vertices; the local section is used only when it is provably the one the whole
+// plane gives: no open polyline, and the loops around the bone point agree in parity with a 3D
+// inside test along the bone's axis (so no far loop, e.g. a hollow body's wall, encloses it).
+// Otherwise the whole plane is cut.
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "analysis_impl.hpp"
+#include "parallel.hpp"
+
+namespace osteon {
+namespace {
+
+// Why a section is queued for phase 2.
+enum Retry : std::uint8_t { kNone = 0, kGrowFamily = 1, kWholePlane = 2, kGrowJoint = 3 };
+
+// Is the point at `param` along bone b's axis inside the mesh (odd number of crossings beyond)?
+bool inside_at(const RunState& run, int b, double param) {
+  const auto& c = run.crossings[b];
+  return (c.end() - std::upper_bound(c.begin(), c.end(), param)) % 2 == 1;
+}
+
+// A loop clipped by the region (an open polyline here) cannot lie inside a closed local loop
+// (the region is convex), so it can only matter if it reaches the chosen outer boundary's box
+// (a hole of it) or encloses the point (then the parity test fails or it comes with a partner).
+bool local_ok(RunState& run, const PlaneCut& cut, const SectionGeometry& geom, bool inside) {
+  bool ok = !(cut.flags & kFlagNonManifold) && geom.found && geom.containing >= 1 &&
+            (geom.containing % 2 == 1) == inside;
+  if (ok && !cut.open_chains.empty()) {
+    Vec2 lo = geom.polygon.outer[0], hi = lo;
+    for (const Vec2& p : geom.polygon.outer) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    for (const auto& chain : cut.open_chains)
+      for (const Vec2& p : chain)
+        if (p.x() >= lo.x() && p.x() <= hi.x() && p.y() >= lo.y() && p.y() <= hi.y()) ok = false;
+  }
+  ++(ok ? run.local_used : run.local_failed);
+  return ok;
+}
+
+// Section state of a found (or skipped) section geometry; region null: the whole plane was cut.
+SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const CutRegion* region) {
+  SectionState st;
+  st.flags = geom.flags;
+  st.whole_plane = region == nullptr;
+  if (region != nullptr) st.region = *region;
+  if (geom.found) {
+    const SectionProperties props = section_properties(geom.polygon);
+    if (props.valid) {
+      st.found = true;
+      st.area = props.area;
+      st.modulus = props.modulus;
+      st.center = frame.to_world(props.centroid);
+      // Principal second moments: the smaller one is across the thinnest direction (a b x t
+      // rectangle has b^3 t / 12 and b t^3 / 12, so the aspect is b / t).
+      const Eigen::SelfAdjointEigenSolver<Mat2> eig(props.second_moment);
+      const Vec2 thin = eig.eigenvectors().col(0);
+      st.thin_axis = (thin.x() * frame.u + thin.y() * frame.v).normalized();
+      const double lo = std::max(eig.eigenvalues()(0), 0.0), hi = eig.eigenvalues()(1);
+      st.aspect = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
+    } else {
+      st.flags |= kFlagDegenerate;
+    }
+  }
+  return st;
+}
+
+// The whole-plane section from all of a plane's segments (gaps closed: nothing is clipped).
+SectionState finish_whole(const PlaneFrame& frame, const std::vector<CutSegment>& segs,
+                          double gap) {
+  SectionGeometry geom = select_section(assemble_loops(segs, gap));
+  if (segs.empty()) geom.flags |= kFlagEmpty;
+  return finish(frame, geom, nullptr);
+}
+
+}  // namespace
+
+void Analyzer::Impl::prepare_cuts(RunState& run) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  const int nb = num_bones;
+  const int threads = options.threads;
+  const double h = options.interval;
+  const long jobs = static_cast<long>(job_bone.size());
+  run.workers = detail::worker_count(threads, jobs);
+  if (std::find(run.job_dirty.begin(), run.job_dirty.end(), 1) != run.job_dirty.end())
+    run.grid.build(mesh, 12, threads);
+  run.timer.lap("grid");
+  run.reach.assign(nb, 0.0);
+  run.axis.resize(nb);
+  std::vector<double>& reach = run.reach;
+  for (int b = 0; b < nb; ++b) run.axis[b] = sk.direction(b);
+  for (Index v = 0; v < num_vertices; ++v) {
+    const int b = run.vertex_bone[v];
+    const Vec3 rel = mesh.vertex(v) - sk.heads[b];
+    const Vec3& d = run.axis[b];
+    reach[b] = std::max(reach[b], (rel - rel.dot(d) * d).squaredNorm());
+  }
+  for (int b = 0; b < nb; ++b) reach[b] = 2.5 * std::sqrt(reach[b]) + 2.0 * h;
+  run.crossings.assign(nb, {});
+  std::vector<std::uint8_t> need_crossings(nb, 0);
+  for (std::size_t i = 0; i < specs.size(); ++i)
+    if (run.job_dirty[specs[i].job]) need_crossings[specs[i].bone] = 1;
+  detail::parallel_for(nb, threads, [&](long b, int) {
+    if (options.local_cuts && need_crossings[b])
+      run.crossings[b] = line_crossings(mesh, run.grid, sk.heads[b], sk.direction(b));
+  });
+  run.family_segments.assign(run.workers, {});
+  run.single_segments.assign(run.workers, {});
+  // Segments of a section whose local cut was not enough: a wider cut only adds the triangles
+  // the narrower one left out (cut_mesh's `exclude`), so no triangle is cut twice.
+  run.kept.assign(specs.size(), {});
+  run.retry.assign(specs.size(), kNone);
+}
+
+void Analyzer::Impl::cut_local(RunState& run) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  const double h = options.interval;
+  const long jobs = static_cast<long>(job_bone.size());
+  // Phase 1 (parallel over bones and joints): one local cut per family of parallel planes.
+  // Sections whose local cut is not provably right, and all joints, are queued for phase 2.
+  detail::parallel_for(jobs, options.threads, [&](long job, int worker) {
+    if (!run.job_dirty[job]) return;
+    const int first = job_section[job];
+    const int b = job_bone[job];
+    if (b < 0) {
+      run.retry[first] = options.local_cuts ? kGrowJoint : kWholePlane;
+      return;
+    }
+    const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
+    const int n = static_cast<int>(slab_params[b].size()) - 2;
+    auto& segs = run.family_segments[worker];
+    const CutRegion region{sk.heads[b], sk.direction(b), run.reach[b]};
+    const bool local = options.local_cuts;
+    cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, local ? &region : nullptr,
+                      run.section_dirty.data() + first);
+    for (int k = 1; k <= n; ++k) {
+      const int si = first + k - 1;
+      if (!run.section_dirty[si]) continue;
+      PlaneFrame frame = base;
+      frame.origin = specs[si].point;
+      if (!local) {
+        states[si] = finish_whole(frame, segs[k - 1], run.gap);
+        continue;
+      }
+      const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
+      const SectionGeometry geom = select_section(cut);
+      if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
+        states[si] = finish(frame, geom, &region);
+        continue;
+      }
+      run.retry[si] = geom.found ? kWholePlane : kGrowFamily;
+      run.kept[si] = std::move(segs[k - 1]);
+    }
+  });
+}
+
+void Analyzer::Impl::cut_retries(RunState& run) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  const double h = options.interval;
+  const double diag = run.diag;
+  const long jobs = static_cast<long>(job_bone.size());
+  const std::vector<std::uint8_t>& retry = run.retry;
+  const std::vector<double>& reach = run.reach;
+  // Phase 2 units: a family's queued planes are re-cut together in masked passes (a cylinder
+  // three times wider, then the whole plane); a joint grows a ball around its point, then cuts
+  // the whole plane. Families first: they are the larger units, joints balance the cores last.
+  std::vector<int> units;
+  for (long job = 0; job < jobs; ++job) {
+    const int first = job_section[job];
+    const int n = job_bone[job] >= 0 ? static_cast<int>(slab_params[job_bone[job]].size()) - 2 : 1;
+    bool any = false;
+    for (int i = first; i < first + n; ++i) {
+      any |= retry[i] != kNone;
+      run.retried += retry[i] != kNone;
+    }
+    if (any) units.push_back(static_cast<int>(job));
+  }
+  std::stable_partition(units.begin(), units.end(), [&](int job) { return job_bone[job] >= 0; });
+  // The moment-arm index (stage 4) needs no section: it is built as one more unit, third in
+  // line, so that it fills a core while the other cuts.
+  const long index_unit = std::min<long>(2, static_cast<long>(units.size()));
+  detail::parallel_for(
+      static_cast<long>(units.size()) + 1, options.threads, [&](long u, int worker) {
+        if (u == index_unit) {
+          run.arms = std::make_unique<MomentArmIndex>(mesh, sk, tree, run.vertex_bone, slab_params);
+          return;
+        }
+        const int job = units[u > index_unit ? u - 1 : u];
+        const int first = job_section[job];
+        const int b = job_bone[job];
+        if (b < 0) {
+          const SectionSpec& spec = specs[first];
+          const int bone = spec.bone;
+          const PlaneFrame frame = PlaneFrame::make(spec.point, spec.normal);
+          auto& segs = run.single_segments[worker];
+          segs.clear();
+          CutRegion ball{spec.point, Vec3::Zero(), reach[bone]};
+          if (sk.parents[bone] >= 0) ball.radius = std::max(ball.radius, reach[sk.parents[bone]]);
+          const CutRegion* done = nullptr;  // the region already cut
+          CutRegion previous;
+          if (retry[first] == kGrowJoint) {
+            const bool inside = inside_at(run, bone, slab_params[bone][spec.boundary]);
+            for (int step = 0; step < 2 && ball.radius < diag; ++step, ball.radius *= 3.0) {
+              cut_mesh(mesh, frame, segs, &run.grid, &ball, done);
+              const PlaneCut cut = assemble_loops(segs, 0.0);
+              const SectionGeometry geom = select_section(cut);
+              previous = ball;
+              done = &previous;
+              if (local_ok(run, cut, geom, inside)) {
+                states[first] = finish(frame, geom, &ball);
+                return;
+              }
+              if (geom.found) break;  // found but not provably right: cut the whole plane
+            }
+          }
+          cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
+          states[first] = finish_whole(frame, segs, run.gap);
+          return;
+        }
+        const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
+        const int n = static_cast<int>(slab_params[b].size()) - 2;
+        auto& segs = run.family_segments[worker];
+        std::vector<std::uint8_t> wanted(n);
+        for (int k = 1; k <= n; ++k) wanted[k - 1] = retry[first + k - 1] != kNone;
+        auto frame_of = [&](int k) {
+          PlaneFrame frame = base;
+          frame.origin = specs[first + k - 1].point;
+          return frame;
+        };
+        auto add_kept = [&](int k) {
+          auto& all = run.kept[first + k - 1];
+          all.insert(all.end(), segs[k - 1].begin(), segs[k - 1].end());
+        };
+        const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
+        const CutRegion wide{sk.heads[b], sk.direction(b), 3.0 * reach[b]};
+        const CutRegion* done = &region;
+        bool grow = false;
+        for (int k = 1; k <= n; ++k) grow |= retry[first + k - 1] == kGrowFamily;
+        if (grow && wide.radius < diag) {
+          cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, &wide, wanted.data(), &region);
+          done = &wide;
+          for (int k = 1; k <= n; ++k) {
+            if (!wanted[k - 1]) continue;
+            add_kept(k);
+            if (retry[first + k - 1] != kGrowFamily) continue;
+            const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
+            const SectionGeometry geom = select_section(cut);
+            if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
+              states[first + k - 1] = finish(frame_of(k), geom, &wide);
+              wanted[k - 1] = 0;
+            }
+          }
+        }
+        if (std::find(wanted.begin(), wanted.end(), 1) == wanted.end()) return;
+        cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, nullptr, wanted.data(), done);
+        for (int k = 1; k <= n; ++k) {
+          if (!wanted[k - 1]) continue;
+          add_kept(k);
+          states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap);
+        }
+      });
+  if (run.timer.on) {
+    std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(run.local_used),
+                 int(run.local_failed));
+    std::fprintf(stderr, "sections retried %ld\n", run.retried);
+  }
+}
+
+}  // namespace osteon

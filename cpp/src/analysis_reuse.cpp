@@ -1,0 +1,116 @@
+// What a run may keep from the last one: partial re-analysis (the correction loop) and exact
+// reuse of unchanged sections (live mode) (Analyzer::Impl).
+#include <algorithm>
+#include <limits>
+#include <vector>
+
+#include "analysis_impl.hpp"
+
+namespace osteon {
+namespace {
+
+// Does the plane (point, normal) pass through the box?
+bool plane_crosses_box(const Vec3& point, const Vec3& normal, const Box3& box) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner((c & 1) ? box.hi.x() : box.lo.x(), (c & 2) ? box.hi.y() : box.lo.y(),
+                      (c & 4) ? box.hi.z() : box.lo.z());
+    const double s = (corner - point).dot(normal);
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  return lo <= 0.0 && hi >= 0.0;
+}
+
+}  // namespace
+
+void Analyzer::Impl::mark_dirty(RunState& run) {
+  const Skeleton& sk = run.sk;
+  const long jobs = static_cast<long>(job_bone.size());
+  run.job_dirty.assign(jobs, 1);
+  run.section_dirty.assign(specs.size(), 1);
+  if (!run.partial) return;
+  const Box3& dirty = *run.dirty;
+  // A section changes only if the moved triangles cross its plane inside the region its cut
+  // was proven in (and, for a ball, away from its bone's axis: the inside test uses that line).
+  const Vec3 center = 0.5 * (dirty.lo + dirty.hi), half = 0.5 * (dirty.hi - dirty.lo);
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const SectionState& st = states[i];
+    bool touched = plane_crosses_box(specs[i].point, specs[i].normal, dirty);
+    if (touched && !st.whole_plane) {
+      const int b = specs[i].bone;
+      const CutRegion axis_line{sk.heads[b], sk.direction(b), 0.0};
+      touched = st.region.meets_box(center, half) || axis_line.meets_box(center, half);
+    }
+    run.section_dirty[i] = touched;
+  }
+  std::fill(run.job_dirty.begin(), run.job_dirty.end(), 0);
+  for (std::size_t i = 0; i < specs.size(); ++i)
+    if (run.section_dirty[i]) run.job_dirty[specs[i].job] = 1;
+}
+
+void Analyzer::Impl::reuse_last_run(RunState& run) {
+  if (!(run.may_reuse && run.prev_specs.size() == specs.size())) return;
+  const Skeleton& sk = run.sk;
+  const MeshView& mesh = run.mesh;
+  const double* vertices = run.vertices;
+  const std::vector<SectionSpec>& prev_specs = run.prev_specs;
+  const std::vector<SectionState>& prev_states = run.prev_states;
+  // Exact reuse: a section keeps its geometry when its bone, plane and downstream side are
+  // bitwise the same and no moved triangle reaches the region its cut was proven in.
+  Box3 moved_box;
+  std::vector<std::uint8_t> moved(num_vertices, 0);
+  bool any_moved = false;
+  for (Index v = 0; v < num_vertices; ++v) {
+    const double* a = vertices + 3 * v;
+    const double* b = last_vertices.data() + 3 * v;
+    moved[v] = a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
+    any_moved |= moved[v] != 0;
+  }
+  if (any_moved) {
+    for (std::size_t f = 0; f < faces.size(); f += 3) {
+      if (!moved[faces[f]] && !moved[faces[f + 1]] && !moved[faces[f + 2]]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Index v = faces[f + k];
+        moved_box.add(mesh.vertex(v));
+        moved_box.add(
+            Vec3(last_vertices[3 * v], last_vertices[3 * v + 1], last_vertices[3 * v + 2]));
+      }
+    }
+  }
+  const Vec3 center = 0.5 * (moved_box.lo + moved_box.hi),
+             half = 0.5 * (moved_box.hi - moved_box.lo);
+  std::fill(run.job_dirty.begin(), run.job_dirty.end(), 0);
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const SectionSpec& a = specs[i];
+    const SectionSpec& b = prev_specs[i];
+    const int bone = a.bone;
+    bool same = a.bone == b.bone && a.kind == b.kind && a.boundary == b.boundary &&
+                a.plus_side == b.plus_side && a.point == b.point && a.normal == b.normal &&
+                sk.heads[bone] == last_heads[bone] && sk.tails[bone] == last_tails[bone] &&
+                !(prev_states[i].whole_plane && run.gap != last_gap);  // gap closing applies there
+    if (same && any_moved && plane_crosses_box(a.point, a.normal, moved_box)) {
+      const SectionState& st = prev_states[i];
+      const CutRegion axis_line{sk.heads[bone], sk.direction(bone), 0.0};
+      same = !st.whole_plane && !st.region.meets_box(center, half) &&
+             !axis_line.meets_box(center, half);
+    }
+    if (same) {
+      states[i] = prev_states[i];
+      run.section_dirty[i] = 0;
+    } else {
+      run.section_dirty[i] = 1;
+      run.job_dirty[a.job] = 1;
+    }
+  }
+}
+
+void Analyzer::Impl::remember_inputs(const RunState& run) {
+  last_vertices.assign(run.vertices, run.vertices + 3 * num_vertices);
+  last_heads = run.sk.heads;
+  last_tails = run.sk.tails;
+  last_parents = run.sk.parents;
+  last_gap = run.gap;
+}
+
+}  // namespace osteon

@@ -1,0 +1,187 @@
+// The face grid: triangles bucketed into cells and blocks (spatial index), and line queries
+// through it (see osteon/slicer.hpp).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "osteon/slicer.hpp"
+#include "parallel.hpp"
+
+namespace osteon {
+
+void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
+  const Index nf = mesh.num_faces;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (Index i = 0; i < mesh.num_vertices; ++i) {
+    const Vec3 p = mesh.vertex(i);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-12 * (1.0 + (hi - lo).norm())));
+  // Boxes are widened by a few ulps of the coordinates so that a plane through a box's face is
+  // never rounded out of it (the plane tests compute n.center +- |n|.half).
+  const double slack = 64 * std::numeric_limits<double>::epsilon() *
+                       std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+  // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
+  // sample) so that a non-empty cell holds about faces_per_cell triangles.
+  const Index step = std::max<Index>(1, nf / 2048);
+  double area = 0.0;
+  Index sampled = 0;
+  for (Index f = 0; f < nf; f += step, ++sampled) {
+    const std::int32_t* t = mesh.faces + 3 * f;
+    area +=
+        0.5 *
+        (mesh.vertex(t[1]) - mesh.vertex(t[0])).cross(mesh.vertex(t[2]) - mesh.vertex(t[0])).norm();
+  }
+  const double mean_area = area / std::max<Index>(1, sampled);
+  double cell = std::sqrt(std::max(mean_area, 1e-300) * faces_per_cell);
+  cell = std::max(cell, extent.maxCoeff() / 256.0);
+  // Never more (volume) cells than a quarter of the faces, so the counting arrays stay small.
+  cell = std::max(cell, std::cbrt(extent.prod() / (0.25 * double(std::max<Index>(nf, 4)))));
+  if (!(cell > 0) || !std::isfinite(cell)) cell = extent.maxCoeff();
+  constexpr int kBlock = 4;  // cells per block edge
+  Eigen::Array3i dims;
+  for (int k = 0; k < 3; ++k) {
+    dims[k] = static_cast<int>(std::clamp(std::ceil(extent[k] / cell), 1.0, 256.0));
+    dims[k] = (dims[k] + kBlock - 1) / kBlock * kBlock;
+  }
+  const Vec3 inv(dims[0] / extent.x(), dims[1] / extent.y(), dims[2] / extent.z());
+  const Eigen::Array3i bdims = dims / kBlock;
+  // Cell ids ordered block by block so that a block's cells are contiguous.
+  auto cell_id = [&](const Vec3& c) {
+    int x[3];
+    for (int k = 0; k < 3; ++k)
+      x[k] = std::clamp(static_cast<int>((c[k] - lo[k]) * inv[k]), 0, dims[k] - 1);
+    const Index block =
+        (Index(x[0] / kBlock) * bdims[1] + x[1] / kBlock) * bdims[2] + x[2] / kBlock;
+    const Index inner = ((x[0] % kBlock) * kBlock + x[1] % kBlock) * kBlock + x[2] % kBlock;
+    return block * (kBlock * kBlock * kBlock) + inner;
+  };
+  const Index total = Index(dims[0]) * dims[1] * dims[2];
+  // One pass over the triangles (split over the workers): cell of the centroid, and how far each
+  // cell's triangles stick out of it (so that a cell's box = its grid box widened by that,
+  // without a second pass).
+  const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
+  std::vector<std::int32_t> cell_of(nf);
+  std::vector<std::vector<Index>> part_count(parts, std::vector<Index>(total, 0));
+  std::vector<std::vector<float>> part_overhang(parts, std::vector<float>(total, 0.0f));
+  const Vec3 size(extent.x() / dims[0], extent.y() / dims[1], extent.z() / dims[2]);
+  auto part_range = [&](long part) {
+    return std::make_pair(nf * part / parts, nf * (part + 1) / parts);
+  };
+  detail::parallel_for(parts, parts, [&](long part, int) {
+    auto& count = part_count[part];
+    auto& overhang = part_overhang[part];
+    const auto [begin, end] = part_range(part);
+    for (Index f = begin; f < end; ++f) {
+      const std::int32_t* t = mesh.faces + 3 * f;
+      const Vec3 a = mesh.vertex(t[0]), b = mesh.vertex(t[1]), c = mesh.vertex(t[2]);
+      const Vec3 centroid = (a + b + c) / 3.0;
+      const Index id = cell_id(centroid);
+      cell_of[f] = static_cast<std::int32_t>(id);
+      ++count[id];
+      const double reach =
+          std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
+                    (c - centroid).cwiseAbs().maxCoeff()});
+      overhang[id] = std::max(overhang[id], static_cast<float>(reach * (1 + 1e-6)));
+    }
+  });
+  // Cell starts, and where each part writes its triangles of a cell: after the earlier parts', so
+  // the order is the sequential one whatever the number of workers.
+  std::vector<Index> count(total + 1, 0);
+  std::vector<float>& overhang = part_overhang[0];
+  for (Index c = 0; c < total; ++c) {
+    Index sum = count[c];
+    for (int p = 0; p < parts; ++p) {
+      const Index n = part_count[p][c];
+      part_count[p][c] = sum;  // now: where part p starts writing in cell c
+      sum += n;
+      if (p > 0) overhang[c] = std::max(overhang[c], part_overhang[p][c]);
+    }
+    count[c + 1] = sum;
+  }
+  faces_.resize(3 * nf);
+  detail::parallel_for(parts, parts, [&](long part, int) {
+    auto& fill = part_count[part];
+    const auto [begin, end] = part_range(part);
+    for (Index f = begin; f < end; ++f) {
+      const Index k = fill[cell_of[f]]++;
+      faces_[3 * k] = mesh.faces[3 * f];
+      faces_[3 * k + 1] = mesh.faces[3 * f + 1];
+      faces_[3 * k + 2] = mesh.faces[3 * f + 2];
+    }
+  });
+  // Keep the non-empty cells only, each with its grid box widened by its triangles' overhang
+  // (centroids lie inside the grid box), and the non-empty blocks with the box of their cells.
+  center_.clear();
+  half_.clear();
+  start_.clear();
+  block_center_.clear();
+  block_half_.clear();
+  block_start_.clear();
+  const Index per_block = kBlock * kBlock * kBlock;
+  const double inf = std::numeric_limits<double>::infinity();
+  for (Index b0 = 0; b0 < total; b0 += per_block) {
+    Vec3 klo = Vec3::Constant(inf), khi = -klo;
+    const Index cells_before = static_cast<Index>(center_.size());
+    const Index block = b0 / per_block;
+    const int bx = static_cast<int>(block / (Index(bdims[1]) * bdims[2]));
+    const int by = static_cast<int>((block / bdims[2]) % bdims[1]);
+    const int bz = static_cast<int>(block % bdims[2]);
+    for (Index c = b0; c < b0 + per_block; ++c) {
+      if (count[c + 1] == count[c]) continue;
+      const Index inner = c - b0;
+      const int ix = bx * kBlock + static_cast<int>(inner / (kBlock * kBlock));
+      const int iy = by * kBlock + static_cast<int>((inner / kBlock) % kBlock);
+      const int iz = bz * kBlock + static_cast<int>(inner % kBlock);
+      const Vec3 clo = lo + Vec3(ix * size.x(), iy * size.y(), iz * size.z());
+      const Vec3 half = 0.5 * size + Vec3::Constant(double(overhang[c]) + slack);
+      const Vec3 center = clo + 0.5 * size;
+      center_.push_back(center);
+      half_.push_back(half);
+      start_.push_back(count[c]);
+      klo = klo.cwiseMin(center - half);
+      khi = khi.cwiseMax(center + half);
+    }
+    if (static_cast<Index>(center_.size()) == cells_before) continue;
+    block_center_.push_back(0.5 * (klo + khi));
+    block_half_.push_back(0.5 * (khi - klo) + Vec3::Constant(slack));
+    block_start_.push_back(cells_before);
+  }
+  start_.push_back(nf);
+  block_start_.push_back(static_cast<Index>(center_.size()));
+}
+
+std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,
+                                   const Vec3& dir) {
+  std::vector<double> hits;
+  const CutRegion line{point, dir, 0.0};
+  for (Index c = 0, k = 0; k < grid.num_blocks(); ++k) {
+    if (!grid.block_near(k, line)) continue;
+    for (c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+      if (!grid.near(c, line)) continue;
+      const std::int32_t* t = grid.faces() + 3 * grid.begin(c);
+      for (Index f = grid.begin(c); f < grid.end(c); ++f, t += 3) {
+        // Moller-Trumbore for the infinite line.
+        const Vec3 a = mesh.vertex(t[0]);
+        const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
+        const Vec3 p = dir.cross(e2);
+        const double det = e1.dot(p);
+        if (det == 0.0) continue;
+        const double inv = 1.0 / det;
+        const Vec3 s = point - a;
+        const double u = s.dot(p) * inv;
+        if (u < 0.0 || u > 1.0) continue;
+        const Vec3 q = s.cross(e1);
+        const double v = dir.dot(q) * inv;
+        if (v < 0.0 || u + v > 1.0) continue;
+        hits.push_back(e2.dot(q) * inv);
+      }
+    }
+  }
+  std::sort(hits.begin(), hits.end());
+  return hits;
+}
+
+}  // namespace osteon

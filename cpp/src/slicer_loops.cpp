@@ -1,0 +1,276 @@
+// Loop assembly: cut segments linked into closed loops by shared mesh edges, open ends joined
+// across small gaps (see osteon/slicer.hpp).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "osteon/slicer.hpp"
+
+namespace osteon {
+namespace {
+
+// Open-addressing table pairing the two segment endpoints ("occurrences") on each mesh edge.
+struct EdgeTable {
+  struct Slot {
+    std::uint64_t key;
+    std::int32_t first;
+    std::uint32_t stamp;  // the slot is in use in this round only when stamp == round
+  };
+  std::vector<Slot> slots;
+  std::uint64_t mask = 0;
+  int bits = 0;
+  std::uint32_t round = 0;
+
+  // `keys` = distinct edges expected (at most); the table stays at most half full. Slots are
+  // not cleared: a new round number empties them all at once (the table is reused per thread).
+  void reset(std::size_t keys) {
+    bits = 4;
+    while ((std::size_t(1) << bits) < 2 * keys + 16) ++bits;
+    const std::size_t size = std::size_t(1) << bits;
+    mask = size - 1;
+    if (slots.size() < size) slots.resize(size, Slot{0, -1, round});
+    if (++round == 0) {  // wrapped: make every stamp stale again
+      for (Slot& slot : slots) slot.stamp = 0;
+      round = 1;
+    }
+  }
+  // Pairs `occurrence` with the endpoint already on the edge (partner[] both ways); returns
+  // false if the edge already had two endpoints (non-manifold).
+  bool insert(std::uint64_t key, std::int32_t occurrence, std::vector<std::int32_t>& partner) {
+    std::uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> (64 - bits);
+    while (true) {
+      Slot& slot = slots[h];
+      if (slot.stamp != round) {
+        slot = Slot{key, occurrence, round};
+        return true;
+      }
+      if (slot.key == key) {
+        if (slot.first < 0) return false;
+        partner[slot.first] = occurrence;
+        partner[occurrence] = slot.first;
+        slot.first = -1;  // paired: a third endpoint is non-manifold
+        return true;
+      }
+      h = (h + 1) & mask;
+    }
+  }
+};
+
+// Unordered pair of the two edge keys of a segment: identical for a doubled triangle.
+std::pair<std::uint64_t, std::uint64_t> segment_key(const CutSegment& s) {
+  return s.edge[0] < s.edge[1] ? std::make_pair(s.edge[0], s.edge[1])
+                               : std::make_pair(s.edge[1], s.edge[0]);
+}
+
+}  // namespace
+
+PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_tolerance) {
+  PlaneCut cut;
+  if (input.empty()) return cut;
+  // Pair the two endpoints that lie on the same mesh edge; orientation-agnostic so that
+  // inconsistently wound meshes still give loops. An edge with more than two endpoints is first
+  // explained by exact duplicate segments (doubled triangles), which are dropped; whatever is
+  // still non-manifold after that is flagged.
+  const std::vector<CutSegment>* source = &input;
+  std::vector<CutSegment> deduplicated;
+  thread_local EdgeTable table;
+  thread_local std::vector<std::int32_t> partner;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const std::vector<CutSegment>& segs = *source;
+    const std::size_t count = segs.size();
+    table.reset(2 * count);  // 2*count endpoints: at most that many distinct edges
+    partner.assign(2 * count, -1);
+    bool crowded = false;
+    for (std::size_t s = 0; s < count; ++s)
+      for (int e = 0; e < 2; ++e)
+        if (!table.insert(segs[s].edge[e], static_cast<std::int32_t>(2 * s + e), partner))
+          crowded = true;
+    if (crowded && attempt == 0) {
+      deduplicated = input;
+      std::sort(
+          deduplicated.begin(), deduplicated.end(),
+          [](const CutSegment& x, const CutSegment& y) { return segment_key(x) < segment_key(y); });
+      const auto last = std::unique(deduplicated.begin(), deduplicated.end(),
+                                    [](const CutSegment& x, const CutSegment& y) {
+                                      return segment_key(x) == segment_key(y);
+                                    });
+      if (last != deduplicated.end()) {
+        deduplicated.erase(last, deduplicated.end());
+        source = &deduplicated;
+        continue;
+      }
+    }
+    if (crowded) cut.flags |= kFlagNonManifold;
+    break;
+  }
+  const std::vector<CutSegment>& segments = *source;
+  const std::size_t m = segments.size();
+  thread_local std::vector<std::uint8_t> used;
+  used.assign(m, 0);
+  std::vector<Vec2> forward, backward;
+  for (std::size_t s0 = 0; s0 < m; ++s0) {
+    if (used[s0]) continue;
+    forward.clear();
+    backward.clear();
+    bool closed = false;
+    // Walk forward: enter s at endpoint `in`, leave through the other endpoint.
+    std::size_t cur = s0;
+    int in = 0;
+    while (true) {
+      used[cur] = 1;
+      forward.push_back(segments[cur].point[in]);
+      const std::int32_t next = partner[2 * cur + (1 - in)];
+      if (next < 0) {
+        forward.push_back(segments[cur].point[1 - in]);
+        break;
+      }
+      const std::size_t ns = static_cast<std::size_t>(next / 2);
+      if (ns == s0) {
+        closed = true;
+        break;
+      }
+      if (used[ns]) {
+        forward.push_back(segments[cur].point[1 - in]);
+        break;
+      }
+      cur = ns;
+      in = next % 2;
+    }
+    if (!closed) {
+      // Walk backward from s0's entry endpoint to find the chain's true start.
+      std::int32_t prev = partner[2 * s0 + 0];
+      while (prev >= 0) {
+        const std::size_t ps = static_cast<std::size_t>(prev / 2);
+        if (used[ps]) break;
+        used[ps] = 1;
+        const int out_end = prev % 2;  // we reach ps through this endpoint: it is ps's exit
+        backward.push_back(segments[ps].point[1 - out_end]);
+        prev = partner[2 * ps + (1 - out_end)];
+      }
+      std::vector<Vec2> chain(backward.rbegin(), backward.rend());
+      chain.insert(chain.end(), forward.begin(), forward.end());
+      cut.open_chains.push_back(std::move(chain));
+    } else {
+      cut.loops.push_back(std::move(forward));
+      forward = {};
+    }
+  }
+  // Close small gaps: join open ends closer than the tolerance, closest pairs first (a chain's
+  // own two ends close it into a loop). Ends are bucketed on a grid of the tolerance's size, so
+  // this stays linear even for triangle soups where every triangle is its own chain.
+  auto& chains = cut.open_chains;
+  if (!chains.empty() && gap_tolerance > 0) {
+    const std::size_t c = chains.size();
+    // End 2i is chain i's front, 2i+1 its back.
+    auto end_point = [&](std::size_t end) -> const Vec2& {
+      return end % 2 == 0 ? chains[end / 2].front() : chains[end / 2].back();
+    };
+    const double cell = gap_tolerance;
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> buckets;
+    auto cell_of = [&](const Vec2& p, int dx, int dy) {
+      const std::int64_t x = static_cast<std::int64_t>(std::floor(p.x() / cell)) + dx;
+      const std::int64_t y = static_cast<std::int64_t>(std::floor(p.y() / cell)) + dy;
+      return (static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull) ^
+             static_cast<std::uint64_t>(y);
+    };
+    for (std::size_t end = 0; end < 2 * c; ++end)
+      buckets[cell_of(end_point(end), 0, 0)].push_back(static_cast<std::uint32_t>(end));
+    struct Pair {
+      double d2;
+      std::uint32_t a, b;
+    };
+    std::vector<Pair> pairs;
+    const double tol2 = gap_tolerance * gap_tolerance;
+    for (std::size_t end = 0; end < 2 * c; ++end) {
+      const Vec2& p = end_point(end);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy) {
+          auto it = buckets.find(cell_of(p, dx, dy));
+          if (it == buckets.end()) continue;
+          for (std::uint32_t other : it->second) {
+            if (other <= end) continue;
+            const double d2 = (end_point(other) - p).squaredNorm();
+            if (d2 <= tol2) pairs.push_back({d2, static_cast<std::uint32_t>(end), other});
+          }
+        }
+    }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+      return x.d2 < y.d2 || (x.d2 == y.d2 && (x.a < y.a || (x.a == y.a && x.b < y.b)));
+    });
+    // Join ends greedily; `link[end]` is the end it is joined to. Chains then form paths and
+    // cycles of chains; a cycle is a closed loop.
+    std::vector<std::int64_t> link(2 * c, -1);
+    std::vector<std::size_t> group(c);
+    for (std::size_t i = 0; i < c; ++i) group[i] = i;
+    auto root = [&](std::size_t i) {
+      while (group[i] != i) i = group[i] = group[group[i]];
+      return i;
+    };
+    std::vector<std::uint8_t> closed_group(c, 0);
+    for (const Pair& pr : pairs) {
+      if (link[pr.a] >= 0 || link[pr.b] >= 0) continue;
+      const std::size_t ra = root(pr.a / 2), rb = root(pr.b / 2);
+      if (ra == rb) {
+        if (closed_group[ra]) continue;
+        closed_group[ra] = 1;  // joining the two free ends of one path closes it
+      } else {
+        group[ra] = rb;
+        closed_group[rb] = closed_group[ra] || closed_group[rb];
+      }
+      link[pr.a] = pr.b;
+      link[pr.b] = pr.a;
+      cut.flags |= kFlagGapClosed;
+    }
+    // Walk each joined group from a free end (paths) or any end (cycles).
+    std::vector<std::uint8_t> done(c, 0);
+    std::vector<std::vector<Vec2>> remaining;
+    auto walk = [&](std::size_t start_end, bool cycle) {
+      std::vector<Vec2> pts;
+      std::size_t end = start_end;
+      while (true) {
+        const std::size_t chain = end / 2;
+        if (done[chain]) break;
+        done[chain] = 1;
+        // Enter the chain at `end`, traverse to its other end.
+        if (end % 2 == 0)
+          pts.insert(pts.end(), chains[chain].begin(), chains[chain].end());
+        else
+          pts.insert(pts.end(), chains[chain].rbegin(), chains[chain].rend());
+        const std::size_t exit_end = end ^ 1u;
+        if (link[exit_end] < 0) break;
+        end = static_cast<std::size_t>(link[exit_end]);
+      }
+      if (cycle) {
+        if (pts.size() >= 3) cut.loops.push_back(std::move(pts));
+      } else {
+        remaining.push_back(std::move(pts));
+      }
+    };
+    for (std::size_t i = 0; i < c; ++i) {
+      if (done[i]) continue;
+      // Find a free end of this group by walking backwards from chain i's front.
+      std::size_t end = 2 * i;
+      bool cycle = false;
+      for (std::size_t steps = 0; steps <= 2 * c; ++steps) {
+        if (link[end] < 0) break;
+        end = static_cast<std::size_t>(link[end]) ^ 1u;  // the other end of the linked chain
+        if (end == 2 * i) {
+          cycle = true;
+          break;
+        }
+      }
+      walk(end, cycle);
+    }
+    chains.swap(remaining);
+  }
+  // Drop degenerate loops (fewer than three points cannot bound area).
+  cut.loops.erase(std::remove_if(cut.loops.begin(), cut.loops.end(),
+                                 [](const std::vector<Vec2>& l) { return l.size() < 3; }),
+                  cut.loops.end());
+  return cut;
+}
+
+}  // namespace osteon

@@ -1,0 +1,223 @@
+"""The one analysis report: allowable stress, the per-bone table and the JSON schema.
+
+Used by the CLI (``osteon analyze/correct``), the Blender add-on (operators, batch script) and
+batch runs, so that the same model and settings give the same JSON everywhere.
+
+Rules: units in every key (mm, N, MPa); a non-finite number becomes ``null`` (JSON has no NaN);
+every key of the schema is present in every report (``null`` where it does not apply);
+``schema_version`` changes when a key is renamed or removed.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: bump when a key is renamed, removed or changes meaning (adding keys keeps the version)
+SCHEMA_VERSION = 1
+UNITS = {"length": "mm", "force": "N", "stress": "MPa"}
+
+
+def allowable_stress(strength_mpa: float, safety_factor: float) -> float:
+    """Allowable stress [σ] in MPa = material strength (MPa) / safety factor."""
+    if not (float(strength_mpa) > 0.0 and math.isfinite(strength_mpa)):
+        raise ValueError(f"material strength must be a positive number of MPa, got {strength_mpa}")
+    if not (float(safety_factor) > 0.0 and math.isfinite(safety_factor)):
+        raise ValueError(f"safety factor must be a positive number, got {safety_factor}")
+    return float(strength_mpa) / float(safety_factor)
+
+
+def finite(x) -> float | None:
+    """The one rule for numbers in a report: a finite float, or ``None`` (JSON null)."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
+               bone_scale=None) -> list[dict]:
+    """One row per bone that has sections, highest stress ratio first (bones whose sections
+    have no finite stress last, with ``null`` stress).
+
+    ``section_bone`` (S,) int, ``stress`` (S,) MPa, ``weak`` (S,) bool, ``bone_names`` (B,),
+    ``bone_scale`` (B,) or None. Row: ``bone``, ``index``, ``max_stress_mpa``, ``ratio``
+    (max stress / allowable), ``weak`` (a weak section), ``weak_sections``, ``sections``,
+    ``scale`` (the correction's cross-section scale, 1 = unchanged)."""
+    section_bone = np.asarray(section_bone, dtype=np.int64)
+    stress = np.asarray(stress, dtype=np.float64)
+    weak = np.asarray(weak, dtype=bool)
+    nb = len(bone_names)
+    count = np.bincount(section_bone, minlength=nb)
+    nweak = np.bincount(section_bone, weights=weak, minlength=nb)
+    ok = np.isfinite(stress)
+    mx = np.full(nb, -np.inf)
+    np.maximum.at(mx, section_bone[ok], stress[ok])
+    have = np.flatnonzero(count > 0)
+    key = np.where(np.isfinite(mx[have]), -mx[have], np.inf)
+    rows = []
+    for b in have[np.argsort(key, kind="stable")]:
+        m = finite(mx[b])
+        rows.append({
+            "bone": bone_names[b],
+            "index": int(b),
+            "max_stress_mpa": m,
+            "ratio": None if m is None else m / float(allowable_mpa),
+            "weak": bool(nweak[b] > 0),
+            "weak_sections": int(nweak[b]),
+            "sections": int(count[b]),
+            "scale": 1.0 if bone_scale is None else float(bone_scale[b]),
+        })
+    return rows
+
+
+def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
+    return bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale)
+
+
+def section_rows(a, bone_names) -> list[dict]:
+    """Every section of an ``osteon.Analysis``: bone, position (mm), area (mm²), modulus
+    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. An object without
+    section geometry (no ``section_center``) gives ``[]``."""
+    if not hasattr(a, "section_center"):
+        return []
+    n = len(a.stress)
+    param = getattr(a, "section_param", None)
+    rows = []
+    for i in range(n):
+        b = int(a.section_bone[i])
+        rows.append({
+            "bone": bone_names[b],
+            "bone_index": b,
+            "param_mm": finite(param[i]) if param is not None else None,
+            "center_mm": [finite(x) for x in a.section_center[i]],
+            "normal": [finite(x) for x in a.section_normal[i]],
+            "area_mm2": finite(a.section_area[i]),
+            "modulus_mm3": finite(a.section_modulus[i]),
+            "moment_arm_mm": finite(a.moment_arm[i]),
+            "moment_nmm": finite(a.moment[i]),
+            "stress_mpa": finite(a.stress[i]),
+            "culled": bool(a.culled[i]),
+            "weak": bool(a.weak[i]),
+        })
+    return rows
+
+
+def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
+                 front_end: str, model: str, object_name: str | None = None,
+                 armature_name: str | None = None, mm_per_unit: float = 1.0,
+                 vertices: int | None = None, faces: int | None = None,
+                 seconds: float | None = None, correction=None, corrected_analysis=None,
+                 output: str | None = None) -> dict:
+    """The JSON report (schema :data:`SCHEMA_VERSION`) of an analysis or a correction.
+
+    ``analysis``: the ``osteon.Analysis`` of the model as it was. With a correction
+    (``osteon.Correction``), ``corrected_analysis`` is the state after it (default
+    ``correction.after``), which ``max_stress_mpa``, ``bones`` ... describe; ``weak_bones`` then
+    lists every bone weak before or after, with its ``scale``, its stress now and before.
+    ``settings``: :meth:`osteon.settings.Settings.as_dict` (or the front end's own dict);
+    ``mm_per_unit``: mm of the print per model unit (file unit or Blender unit).
+    """
+    if correction is not None and corrected_analysis is None:
+        corrected_analysis = correction.after
+    shown = corrected_analysis if corrected_analysis is not None else analysis
+    scale = None if correction is None else np.asarray(correction.bone_scale, dtype=np.float64)
+    rows = _analysis_table(shown, bone_names, allowable_mpa, scale)
+    if correction is None:
+        weak_bones = [{"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"],
+                       "ratio": r["ratio"], "scale": r["scale"], "weak": True}
+                      for r in rows if r["weak"]]
+        before_rows = None
+    else:
+        before_rows = _analysis_table(analysis, bone_names, allowable_mpa)
+        before = {r["bone"]: r for r in before_rows}
+        weak_bones = [
+            {"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"], "ratio": r["ratio"],
+             "scale": r["scale"], "weak": r["weak"],
+             "max_stress_before_mpa": before[r["bone"]]["max_stress_mpa"]
+             if r["bone"] in before else None}
+            for r in rows if r["weak"] or (r["bone"] in before and before[r["bone"]]["weak"])
+        ]
+    max_stress = finite(shown.max_stress)
+    report = {
+        "schema_version": SCHEMA_VERSION,
+        "run": {"front_end": front_end, "osteon_version": _version(), "blender_version": None,
+                "blend_file": None, "seconds": finite(seconds)},
+        "model": str(model),
+        "object": object_name,
+        "armature": armature_name,
+        "output": None if output is None else str(output),
+        "units": dict(UNITS),
+        "settings": dict(settings),
+        "mm_per_model_unit": float(mm_per_unit),
+        "vertices": None if vertices is None else int(vertices),
+        "faces": None if faces is None else int(faces),
+        "bone_names": list(bone_names),
+        "force_n": finite(settings.get("force_n")),
+        "allowable_stress_mpa": float(allowable_mpa),
+        "max_stress_mpa": max_stress,
+        "stress_ratio": None if max_stress is None else max_stress / float(allowable_mpa),
+        "safe_modulus_mm3": finite(shown.safe_modulus),
+        "sections": len(shown.stress),
+        "weak_sections": int(np.count_nonzero(shown.weak)),
+        "culled_sections": int(np.count_nonzero(shown.culled)),
+        "weak_bones": weak_bones,
+        "bones": rows,
+        # the CLI's name for ``bones`` before the schema had a version; same list
+        "bone_results": rows,
+        "section_table": section_rows(shown, bone_names),
+        "converged": (not any(r["weak"] for r in rows)) if correction is None
+        else bool(correction.converged),
+        "corrected": correction is not None,
+        "correction": None,
+        "max_stress_before_mpa": None,
+        "bone_scale": None,
+        "bone_scale_xz": None,
+        "warnings": [],
+    }
+    if correction is not None:
+        rounds = correction.rounds
+        sx = getattr(correction, "bone_scale_x", None)
+        sz = getattr(correction, "bone_scale_z", None)
+        before_max = finite(analysis.max_stress)
+        report["max_stress_before_mpa"] = before_max
+        report["bone_scale"] = [float(s) for s in scale]
+        if sx is not None and sz is not None:
+            report["bone_scale_xz"] = [[float(x), float(z)] for x, z in zip(sx, sz)]
+        report["correction"] = {
+            "rounds": len(rounds) if hasattr(rounds, "__len__") else int(rounds),
+            "reason": str(getattr(correction, "reason", "")),
+            "converged": bool(correction.converged),
+            "max_stress_before_mpa": before_max,
+            "max_stress_after_mpa": max_stress,
+            "engine_max_stress_after_mpa": finite(correction.after.max_stress),
+            "bone_scale": {bone_names[i]: float(s) for i, s in enumerate(scale) if s != 1.0},
+            # pose scale X and Z of each scaled bone (they differ where a flat part was
+            # thickened across its thickness only)
+            "bone_scale_xz": None if sx is None or sz is None else {
+                bone_names[i]: [float(sx[i]), float(sz[i])]
+                for i in range(len(bone_names)) if sx[i] != 1.0 or sz[i] != 1.0},
+            "before": {"max_stress_mpa": before_max,
+                       "weak_sections": int(np.count_nonzero(analysis.weak)),
+                       "bones": before_rows},
+        }
+    return report
+
+
+def to_json(report: dict, indent: int = 1) -> str:
+    """The report as JSON text; refuses NaN/inf (which :func:`finite` already removed)."""
+    import json
+
+    return json.dumps(report, indent=indent, allow_nan=False)
+
+
+def _version() -> str:
+    try:
+        from importlib.metadata import version
+
+        return version("osteon")
+    except Exception:  # noqa: BLE001 - not installed as a distribution (e.g. vendored)
+        from . import __version__
+
+        return __version__

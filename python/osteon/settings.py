@@ -1,0 +1,109 @@
+"""One set of user settings and the one mapping from settings to the engine's arguments.
+
+The CLI (from its options), the Blender add-on (from ``scene.osteon``), live mode and batch runs
+all build a :class:`Settings` and call :func:`engine_arguments`; the checks live here once.
+Units: mm, N, MPa.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+from . import materials
+from .report import allowable_stress
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What the user chose.
+
+    ``material``: a preset key of :mod:`osteon.materials` (or ``CUSTOM``); ``strength_mpa``:
+    the strength in MPa (``None``: the preset's); ``safety_factor``: allowable stress =
+    strength / safety factor; ``force_n``: N on the worst point of each branch;
+    ``interval_mm``: mm between sections; ``held_bone``: bone name or index held at its head
+    (``None`` or ``""``: the main root); ``size_mode``/``print_size_mm``: how the model's units
+    become mm (front-end specific: "HEIGHT", "LARGEST", "UNITS", "X", "Y"); ``max_scale``,
+    ``max_rounds``, ``scaling``: the correction's limits and mode ("thin"/"uniform").
+    """
+
+    force_n: float
+    interval_mm: float
+    material: str = materials.DEFAULT_MATERIAL
+    strength_mpa: float | None = None
+    safety_factor: float = materials.DEFAULT_SAFETY_FACTOR
+    held_bone: str | int | None = None
+    size_mode: str = "LARGEST"
+    print_size_mm: float = 120.0
+    max_scale: float = 3.0
+    max_rounds: int = 100
+    scaling: str = "thin"
+
+    def material_and_strength(self) -> tuple[str, float]:
+        """(material key, strength in MPa): the given strength, else the preset's."""
+        if self.strength_mpa is not None:
+            key = self.material
+            if str(key).upper() != materials.CUSTOM:
+                key = materials.get(key).key
+            return key, float(self.strength_mpa)
+        m = materials.get(self.material)
+        return m.key, m.strength_mpa
+
+    def allowable_stress_mpa(self) -> float:
+        """strength / safety factor, MPa (``ValueError`` when either is not positive)."""
+        return allowable_stress(self.material_and_strength()[1], self.safety_factor)
+
+    def as_dict(self) -> dict:
+        """JSON-ready, with the strength resolved (the report's ``settings``)."""
+        d = asdict(self)
+        d["material"], d["strength_mpa"] = self.material_and_strength()
+        d["safety_factor"] = float(self.safety_factor)
+        d["held_bone"] = "" if self.held_bone is None else self.held_bone
+        d["scaling"] = str(self.scaling).upper()
+        return d
+
+
+def _positive(value, what: str, unit: str) -> float:
+    v = float(value)
+    if not (v > 0.0 and math.isfinite(v)):
+        raise ValueError(f"{what} must be a positive number of {unit}, got {value}")
+    return v
+
+
+def held_bone_index(held_bone, bone_names) -> int | None:
+    """Index of the held bone: ``None``/"" -> None (the main root), a name or an index."""
+    if held_bone is None or held_bone == "":
+        return None
+    names = list(bone_names)
+    if isinstance(held_bone, str) and held_bone.lstrip("-").isdigit() and held_bone not in names:
+        held_bone = int(held_bone)
+    if isinstance(held_bone, int):
+        if not (0 <= held_bone < len(names)):
+            raise ValueError(f"Held bone index {held_bone} is out of range: "
+                             f"the skeleton has {len(names)} bones")
+        return held_bone
+    if held_bone not in names:
+        raise ValueError(f"Held bone {str(held_bone)!r} is not one of the skeleton's bones "
+                         f"({', '.join(names[:12])}{' ...' if len(names) > 12 else ''})")
+    return names.index(held_bone)
+
+
+def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> dict:
+    """The keyword arguments of ``osteon.analyze`` / ``Analyzer`` (``force``,
+    ``allowable_stress``, ``interval``, ``root``), plus ``max_scale``, ``max_rounds``,
+    ``scaling`` with ``correct=True`` for ``osteon.correct``. Raises ``ValueError`` naming the
+    bad setting."""
+    kw = {
+        "force": _positive(settings.force_n, "force", "N"),
+        "allowable_stress": settings.allowable_stress_mpa(),
+        "interval": _positive(settings.interval_mm, "section interval", "mm"),
+        "root": held_bone_index(settings.held_bone, bone_names),
+    }
+    if correct:
+        if not (float(settings.max_scale) >= 1.0):
+            raise ValueError(f"max scale must be >= 1, got {settings.max_scale}")
+        if int(settings.max_rounds) < 0:
+            raise ValueError(f"max rounds must be >= 0, got {settings.max_rounds}")
+        kw.update(max_scale=float(settings.max_scale), max_rounds=int(settings.max_rounds),
+                  scaling=str(settings.scaling).lower())
+    return kw
