@@ -61,7 +61,7 @@ def _pieces(faces: np.ndarray, num_vertices: int) -> tuple[int, np.ndarray]:
     return len(pieces), labels
 
 
-def _check_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
+def _check_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     v = _float_rows(vertices, "vertices")
     if len(v) < 4:
         raise ValueError(f"mesh has {len(v)} vertices; a closed mesh needs at least 4")
@@ -85,6 +85,16 @@ def _check_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
             f"degenerate mesh: it encloses no volume ({volume:.3g} mm³ for a {size:.3g} mm "
             "model): flat or open meshes have no skeleton"
         )
+    # Weld coincident vertices (STL and other triangle soups): the skeleton is computed on the
+    # welded mesh, the weights are returned for the caller's vertices.
+    key = np.round(v / (1e-9 * size)).astype(np.int64)
+    _, first, weld = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    weld = weld.ravel()
+    v = v[first]
+    f = weld[f]
+    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])].astype(np.int32)
+    if len(f) < 4:
+        raise ValueError(f"mesh has {len(f)} non-degenerate faces; a closed mesh needs at least 4")
     n, labels = _pieces(f, len(v))
     if n > 1:
         counts = np.bincount(labels[np.unique(f)])
@@ -94,7 +104,7 @@ def _check_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
             f"{', '.join(str(int(c)) for c in counts[:6])}{', …' if n > 6 else ''}); "
             "auto_skeleton needs one connected piece: split them and rig each, or join them"
         )
-    return v, f
+    return v, f, weld
 
 
 def _simplified_graph(v: np.ndarray, f: np.ndarray, target: int):
@@ -231,7 +241,7 @@ def auto_skeleton(
         if not (isinstance(val, (int, float)) and val > 0 and math.isfinite(val)):
             raise ValueError(f"{name} must be a positive number, got {val!r}")
 
-    v, f = _check_mesh(vertices, faces)
+    v, f, weld = _check_mesh(vertices, faces)
     used = np.unique(f)
     size = float(np.ptp(v[used], axis=0).max())
 
@@ -301,9 +311,10 @@ def auto_skeleton(
             return npos[leaf]
         margin = max(0.5 * nradius[leaf], 1e-3 * size)
         cap = pts[proj >= proj.max() - margin]
-        # Stop a tip radius inside the surface: a section cut at the surface itself would be a
-        # sliver (on a pointed tip, F·d/W grows without bound as the cut nears the point).
-        tip = cap.mean(0) - direction * (margin + nradius[leaf])
+        # Stop a tip radius inside the surface, at most 2 % of the model: a section cut at the
+        # surface itself would be a sliver (on a pointed tip, F·d/W grows without bound as the
+        # cut nears the point).
+        tip = cap.mean(0) - direction * min(margin + nradius[leaf], 0.02 * size)
         return tip if (tip - npos[leaf]) @ direction > 0 else npos[leaf]
 
     def leaf_direction(leaf: int) -> np.ndarray:
@@ -452,4 +463,4 @@ def auto_skeleton(
         full[full < cut] = 0.0
     full[full < np.minimum(0.01, 0.5 * full.max(1, keepdims=True))] = 0.0
     full /= full.sum(1, keepdims=True)
-    return skeleton, sparse.csr_matrix(full)
+    return skeleton, sparse.csr_matrix(full[weld])

@@ -46,7 +46,8 @@ def _add_common(p: argparse.ArgumentParser):
     g.add_argument(
         "--skeleton",
         metavar="FILE",
-        help="skeleton: libigl TGF or RigNet _rig.txt (default: sidecar next to MODEL)",
+        help="skeleton: libigl TGF or RigNet _rig.txt, or 'auto' (osteon.auto_skeleton); "
+        "default: sidecar next to MODEL, else auto",
     )
     g.add_argument(
         "--weights",
@@ -203,7 +204,44 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="threads for gmsh and CalculiX (default 2)",
     )
+    ps = sub.add_parser(
+        "skeleton",
+        help="make a skeleton and weights for an unrigged mesh (osteon.auto_skeleton)",
+        description="Compute a bone skeleton and skinning weights for a closed mesh and write "
+        "them as TGF + DMAT (in the mesh file's units, so that `osteon analyze MODEL "
+        "--skeleton OUT.tgf --weights OUT.dmat` reuses them).",
+    )
+    ps.add_argument("model", help="closed mesh (OBJ/OFF/PLY/STL)")
+    ps.add_argument("--out", required=True, metavar="FILE.tgf", help="skeleton file (TGF)")
+    ps.add_argument("--weights-out", metavar="FILE.dmat",
+                    help="weights file (DMAT; default: OUT with .dmat)")
+    ps.add_argument("--root", choices=("centre", "base"), default="centre",
+                    help="root at the bone nearest the barycentre (default) or at the base "
+                    "(lowest point along +Z)")
+    ps.add_argument("--height-mm", type=float, default=120.0,
+                    help="printed size used for the skeleton's mm parameters (default 120)")
+    ps.add_argument("--axis", default="longest", choices=("longest", "x", "y", "z"))
+    ps.add_argument("-q", "--quiet", action="store_true")
     return p
+
+
+def cmd_skeleton(args, out):
+    from .io import write_dmat, write_tgf
+
+    axis = None if args.axis == "longest" else args.axis
+    args.skeleton = args.weights = None
+    m = _auto_model(args, axis)
+    pts = np.concatenate([m.heads, m.tails]) / m.scale  # back to the file's units
+    key = np.round(pts * (1e6 / max(float(np.ptp(pts)), 1e-300))).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    b = len(m.heads)
+    write_tgf(args.out, pts[first], np.column_stack([inverse[:b], inverse[b:]]))
+    wpath = args.weights_out or str(Path(args.out).with_suffix(".dmat"))
+    write_dmat(wpath, m.weights.toarray())
+    if not args.quiet:
+        print(f"{args.out}: {b} bones; {wpath}: {m.weights.shape[0]} x {b} weights", file=out)
+    return 0
 
 
 def _version():
@@ -277,10 +315,44 @@ class _Progress:
             self.bar.close()
 
 
+def _wants_auto_skeleton(args) -> bool:
+    """``--skeleton auto``, or a mesh file with no skeleton given and no sidecar next to it."""
+    if args.skeleton == "auto":
+        return True
+    if args.skeleton is not None or args.weights is not None:
+        return False
+    from .io.loader import GLTF_EXTENSIONS, _sidecar
+
+    p = Path(args.model)
+    return (p.is_file() and p.suffix.lower() not in GLTF_EXTENSIONS
+            and _sidecar(p, [".tgf", "_rig.txt"]) is None)
+
+
+def _auto_model(args, axis):
+    """The mesh at its printed size with an :func:`osteon.auto_skeleton` rig."""
+    from .autoskeleton import auto_skeleton
+    from .io import read_mesh
+    from .io.model import RiggedModel
+
+    v, f = read_mesh(args.model)
+    m = RiggedModel(v, f, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int64), [],
+                    source=str(args.model)).scaled_to(args.height_mm, axis)
+    t = time.perf_counter()
+    sk, w = auto_skeleton(m.vertices, m.faces, root=getattr(args, "root", "centre") or "centre")
+    note = (f"skeleton: made by osteon.auto_skeleton ({sk.num_bones} bones in "
+            f"{time.perf_counter() - t:.1f} s); no skeleton file was given or found")
+    if not getattr(args, "quiet", False):
+        print(f"osteon: {Path(args.model).name}: {note}", file=sys.stderr)
+    return replace(m, heads=sk.heads, tails=sk.tails, parents=sk.parents.astype(np.int64),
+                   bone_names=list(sk.names), weights=w, notes=[*m.notes, note])
+
+
 def _load(args):
     from .io import load_model
 
     axis = None if args.axis == "longest" else args.axis
+    if _wants_auto_skeleton(args):
+        return _auto_model(args, axis)
     return load_model(
         args.model,
         skeleton=args.skeleton,
@@ -616,7 +688,8 @@ def model_checks(model):
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate}
+    handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate,
+               "skeleton": cmd_skeleton}
     try:
         return handler[args.command](args, sys.stdout)
     except (ValueError, FileNotFoundError, RuntimeError) as e:

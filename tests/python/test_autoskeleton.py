@@ -209,3 +209,25 @@ def test_cantilever_on_the_auto_skeleton_matches_f_d_over_w():
     np.testing.assert_allclose(res.stress[inner], F * d / w_exact, rtol=0.05)
     # the weakest section is next to the hold
     assert x[np.argmax(np.where(res.section_flags == 0, res.stress, 0))] < 0.25 * length
+
+
+def test_cli_uses_auto_skeleton_without_a_skeleton_file_and_writes_tgf_dmat(tmp_path, capsys):
+    from osteon.cli import main
+    from osteon.io import read_dmat, read_tgf, write_mesh
+
+    v, f = capsule(stations=20)
+    mesh = tmp_path / "capsule.stl"  # STL: a triangle soup, welded inside auto_skeleton
+    write_mesh(mesh, v, f)
+    assert main(["analyze", str(mesh), "--height-mm", "92", "--json", str(tmp_path / "r.json")]) == 0
+    err = capsys.readouterr().err
+    assert "auto_skeleton" in err
+    assert main(["analyze", str(mesh), "--skeleton", "auto", "-q"]) == 0
+    assert main(["skeleton", str(mesh), "--out", str(tmp_path / "capsule.tgf"),
+                 "--height-mm", "92"]) == 0
+    joints, _, heads, tails, parents = read_tgf(tmp_path / "capsule.tgf")
+    w = read_dmat(tmp_path / "capsule.dmat")
+    assert w.shape[1] == len(parents) and np.allclose(w.sum(1), 1.0)
+    # written in the file's units (the capsule spans x in [-6, 86] in the file)
+    assert np.concatenate([heads, tails])[:, 0].min() < 0 and joints[:, 0].max() > 80
+    assert main(["analyze", str(mesh), "--skeleton", str(tmp_path / "capsule.tgf"),
+                 "--weights", str(tmp_path / "capsule.dmat"), "-q"]) == 0
