@@ -452,6 +452,7 @@ def _png(args, model, analysis, allowable, before=None, vertices=None, marks=Non
         title=title,
         before=before,
         marks=marks,
+        bones=any("auto_skeleton" in n for n in model.notes),
     )
 
 
