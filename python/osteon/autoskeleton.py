@@ -247,9 +247,19 @@ def auto_skeleton(
 
     spos, sedges, npos, kedges, smap = _simplified_graph(v, f, target)
     stree = cKDTree(spos)
+    nn = len(npos)
+    if nn < 2:  # no curve skeleton (a blob): one bone along the principal axis
+        c = v[used].mean(0)
+        axis = np.linalg.svd(v[used] - c, full_matrices=False)[2][0]
+        t = (v[used] - c) @ axis
+        sk = Skeleton([c + axis * t.min() * 0.9], [c + axis * t.max() * 0.9], [-1], ["auto_00"])
+        return sk, sparse.csr_matrix(np.ones((len(weld), 1)))
+    bad = (smap < 0) | (smap >= nn)
+    if bad.any():  # simplified vertices the map left out: nearest skeleton node
+        smap = smap.copy()
+        smap[bad] = cKDTree(npos).query(spos[bad])[1]
     # Body radius at each skeleton node: distance to the nearest surface vertex (mm).
     nradius = stree.query(npos)[0]
-    nn = len(npos)
 
     # Barycentre / base -> root node.
     if root == "base":

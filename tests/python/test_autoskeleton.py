@@ -231,3 +231,14 @@ def test_cli_uses_auto_skeleton_without_a_skeleton_file_and_writes_tgf_dmat(tmp_
     assert np.concatenate([heads, tails])[:, 0].min() < 0 and joints[:, 0].max() > 80
     assert main(["analyze", str(mesh), "--skeleton", str(tmp_path / "capsule.tgf"),
                  "--weights", str(tmp_path / "capsule.dmat"), "-q"]) == 0
+
+
+def test_a_blob_gets_one_bone_through_it():
+    v = np.array([[x, y, z] for x in (0, 10) for y in (0, 10) for z in (0, 10)], float)
+    f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7],
+                  [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    sk, w = osteon.auto_skeleton(v, f)
+    assert sk.num_bones >= 1
+    check_weights(w, len(v), sk.num_bones)
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.all((ends > -1e-9) & (ends < 10 + 1e-9))  # inside the cube
