@@ -19,6 +19,7 @@ from ._api import (
     slice_section,
 )
 from .orientation import Orientation, best_orientation
+from .autoskeleton import auto_skeleton
 
 __version__ = "0.1.0"
 
@@ -33,6 +34,7 @@ __all__ = [
     "Skeleton",
     "analyze",
     "best_orientation",
+    "auto_skeleton",
     "correct",
     "section_properties",
     "skin",
