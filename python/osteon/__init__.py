@@ -18,8 +18,8 @@ from ._api import (
     skin,
     slice_section,
 )
-from .orientation import Orientation, best_orientation
 from .autoskeleton import auto_skeleton
+from .orientation import Orientation, best_orientation
 
 __version__ = "0.1.0"
 
@@ -33,8 +33,8 @@ __all__ = [
     "Orientation",
     "Skeleton",
     "analyze",
-    "best_orientation",
     "auto_skeleton",
+    "best_orientation",
     "correct",
     "section_properties",
     "skin",

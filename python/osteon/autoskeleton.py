@@ -107,7 +107,7 @@ def _check_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray, np.n
     return v, f, weld
 
 
-def _simplified_graph(v: np.ndarray, f: np.ndarray, target: int):
+def _simplified_graph(v: np.ndarray, f: np.ndarray, target: int, deterministic: bool = True):
     """pygel3d skeleton of the mesh simplified to about ``target`` vertices.
 
     Returns (simplified vertex positions (S,3), simplified edges (E,2), skeleton node positions
@@ -127,7 +127,10 @@ def _simplified_graph(v: np.ndarray, f: np.ndarray, target: int):
     pos = np.array(g.positions(), dtype=np.float64)
     sedges = _graph_edges(g, len(pos))
     with _quiet_stdout():  # GEL prints progress lines to C stdout
-        skel, mapping = graph.MSLS_skeleton_and_map(g)
+        if deterministic:  # every vertex grows a separator: no rand(), same result each run
+            skel, mapping = graph.LS_skeleton_and_map(g, sampling=False)
+        else:  # GEL samples with libc rand() from several threads: differs run to run
+            skel, mapping = graph.MSLS_skeleton_and_map(g)
     npos = np.array(skel.positions(), dtype=np.float64)
     kedges = _graph_edges(skel, len(npos))
     vmap = np.fromiter(mapping, dtype=np.int64, count=len(pos))
@@ -193,6 +196,7 @@ def auto_skeleton(
     spur: float = 1.5,
     bend: float = 0.5,
     smooth: int = 4,
+    seed: int | None = 0,
 ) -> tuple[Skeleton, sparse.csr_matrix]:
     """A bone skeleton and skinning weights for an unrigged closed mesh.
 
@@ -210,6 +214,13 @@ def auto_skeleton(
         bend: a branch is split into bones where it leaves the straight line between its ends
             by more than ``bend`` × its radius (mm / mm).
         smooth: neighbour-averaging rounds on the simplified mesh that blend weights at joints.
+        seed: an int (default 0): deterministic -- the same mesh gives the same skeleton and
+            weights on every call (pygel3d's local-separator skeleton grown from every vertex,
+            ``LS_skeleton_and_map(sampling=False)``; ~3x the CPU time of the sampled one).
+            ``None``: pygel3d's multi-scale sampled skeleton (``MSLS_skeleton_and_map``),
+            faster but random: GEL draws samples with libc ``rand()`` from one thread per core,
+            so the result depends on thread timing and no seed can fix it (bone counts vary
+            by 2-3 between runs). pygel3d takes no seed, so any int gives the same result.
 
     Returns:
         (Skeleton, weights): bones in mm (one root bone, parent -1, at the root point; bones
@@ -245,7 +256,9 @@ def auto_skeleton(
     used = np.unique(f)
     size = float(np.ptp(v[used], axis=0).max())
 
-    spos, sedges, npos, kedges, smap = _simplified_graph(v, f, target)
+    if seed is not None and not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"seed must be an int or None, got {seed!r}")
+    spos, sedges, npos, kedges, smap = _simplified_graph(v, f, target, seed is not None)
     stree = cKDTree(spos)
     nn = len(npos)
     if nn < 2:  # no curve skeleton (a blob): one bone along the principal axis

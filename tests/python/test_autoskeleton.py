@@ -242,3 +242,16 @@ def test_a_blob_gets_one_bone_through_it():
     check_weights(w, len(v), sk.num_bones)
     ends = np.concatenate([sk.heads, sk.tails])
     assert np.all((ends > -1e-9) & (ends < 10 + 1e-9))  # inside the cube
+
+
+def test_seed_gives_identical_results():
+    """auto_skeleton(seed=0) twice on the same T: identical bones and weights (bit for bit)."""
+    v, f = t_shape()
+    a_sk, a_w = osteon.auto_skeleton(v, f, seed=0)
+    b_sk, b_w = osteon.auto_skeleton(v, f, seed=0)
+    assert a_sk.num_bones == b_sk.num_bones
+    assert np.array_equal(a_sk.heads, b_sk.heads) and np.array_equal(a_sk.tails, b_sk.tails)
+    assert np.array_equal(a_sk.parents, b_sk.parents)
+    assert (a_w != b_w).nnz == 0
+    with pytest.raises(ValueError, match="seed"):
+        osteon.auto_skeleton(v, f, seed="x")
