@@ -7,7 +7,6 @@ import pytest
 from conftest import empty_scene
 from osteon_blender import bridge
 
-pytest.importorskip("pygel3d")
 
 
 def _capsule(length=4.0, radius=0.5, n=24, stations=16, cap=5):
@@ -49,7 +48,8 @@ def capsule(addon):
     obj.select_set(True)
     s = bpy.context.scene.osteon
     s.size_mode = "LARGEST"
-    s.print_size_mm = 100.0
+    s.print_size_mm = 40.0
+    s.force_n = 200.0  # a thin 40 mm capsule under 200 N: stresses near the allowable, none culled
     yield obj
     for o in list(bpy.data.objects):
         bpy.data.objects.remove(o, do_unlink=True)
