@@ -8,7 +8,6 @@ from conftest import empty_scene
 from osteon_blender import bridge
 
 
-
 def _capsule(length=4.0, radius=0.5, n=24, stations=16, cap=5):
     """A closed capsule along X (Blender units): (V,3) vertices, (F,4/3) faces."""
     rings = []
@@ -94,24 +93,18 @@ def test_make_skeleton_blender_weights_option(capsule):
     assert len(obj.vertex_groups) >= 1
 
 
-def test_make_skeleton_is_undoable(capsule):
-    """Ctrl+Z: the operator is registered with UNDO (Blender pushes an undo step after it).
-    Headless Blender has no window for ``ed.undo``; when it refuses, the undo step itself is
-    not checked here, only that the operator is undoable and that removing what it made
-    leaves the mesh as it was."""
+def test_make_skeleton_is_undone_by_ctrl_z(capsule):
+    """Ctrl+Z removes the armature, the groups and the modifier.  Background Blender starts
+    with undo off: ``ed.undo_push`` initialises it, and the operator is called with undo on
+    (as from the UI), so ``ed.undo`` is a real undo step here."""
     assert "UNDO" in bpy.types.OSTEON_OT_make_skeleton.bl_options
-    obj = capsule
-    n_obj = len(bpy.data.objects)
-    assert bpy.ops.osteon.make_skeleton() == {"FINISHED"}
-    assert len(bpy.data.objects) == n_obj + 1
-    try:
-        undone = bpy.ops.ed.undo() == {"FINISHED"}
-    except RuntimeError:
-        undone = False
-    if undone:
-        assert not any(o.type == "ARMATURE" for o in bpy.data.objects)
-        return
-    arm = bridge.armature_of(obj)
-    obj.modifiers.remove(next(m for m in obj.modifiers if m.type == "ARMATURE"))
-    bpy.data.objects.remove(arm, do_unlink=True)
-    assert bridge.armature_of(obj) is None and len(bpy.data.objects) == n_obj
+    name = capsule.name
+    bpy.ops.ed.undo_push(message="before Make skeleton")
+    assert bpy.ops.osteon.make_skeleton("EXEC_DEFAULT", True) == {"FINISHED"}
+    assert any(o.type == "ARMATURE" for o in bpy.data.objects)
+    assert bpy.ops.ed.undo() == {"FINISHED"}
+    assert not any(o.type == "ARMATURE" for o in bpy.data.objects)
+    obj = bpy.data.objects[name]  # undo reloads the datablocks
+    assert bridge.armature_of(obj) is None
+    assert not any(m.type == "ARMATURE" for m in obj.modifiers)
+    assert len(obj.vertex_groups) == 0

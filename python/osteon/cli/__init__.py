@@ -38,8 +38,10 @@ __all__ = [
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    from ..batch.cli import cmd_batch
+
     handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate,
-               "skeleton": cmd_skeleton}
+               "skeleton": cmd_skeleton, "batch": cmd_batch}
     try:
         return handler[args.command](args, sys.stdout)
     except (ValueError, FileNotFoundError, RuntimeError) as e:

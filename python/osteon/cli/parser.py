@@ -230,6 +230,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .skeleton import add_parser as _add_skeleton
 
     _add_skeleton(sub)
+    from ..batch.cli import add_batch_parser
+
+    add_batch_parser(sub)
     return p
 
 
