@@ -647,3 +647,83 @@ def tag_redraw_view3d(region_types: tuple = ("UI", "WINDOW")):
             for region in area.regions:
                 if region.type in region_types:
                     region.tag_redraw()
+
+
+# --------------------------------------------------------------------------- make skeleton
+
+
+def world_rest_positions(obj) -> np.ndarray:
+    """(V, 3) float64 world-space positions of the mesh datablock (no modifiers), Blender units."""
+    return _transform(local_positions(obj.data), _matrix_np(obj.matrix_world))
+
+
+def build_armature(context, name: str, heads: np.ndarray, tails: np.ndarray,
+                   parents: np.ndarray, names: list[str]):
+    """A new Armature object (at the world origin) with one bone per row: ``heads``/``tails``
+    (B, 3) world, Blender units; ``parents`` (B,) int, -1 = root.  Bones are made in Edit
+    Mode (bpy has no other way); the loop is over bones (tens), not vertices."""
+    data = bpy.data.armatures.new(name)
+    arm = bpy.data.objects.new(name, data)
+    context.collection.objects.link(arm)
+    prev_active = context.view_layer.objects.active
+    context.view_layer.objects.active = arm
+    bpy.ops.object.mode_set(mode="EDIT")
+    try:
+        ebs = [data.edit_bones.new(n) for n in names]
+        for i, eb in enumerate(ebs):
+            eb.head = tuple(float(x) for x in heads[i])
+            eb.tail = tuple(float(x) for x in tails[i])
+            eb.use_deform = True
+        for i, p in enumerate(np.asarray(parents, int)):
+            if p >= 0:
+                ebs[i].parent = ebs[p]
+    finally:
+        bpy.ops.object.mode_set(mode="OBJECT")
+    context.view_layer.objects.active = prev_active
+    return arm
+
+
+def write_bone_weights(obj, names: list[str], weights, step: float = 1.0 / 1024) -> int:
+    """Vertex groups named after the bones from a (V, B) sparse weight matrix (rows sum to 1).
+
+    bpy has no bulk setter for vertex-group weights; ``VertexGroup.add`` takes a list of
+    vertices with ONE weight, so weights are quantised to ``step`` and each bone gets one
+    ``add`` call per distinct value (at most 1/step calls per bone; no per-vertex loop).
+    Returns the number of ``add`` calls."""
+    csc = weights.tocsc() if hasattr(weights, "tocsc") else weights
+    calls = 0
+    for b, name in enumerate(names):
+        vg = obj.vertex_groups.get(name) or obj.vertex_groups.new(name=name)
+        lo, hi = csc.indptr[b], csc.indptr[b + 1]
+        rows = np.asarray(csc.indices[lo:hi])
+        q = np.round(np.asarray(csc.data[lo:hi], float) / step).astype(np.int64)
+        keep = q > 0
+        rows, q = rows[keep], q[keep]
+        order = np.argsort(q, kind="stable")
+        rows, q = rows[order], q[order]
+        vals, starts = np.unique(q, return_index=True)
+        ends = np.append(starts[1:], len(q))
+        for v, s, e in zip(vals, starts, ends):
+            vg.add(rows[s:e].tolist(), float(v * step), "REPLACE")
+            calls += 1
+    return calls
+
+
+def bind_armature(context, obj, arm, auto_weights: bool = False):
+    """An Armature modifier on ``obj`` using ``arm``.  ``auto_weights``: Blender's own
+    automatic (bone heat) weights via ``parent_set(type='ARMATURE_AUTO')``, which also parents
+    the mesh to the armature and makes the modifier."""
+    if auto_weights:
+        for o in context.view_layer.objects:
+            o.select_set(False)
+        obj.select_set(True)
+        arm.select_set(True)
+        context.view_layer.objects.active = arm
+        res = bpy.ops.object.parent_set(type="ARMATURE_AUTO")
+        context.view_layer.objects.active = obj
+        if "FINISHED" not in res:
+            raise OsteonError("Blender's automatic weights failed (parent_set ARMATURE_AUTO)")
+        return next(m for m in obj.modifiers if m.type == "ARMATURE")
+    mod = obj.modifiers.new(name="Armature", type="ARMATURE")
+    mod.object = arm
+    return mod

@@ -240,3 +240,52 @@ def run_apply(context) -> dict:
     bridge.restore_pose(context, arm)
     state.of(context.scene).weights.clear()
     return run_analyze(context)
+
+
+def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
+                      progress=_no_progress) -> dict:
+    """Rig the active unrigged mesh: an Armature object from :func:`osteon.auto_skeleton`
+    (computed in mm at the print size, built in Blender units), vertex groups with the engine's
+    weights (or Blender's automatic weights) and an Armature modifier.  The mesh's vertices are
+    not changed.  Returns {"armature", "bones", "seconds", "weights"}."""
+    osteon = core.import_engine()
+    obj = context.active_object
+    if obj is None or obj.type != "MESH":
+        raise OsteonError("Make skeleton: select the mesh to rig (the active object is not a mesh)")
+    if bridge.armature_of(obj) is not None:
+        raise OsteonError(f"Mesh '{obj.name}' already has an Armature modifier")
+    try:
+        import pygel3d  # noqa: F401  (auto_skeleton imports it lazily)
+    except ImportError:
+        raise OsteonError(
+            "Make skeleton needs the Python package 'pygel3d', which this Blender cannot import; "
+            "install it into Blender's Python (scripts/blender_setup.sh does: "
+            "pip install --target <Blender's site-packages> pygel3d)") from None
+    s = context.scene.osteon
+    verts = bridge.world_rest_positions(obj)
+    faces = bridge.triangles(obj.data)
+    if len(faces) == 0:
+        raise OsteonError(f"Mesh '{obj.name}' has no faces")
+    try:
+        k = core.mm_per_unit(s.size_mode, s.print_size_mm, verts.max(0) - verts.min(0),
+                             context.scene.unit_settings.scale_length)
+    except ValueError as e:
+        raise OsteonError(str(e)) from e
+    progress(0.1)
+    t0 = time.perf_counter()
+    try:
+        sk, w = osteon.auto_skeleton(verts * k, faces, root=root)
+    except ValueError as e:
+        raise OsteonError(f"Make skeleton: {e}") from e
+    progress(0.7)
+    names = list(sk.names)
+    arm = bridge.build_armature(context, f"{obj.name}_skeleton", np.asarray(sk.heads) / k,
+                                np.asarray(sk.tails) / k, np.asarray(sk.parents), names)
+    if not auto_weights:
+        bridge.write_bone_weights(obj, names, w)
+    bridge.bind_armature(context, obj, arm, auto_weights=auto_weights)
+    context.view_layer.objects.active = obj
+    obj.select_set(True)
+    state.of(context.scene).weights.clear()
+    return {"armature": arm.name, "bones": len(names), "seconds": time.perf_counter() - t0,
+            "weights": "Blender automatic" if auto_weights else "osteon"}

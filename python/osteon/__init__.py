@@ -20,6 +20,7 @@ from ._api import (
     skin,
     slice_section,
 )
+from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
 
 __version__ = "0.1.0"
@@ -36,6 +37,7 @@ __all__ = [
     "Orientation",
     "Skeleton",
     "analyze",
+    "auto_skeleton",
     "best_orientation",
     "correct",
     "section_properties",

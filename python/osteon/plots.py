@@ -142,6 +142,7 @@ def save_stress_png(
     marks=None,
     dpi=90,
     orientation=None,
+    bones=False,
 ):
     """Write a PNG: two orthographic views coloured by per-vertex stress and the chain plot.
 
@@ -149,6 +150,7 @@ def save_stress_png(
     ``marks``: (k,3) points (mm) to mark on the views (e.g. FEM-tested sections);
     ``orientation``: an :class:`osteon.orientation.Orientation` drawn as a fourth panel (the
     sphere map of the worst stress ratio by build direction).
+    ``bones``: draw the bones (heads → tails) over the views (e.g. an automatic skeleton).
     """
     _, plt = _mpl()
     V = np.asarray(vertices, float)
@@ -174,6 +176,12 @@ def save_stress_png(
     # views: look along the shorter horizontal axis, then along the longer one
     _view(ax1, V, Fc, rgba, [others[0], up], others[1], False, "side view")
     _view(ax2, V, Fc, rgba, [others[1], up], others[0], True, "front view")
+    if bones:
+        h, t = np.asarray(heads, float), np.asarray(tails, float)
+        for ax, axes in ((ax1, [others[0], up]), (ax2, [others[1], up])):
+            ax.plot(np.stack([h[:, axes[0]], t[:, axes[0]]]), np.stack([h[:, axes[1]],
+                    t[:, axes[1]]]), "k-", lw=1.2)
+            ax.plot(t[:, axes[0]], t[:, axes[1]], "k.", ms=4)
     if marks is not None and len(marks):
         mk = np.asarray(marks, float).reshape(-1, 3)
         for ax, axes in ((ax1, [others[0], up]), (ax2, [others[1], up])):

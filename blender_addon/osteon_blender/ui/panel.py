@@ -47,6 +47,8 @@ class OSTEON_PT_main(bpy.types.Panel):
             col.prop_search(s, "held_bone", arm.data, "bones")
         else:
             col.prop(s, "held_bone")
+        if ob is not None and ob.type == "MESH" and arm is None:
+            layout.operator("osteon.make_skeleton", icon="ARMATURE_DATA")
         row = layout.row(align=True)
         row.scale_y = 1.3
         row.operator("osteon.analyze", icon="VIEWZOOM")
