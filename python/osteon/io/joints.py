@@ -10,7 +10,9 @@ means:
   weighted centroid of its vertices seen from the joint);
 * a leaf (no child apart from the joint itself) runs along its own skinning domain: from the
   joint in the direction of the domain's centroid (its principal axis if the centroid sits on
-  the joint) to the farthest weighted vertex along that direction;
+  the joint), as far as the domain's weighted mean distance along it (:data:`LEAF_REACH`; the
+  farthest vertex made the last sections tiny caps around the tip, cut off-centre, whose
+  stresses were nonsense: 7.7e30 MPa on the RigNet dog's leaf, against 25.2 MPa with the mean);
 * a bone with neither a child nor weights keeps its tail.
 
 Whether the armature is a joint rig is decided once for the whole rig: a rig is a *bone rig*
@@ -29,6 +31,9 @@ MEET_REL = 1e-3
 #: a child joint closer than this fraction of the rig's size to its parent joint does not
 #: give the parent a direction (RigNet ``*_dup_*`` joints, Blender's FBX end bones)
 NEAR_REL = 5e-3
+#: how far a leaf runs along its domain: "centroid" (the weighted mean distance; the
+#: domain's outer half, thin and least loaded, is not cut) or "farthest"
+LEAF_REACH = "centroid"
 
 
 def _children(parents: np.ndarray) -> list[list[int]]:
@@ -136,7 +141,7 @@ def joint_segments(heads, tails, parents, vertices=None, weights=None, *,
             if np.abs(t.min()) > np.abs(t.max()):
                 d = -d
         t = (p - h) @ d
-        reach = float(t.max())
+        reach = float((w * t).sum() / w.sum()) if LEAF_REACH == "centroid" else float(t.max())
         if reach > near:
             out[b] = h + reach * d
     changed = np.linalg.norm(out - tails, axis=1) > meet_rel * size

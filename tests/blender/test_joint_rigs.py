@@ -1,0 +1,110 @@
+"""Issue 13 in Blender: rigs made of joints (FBX/glTF imports) and no false all-clear on an
+open mesh."""
+
+import os
+
+import bpy
+import numpy as np
+import pytest
+from conftest import DATA, activate, import_rignet
+from osteon_blender import bridge, core
+from osteon_blender import service as common
+from osteon_blender.ui import doubt_ui
+
+
+def _open_cube(addon):
+    """A cube with its +x and -x faces deleted, rigged to one bone along z (all weights 1)."""
+    from conftest import empty_scene
+
+    empty_scene()
+    v = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    # faces of the cube without x = +1 and x = -1
+    faces = [(0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    me = bpy.data.meshes.new("open_cube")
+    me.from_pydata(v, [], faces)
+    me.update()
+    obj = bpy.data.objects.new("open_cube", me)
+    bpy.context.scene.collection.objects.link(obj)
+    ad = bpy.data.armatures.new("rig")
+    arm = bpy.data.objects.new("rig", ad)
+    bpy.context.scene.collection.objects.link(arm)
+    activate(arm)
+    bpy.ops.object.mode_set(mode="EDIT")
+    b = ad.edit_bones.new("bone")
+    b.head, b.tail = (0, 0, -1), (0, 0, 1)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    vg = obj.vertex_groups.new(name="bone")
+    vg.add(list(range(8)), 1.0, "REPLACE")
+    mod = obj.modifiers.new("Armature", "ARMATURE")
+    mod.object = arm
+    activate(obj)
+    return obj, arm
+
+
+def test_open_cube_shows_skipped_sections_and_no_all_clear(addon, engine):
+    obj, arm = _open_cube(addon)
+    s = bpy.context.scene.osteon
+    s.size_mode, s.print_size_mm, s.interval_mm = "HEIGHT", 60.0, 1.0
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    rep = common.LAST[bpy.context.scene.name]["report"]
+    assert rep["skipped_sections"] > 0 and rep["verdict"] == "not analysed"
+    assert s.skipped_sections == rep["skipped_sections"] and s.verdict == "not analysed"
+    texts = [t for t, _ in doubt_ui.summary_lines(s)]
+    assert not any("No weak bones" in t for t in texts)
+    assert any("could not be cut" in t for t in texts)
+    rows = [r for r in s.weak_bones if r.name == "bone"]
+    assert rows and rows[0].status == "not analysed" and "could not be cut" in rows[0].reason
+    # the colour layer: the bone's vertices are magenta, never the ramp's safe blue
+    rgba = bridge.read_point_colors(obj.data)
+    assert np.allclose(rgba, core.MAGENTA)
+    assert "not analysed" in common.summary(rep) or "NOT A CLEAN RESULT" in common.summary(rep)
+
+
+def _cli_dog(engine, height_mm, force):
+    from osteon.io import load_model
+
+    m = load_model(os.path.join(DATA, "RigNet", "2982_ori.obj"), height_mm=height_mm, axis="y")
+    return m, engine.analyze(m.vertices, m.faces, m.skeleton, m.weights, force=force,
+                             allowable_stress=30.0, interval=2.0)
+
+
+def test_fbx_dog_joint_segments_match_the_cli(addon, engine):
+    obj, arm = import_rignet("2982")
+    activate(obj)
+    s = bpy.context.scene.osteon
+    s.size_mode, s.print_size_mm, s.force_n = "HEIGHT", 120.0, 20.0
+    s.strength_mpa, s.safety_factor, s.interval_mm = 60.0, 2.0, 2.0
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    last = common.LAST[bpy.context.scene.name]
+    sk = last["inputs"].skeleton
+    assert sk.segment_changed is not None and sk.segment_changed.sum() >= 10  # a joint rig
+    blender_max = last["report"]["max_stress_mpa"]
+    _, a = _cli_dog(engine, 120.0, 20.0)
+    print(f"[issue13] dog FBX max {blender_max:.2f} MPa, CLI {a.max_stress:.2f} MPa")
+    assert blender_max == pytest.approx(a.max_stress, rel=0.10)
+
+
+def test_fbx_dog_correct_converges_and_leaves_stay_modest(addon, engine):
+    obj, arm = import_rignet("2982")
+    activate(obj)
+    s = bpy.context.scene.osteon
+    s.size_mode, s.print_size_mm, s.force_n = "HEIGHT", 120.0, 40.0
+    s.strength_mpa, s.safety_factor, s.interval_mm = 60.0, 2.0, 2.0
+    assert bpy.ops.osteon.correct() == {"FINISHED"}
+    last = common.LAST[bpy.context.scene.name]
+    fix, inp = last["correction"], last["inputs"]
+    assert fix.converged
+    m, _ = _cli_dog(engine, 120.0, 40.0)
+    cli = engine.correct(m.vertices, m.faces, m.skeleton, m.weights, force=40.0,
+                         allowable_stress=30.0, interval=2.0)
+    cli_max = float(np.max(cli.bone_scale))
+    kids = {n for n in inp.skeleton.names
+            if not any(arm.data.bones[n] == b.parent for b in arm.data.bones)}
+    leaf_scales = {n: float(fix.bone_scale[inp.skeleton.names.index(n)]) for n in kids}
+    print(f"[issue13] dog correct: leaf scales {leaf_scales}, CLI max scale {cli_max:.3f}")
+    assert max(leaf_scales.values()) <= cli_max * 1.05 + 1e-9
+    # Blender reproduces the engine's corrected vertices
+    size = np.ptp(fix.vertices, axis=0).max()
+    err = np.abs(inp.vertices_mm - fix.vertices).max() / size
+    print(f"[issue13] Blender vs engine corrected vertices: {err:.2e} of the size")
+    assert err <= 2e-2
