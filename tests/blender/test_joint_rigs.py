@@ -42,7 +42,7 @@ def _open_cube(addon):
 
 
 def test_open_cube_shows_skipped_sections_and_no_all_clear(addon, engine):
-    obj, arm = _open_cube(addon)
+    obj, _arm = _open_cube(addon)
     s = bpy.context.scene.osteon
     s.size_mode, s.print_size_mm, s.interval_mm = "HEIGHT", 60.0, 1.0
     assert bpy.ops.osteon.analyze() == {"FINISHED"}
@@ -69,7 +69,7 @@ def _cli_dog(engine, height_mm, force):
 
 
 def test_fbx_dog_joint_segments_match_the_cli(addon, engine):
-    obj, arm = import_rignet("2982")
+    obj, _arm = import_rignet("2982")
     activate(obj)
     s = bpy.context.scene.osteon
     s.size_mode, s.print_size_mm, s.force_n = "HEIGHT", 120.0, 20.0
