@@ -88,8 +88,9 @@ def test_leaf_runs_to_the_far_end_of_its_domain():
     d = (out[1] - heads[1]) / np.linalg.norm(out[1] - heads[1])
     c = (v[xs >= 1].mean(0) - heads[1])
     np.testing.assert_allclose(d, c / np.linalg.norm(c), atol=1e-12)
-    # it reaches the domain's weighted mean distance (joints.LEAF_REACH = "centroid")
-    assert (out[1] - heads[1]) @ d == pytest.approx(((v[xs >= 1] - heads[1]) @ d).mean())
+    # it reaches LEAF_FACTOR of the domain's weighted mean distance (LEAF_REACH = "centroid")
+    assert (out[1] - heads[1]) @ d == pytest.approx(
+        joints.LEAF_FACTOR * ((v[xs >= 1] - heads[1]) @ d).mean())
 
 
 def test_cross_section_axes_pick_the_axis_along_the_segment():

@@ -34,6 +34,10 @@ NEAR_REL = 5e-3
 #: how far a leaf runs along its domain: "centroid" (the weighted mean distance; the
 #: domain's outer half, thin and least loaded, is not cut) or "farthest"
 LEAF_REACH = "centroid"
+#: the leaf's segment is this fraction of that reach (a leaf is often a tapering, curved tip
+#: (ear, tail): a segment to its centroid can leave the mesh, whose off-centre sections give
+#: nonsense stresses)
+LEAF_FACTOR = 0.5
 
 
 def _children(parents: np.ndarray) -> list[list[int]]:
@@ -141,7 +145,8 @@ def joint_segments(heads, tails, parents, vertices=None, weights=None, *,
             if np.abs(t.min()) > np.abs(t.max()):
                 d = -d
         t = (p - h) @ d
-        reach = float((w * t).sum() / w.sum()) if LEAF_REACH == "centroid" else float(t.max())
+        reach = LEAF_FACTOR * (float((w * t).sum() / w.sum()) if LEAF_REACH == "centroid"
+                               else float(t.max()))
         if reach > near:
             out[b] = h + reach * d
     changed = np.linalg.norm(out - tails, axis=1) > meet_rel * size
