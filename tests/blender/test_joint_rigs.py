@@ -108,7 +108,6 @@ def test_fbx_dog_joint_segments_match_the_cli(addon, engine):
     assert blender_max == pytest.approx(a.max_stress, rel=0.10)
 
 
-@pytest.mark.xfail(strict=False, reason="follows the FBX/CLI difference above (issue 13 open)")
 def test_fbx_dog_correct_converges_and_leaves_stay_modest(addon, engine):
     obj, arm = import_rignet("2982")
     activate(obj)
@@ -157,7 +156,10 @@ def test_gltf_fox_joint_rig_matches_the_cli(addon, engine):
     s.size_mode, s.print_size_mm, s.force_n = "HEIGHT", 120.0, 20.0
     s.strength_mpa, s.safety_factor, s.interval_mm = 60.0, 2.0, 2.0
     assert bpy.ops.osteon.analyze() == {"FINISHED"}
-    blender_max = common.LAST[bpy.context.scene.name]["report"]["max_stress_mpa"]
+    rep = common.LAST[bpy.context.scene.name]["report"]
+    blender_max = rep["max_stress_mpa"]
+    print(f"[issue13] Fox glTF in Blender: max {blender_max:.2f} MPa, doubt {rep['doubt']}")
+    pytest.importorskip("pygltflib", reason="the wheel's glTF reader (CLI side) needs pygltflib")
     m = load_model(os.path.join(DATA, "glTF-Sample-Models", "Fox.glb"), height_mm=120.0,
                    axis="y")
     a = engine.analyze(m.vertices, m.faces, m.skeleton, m.weights, force=20.0,
