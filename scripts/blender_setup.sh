@@ -89,10 +89,14 @@ fi
 if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
   PY313="${OSTEON_PY313:-}"
   if [ -z "$PY313" ]; then
-    PY313="$(command -v python3.13 || true)"
-    if [ -z "$PY313" ]; then
-      PY313="$(ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.13*/bin/python 2>/dev/null | sort -V | tail -1 || true)"
-    fi
+    # A pyenv shim for python3.13 exists even when 3.13 is not the active version (and then
+    # fails), so a candidate counts only if it runs.
+    for c in "$(command -v python3.13 || true)" \
+      $(ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.13*/bin/python 2>/dev/null | sort -rV); do
+      if [ -n "$c" ] && "$c" -c 'import sys; assert sys.version_info[:2] == (3, 13)' 2>/dev/null; then
+        PY313="$c"; break
+      fi
+    done
   fi
   if [ -z "$PY313" ] || [ ! -x "$PY313" ]; then
     log "no Python 3.13 found (set OSTEON_PY313; e.g. pyenv install 3.13)"; exit 1
@@ -121,4 +125,11 @@ if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
     "$BPY52_VENV/bin/python" -m pip install -q "bpy==5.2.*" pytest scipy
   "$BPY52_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL313"
   log "bpy 5.2 wheel ready in $BPY52_VENV"
+fi
+
+# 6. the add-on zips from both engine wheels (scripts/build_addon.py): the extension zip carries
+#    cp311 (Blender 4.2-5.0) and cp313 (5.1+), the legacy zip cp311 (4.1, Debian's 3.4.1);
+#    tests/blender/test_packaging.py checks exactly that. Zipping takes about a second.
+if [ -n "${WHEEL313:-}" ]; then
+  "$PY" scripts/build_addon.py --out dist --wheel "$WHEEL" --wheel "$WHEEL313"
 fi

@@ -36,7 +36,10 @@ __all__ = [
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate}
+    from ..batch.cli import cmd_batch
+
+    handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate,
+               "batch": cmd_batch}
     try:
         return handler[args.command](args, sys.stdout)
     except (ValueError, FileNotFoundError, RuntimeError) as e:

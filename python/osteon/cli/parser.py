@@ -226,6 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="threads for gmsh and CalculiX (default 2)",
     )
+    from ..batch.cli import add_batch_parser
+
+    add_batch_parser(sub)
     return p
 
 
