@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import doubt
 from . import common, orient
 
 
@@ -59,6 +60,9 @@ def cmd_analyze(args, out):
             "culled (safe for sure)",
             file=out,
         )
+        doubt_text = doubt.analysis_text(a, model.bone_names)
+        if doubt_text:
+            print(f"NOT A CLEAN RESULT: {doubt_text}", file=out)
         print(common.format_table(common.bone_table(a, args.top), allowable,
                                   layer_ratio=a.layer_strength_ratio), file=out)
         _print_printability(rep, out)
