@@ -56,5 +56,9 @@ export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:detect_odr_violation=0"
 export PYTHONPATH="$STAGE"
 "$VENV/bin/python" -c 'import osteon._core as c, sys; print("[sanitize] using", c.__file__)' \
   | grep -q "$STAGE" || { echo "sanitized osteon._core not picked up" >&2; exit 1; }
-if [ $# -eq 0 ]; then set -- tests/python; fi
+# The console-script test runs the installed `osteon` of .venv in a child process: it would not
+# use the sanitized module, and .venv-asan has no console script.
+if [ $# -eq 0 ]; then
+  set -- tests/python --deselect tests/python/test_install.py::test_console_script_analyzes_a_model
+fi
 "$VENV/bin/python" -m pytest -q -p no:cacheprovider "$@"
