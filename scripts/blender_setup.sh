@@ -7,7 +7,7 @@
 #     when engine sources are newer than the wheel.
 #  3. Debian's Blender imports the engine from /usr/local/lib/python3.X/dist-packages, which is
 #     on its sys.path: `pip install --no-deps --target` of the wheel there.
-#  4. the bpy 4.5 wheel in its own venv (.venv-bpy: bpy==4.5.*, pytest, scipy, osteon wheel).
+#  4. the bpy 4.5 wheel in its own venv (.venv-bpy: bpy==4.5.*, pytest, scipy, pygel3d, osteon wheel).
 #  5. Blender 5.1+ embeds Python 3.13: a cp313 osteon wheel built with a Python 3.13
 #     (OSTEON_PY313, else python3.13 on PATH, else pyenv's 3.13) in a build venv
 #     (.venv-py313: scikit-build-core, pybind11, cmake, ninja), and the bpy 5.2 wheel in its own
@@ -67,6 +67,9 @@ fi
 SITE="${OSTEON_BLENDER_SITE:-/usr/local/lib/python$BPYVER/dist-packages}"
 $SUDO mkdir -p "$SITE"
 $SUDO "$PY" -m pip install -q --no-deps --upgrade --target "$SITE" "$WHEEL"
+# pygel3d (pure-Python wheel + its own shared library) for "Make skeleton" (osteon.auto_skeleton)
+blender -b --factory-startup --python-exit-code 1 --python-expr 'import pygel3d' >/dev/null 2>&1 ||
+  $SUDO "$PY" -m pip install -q --no-deps --upgrade --target "$SITE" "pygel3d>=0.8"
 blender -b --factory-startup --python-exit-code 1 --python-expr \
   'import osteon, numpy; print("[blender_setup] Debian Blender imports", osteon.__file__)' \
   2>&1 | grep 'blender_setup'
@@ -82,6 +85,8 @@ if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
   "$BPY_VENV/bin/python" -c 'import bpy, pytest, scipy' >/dev/null 2>&1 ||
     "$BPY_VENV/bin/python" -m pip install -q "bpy==4.5.*" pytest scipy
   "$BPY_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL"
+  "$BPY_VENV/bin/python" -c 'import pygel3d' >/dev/null 2>&1 ||
+    "$BPY_VENV/bin/python" -m pip install -q "pygel3d>=0.8"
   log "bpy wheel ready in $BPY_VENV"
 fi
 
@@ -89,10 +94,14 @@ fi
 if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
   PY313="${OSTEON_PY313:-}"
   if [ -z "$PY313" ]; then
-    PY313="$(command -v python3.13 || true)"
-    if [ -z "$PY313" ]; then
-      PY313="$(ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.13*/bin/python 2>/dev/null | sort -V | tail -1 || true)"
-    fi
+    # A pyenv shim for python3.13 exists even when 3.13 is not the active version (and then
+    # fails), so a candidate counts only if it runs.
+    for c in "$(command -v python3.13 || true)" \
+      $(ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.13*/bin/python 2>/dev/null | sort -rV); do
+      if [ -n "$c" ] && "$c" -c 'import sys; assert sys.version_info[:2] == (3, 13)' 2>/dev/null; then
+        PY313="$c"; break
+      fi
+    done
   fi
   if [ -z "$PY313" ] || [ ! -x "$PY313" ]; then
     log "no Python 3.13 found (set OSTEON_PY313; e.g. pyenv install 3.13)"; exit 1
@@ -120,6 +129,8 @@ if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
   "$BPY52_VENV/bin/python" -c 'import bpy, pytest, scipy' >/dev/null 2>&1 ||
     "$BPY52_VENV/bin/python" -m pip install -q "bpy==5.2.*" pytest scipy
   "$BPY52_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL313"
+  "$BPY52_VENV/bin/python" -c 'import pygel3d' >/dev/null 2>&1 ||
+    "$BPY52_VENV/bin/python" -m pip install -q "pygel3d>=0.8"
   log "bpy 5.2 wheel ready in $BPY52_VENV"
 fi
 

@@ -152,6 +152,7 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["section_modulus"] = to_numpy(std::move(r.section_modulus));
   d["section_thin_axis"] = to_numpy(std::move(r.section_thin_axis));
   d["section_aspect"] = to_numpy(std::move(r.section_aspect));
+  d["section_thickness"] = to_numpy(std::move(r.section_thickness));
   d["moment_arm"] = to_numpy(std::move(r.moment_arm));
   d["moment"] = to_numpy(std::move(r.moment));
   d["stress"] = to_numpy(std::move(r.stress));
@@ -173,6 +174,9 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["outline_points"] = to_numpy(std::move(r.outline_points));
   d["outline_loop_start"] = to_numpy(std::move(r.outline_loop_start));
   d["outline_section_start"] = to_numpy(std::move(r.outline_section_start));
+  py::list loose;
+  for (auto& piece : r.loose_pieces) loose.append(to_numpy(std::move(piece)));
+  d["loose_pieces"] = loose;
   return d;
 }
 
@@ -258,6 +262,8 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("local_cuts", &AnalysisOptions::local_cuts)
       .def_readwrite("reuse_sections", &AnalysisOptions::reuse_sections)
       .def_readwrite("keep_outlines", &AnalysisOptions::keep_outlines)
+      .def_readwrite("min_thickness", &AnalysisOptions::min_thickness,
+                     "mm; thinner sections are flagged too_thin (0 = no check)")
       .def_property(
           "build_direction",
           [](const AnalysisOptions& o) {
@@ -437,4 +443,6 @@ PYBIND11_MODULE(_core, m) {
   m.attr("FLAG_EMPTY") = static_cast<int>(kFlagEmpty);
   m.attr("FLAG_DEGENERATE") = static_cast<int>(kFlagDegenerate);
   m.attr("FLAG_NON_MANIFOLD") = static_cast<int>(kFlagNonManifold);
+  m.attr("FLAG_UNRELIABLE") = static_cast<int>(kFlagUnreliable);
+  m.attr("FLAG_TOO_THIN") = static_cast<int>(kFlagTooThin);
 }

@@ -7,7 +7,7 @@ and a PNG of the stress map.
 Options (units: mm, N, MPa): --object NAME, --material {PLA,PETG,ABS,RESIN,NYLON,CUSTOM},
 --strength MPA, --safety FACTOR, --force N, --size-mode {HEIGHT,LARGEST,UNITS},
 --print-size MM, --interval MM, --held-bone NAME, --max-scale S, --max-rounds N,
---scaling THIN|UNIFORM,
+--scaling THIN|UNIFORM, --auto-skeleton (rig an unrigged mesh first: Make skeleton),
 --resolution PIXELS.  Exit code 0 on success, 1 on any error (message on stderr).
 """
 
@@ -55,6 +55,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     ap.add_argument("--max-rounds", type=int)
     ap.add_argument("--scaling", choices=[m[0] for m in core.SCALING_MODES],
                     help="THIN (flat parts across their thickness only) or UNIFORM (both axes)")
+    ap.add_argument("--auto-skeleton", action="store_true",
+                    help="rig an unrigged mesh first (Make skeleton: osteon.auto_skeleton, "
+                    "needs pygel3d); the largest unrigged mesh unless --object")
     ap.add_argument("--resolution", type=int, default=1000, help="PNG width, pixels")
     return ap.parse_args(argv)
 
@@ -62,6 +65,17 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 def ensure_registered() -> None:
     if not hasattr(bpy.types.Scene, "osteon"):
         osteon_blender.register()
+
+
+def pick_unrigged(scene, name: str | None):
+    """The mesh to rig for --auto-skeleton: ``name``, else the largest mesh without an
+    Armature modifier."""
+    if name:
+        return pick_object(scene, name)
+    meshes = [o for o in scene.objects if o.type == "MESH" and bridge.armature_of(o) is None]
+    if not meshes:
+        raise OsteonError("--auto-skeleton: no mesh without an Armature modifier in the scene")
+    return max(meshes, key=lambda o: len(o.data.vertices))
 
 
 def pick_object(scene, name: str | None):
@@ -258,13 +272,17 @@ def run(argv: list[str]) -> int:
     context = bpy.context
     scene = context.scene
     t0 = time.perf_counter()
-    obj = pick_object(scene, a.object)
+    obj = pick_unrigged(scene, a.object) if a.auto_skeleton else pick_object(scene, a.object)
     if obj.mode != "OBJECT" and bpy.ops.object.mode_set.poll():
         bpy.ops.object.mode_set(mode="OBJECT")
     for o in scene.objects:
         o.select_set(o == obj)
     context.view_layer.objects.active = obj
     apply_settings(scene.osteon, a)
+    if a.auto_skeleton and obj.type == "MESH" and bridge.armature_of(obj) is None:
+        r = service.run_make_skeleton(context)
+        print(f"osteon: {obj.name}: skeleton made by osteon.auto_skeleton: {r['armature']}, "
+              f"{r['bones']} bones in {r['seconds']:.1f} s")
     report = service.run_correct(context) if a.correct else service.run_analyze(context)
     report["run"].update(seconds=time.perf_counter() - t0,
                          blender_version=bpy.app.version_string, blend_file=bpy.data.filepath)

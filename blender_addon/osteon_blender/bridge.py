@@ -184,6 +184,12 @@ class SkeletonArrays:
     tails: np.ndarray         # (B, 3)
     parents: np.ndarray       # (B,) int, nearest deform ancestor, -1 = root
     x_axes: np.ndarray | None = None  # (B, 3) world unit X axis of each posed bone (roll)
+    bone_axes: np.ndarray | None = None  # (B, 3, 3) world unit X, Y, Z axes of each posed bone
+    # joint rigs (osteon.io.joints): the Blender tails before the engine's segments replaced
+    # them, which bones changed, and the local axes (scale X, scale Z, length) of each bone
+    blender_tails: np.ndarray | None = None
+    segment_changed: np.ndarray | None = None
+    scale_slots: np.ndarray | None = None
 
 
 def skeleton_arrays(arm) -> SkeletonArrays:
@@ -199,11 +205,13 @@ def skeleton_arrays(arm) -> SkeletonArrays:
     tail = np.empty((nb, 3))
     parents = np.full(nb, -1, dtype=np.int64)
     x_axes = np.empty((nb, 3))
+    axes = np.empty((nb, 3, 3))
     for i, name in enumerate(deform):
         p = pb[name]
         head[i] = p.head
         tail[i] = p.tail
         x_axes[i] = p.x_axis
+        axes[i] = (p.x_axis, p.y_axis, p.z_axis)
         anc = bones[name].parent
         while anc is not None and anc.name not in idx:
             anc = anc.parent
@@ -214,7 +222,46 @@ def skeleton_arrays(arm) -> SkeletonArrays:
     _check_bone_lengths(arm.name, deform, head_w, tail_w)
     x_world = x_axes @ mw[:3, :3].T
     x_world /= np.linalg.norm(x_world, axis=1, keepdims=True)
-    return SkeletonArrays(deform, head_w, tail_w, parents, x_world)
+    axes_w = axes @ mw[:3, :3].T
+    axes_w /= np.linalg.norm(axes_w, axis=2, keepdims=True)
+    return SkeletonArrays(deform, head_w, tail_w, parents, x_world, axes_w)
+
+
+def use_joint_segments(sk: SkeletonArrays, vertices: np.ndarray, weights) -> SkeletonArrays:
+    """Give the engine the bone segments a joint rig means (FBX/glTF imports: bones with
+    arbitrary tails), through the wheel's one function ``osteon.io.joints.joint_segments``;
+    a rig whose bones end at their children's heads is left as it is.  ``vertices`` (V, 3)
+    world, same units as ``sk``; ``weights`` (V, B).  Updates ``sk`` in place: ``tails`` become
+    the segments' ends, ``x_axes`` the local axis that carries the correction's scale X and
+    ``scale_slots`` which local axes get (scale X, scale Z, 1) (see
+    :func:`correction_pose_scales`)."""
+    from osteon.io import joints
+
+    new_tails, changed = joints.joint_segments(sk.heads, sk.tails, sk.parents, vertices, weights)
+    sk.blender_tails = sk.tails
+    sk.segment_changed = changed
+    if changed.any():
+        _check_bone_lengths("(segments of the joint rig)", sk.names, sk.heads, new_tails)
+        sk.tails = new_tails
+        if sk.bone_axes is not None:
+            sk.x_axes, sk.scale_slots = joints.cross_section_axes(new_tails - sk.heads,
+                                                                  sk.bone_axes)
+    return sk
+
+
+def correction_pose_scales(sk: SkeletonArrays, scale_x, scale_z) -> dict[str, tuple]:
+    """Per bone name, the pose scale factors (x, y, z) on the bone's own local axes that
+    reproduce the engine's cross-section scales: (scale X, 1, scale Z) for a bone whose Y axis is
+    its segment; for a joint-rig bone whose segment lies along another local axis, that axis
+    gets 1 and the two others the scales (``scale_slots``)."""
+    out = {}
+    for i, n in enumerate(sk.names):
+        v = [1.0, 1.0, 1.0]
+        slots = (0, 2, 1) if sk.scale_slots is None else tuple(int(k) for k in sk.scale_slots[i])
+        v[slots[0]] = float(scale_x[i])
+        v[slots[1]] = float(scale_z[i])
+        out[n] = tuple(v)
+    return out
 
 
 def _check_bone_lengths(arm_name: str, names: list[str], head: np.ndarray,
@@ -482,8 +529,18 @@ def _depth(bone) -> int:
 def _xz(scale) -> tuple[float, float]:
     """A bone's cross-section scale as (x, z): a number scales both axes."""
     if isinstance(scale, (tuple, list)):
-        return float(scale[0]), float(scale[1])
+        return float(scale[0]), float(scale[-1])
     return float(scale), float(scale)
+
+
+def _xyz(scale) -> tuple[float, float, float]:
+    """A bone's pose scale factors on its local (x, y, z): a number s is (s, 1, s), a pair
+    (x, z) is (x, 1, z), a triple is itself (joint rigs: see :func:`correction_pose_scales`)."""
+    if isinstance(scale, (tuple, list)):
+        if len(scale) == 3:
+            return float(scale[0]), float(scale[1]), float(scale[2])
+        return float(scale[0]), 1.0, float(scale[1])
+    return float(scale), 1.0, float(scale)
 
 
 def apply_bone_scales(context, arm, scales: dict, tol: float = 1e-7) -> list[str]:
@@ -501,7 +558,7 @@ def apply_bone_scales(context, arm, scales: dict, tol: float = 1e-7) -> list[str
     bones = arm.data.bones
     pb = arm.pose.bones
     scaled = [n for n, s in scales.items()
-              if max(abs(v - 1.0) for v in _xz(s)) > tol and n in pb]
+              if max(abs(v - 1.0) for v in _xyz(s)) > tol and n in pb]
     if not scaled:
         return []
     children = sorted({c.name for n in scaled for c in bones[n].children},
@@ -513,9 +570,9 @@ def apply_bone_scales(context, arm, scales: dict, tol: float = 1e-7) -> list[str
     arm[SAVED_POSE_KEY] = {"bones": saved}
     try:
         for n in scaled:
-            kx, kz = _xz(scales[n])
+            kx, ky, kz = _xyz(scales[n])
             sx, sy, sz = pb[n].scale
-            pb[n].scale = (sx * kx, sy, sz * kz)
+            pb[n].scale = (sx * kx, sy * ky, sz * kz)
         for n in children:
             bones[n].inherit_scale = "NONE"
         by_depth: dict[int, list[str]] = {}
@@ -554,18 +611,20 @@ def restore_pose(context, arm) -> bool:
     return True
 
 
-def correction_ratios(arm) -> dict[str, tuple[float, float]]:
-    """Per bone, the cross-section scales (x, z) the current correction applies."""
+def correction_ratios(arm) -> dict[str, tuple]:
+    """Per bone, the cross-section scales (x, z) the current correction applies, or
+    (x, y, z) where it also scales the bone's Y axis (a joint-rig bone, see
+    :func:`correction_pose_scales`)."""
     if SAVED_POSE_KEY not in arm:
         return {}
     saved = arm[SAVED_POSE_KEY].to_dict().get("bones", {})
     out = {}
     for n, st in saved.items():
         p = arm.pose.bones.get(n)
-        if p is not None and st["scale"][0] != 0.0 and st["scale"][2] != 0.0:
-            r = (float(p.scale[0] / st["scale"][0]), float(p.scale[2] / st["scale"][2]))
+        if p is not None and all(v != 0.0 for v in st["scale"]):
+            r = tuple(float(p.scale[k] / st["scale"][k]) for k in range(3))
             if max(abs(v - 1.0) for v in r) > 1e-7:
-                out[n] = r
+                out[n] = r if abs(r[1] - 1.0) > 1e-7 else (r[0], r[2])
     return out
 
 
@@ -596,8 +655,8 @@ def bake_scales_into_mesh(obj, arm, ratios: dict, bone_names: list[str],
         r = rows[sel]
         w = data[sel] / np.where(total[r] > 0, total[r], 1.0)
         rest = _matrix_np(arm.data.bones[name].matrix_local)
-        kx, kz = _xz(s)
-        d = rest @ np.diag([kx, 1.0, kz, 1.0]) @ np.linalg.inv(rest)
+        kx, ky, kz = _xyz(s)
+        d = rest @ np.diag([kx, ky, kz, 1.0]) @ np.linalg.inv(rest)
         p = pa[r]
         delta[r] += w[:, None] * (_transform(p, d) - p)
     return _transform(pa + delta, from_arm)
@@ -649,6 +708,7 @@ def tag_redraw_view3d(region_types: tuple = ("UI", "WINDOW")):
                     region.tag_redraw()
 
 
+<<<<<<< HEAD
 # --------------------------------------------------------------------------- print direction
 
 
@@ -725,3 +785,83 @@ def remove_object(name: str) -> None:
     ob = bpy.data.objects.get(name)
     if ob is not None:
         bpy.data.objects.remove(ob, do_unlink=True)
+=======
+# --------------------------------------------------------------------------- make skeleton
+
+
+def world_rest_positions(obj) -> np.ndarray:
+    """(V, 3) float64 world-space positions of the mesh datablock (no modifiers), Blender units."""
+    return _transform(local_positions(obj.data), _matrix_np(obj.matrix_world))
+
+
+def build_armature(context, name: str, heads: np.ndarray, tails: np.ndarray,
+                   parents: np.ndarray, names: list[str]):
+    """A new Armature object (at the world origin) with one bone per row: ``heads``/``tails``
+    (B, 3) world, Blender units; ``parents`` (B,) int, -1 = root.  Bones are made in Edit
+    Mode (bpy has no other way); the loop is over bones (tens), not vertices."""
+    data = bpy.data.armatures.new(name)
+    arm = bpy.data.objects.new(name, data)
+    context.collection.objects.link(arm)
+    prev_active = context.view_layer.objects.active
+    context.view_layer.objects.active = arm
+    bpy.ops.object.mode_set(mode="EDIT")
+    try:
+        ebs = [data.edit_bones.new(n) for n in names]
+        for i, eb in enumerate(ebs):
+            eb.head = tuple(float(x) for x in heads[i])
+            eb.tail = tuple(float(x) for x in tails[i])
+            eb.use_deform = True
+        for i, p in enumerate(np.asarray(parents, int)):
+            if p >= 0:
+                ebs[i].parent = ebs[p]
+    finally:
+        bpy.ops.object.mode_set(mode="OBJECT")
+    context.view_layer.objects.active = prev_active
+    return arm
+
+
+def write_bone_weights(obj, names: list[str], weights, step: float = 1.0 / 1024) -> int:
+    """Vertex groups named after the bones from a (V, B) sparse weight matrix (rows sum to 1).
+
+    bpy has no bulk setter for vertex-group weights; ``VertexGroup.add`` takes a list of
+    vertices with ONE weight, so weights are quantised to ``step`` and each bone gets one
+    ``add`` call per distinct value (at most 1/step calls per bone; no per-vertex loop).
+    Returns the number of ``add`` calls."""
+    csc = weights.tocsc() if hasattr(weights, "tocsc") else weights
+    calls = 0
+    for b, name in enumerate(names):
+        vg = obj.vertex_groups.get(name) or obj.vertex_groups.new(name=name)
+        lo, hi = csc.indptr[b], csc.indptr[b + 1]
+        rows = np.asarray(csc.indices[lo:hi])
+        q = np.round(np.asarray(csc.data[lo:hi], float) / step).astype(np.int64)
+        keep = q > 0
+        rows, q = rows[keep], q[keep]
+        order = np.argsort(q, kind="stable")
+        rows, q = rows[order], q[order]
+        vals, starts = np.unique(q, return_index=True)
+        ends = np.append(starts[1:], len(q))
+        for v, s, e in zip(vals, starts, ends):
+            vg.add(rows[s:e].tolist(), float(v * step), "REPLACE")
+            calls += 1
+    return calls
+
+
+def bind_armature(context, obj, arm, auto_weights: bool = False):
+    """An Armature modifier on ``obj`` using ``arm``.  ``auto_weights``: Blender's own
+    automatic (bone heat) weights via ``parent_set(type='ARMATURE_AUTO')``, which also parents
+    the mesh to the armature and makes the modifier."""
+    if auto_weights:
+        for o in context.view_layer.objects:
+            o.select_set(False)
+        obj.select_set(True)
+        arm.select_set(True)
+        context.view_layer.objects.active = arm
+        res = bpy.ops.object.parent_set(type="ARMATURE_AUTO")
+        context.view_layer.objects.active = obj
+        if "FINISHED" not in res:
+            raise OsteonError("Blender's automatic weights failed (parent_set ARMATURE_AUTO)")
+        return next(m for m in obj.modifiers if m.type == "ARMATURE")
+    mod = obj.modifiers.new(name="Armature", type="ARMATURE")
+    mod.object = arm
+    return mod
+>>>>>>> main

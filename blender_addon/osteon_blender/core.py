@@ -54,6 +54,9 @@ def mm_per_unit(mode: str, size_mm: float, extent: np.ndarray, unit_scale_length
 # --------------------------------------------------------------------------- colours
 
 GREY = (0.45, 0.45, 0.45, 1.0)
+# vertices of bones that were not analysed (too many sections skipped): never a stress colour
+MAGENTA = (1.0, 0.0, 1.0, 1.0)
+DOUBT_LEGEND = "bone not analysed, its sections could not be cut"
 # blue -> cyan -> green -> yellow -> red, stops at 0, .25, .5, .75, 1 x allowable
 _RAMP = np.array(
     [
@@ -88,9 +91,11 @@ _LUT[_LUT_SIZE] = GREY
 
 
 def stress_colors(vertex_stress: np.ndarray, allowable_mpa: float,
-                  vertex_culled: np.ndarray | None = None) -> np.ndarray:
+                  vertex_culled: np.ndarray | None = None,
+                  vertex_doubt: np.ndarray | None = None) -> np.ndarray:
     """Per-vertex RGBA (V, 4) float32: blue at 0 MPa -> red at the allowable stress
-    (and above), grey where the vertex lies on culled (surely safe) sections.
+    (and above), grey where the vertex lies on culled (surely safe) sections, magenta
+    where ``vertex_doubt`` (V,) bool is set (its bone was not analysed: DOUBT_LEGEND).
     One table lookup per vertex (the ramp in 2048 steps): ~1 ms for 100k vertices."""
     s = np.asarray(vertex_stress, dtype=np.float64)
     t = s * ((_LUT_SIZE - 1) / float(allowable_mpa))
@@ -98,7 +103,10 @@ def stress_colors(vertex_stress: np.ndarray, allowable_mpa: float,
     idx = np.nan_to_num(t, nan=0.0).astype(np.intp)  # ... and becomes 0 MPa (blue)
     if vertex_culled is not None:
         idx[np.asarray(vertex_culled, dtype=bool)] = _LUT_SIZE
-    return np.take(_LUT, idx, axis=0)
+    out = np.take(_LUT, idx, axis=0)
+    if vertex_doubt is not None:
+        out[np.asarray(vertex_doubt, dtype=bool)] = MAGENTA
+    return out
 
 
 # --------------------------------------------------------------------------- engine

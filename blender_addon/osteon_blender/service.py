@@ -57,10 +57,13 @@ def gather(context, use_weight_cache: bool = False, mm_per_unit: float | None = 
                              context.scene.unit_settings.scale_length)
     except ValueError as e:
         raise OsteonError(str(e)) from e
+    weights = bridge.sparse_weights(csr, len(sk.names))
+    # joint rigs (FBX/glTF imports): the segments the joints mean, not Blender's tails
+    bridge.use_joint_segments(sk, verts, weights)
     t2 = time.perf_counter()
     return Inputs(
         obj=obj, arm=arm, skeleton=sk, vertices_mm=verts * k, faces=faces, csr=csr,
-        weights=bridge.sparse_weights(csr, len(sk.names)), mm_per_unit=k, root=params["root"],
+        weights=weights, mm_per_unit=k, root=params["root"],
         params=params,
         timings={"read_weights_s": t1 - t0, "read_mesh_s": t2 - t1},
     )
@@ -89,12 +92,15 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
     s = context.scene.osteon
     allowable = inp.params["allowable_stress"]
     culled = getattr(analysis, "vertex_culled", None)
+<<<<<<< HEAD
     # colours by stress ratio at the print direction (stress itself when isotropic)
     k = inp.mm_per_unit
     shown = printdir.colour_stress(analysis, inp.skeleton.heads * k, inp.skeleton.tails * k)
     rgba = core.stress_colors(shown, allowable, culled)
     bridge.write_point_colors(inp.obj.data, rgba)
     bridge.show_colors_in_viewports()
+=======
+>>>>>>> main
     report = core.build_report(
         object_name=inp.obj.name, armature_name=inp.arm.name, bone_names=inp.skeleton.names,
         analysis=first_analysis if first_analysis is not None else analysis,
@@ -110,11 +116,18 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
         item.limit = row.get("limit") or ""
         item.scale = row["scale"]
         item.weak = row["weak"]
+        item.status = "weak" if row["weak"] else "ok"
+    doubt_ui_publish(s, report)
+    rgba = core.stress_colors(analysis.vertex_stress, allowable, culled,
+                              not_analysed_vertices(analysis, report, inp.skeleton.names))
+    bridge.write_point_colors(inp.obj.data, rgba)
+    bridge.show_colors_in_viewports()
     s.weak_bones_index = -1
     s.has_result = True
     s.result_object = inp.obj.name
     s.result_armature = inp.arm.name
-    s.max_stress_mpa = report["max_stress_mpa"]
+    # no section gave a stress (all skipped): 0.0 here, the doubt lines say why
+    s.max_stress_mpa = report["max_stress_mpa"] if report["max_stress_mpa"] is not None else 0.0
     s.allowable_mpa = allowable
     s.sections = report["sections"]
     s.weak_sections = report["weak_sections"]
@@ -124,6 +137,29 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
     return report
 
 
+def not_analysed_vertices(analysis, report: dict, bone_names) -> np.ndarray | None:
+    """(V,) bool: vertices whose bone is "not analysed" (drawn magenta), or None."""
+    bad = {r["bone"] for r in report.get("not_analysed_bones") or []}
+    vb = getattr(analysis, "vertex_bone", None)
+    if not bad or vb is None:
+        return None
+    idx = np.array([i for i, n in enumerate(bone_names) if n in bad], dtype=np.int64)
+    return np.isin(np.asarray(vb, dtype=np.int64), idx)
+
+
+def doubt_ui_publish(s, report: dict) -> None:
+    """Skipped sections and not-analysed bones into the sidebar's properties and list."""
+    s.skipped_sections = int(report.get("skipped_sections") or 0)
+    s.doubt = report.get("doubt") or ""
+    s.verdict = report.get("verdict") or ""
+    for row in report.get("not_analysed_bones") or []:
+        item = s.weak_bones.add()
+        item.name = row["bone"]
+        item.status = "not analysed"
+        item.reason = row["reason"] or ""
+        item.weak = False
+
+
 def clear_results(context):
     s = context.scene.osteon
     s.weak_bones.clear()
@@ -131,6 +167,9 @@ def clear_results(context):
     s.has_result = False
     s.max_stress_mpa = 0.0
     s.sections = 0
+    s.skipped_sections = 0
+    s.doubt = ""
+    s.verdict = ""
     s.weak_sections = 0
     st = state.get(context.scene)
     if st is not None:
@@ -145,6 +184,8 @@ def summary(report: dict) -> str:
            f"{n} weak bone{'s' if n != 1 else ''}")
     if n:
         msg += " (" + ", ".join(weak[:5]) + ")"
+    if report.get("doubt"):
+        msg += "; NOT A CLEAN RESULT: " + report["doubt"]
     return msg
 
 
@@ -182,8 +223,8 @@ def run_correct(context, progress=_no_progress) -> dict:
                                  **core.engine_params(s, arm, inp.skeleton.names, correct=True))
         except ValueError as e:
             raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
-        scales = {n: (float(x), float(z)) for n, x, z in
-                  zip(inp.skeleton.names, fix.bone_scale_x, fix.bone_scale_z)}
+        scales = bridge.correction_pose_scales(inp.skeleton, fix.bone_scale_x,
+                                               fix.bone_scale_z)
         bridge.apply_bone_scales(context, arm, scales)
         progress(0.7)
         after_inp = gather(context, mm_per_unit=inp.mm_per_unit)
@@ -244,3 +285,52 @@ def run_apply(context) -> dict:
     bridge.restore_pose(context, arm)
     state.of(context.scene).weights.clear()
     return run_analyze(context)
+
+
+def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
+                      progress=_no_progress) -> dict:
+    """Rig the active unrigged mesh: an Armature object from :func:`osteon.auto_skeleton`
+    (computed in mm at the print size, built in Blender units), vertex groups with the engine's
+    weights (or Blender's automatic weights) and an Armature modifier.  The mesh's vertices are
+    not changed.  Returns {"armature", "bones", "seconds", "weights"}."""
+    osteon = core.import_engine()
+    obj = context.active_object
+    if obj is None or obj.type != "MESH":
+        raise OsteonError("Make skeleton: select the mesh to rig (the active object is not a mesh)")
+    if bridge.armature_of(obj) is not None:
+        raise OsteonError(f"Mesh '{obj.name}' already has an Armature modifier")
+    try:
+        import pygel3d  # noqa: F401  (auto_skeleton imports it lazily)
+    except ImportError:
+        raise OsteonError(
+            "Make skeleton needs the Python package 'pygel3d', which this Blender cannot import; "
+            "install it into Blender's Python (scripts/blender_setup.sh does: "
+            "pip install --target <Blender's site-packages> pygel3d)") from None
+    s = context.scene.osteon
+    verts = bridge.world_rest_positions(obj)
+    faces = bridge.triangles(obj.data)
+    if len(faces) == 0:
+        raise OsteonError(f"Mesh '{obj.name}' has no faces")
+    try:
+        k = core.mm_per_unit(s.size_mode, s.print_size_mm, verts.max(0) - verts.min(0),
+                             context.scene.unit_settings.scale_length)
+    except ValueError as e:
+        raise OsteonError(str(e)) from e
+    progress(0.1)
+    t0 = time.perf_counter()
+    try:
+        sk, w = osteon.auto_skeleton(verts * k, faces, root=root)
+    except ValueError as e:
+        raise OsteonError(f"Make skeleton: {e}") from e
+    progress(0.7)
+    names = list(sk.names)
+    arm = bridge.build_armature(context, f"{obj.name}_skeleton", np.asarray(sk.heads) / k,
+                                np.asarray(sk.tails) / k, np.asarray(sk.parents), names)
+    if not auto_weights:
+        bridge.write_bone_weights(obj, names, w)
+    bridge.bind_armature(context, obj, arm, auto_weights=auto_weights)
+    context.view_layer.objects.active = obj
+    obj.select_set(True)
+    state.of(context.scene).weights.clear()
+    return {"armature": arm.name, "bones": len(names), "seconds": time.perf_counter() - t0,
+            "weights": "Blender automatic" if auto_weights else "osteon"}

@@ -104,7 +104,8 @@ void check_analysis(const AnalysisResult& r, Index num_vertices, int num_bones) 
     check(r.section_area[i] >= 0.0, "section area >= 0");
     check(std::isfinite(r.moment_arm[i]) && r.moment_arm[i] >= 0.0, "moment arm finite >= 0");
     check(r.section_center[i].allFinite(), "finite section centre");
-    const bool skipped = (r.section_flags[i] & (kFlagEmpty | kFlagDegenerate)) != 0;
+    const bool skipped =
+        (r.section_flags[i] & (kFlagEmpty | kFlagDegenerate | kFlagUnreliable)) != 0;
     check(std::isnan(r.stress[i]) == skipped, "NaN stress <=> skipped flag");
     check(std::isnan(r.section_modulus[i]) == skipped, "NaN modulus <=> skipped flag");
     if (!skipped) {
@@ -114,6 +115,15 @@ void check_analysis(const AnalysisResult& r, Index num_vertices, int num_bones) 
       check(!r.weak[i] && !r.culled[i], "skipped section is neither weak nor culled");
     }
     check(!(r.culled[i] && r.weak[i]), "culled => not weak");
+    // Unreliable and too-thin sections never drive the result; the others stay under the maximum.
+    if (skipped || (r.section_flags[i] & kFlagTooThin))
+      check(!r.weak[i] && !r.culled[i], "left-out section is neither weak nor culled");
+    else
+      check(r.stress[i] <= r.max_stress, "max stress >= every usable section's stress");
+    check(r.section_thickness.size() == ns &&
+              (skipped ? std::isnan(r.section_thickness[i]) || r.section_thickness[i] >= 0.0
+                       : r.section_thickness[i] >= 0.0),
+          "section thickness >= 0 mm");
   }
   check(std::isfinite(r.max_stress) && std::isfinite(r.safe_modulus), "finite summary");
   for (Index v = 0; v < num_vertices; ++v) {

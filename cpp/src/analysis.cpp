@@ -22,6 +22,8 @@ void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
                                 " out of range for " + std::to_string(skeleton.num_bones()) +
                                 " bones");
   if (std::isnan(o.gap_tolerance)) throw std::invalid_argument("gap_tolerance must not be NaN");
+  if (!(o.min_thickness >= 0) || !std::isfinite(o.min_thickness))
+    throw std::invalid_argument("min_thickness must be a finite length >= 0 mm");
 }
 
 Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertices,

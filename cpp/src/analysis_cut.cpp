@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
+#include "osteon/regions.hpp"
 #include "parallel.hpp"
 
 namespace osteon {
@@ -71,6 +72,7 @@ SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const 
       st.thin_axis = (thin.x() * frame.u + thin.y() * frame.v).normalized();
       const double lo = std::max(eig.eigenvalues()(0), 0.0), hi = eig.eigenvalues()(1);
       st.aspect = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
+      st.thickness = region_thickness(geom.polygon);
       if (keep) {
         auto to_world = [&](const std::vector<Vec2>& loop) {
           std::vector<Vec3> out(loop.size());
@@ -87,10 +89,12 @@ SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const 
   return st;
 }
 
-// The whole-plane section from all of a plane's segments (gaps closed: nothing is clipped).
+// The whole-plane section from all of a plane's segments (gaps closed: nothing is clipped). A
+// bone outside the mesh takes the region cut from its own skinning domain (vertex_bone, #V).
 SectionState finish_whole(const PlaneFrame& frame, const std::vector<CutSegment>& segs, double gap,
-                          bool keep) {
-  SectionGeometry geom = select_section(assemble_loops(segs, gap));
+                          const int* vertex_bone, int bone, bool keep) {
+  const BoneDomain domain{&segs, vertex_bone, bone};
+  SectionGeometry geom = select_region(assemble_loops(segs, gap), &domain);
   if (segs.empty()) geom.flags |= kFlagEmpty;
   return finish(frame, geom, nullptr, keep);
 }
@@ -164,11 +168,11 @@ void Analyzer::Impl::cut_local(RunState& run) {
       PlaneFrame frame = base;
       frame.origin = specs[si].point;
       if (!local) {
-        states[si] = finish_whole(frame, segs[k - 1], run.gap, keep);
+        states[si] = finish_whole(frame, segs[k - 1], run.gap, run.vertex_bone.data(), b, keep);
         continue;
       }
       const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
-      const SectionGeometry geom = select_section(cut);
+      const SectionGeometry geom = select_region(cut, nullptr);
       if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
         states[si] = finish(frame, geom, &region, keep);
         continue;
@@ -230,7 +234,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             for (int step = 0; step < 2 && ball.radius < diag; ++step, ball.radius *= 3.0) {
               cut_mesh(mesh, frame, segs, &run.grid, &ball, done);
               const PlaneCut cut = assemble_loops(segs, 0.0);
-              const SectionGeometry geom = select_section(cut);
+              const SectionGeometry geom = select_region(cut, nullptr);
               previous = ball;
               done = &previous;
               if (local_ok(run, cut, geom, inside)) {
@@ -241,7 +245,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             }
           }
           cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
-          states[first] = finish_whole(frame, segs, run.gap, keep);
+          states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, keep);
           return;
         }
         const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
@@ -271,7 +275,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             add_kept(k);
             if (retry[first + k - 1] != kGrowFamily) continue;
             const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
-            const SectionGeometry geom = select_section(cut);
+            const SectionGeometry geom = select_region(cut, nullptr);
             if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
               states[first + k - 1] = finish(frame_of(k), geom, &wide, keep);
               wanted[k - 1] = 0;
@@ -283,7 +287,8 @@ void Analyzer::Impl::cut_retries(RunState& run) {
         for (int k = 1; k <= n; ++k) {
           if (!wanted[k - 1]) continue;
           add_kept(k);
-          states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap, keep);
+          states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap,
+                                               run.vertex_bone.data(), b, keep);
         }
       });
   if (run.timer.on) {

@@ -73,6 +73,7 @@ struct SectionState {
   Vec3 center = Vec3::Zero();
   Vec3 thin_axis = Vec3::Zero();  // unit, in the plane: the direction across the thinnest width
   double aspect = 1.0;            // width / thickness
+  double thickness = 0.0;         // minimum width of the region, mm
   std::vector<std::vector<Vec3>> loops;  // keep_outlines: outer boundary, then holes, 3D mm
 };
 

@@ -26,6 +26,7 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   r.section_modulus.resize(ns);
   r.section_thin_axis.resize(ns);
   r.section_aspect.resize(ns);
+  r.section_thickness.resize(ns);
   r.moment_arm.resize(ns);
   r.moment.resize(ns);
   r.stress.resize(ns);
@@ -55,6 +56,7 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       r.section_modulus[i] = st.found ? st.modulus : kNaN;
       r.section_thin_axis[i] = st.found ? st.thin_axis : Vec3(kNaN, kNaN, kNaN);
       r.section_aspect[i] = st.found ? st.aspect : kNaN;
+      r.section_thickness[i] = st.found ? st.thickness : kNaN;
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
@@ -63,11 +65,44 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
                      options.layer_strength_ratio, r.section_allowable, r.across_layers);
   r.stress_ratio.assign(ns, kNaN);
+  // Sections that drive results: found, not doubted (unreliable), not too thin to print. An
+  // outside section far smaller than its bone's sections inside the mesh (below a tenth of their
+  // median area) is a sliver the bone only grazes: unreliable, no number. Too-thin sections keep
+  // their stress and ratio but drive neither the maximum, weak, culled nor the safe modulus.
+  std::vector<std::uint8_t> usable(ns, 0);
+  {
+    const int nb = num_bones;
+    std::vector<std::vector<double>> inner(nb);
+    for (int i = 0; i < ns; ++i)
+      if (states[i].found && !(states[i].flags & kFlagOutside))
+        inner[specs[i].bone].push_back(states[i].area);
+    std::vector<double> median(nb, 0.0);
+    for (int b = 0; b < nb; ++b) {
+      auto& a = inner[b];
+      if (a.empty()) continue;
+      std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+      median[b] = a[a.size() / 2];
+    }
+    for (int i = 0; i < ns; ++i) {
+      if (!states[i].found) continue;
+      std::uint32_t& flags = r.section_flags[i];
+      if ((flags & kFlagOutside) && states[i].area < 0.1 * median[specs[i].bone]) {
+        flags |= kFlagUnreliable;
+        r.section_area[i] = 0.0;
+        r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
+        r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
+        continue;
+      }
+      if (options.min_thickness > 0 && states[i].thickness < options.min_thickness)
+        flags |= kFlagTooThin;
+      r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
+      usable[i] = !(flags & kFlagTooThin);
+    }
+  }
   for (int i = 0; i < ns; ++i) {
-    if (!states[i].found) continue;
+    if (!usable[i]) continue;
     r.max_moment = std::max(r.max_moment, r.moment[i]);
     r.max_stress = std::max(r.max_stress, r.stress[i]);
-    r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
     if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
       r.max_stress_ratio = r.stress_ratio[i];
       r.weakest_section = i;
@@ -75,7 +110,7 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   }
   r.safe_modulus = r.max_moment / options.allowable_stress;
   for (int i = 0; i < ns; ++i) {
-    if (!states[i].found) continue;
+    if (!usable[i]) continue;
     r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
     r.weak[i] = r.stress[i] > r.section_allowable[i];
   }
@@ -84,7 +119,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
     r.outline_loop_start.push_back(0);
     for (int i = 0; i < ns; ++i) {
       r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
-      if (!states[i].found) continue;
+      // Only regions analysed: not an unreliable sliver (no number, no outline).
+      if (!states[i].found || (r.section_flags[i] & kFlagUnreliable)) continue;
       for (const auto& loop : states[i].loops) {
         r.outline_points.insert(r.outline_points.end(), loop.begin(), loop.end());
         r.outline_loop_start.push_back(static_cast<std::int64_t>(r.outline_points.size()));

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
+#include "osteon/regions.hpp"
 #include "parallel.hpp"
 
 namespace osteon {
@@ -16,8 +17,10 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   const int nb = num_bones;
   const int ns = static_cast<int>(specs.size());
   std::vector<std::vector<int>> bone_sections(nb);
+  // Unreliable and too-thin sections are left out (they do not set the colour scale).
   for (int i = 0; i < ns; ++i)
-    if (states[i].found) bone_sections[specs[i].bone].push_back(i);
+    if (states[i].found && !(r.section_flags[i] & (kFlagUnreliable | kFlagTooThin)))
+      bone_sections[specs[i].bone].push_back(i);
   std::vector<std::vector<double>> sp(nb), ss(nb);
   std::vector<std::vector<std::uint8_t>> sc(nb);
   for (int b = 0; b < nb; ++b) {
@@ -40,6 +43,8 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   r.vertex_stress.assign(num_vertices, 0.0);
   r.vertex_culled.assign(num_vertices, 0);
   r.vertex_bone = vertex_bone;
+  // Loose pieces: full runs only (the correction's partial re-cuts move no piece apart).
+  if (!run.partial) r.loose_pieces = loose_pieces(mesh, vertex_bone, tree.held_bone);
   const Index block = 8192;
   detail::parallel_for(
       static_cast<long>((num_vertices + block - 1) / block), options.threads, [&](long chunk, int) {

@@ -17,12 +17,15 @@ inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
 
 // Cut of triangle (a, b, c) given per-vertex "above" flags and signed heights (height 0 = plane).
 // Exactly two edges change side; each gives an endpoint at linear interpolation of the heights.
+// The segment keeps the face's orientation: it runs from the edge that goes down (above to below
+// in the face's winding) to the edge that goes up, so that a closed outward-facing surface gives
+// counter-clockwise loops in (u, v) and an inward-facing one clockwise loops.
 inline void emit_segment(const MeshView& mesh, const PlaneFrame& plane, const std::int32_t* f,
                          const bool above[3], const double height[3], CutSegment& seg) {
-  int n = 0;
-  for (int e = 0; e < 3 && n < 2; ++e) {
+  for (int e = 0; e < 3; ++e) {
     const int i = e, j = (e + 1) % 3;
     if (above[i] == above[j]) continue;
+    const int n = above[i] ? 0 : 1;
     const double denom = height[j] - height[i];
     double lambda = denom != 0.0 ? -height[i] / denom : 0.5;
     lambda = std::clamp(lambda, 0.0, 1.0);
@@ -32,7 +35,6 @@ inline void emit_segment(const MeshView& mesh, const PlaneFrame& plane, const st
                  pi[2] + lambda * (pj[2] - pi[2]));
     seg.edge[n] = edge_key(f[i], f[j]);
     seg.point[n] = plane.to_plane(p);
-    ++n;
   }
 }
 

@@ -100,10 +100,18 @@ TEST(Slicer, GrownCutsAddExactlyTheTrianglesLeftOut) {
   }
 }
 
+namespace {
+// A loop traversed the other way (a hole: an inward-facing surface's cut).
+std::vector<Vec2> reversed(std::vector<Vec2> loop) {
+  std::reverse(loop.begin(), loop.end());
+  return loop;
+}
+}  // namespace
+
 TEST(Slicer, PointInAHoleTakesTheWall) {
-  // Two concentric square loops: the origin lies in the hole.
+  // Two concentric square loops, the inner one clockwise (a real hole): the origin lies in it.
   PlaneCut cut;
-  cut.loops = {rectangle(10, 10), rectangle(6, 6)};
+  cut.loops = {rectangle(10, 10), reversed(rectangle(6, 6))};
   const SectionGeometry g = select_section(cut);
   ASSERT_TRUE(g.found);
   EXPECT_TRUE(g.flags & kFlagHollow);
@@ -115,7 +123,7 @@ TEST(Slicer, IslandsInsideHolesAreNotPartOfTheSection) {
   PlaneCut cut;
   std::vector<Vec2> island = rectangle(2, 2);
   for (auto& p : island) p += Vec2(0, 0);
-  cut.loops = {rectangle(20, 20), rectangle(14, 14), island};  // origin in the island
+  cut.loops = {rectangle(20, 20), reversed(rectangle(14, 14)), island};  // origin in the island
   const SectionGeometry g = select_section(cut);
   EXPECT_EQ(g.containing, 3);
   EXPECT_NEAR(section_properties(g.polygon).area, 4.0, 1e-12);  // the island itself

@@ -5,7 +5,9 @@ printed object, newtons, MPa. See :func:`analyze`, :func:`correct`, :class:`Skel
 """
 
 from ._api import (
+    DEFAULT_MIN_THICKNESS,
     DEFAULT_SCALING,
+    FLAG_REASONS,
     SECTION_FLAGS,
     SECTION_KINDS,
     Analysis,
@@ -18,12 +20,15 @@ from ._api import (
     skin,
     slice_section,
 )
+from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "DEFAULT_MIN_THICKNESS",
     "DEFAULT_SCALING",
+    "FLAG_REASONS",
     "SECTION_FLAGS",
     "SECTION_KINDS",
     "Analysis",
@@ -32,6 +37,7 @@ __all__ = [
     "Orientation",
     "Skeleton",
     "analyze",
+    "auto_skeleton",
     "best_orientation",
     "correct",
     "section_properties",

@@ -16,6 +16,8 @@ import numpy as np
 from . import _core
 
 __all__ = [
+    "DEFAULT_MIN_THICKNESS",
+    "FLAG_REASONS",
     "SECTION_FLAGS",
     "SECTION_KINDS",
     "Analysis",
@@ -38,6 +40,22 @@ SECTION_FLAGS = {
     "empty": _core.FLAG_EMPTY,
     "degenerate": _core.FLAG_DEGENERATE,
     "non_manifold": _core.FLAG_NON_MANIFOLD,
+    "unreliable": _core.FLAG_UNRELIABLE,
+    "too_thin": _core.FLAG_TOO_THIN,
+}
+
+#: Plain-language reason of each flag (``Analysis.flag_reasons``, the JSON ``sections`` rows).
+FLAG_REASONS = {
+    "gap_closed": "the cut had open ends, joined across a small gap (mesh not closed here)",
+    "open": "an open mesh edge touches this section: it may be incomplete",
+    "outside": "the bone runs outside the mesh here: the section is its own part's cut",
+    "hollow": "the bone runs through a hole: the wall around it is the section",
+    "empty": "nothing usable was cut here: no number",
+    "degenerate": "zero area or a flat section: no number",
+    "non_manifold": "non-manifold edges (more than two faces on an edge) are cut here",
+    "unreliable": "the bone is outside the mesh and no part here belongs to it: no number, "
+                  "left out of every result",
+    "too_thin": "too thin to print ({thickness} mm < {minimum} mm)",
 }
 #: Values of ``Analysis.section_kind``.
 SECTION_KINDS = {0: "interior", 1: "joint", 2: "end"}
@@ -229,6 +247,23 @@ def _layer_options(build_direction: Any, layer_strength_ratio: Any) -> tuple[np.
     return d / np.linalg.norm(d), r
 
 
+#: Default minimum printable thickness, mm (FDM: two perimeters of a 0.4 mm nozzle).
+DEFAULT_MIN_THICKNESS = 0.8
+
+
+def _min_thickness(value: Any) -> float:
+    """``min_thickness`` in mm: None -> the default; must be a finite number >= 0."""
+    if value is None:
+        return DEFAULT_MIN_THICKNESS
+    try:
+        t = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"min_thickness must be a number of mm, got {value!r}") from None
+    if not (t >= 0.0 and math.isfinite(t)):
+        raise ValueError(f"min_thickness must be a finite length >= 0 mm, got {value!r}")
+    return t
+
+
 def _held_bone(root: int | str | None, skeleton: Skeleton) -> int:
     if root is None:
         return -1
@@ -270,8 +305,13 @@ class Analysis:
     (S,) mm³, ``section_thin_axis`` (S,3) unit in-plane direction across the section's thinnest
     width, ``section_aspect`` (S,) width / thickness (1 for a circle or square), ``moment_arm`` (S,) mm, ``moment`` (S,) N·mm, ``stress`` (S,) MPa, ``culled`` (S,)
     bool (W > safe modulus: safe for sure), ``weak`` (S,) bool (stress > allowable),
-    ``section_flags`` (S,) bit mask (see ``SECTION_FLAGS``). Skipped sections (flag ``empty`` or
-    ``degenerate``) have NaN modulus and stress and are never weak or culled.
+    ``section_flags`` (S,) bit mask (see ``SECTION_FLAGS``), ``section_thickness`` (S,) mm: the
+    region's minimum width (narrowest distance between two parallel lines enclosing it; a solid
+    round section's diameter, a plate's thickness). Skipped sections (flag ``empty``,
+    ``degenerate`` or ``unreliable``) have NaN modulus and stress and are never weak or culled;
+    ``too_thin`` sections (thinner than ``min_thickness`` mm) keep their stress but are never
+    weak, culled, the maximum or corrected. ``loose_pieces``: list of (n,) vertex index arrays,
+    one per shell that neither touches nor overlaps the held piece (it would fall off).
     Per vertex: ``vertex_stress`` (V,) MPa, ``vertex_culled`` (V,) bool, ``vertex_bone`` (V,).
     Scalars: ``max_moment`` N·mm, ``safe_modulus`` mm³, ``max_stress`` MPa, ``allowable_stress``
     MPa, ``force`` N, ``interval`` mm, ``held_bone`` index.
@@ -294,6 +334,7 @@ class Analysis:
     culled: np.ndarray
     weak: np.ndarray
     section_flags: np.ndarray
+    section_thickness: np.ndarray
     max_moment: float
     safe_modulus: float
     max_stress: float
@@ -306,12 +347,14 @@ class Analysis:
     stress_ratio: np.ndarray | None = None
     across_layers: np.ndarray | None = None
     max_stress_ratio: float = 0.0
+    loose_pieces: list = field(default_factory=list)
     allowable_stress: float = 60.0
     force: float = 20.0
     interval: float = 2.0
     bone_names: list = field(default_factory=list)
     build_direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     layer_strength_ratio: float = 1.0
+    min_thickness: float = DEFAULT_MIN_THICKNESS
 
     outline_points: np.ndarray | None = None
     outline_loop_start: np.ndarray | None = None
@@ -320,13 +363,15 @@ class Analysis:
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
                    interval: float, build_direction: Any = (0.0, 0.0, 1.0),
-                   layer_strength_ratio: float = 1.0) -> Analysis:
+                   layer_strength_ratio: float = 1.0,
+                   min_thickness: float = DEFAULT_MIN_THICKNESS) -> Analysis:
         if len(d["outline_section_start"]) == 0:  # outlines not asked for
             d["outline_points"] = d["outline_loop_start"] = d["outline_section_start"] = None
         return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
                    bone_names=list(skeleton.names),
                    build_direction=np.array(build_direction, dtype=float),
-                   layer_strength_ratio=float(layer_strength_ratio))
+                   layer_strength_ratio=float(layer_strength_ratio),
+                   min_thickness=float(min_thickness))
 
     def __post_init__(self) -> None:
         # Results built without the layer fields (older callers): isotropic values.
@@ -369,6 +414,22 @@ class Analysis:
         """Names of the flags set on one section."""
         f = int(self.section_flags[section])
         return [name for name, bit in SECTION_FLAGS.items() if f & bit]
+
+    def flag_reasons(self, section: int) -> list[str]:
+        """Plain-language reason of each flag set on one section (see ``FLAG_REASONS``)."""
+        t = float(self.section_thickness[section])
+        return [FLAG_REASONS[name].format(thickness=f"{t:.2g}", minimum=f"{self.min_thickness:g}")
+                for name in self.flag_names(section)]
+
+    @property
+    def too_thin(self) -> np.ndarray:
+        """(S,) bool: sections thinner than ``min_thickness`` mm (too thin to print)."""
+        return (self.section_flags & SECTION_FLAGS["too_thin"]) != 0
+
+    @property
+    def unreliable(self) -> np.ndarray:
+        """(S,) bool: sections no material could be tied to (bone outside the mesh)."""
+        return (self.section_flags & SECTION_FLAGS["unreliable"]) != 0
 
     def bone_max_stress(self) -> np.ndarray:
         """(B,) largest section stress per bone, MPa (0 for bones without valid sections)."""
@@ -509,6 +570,7 @@ class Analyzer:
         build_direction: Any = (0.0, 0.0, 1.0),
         layer_strength_ratio: float = 1.0,
         keep_outlines: bool = False,
+        min_thickness: float | None = None,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -523,6 +585,7 @@ class Analyzer:
             raise ValueError("gap_tolerance must be >= 0 mm")
         self.build_direction, self.layer_strength_ratio = _layer_options(
             build_direction, layer_strength_ratio)
+        self.min_thickness = _min_thickness(min_thickness)
         dense, csr = _weights_args(weights, self.num_vertices, skeleton.num_bones)
         self._skeleton = skeleton
         options = _options(self.force, self.allowable_stress, self.interval,
@@ -530,6 +593,7 @@ class Analyzer:
                            self.build_direction, self.layer_strength_ratio)
         options.local_cuts = bool(local_cuts)
         options.keep_outlines = bool(keep_outlines)
+        options.min_thickness = self.min_thickness
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
                                     options)
 
@@ -552,7 +616,8 @@ class Analyzer:
         return Analysis._from_core(d, skeleton=sk, allowable_stress=self.allowable_stress,
                                    force=self.force, interval=self.interval,
                                    build_direction=self.build_direction,
-                                   layer_strength_ratio=self.layer_strength_ratio)
+                                   layer_strength_ratio=self.layer_strength_ratio,
+                                   min_thickness=self.min_thickness)
 
 
 def analyze(
@@ -571,6 +636,7 @@ def analyze(
     build_direction: Any = (0.0, 0.0, 1.0),
     layer_strength_ratio: float = 1.0,
     keep_outlines: bool = False,
+    min_thickness: float | None = None,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -583,7 +649,9 @@ def analyze(
     isotropic): each section's allowable then depends on the angle between its normal and the
     build direction (``section_allowable``, ``stress_ratio``, ``across_layers``;
     docs/printing.md); ``keep_outlines`` also return each section's loops
-    (:attr:`Analysis.section_loops`). Raises ValueError on bad input.
+    (:attr:`Analysis.section_loops`); ``min_thickness`` mm: sections thinner than this are
+    flagged ``too_thin`` (None: 0.8 mm, FDM; the material presets carry their own; 0 = no
+    check). Raises ValueError on bad input.
     """
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
@@ -592,7 +660,8 @@ def analyze(
                         allowable_stress=allowable_stress, interval=interval, root=root,
                         gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
                         build_direction=build_direction,
-                        layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines)
+                        layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines,
+                        min_thickness=min_thickness)
     return analyzer.run(v)
 
 
@@ -617,6 +686,7 @@ def correct(
     build_direction: Any = (0.0, 0.0, 1.0),
     layer_strength_ratio: float = 1.0,
     keep_outlines: bool = False,
+    min_thickness: float | None = None,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -672,6 +742,7 @@ def correct(
     options = _options(force, allowable_stress, interval, _held_bone(root, skeleton),
                        gap_tolerance, threads, build_direction, layer_strength_ratio)
     options.keep_outlines = bool(keep_outlines)
+    options.min_thickness = _min_thickness(min_thickness)
     co = _core.CorrectionOptions()
     co.max_scale, co.max_rounds = float(max_scale), max_rounds
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"
@@ -679,7 +750,8 @@ def correct(
     d = _core.correct(v, f, skeleton._engine(), dense, csr, options, co)
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
           "interval": interval, "build_direction": build_direction,
-          "layer_strength_ratio": layer_strength_ratio}
+          "layer_strength_ratio": layer_strength_ratio,
+          "min_thickness": _min_thickness(min_thickness)}
     d["before"] = Analysis._from_core(d["before"], **kw)
     d["after"] = Analysis._from_core(d["after"], **kw)
     return Correction(**d)

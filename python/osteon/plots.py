@@ -142,6 +142,7 @@ def save_stress_png(
     marks=None,
     dpi=90,
     orientation=None,
+    bones=False,
 ):
     """Write a PNG: two orthographic views coloured by per-vertex stress and the chain plot.
 
@@ -149,6 +150,7 @@ def save_stress_png(
     ``marks``: (k,3) points (mm) to mark on the views (e.g. FEM-tested sections);
     ``orientation``: an :class:`osteon.orientation.Orientation` drawn as a fourth panel (the
     sphere map of the worst stress ratio by build direction).
+    ``bones``: draw the bones (heads → tails) over the views (e.g. an automatic skeleton).
     """
     _, plt = _mpl()
     V = np.asarray(vertices, float)
@@ -174,6 +176,12 @@ def save_stress_png(
     # views: look along the shorter horizontal axis, then along the longer one
     _view(ax1, V, Fc, rgba, [others[0], up], others[1], False, "side view")
     _view(ax2, V, Fc, rgba, [others[1], up], others[0], True, "front view")
+    if bones:
+        h, t = np.asarray(heads, float), np.asarray(tails, float)
+        for ax, axes in ((ax1, [others[0], up]), (ax2, [others[1], up])):
+            ax.plot(np.stack([h[:, axes[0]], t[:, axes[0]]]), np.stack([h[:, axes[1]],
+                    t[:, axes[1]]]), "k-", lw=1.2)
+            ax.plot(t[:, axes[0]], t[:, axes[1]], "k.", ms=4)
     if marks is not None and len(marks):
         mk = np.asarray(marks, float).reshape(-1, 3)
         for ax, axes in ((ax1, [others[0], up]), (ax2, [others[1], up])):
@@ -224,6 +232,32 @@ def save_fem_png(path, report, dpi=110, title=""):
     ax.set_title(title or f"median |err| {100 * report.median_error:.1f} %", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+
+
+def save_stress_thumbnail(path, vertices, faces, analysis, allowable, title="", dpi=60):
+    """A small PNG for contact sheets (``osteon batch``): the two orthographic views coloured by
+    stress as in :func:`save_stress_png`, without axes, colour bar or chain plot (about ten
+    times faster to draw). ``path`` may be a file name or a binary file object."""
+    _, plt = _mpl()
+    V = np.asarray(vertices, float)
+    Fc = np.asarray(faces)
+    vs = np.asarray(analysis.vertex_stress, float)
+    vc = getattr(analysis, "vertex_culled", None)
+    fcull = None if vc is None else np.asarray(vc, bool)[Fc].all(1)
+    rgba = stress_colors(vs[Fc].mean(1), allowable, fcull)
+    up = _up_axis(V)
+    others = sorted((a for a in range(3) if a != up), key=lambda a: -float(np.ptp(V[:, a])))
+    fig = plt.figure(figsize=(6.0, 3.0))
+    ax1 = fig.add_axes((0.01, 0.01, 0.48, 0.86))
+    ax2 = fig.add_axes((0.51, 0.01, 0.48, 0.86))
+    _view(ax1, V, Fc, rgba, [others[0], up], others[1], False, "side view")
+    _view(ax2, V, Fc, rgba, [others[1], up], others[0], True, "front view")
+    for ax in (ax1, ax2):
+        ax.set_axis_off()
+    if title:
+        fig.suptitle(title, fontsize=8, y=0.98)
+    fig.savefig(path, dpi=dpi, format="png")
     plt.close(fig)
 
 

@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from . import doubt
+
 #: bump when a key is renamed, removed or changes meaning (adding keys keeps the version)
 SCHEMA_VERSION = 1
 UNITS = {"length": "mm", "force": "N", "stress": "MPa"}
@@ -88,8 +90,18 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
 
 
 def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
-    return bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale,
+    rows = bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale,
                       getattr(a, "stress_ratio", None), getattr(a, "across_layers", None))
+    # skipped / doubtful sections per bone (osteon.doubt): a bone with too many skipped
+    # sections is "not analysed", never "ok"
+    per_bone = doubt.bone_doubt(a, len(bone_names))
+    for r in rows:
+        d = per_bone[r["index"]]
+        r["skipped_sections"] = d["skipped_sections"]
+        r["doubtful_sections"] = d["doubtful_sections"]
+        r["status"] = ("not analysed" if d["not_analysed"] else "weak" if r["weak"] else "ok")
+        r["reason"] = d["reason"] or None
+    return rows
 
 
 def section_rows(a, bone_names) -> list[dict]:
@@ -123,8 +135,43 @@ def section_rows(a, bone_names) -> list[dict]:
             "stress_ratio": finite(ratio[i]) if ratio is not None else None,
             "limit": None if across is None else
             ("across layers" if across[i] else "along layers"),
+            "thickness_mm": finite(a.section_thickness[i])
+            if hasattr(a, "section_thickness") else None,
+            "flags": a.flag_names(i) if hasattr(a, "flag_names") else [],
+            "reasons": a.flag_reasons(i) if hasattr(a, "flag_reasons") else [],
         })
     return rows
+
+
+def printability(a, bone_names) -> dict:
+    """What the print cannot do, apart from overloading: ``too_thin`` (sections thinner than the
+    minimum printable thickness: bone, position mm, thickness mm, reason), ``unreliable``
+    (sections no material could be tied to) and ``loose_pieces`` (vertex count and the first
+    vertex index of each shell that would fall off; the vertex lists are in
+    ``Analysis.loose_pieces``)."""
+    out = {"too_thin": [], "unreliable": [], "loose_pieces": []}
+    flags = getattr(a, "section_flags", None)
+    if flags is None or not hasattr(a, "flag_reasons"):
+        return out
+    from . import SECTION_FLAGS
+
+    for i in np.flatnonzero(flags & SECTION_FLAGS["too_thin"]):
+        b = int(a.section_bone[i])
+        out["too_thin"].append({
+            "bone": bone_names[b], "section": int(i), "param_mm": finite(a.section_param[i]),
+            "thickness_mm": finite(a.section_thickness[i]),
+            "reason": next(r for n, r in zip(a.flag_names(i), a.flag_reasons(i))
+                           if n == "too_thin")})
+    for i in np.flatnonzero(flags & SECTION_FLAGS["unreliable"]):
+        b = int(a.section_bone[i])
+        out["unreliable"].append({"bone": bone_names[b], "section": int(i),
+                                  "param_mm": finite(a.section_param[i])})
+    for piece in getattr(a, "loose_pieces", []):
+        piece = np.asarray(piece)
+        out["loose_pieces"].append({"vertices": len(piece),
+                                    "first_vertex": int(piece[0]) if len(piece) else None,
+                                    "vertex_indices": [int(v) for v in piece]})
+    return out
 
 
 def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
@@ -205,6 +252,27 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         "bone_scale_xz": None,
         "warnings": [],
     }
+    # Printability, reported apart from the overloaded sections (issue 12).
+    printable = printability(shown, bone_names)
+    report["too_thin_sections"] = printable["too_thin"]
+    report["unreliable_sections"] = printable["unreliable"]
+    report["loose_pieces"] = printable["loose_pieces"]
+    # what the numbers above do not cover (osteon.doubt): skipped sections, bones not analysed,
+    # a maximum resting on a doubtful section
+    d = doubt.section_doubt(shown)
+    report["skipped_sections"] = int(np.count_nonzero(d["skipped"]))
+    report["doubtful_sections"] = int(np.count_nonzero(d["doubtful"]))
+    report["skipped_by_flag"] = d["skipped_by_flag"]
+    report["flagged_sections"] = d["by_flag"]
+    report["not_analysed_share"] = doubt.NOT_ANALYSED_SHARE
+    report["not_analysed_bones"] = [
+        {"bone": r["bone"], "sections": r["sections"], "skipped_sections": r["skipped_sections"],
+         "reason": r["reason"]} for r in rows if r["status"] == "not analysed"]
+    report["max_stress_doubt"] = doubt.worst_section_doubt(shown)
+    report["verdict"] = ("weak" if any(r["weak"] for r in rows) else
+                         "not analysed" if report["not_analysed_bones"] or (
+                             report["sections"] and report["max_stress_mpa"] is None) else "ok")
+    report["doubt"] = doubt.summary_text(report) or None
     if correction is not None:
         rounds = correction.rounds
         sx = getattr(correction, "bone_scale_x", None)

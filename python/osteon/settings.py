@@ -131,6 +131,14 @@ def held_bone_index(held_bone, bone_names) -> int | None:
     return names.index(held_bone)
 
 
+def min_thickness_mm(settings: Settings) -> float:
+    """Minimum printable thickness in mm: the material preset's (0.8 mm for a custom one)."""
+    try:
+        return float(materials.get(settings.material).min_thickness_mm)
+    except (KeyError, ValueError):
+        return 0.8
+
+
 def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> dict:
     """The keyword arguments of ``osteon.analyze`` / ``Analyzer`` (``force``,
     ``allowable_stress``, ``interval``, ``root``), plus ``max_scale``, ``max_rounds``,
@@ -144,6 +152,7 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
         "build_direction": _direction(settings.build_direction),
         "layer_strength_ratio": _positive(settings.layer_ratio(), "layer strength ratio",
                                           "(layer / in-plane strength)"),
+        "min_thickness": min_thickness_mm(settings),
     }
     if correct:
         if not (float(settings.max_scale) >= 1.0):

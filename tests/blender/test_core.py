@@ -62,8 +62,8 @@ def test_report_has_spec_keys_and_is_json():
                             analysis=a, allowable_mpa=30.0, settings={}, mm_per_unit=2.0)
     for key in ("max_stress_mpa", "allowable_stress_mpa", "weak_bones", "sections", "converged"):
         assert key in rep
-    assert rep["weak_bones"] == [{"bone": "b1", "max_stress_mpa": 45.0, "ratio": 1.5, "scale": 1.0,
-                                  "weak": True}]
+    assert rep["weak_bones"] == [{"bone": "b1", "max_stress_mpa": 45.0, "ratio": 1.5,
+                                  "limit": "along layers", "scale": 1.0, "weak": True}]
     assert rep["sections"] == 4 and rep["converged"] is False
     assert [b["bone"] for b in rep["bones"]] == ["b1", "b0", "b2"]
     json.loads(json.dumps(rep, allow_nan=False))
@@ -79,7 +79,7 @@ def test_report_after_correction():
                             settings={}, mm_per_unit=1.0, correction=fix)
     assert rep["converged"] is True
     assert rep["weak_bones"] == [{"bone": "x", "max_stress_mpa": 29.0, "ratio": 29.0 / 30.0,
-                                  "scale": 1.2, "weak": False, "max_stress_before_mpa": 45.0}]
+                                  "limit": "along layers", "scale": 1.2, "weak": False, "max_stress_before_mpa": 45.0}]
     assert rep["correction"]["rounds"] == 1
     assert rep["correction"]["bone_scale"] == {"x": 1.2}
     assert rep["max_stress_mpa"] == 29.0 and rep["correction"]["max_stress_before_mpa"] == 45.0

@@ -94,8 +94,10 @@ def test_correction_follows_the_ratio():
     up, flat = inner & (a.section_bone == 1), inner & (a.section_bone == 0)
     assert np.nanmax(a.stress[flat]) > np.nanmax(a.stress[up])          # more stress lying...
     assert np.nanmax(a.stress_ratio[up]) > np.nanmax(a.stress_ratio[flat])  # ...weaker upright
-    # Allowable so that the upright arm's worst ratio is 1.25 and all else stays below 1.
-    allow = X * np.nanmax(a.stress_ratio[up]) / 1.25
+    # Allowable so that the upright arm's worst ratio is 1.1 and all else stays below 1 (the
+    # printed union: the upright arm's plane at z = 2 mm also cuts the lying arm, 442 mm², so its
+    # worst ratio is the next section's and the margin over the lying arm is smaller than 1.25).
+    allow = X * np.nanmax(a.stress_ratio[up]) / 1.1
     fix = osteon.correct(v, f, sk, w, force=5.0, allowable_stress=allow, layer_strength_ratio=0.4)
     before = fix.before
     assert before.weak[up].any() and not before.weak[flat].any()

@@ -78,10 +78,13 @@ def test_isotropic_material_is_the_same_in_every_direction(l_rod):
 def test_l_rod_best_direction_is_across_both_arms(l_rod):
     _, a = l_rod
     o = best_orientation(a, layer_strength_ratio=0.5, samples=2000)
-    # The most stressed sections (at the hold, normals along x) must lie in the layer plane:
-    # then the worst ratio is the isotropic one, peak / X (y, or a tilt toward z where the
-    # vertical arm's low stress still fits under its reduced allowable).
-    assert abs(o.direction[0]) < 1e-3
+    # The most stressed section must lie in the layer plane (its normal across the build
+    # direction): then the worst ratio is the isotropic one, peak / X. With sections as printed
+    # (issue 12: the union of the two capped cylinders) the peak is the 45° joint section, the
+    # half ellipse the corner really has (35.4 mm²), not the hold; the hold's lower stress leaves
+    # room for a tilt.
+    peak = int(np.nanargmax(a.stress))
+    assert abs(o.direction @ a.section_normal[peak]) < 1e-3
     assert o.worst_ratio == pytest.approx(np.nanmax(a.stress) / X, rel=1e-6)
     # Standing (+Z): the vertical arm's sections pull across the layers.
     up = np.isfinite(a.stress) & (a.section_bone == 1) & (a.section_kind == 0)

@@ -103,7 +103,8 @@ import pytest
 from scipy import sparse
 from shapes import cylinder_along, merge, revolve
 
-SKIPPED = osteon.SECTION_FLAGS["empty"] | osteon.SECTION_FLAGS["degenerate"]
+SKIPPED = (osteon.SECTION_FLAGS["empty"] | osteon.SECTION_FLAGS["degenerate"]
+           | osteon.SECTION_FLAGS["unreliable"])
 
 
 def flag_set(res: osteon.Analysis) -> set[str]:
@@ -417,9 +418,11 @@ def test_self_intersecting_shells(clean):
     res = osteon.analyze(v2, f2, sk)
     assert_well_formed(res, len(v2))
     interior = res.section_kind == 0
-    assert has_flag(res, "hollow")[interior].all()
-    # The section is one shell (not the union): the same area as the single bar.
-    np.testing.assert_allclose(res.section_area[interior], ref.section_area[interior], rtol=1e-9)
+    assert not has_flag(res, "hollow")[interior].any()
+    # The section is the union of the shells, as a slicer prints it (issue 12): more than one
+    # bar, less than two (exact union areas: tests/python/test_printed_sections.py).
+    a, one = res.section_area[interior], ref.section_area[interior]
+    assert (a > 1.02 * one).all() and (a < 2 * one).all()
 
 
 # --- skeleton ------------------------------------------------------------------------------------
@@ -682,9 +685,9 @@ def test_extreme_scales(clean, scale):
     """Geometric scaling by s: area s², modulus s³, moment arm s, moment s, stress 1/s²."""
     v, f, _, _ = clean
     sk = off_grid_bones()
-    ref = osteon.analyze(v, f, sk)
+    ref = osteon.analyze(v, f, sk, min_thickness=0)
     assert (ref.section_flags == 0).all()
-    res = osteon.analyze(v * scale, f, sk.scaled(scale), interval=2.0 * scale)
+    res = osteon.analyze(v * scale, f, sk.scaled(scale), interval=2.0 * scale, min_thickness=0)
     assert_well_formed(res, len(v))
     assert res.num_sections == ref.num_sections
     np.testing.assert_array_equal(res.section_flags, ref.section_flags)
@@ -701,7 +704,7 @@ def test_extreme_scale_planes_through_vertices(clean):
     their cut when the face grid rounded a cell box below the plane."""
     v, f, sk, ref = clean  # bones on integers: planes every 2 mm through the 1 mm vertex rings
     s = 1e-6
-    res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s)
+    res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s, min_thickness=0)
     np.testing.assert_array_equal(res.section_flags, ref.section_flags)
     np.testing.assert_allclose(res.stress, ref.stress / s**2, rtol=1e-9)
 
@@ -709,7 +712,7 @@ def test_extreme_scale_planes_through_vertices(clean):
 def test_overflowing_coordinates_are_flagged(clean):
     v, f, sk, _ = clean
     s = 1e80  # J ~ r^4 overflows to inf
-    res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s)
+    res = osteon.analyze(v * s, f, sk.scaled(s), interval=2.0 * s, min_thickness=0)
     assert_well_formed(res, len(v))
     assert has_flag(res, "degenerate").all()
 

@@ -1,4 +1,5 @@
-"""Operators: osteon.analyze, osteon.correct, osteon.reset, osteon.apply, osteon.select_bone."""
+"""Operators: osteon.analyze, osteon.correct, osteon.reset, osteon.apply, osteon.select_bone,
+osteon.make_skeleton."""
 
 from .analyze import OSTEON_OT_analyze
 from .apply import OSTEON_OT_apply
@@ -6,6 +7,11 @@ from .correct import OSTEON_OT_correct
 from .orientation import classes as _orientation_classes
 from .reset import OSTEON_OT_reset
 from .select_bone import OSTEON_OT_select_bone
+from .skeleton import OSTEON_OT_make_skeleton
 
 classes = (OSTEON_OT_analyze, OSTEON_OT_correct, OSTEON_OT_reset, OSTEON_OT_apply,
+<<<<<<< HEAD
            OSTEON_OT_select_bone) + _orientation_classes
+=======
+           OSTEON_OT_select_bone, OSTEON_OT_make_skeleton)
+>>>>>>> main

@@ -3,12 +3,21 @@
 import bpy
 
 from .. import bridge, core
+<<<<<<< HEAD
 from . import print_panel
+=======
+from . import doubt_ui
+>>>>>>> main
 
 
 class OSTEON_UL_weak_bones(bpy.types.UIList):
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index):
         row = layout.row(align=True)
+        if item.status == "not analysed":  # osteon.doubt: never shown as safe
+            row.label(text=item.name, icon="QUESTION")
+            row.label(text="not analysed")
+            row.label(text=item.reason)
+            return
         row.label(text=item.name, icon="ERROR" if item.weak else "CHECKMARK")
         row.label(text=f"{item.max_stress_mpa:.1f} MPa")
         row.label(text=f"x{item.ratio:.2f}")
@@ -51,6 +60,8 @@ class OSTEON_PT_main(bpy.types.Panel):
             col.prop_search(s, "held_bone", arm.data, "bones")
         else:
             col.prop(s, "held_bone")
+        if ob is not None and ob.type == "MESH" and arm is None:
+            layout.operator("osteon.make_skeleton", icon="ARMATURE_DATA")
         row = layout.row(align=True)
         row.scale_y = 1.3
         row.operator("osteon.analyze", icon="VIEWZOOM")
@@ -65,10 +76,11 @@ class OSTEON_PT_main(bpy.types.Panel):
             box.label(text=f"{s.result_object}: max {s.max_stress_mpa:.1f} / "
                       f"{s.allowable_mpa:.1f} MPa")
             box.label(text=f"{s.sections} sections, {s.weak_sections} weak")
+            doubt_ui.draw_doubt(box, s)
             if len(s.weak_bones):
                 box.template_list("OSTEON_UL_weak_bones", "", s, "weak_bones", s,
                                   "weak_bones_index", rows=4)
-            else:
+            elif s.verdict == "ok":
                 box.label(text="No weak bones", icon="CHECKMARK")
             if arm is not None and bridge.has_saved_pose(arm):
                 box.operator("osteon.apply", icon="CHECKMARK")

@@ -44,8 +44,14 @@ class OsteonBoneResult(bpy.types.PropertyGroup):
     ratio: FloatProperty(name="Stress ratio", description="Max stress / allowable stress "
                          "(> 1 = weak)")
     weak: BoolProperty(name="Weak", description="Stress above the allowable stress now")
+<<<<<<< HEAD
     limit: StringProperty(name="Limit", description="Which strength governs the worst section: "
                           "'across layers' or 'along layers'")
+=======
+    status: StringProperty(name="Status", description="weak, ok or not analysed (too many of "
+                           "the bone's sections could not be cut)")
+    reason: StringProperty(name="Reason", description="Why sections were skipped or doubtful")
+>>>>>>> main
     scale: FloatProperty(name="Scale", default=1.0, description="Cross-section scale applied by "
                          "Correct (1 = unchanged)")
 
@@ -97,6 +103,10 @@ class OsteonSettings(bpy.types.PropertyGroup):
     sections: IntProperty(name="Sections")
     weak_sections: IntProperty(name="Weak sections")
     converged: BoolProperty(name="Converged")
+    skipped_sections: IntProperty(name="Skipped sections", description="Sections that could "
+                                  "not be cut (open mesh, nothing cut): no stress there")
+    doubt: StringProperty(name="Doubt", description="What the result does not cover")
+    verdict: StringProperty(name="Verdict", description="ok, weak or not analysed")
 
 
 classes = (OsteonBoneResult, OsteonSettings)

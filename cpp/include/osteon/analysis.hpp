@@ -29,6 +29,7 @@ struct AnalysisOptions {
   /// between its normal and this direction (osteon/layers.hpp, docs/printing.md).
   Vec3 build_direction = Vec3(0, 0, 1);
   double layer_strength_ratio = 1.0;  ///< layer / in-plane strength; allowable_stress is in-plane
+  double min_thickness = 0.8;         ///< thinner sections (mm) are flagged too_thin; 0 = no check
 };
 
 /// Where a section sits on its bone.
@@ -52,13 +53,14 @@ struct AnalysisResult {
   std::vector<Vec3>
       section_thin_axis;               ///< S unit in-plane direction the section is thinnest across
   std::vector<double> section_aspect;  ///< S width / thickness (sqrt of J's eigenvalue ratio)
-  std::vector<double> moment_arm;      ///< S distance centroid -> load point d, mm
-  std::vector<double> moment;          ///< S bending moment M = F d, N mm
-  std::vector<double> stress;          ///< S peak bending stress M / W, MPa (NaN when skipped)
-  std::vector<std::uint8_t> culled;    ///< S W > safe modulus: safe for sure (drawn grey)
-  std::vector<std::uint8_t> weak;      ///< S stress > section_allowable
-  std::vector<double> section_allowable;     ///< S [sigma](theta) for the build direction, MPa
-  std::vector<double> stress_ratio;          ///< S stress / section_allowable (NaN when skipped)
+  std::vector<double> section_thickness;  ///< S minimum width of the region, mm (NaN: skipped)
+  std::vector<double> moment_arm;         ///< S distance centroid -> load point d, mm
+  std::vector<double> moment;             ///< S bending moment M = F d, N mm
+  std::vector<double> stress;  ///< S peak bending stress M / W, MPa (NaN when skipped/unreliable)
+  std::vector<std::uint8_t> culled;       ///< S W > safe modulus: safe for sure (drawn grey)
+  std::vector<std::uint8_t> weak;         ///< S stress > section_allowable
+  std::vector<double> section_allowable;  ///< S [sigma](theta) for the build direction, MPa
+  std::vector<double> stress_ratio;  ///< S stress / section_allowable (NaN when skipped/unreliable)
   std::vector<std::uint8_t> across_layers;   ///< S the layer (Z) strength governs the allowable
   std::vector<std::uint32_t> section_flags;  ///< S SectionFlag bits
   double max_moment = 0.0;                   ///< M_gmax, N mm
@@ -80,6 +82,9 @@ struct AnalysisResult {
   std::vector<Vec3> outline_points;                 ///< P loop points, mm
   std::vector<std::int64_t> outline_loop_start;     ///< L+1 first point of each loop
   std::vector<std::int64_t> outline_section_start;  ///< S+1 first loop of each section
+  /// Vertex indices of each loose piece: a shell that neither touches nor overlaps the held piece
+  /// (it would fall off the print); its sections are still computed like any other.
+  std::vector<std::vector<std::int32_t>> loose_pieces;
 };
 
 /// Throws std::invalid_argument when an option is out of range (force, stress, interval <= 0...).

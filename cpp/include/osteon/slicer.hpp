@@ -16,11 +16,13 @@ namespace osteon {
 enum SectionFlag : std::uint32_t {
   kFlagGapClosed = 1u << 0,    ///< open polylines were joined across gaps <= the gap tolerance
   kFlagOpen = 1u << 1,         ///< an open polyline touches this section: it may be incomplete
-  kFlagOutside = 1u << 2,      ///< the bone point lies in no loop (bone outside): nearest loop used
-  kFlagHollow = 1u << 3,       ///< the bone point lies in a hole: the whole wall around it is used
+  kFlagOutside = 1u << 2,      ///< the bone point lies in no material: the bone's own region used
+  kFlagHollow = 1u << 3,       ///< the bone point lies in a real hole: the wall around it is used
   kFlagEmpty = 1u << 4,        ///< nothing usable was cut: section skipped (no stress)
   kFlagDegenerate = 1u << 5,   ///< zero area or singular second moment: section skipped
   kFlagNonManifold = 1u << 6,  ///< non-manifold edges were cut (more than two faces on an edge)
+  kFlagUnreliable = 1u << 7,   ///< bone outside and no region tied to it: no number, left out
+  kFlagTooThin = 1u << 8,  ///< thinner than the printable minimum: reported apart, not corrected
 };
 
 /// An orthonormal plane frame: origin, unit normal and in-plane axes u, v (u x v = normal).
@@ -41,7 +43,8 @@ struct PlaneFrame {
 /// One triangle's cut: two endpoints, each on a mesh edge identified by its vertex pair.
 struct CutSegment {
   std::uint64_t edge[2];  ///< (min vertex << 32) | max vertex of the edge each endpoint lies on
-  Vec2 point[2];          ///< endpoints in plane coordinates, mm
+  Vec2 point[2];  ///< endpoints in plane coordinates, mm; point[0] -> point[1] keeps the face's
+                  ///< orientation (outward-facing surfaces give counter-clockwise loops)
 };
 
 /// The closed loops (and leftover open polylines) of one plane cut, in plane coordinates.
@@ -160,8 +163,9 @@ std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, c
 /// (mm).
 PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tolerance);
 
-/// The material region around the plane origin (the bone point), following SPEC §3: the deepest
-/// outer boundary containing the origin with the loops directly inside it as holes.
+/// The material region around the plane origin (the bone point), SPEC §3: select_region
+/// (regions.hpp) without a bone domain (the non-zero-winding union of the loops; a bone outside the
+/// mesh gets the nearest region, flagged kFlagOutside).
 SectionGeometry select_section(const PlaneCut& cut);
 
 /// Convenience: cut, assemble and select the section of one plane (origin = bone point).

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import doubt
 from . import common, orient
 
 
@@ -59,8 +60,12 @@ def cmd_analyze(args, out):
             "culled (safe for sure)",
             file=out,
         )
+        doubt_text = doubt.analysis_text(a, model.bone_names)
+        if doubt_text:
+            print(f"NOT A CLEAN RESULT: {doubt_text}", file=out)
         print(common.format_table(common.bone_table(a, args.top), allowable,
                                   layer_ratio=a.layer_strength_ratio), file=out)
+        _print_printability(rep, out)
         if best is not None:
             print("best print orientations:", file=out)
             print(orient.orientation_table(best), file=out)
@@ -68,3 +73,20 @@ def cmd_analyze(args, out):
                 print(f"model turned to the best orientation written to {args.orient_out}",
                       file=out)
     return 0
+
+
+def _print_printability(rep, out):
+    """Too-thin sections, unreliable sections and loose pieces, apart from the overloaded."""
+    thin = rep.get("too_thin_sections", [])
+    if thin:
+        print(f"{len(thin)} section(s) too thin to print (not corrected by scaling):", file=out)
+        for t in thin[:10]:
+            print(f"  {t['bone']} at {t['param_mm'] or 0:.1f} mm: {t['reason']}", file=out)
+    doubt = rep.get("unreliable_sections", [])
+    if doubt:
+        print(f"{len(doubt)} unreliable section(s) (bone outside the mesh, no part of it there): "
+              "left out of the results", file=out)
+    for k, piece in enumerate(rep.get("loose_pieces", [])):
+        print(f"loose piece {k + 1}: {piece['vertices']} vertices (from vertex "
+              f"{piece['first_vertex']}) touch nothing held: it would fall off the print",
+              file=out)

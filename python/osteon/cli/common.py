@@ -94,10 +94,45 @@ class Progress:
             self.bar.close()
 
 
+def wants_auto_skeleton(args) -> bool:
+    """``--skeleton auto``, or a mesh file with no skeleton given and no sidecar next to it."""
+    if args.skeleton == "auto":
+        return True
+    if args.skeleton is not None or args.weights is not None:
+        return False
+    from ..io.loader import GLTF_EXTENSIONS, _sidecar
+
+    p = Path(args.model)
+    return (p.is_file() and p.suffix.lower() not in GLTF_EXTENSIONS
+            and _sidecar(p, [".tgf", "_rig.txt"]) is None)
+
+
+def auto_model_of(args, axis, root="centre"):
+    """The mesh at its printed size (mm) with an :func:`osteon.auto_skeleton` rig; says so on
+    stderr and in the model's notes."""
+    from ..autoskeleton import auto_skeleton
+    from ..io import read_mesh
+    from ..io.model import RiggedModel
+
+    v, f = read_mesh(args.model)
+    m = RiggedModel(v, f, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int64), [],
+                    source=str(args.model)).scaled_to(args.height_mm, axis)
+    t = time.perf_counter()
+    sk, w = auto_skeleton(m.vertices, m.faces, root=root)
+    note = (f"skeleton: made by osteon.auto_skeleton ({sk.num_bones} bones in "
+            f"{time.perf_counter() - t:.1f} s); no skeleton file was given or found")
+    if not getattr(args, "quiet", False):
+        print(f"osteon: {Path(args.model).name}: {note}", file=sys.stderr)
+    return replace(m, heads=sk.heads, tails=sk.tails, parents=sk.parents.astype(np.int64),
+                   bone_names=list(sk.names), weights=w, notes=[*m.notes, note])
+
+
 def load_model_of(args):
     from ..io import load_model
 
     axis = None if args.axis == "longest" else args.axis
+    if wants_auto_skeleton(args):
+        return auto_model_of(args, axis)
     return load_model(
         args.model,
         skeleton=args.skeleton,
@@ -208,4 +243,5 @@ def save_png(args, model, analysis, allowable, before=None, vertices=None, marks
         before=before,
         marks=marks,
         orientation=orientation,
+        bones=any("auto_skeleton" in n for n in model.notes),
     )

@@ -30,7 +30,8 @@ def _add_common(p: argparse.ArgumentParser):
     g.add_argument(
         "--skeleton",
         metavar="FILE",
-        help="skeleton: libigl TGF or RigNet _rig.txt (default: sidecar next to MODEL)",
+        help="skeleton: libigl TGF or RigNet _rig.txt, or 'auto' (osteon.auto_skeleton); "
+        "default: sidecar next to MODEL, else auto",
     )
     g.add_argument(
         "--weights",
@@ -226,6 +227,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="threads for gmsh and CalculiX (default 2)",
     )
+    from .skeleton import add_parser as _add_skeleton
+
+    _add_skeleton(sub)
+    from ..batch.cli import add_batch_parser
+
+    add_batch_parser(sub)
     return p
 
 

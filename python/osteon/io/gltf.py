@@ -144,6 +144,31 @@ def weld(vertices, faces, rel_tol=1e-9):
 
 def read_gltf(path):
     """Read a skinned glTF/GLB → ``(vertices, faces, heads, tails, parents, names, weights)``."""
+    j = read_gltf_joints(path)
+    V, F, rows, jidx, vals = j["vertices"], j["faces"], j["skin_rows"], j["skin_joints"], \
+        j["skin_values"]
+    jpos, jparent, names = j["positions"], j["parent"], j["names"]
+    heads, tails, parents, bnames, targets = bones_from_joint_tree(jpos, jparent, names)
+    if len(heads) == 0:
+        raise ValueError(f"{path}: the glTF skin has no bones of non-zero length")
+    # weld: weights of merged vertices are averaged (they are equal in valid files)
+    Vw, Fw, o2n = weld(V, F)
+    W = joint_weights_to_bones(V, rows, jidx, vals, targets, heads, tails, names)
+    import scipy.sparse as sp
+
+    from .model import drop_unweighted_roots, normalize_rows
+
+    M = sp.csr_matrix((np.ones(len(V)), (o2n, np.arange(len(V)))), shape=(len(Vw), len(V)))
+    W = normalize_rows(M @ W)
+    heads, tails, parents, bnames, W, _ = drop_unweighted_roots(heads, tails, parents, bnames, W)
+    return Vw, Fw, heads, tails, parents, bnames, W
+
+
+def read_gltf_joints(path) -> dict:
+    """The joint rig of a skinned glTF/GLB as stored: ``vertices`` (V, 3), ``faces`` (F, 3)
+    (not welded), joint ``names``, ``positions`` (J, 3) in bind space, ``parent`` (J,) and the
+    skin as triplets ``skin_rows``, ``skin_joints``, ``skin_values`` (what Blender's importer
+    turns into one bone and one vertex group per joint)."""
     r = _Reader(path)
     g = r.g
     if not g.skins:
@@ -217,17 +242,5 @@ def read_gltf(path):
         if p is not None:
             jparent[k] = jset[p]
     names = [g.nodes[n].name or f"joint_{k}" for k, n in enumerate(joints)]
-    heads, tails, parents, bnames, targets = bones_from_joint_tree(jpos, jparent, names)
-    if len(heads) == 0:
-        raise ValueError(f"{r.path}: the glTF skin has no bones of non-zero length")
-    # weld: weights of merged vertices are averaged (they are equal in valid files)
-    Vw, Fw, o2n = weld(V, F)
-    W = joint_weights_to_bones(V, rows, jidx, vals, targets, heads, tails, names)
-    import scipy.sparse as sp
-
-    from .model import drop_unweighted_roots, normalize_rows
-
-    M = sp.csr_matrix((np.ones(len(V)), (o2n, np.arange(len(V)))), shape=(len(Vw), len(V)))
-    W = normalize_rows(M @ W)
-    heads, tails, parents, bnames, W, _ = drop_unweighted_roots(heads, tails, parents, bnames, W)
-    return Vw, Fw, heads, tails, parents, bnames, W
+    return {"vertices": V, "faces": F, "names": names, "positions": jpos, "parent": jparent,
+            "skin_rows": rows, "skin_joints": jidx, "skin_values": vals}

@@ -1,0 +1,57 @@
+// Section material as a slicer prints it (SPEC §3): the non-zero-winding union of a plane cut's
+// oriented loops, and the region around the bone point in it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "osteon/section.hpp"
+#include "osteon/slicer.hpp"
+
+namespace osteon {
+
+/// Which faces belong to the section's bone, to tie a region to a bone outside the mesh: a cut
+/// segment belongs to `bone` when at least two of the three vertices of its triangle (found from
+/// the two mesh edges it crosses) have vertex_bone == bone.
+struct BoneDomain {
+  const std::vector<CutSegment>* segments = nullptr;  ///< the plane's cut segments
+  const int* vertex_bone = nullptr;                   ///< #V bone of each vertex
+  int bone = -1;                                      ///< the section's bone
+};
+
+/// Material of a set of closed loops (plane coordinates, mm, orientation from the faces): the
+/// union of the loops by the non-zero winding rule (Clipper2, 64-bit integer coordinates with a
+/// power-of-two scale that resolves ~1e-12 of the loops' extent), as polygons with holes. An
+/// inner shell inside an outer one adds nothing, overlapping shells merge, an inward-facing
+/// (reversed) inner loop is a hole.
+std::vector<SectionPolygon> material_regions(const std::vector<std::vector<Vec2>>& loops);
+
+/// The section region of a plane cut around the plane origin (the bone point), SPEC §3: the
+/// material region (outer boundary + its holes) of the non-zero-winding union that contains the
+/// origin; if the origin lies in a real hole, the region around that hole (flag kFlagHollow).
+/// If the origin lies in no material (flag kFlagOutside): with `domain`, the region holding the
+/// greatest length of the bone's own cut segments, or none (kFlagUnreliable, found = false) when
+/// no region holds any; without `domain`, the nearest region. `containing` counts the loops
+/// around the origin (any orientation), for parity checks.
+SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain = nullptr);
+
+/// Thickness of a region (mm): its minimum width, i.e. the smallest distance between two parallel
+/// lines enclosing the outer boundary (the narrowest direction of its convex hull). A solid round
+/// section gives its diameter, a b x t plate t; holes are not subtracted (a tube gives its outer
+/// diameter). 0 for fewer than three points.
+double region_thickness(const SectionPolygon& polygon);
+
+}  // namespace osteon
+
+namespace osteon {
+
+/// Loose pieces of a mesh: its shells (faces connected by shared vertices or by vertices at
+/// exactly the same position) that neither touch nor overlap the held piece, directly or through
+/// other attached shells. The held piece is the shell with the most vertices of `held_bone`
+/// (vertex_bone, #V), else the largest. Two shells overlap when a vertex of the smaller one (16
+/// sampled) lies inside the larger (ray parity). Returns the vertex indices of each loose piece.
+std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
+                                                    const std::vector<int>& vertex_bone,
+                                                    int held_bone);
+
+}  // namespace osteon

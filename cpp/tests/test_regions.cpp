@@ -1,0 +1,254 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "osteon/analysis.hpp"
+#include "osteon/regions.hpp"
+#include "osteon/section.hpp"
+#include "osteon/slicer.hpp"
+#include "test_helpers.hpp"
+
+using namespace osteon;
+using osteon::testing::OwnedMesh;
+using osteon::testing::prism;
+using osteon::testing::rectangle;
+using osteon::testing::regular_polygon;
+
+namespace {
+
+// Appends mesh b (optionally with its faces reversed, i.e. facing inward) to a.
+void append(OwnedMesh& a, const OwnedMesh& b, bool reversed = false) {
+  const std::int32_t base = static_cast<std::int32_t>(a.v.size() / 3);
+  a.v.insert(a.v.end(), b.v.begin(), b.v.end());
+  for (std::size_t f = 0; f < b.f.size(); f += 3) {
+    if (reversed)
+      a.f.insert(a.f.end(), {base + b.f[f], base + b.f[f + 2], base + b.f[f + 1]});
+    else
+      a.f.insert(a.f.end(), {base + b.f[f], base + b.f[f + 1], base + b.f[f + 2]});
+  }
+}
+
+OwnedMesh shifted(OwnedMesh m, const Vec3& d) {
+  for (std::size_t i = 0; i < m.v.size(); i += 3)
+    for (int k = 0; k < 3; ++k) m.v[i + k] += d[k];
+  return m;
+}
+
+// Signed volume by the divergence theorem: > 0 when the faces face outward.
+double signed_volume(const OwnedMesh& m) {
+  double vol = 0;
+  for (std::size_t f = 0; f < m.f.size(); f += 3) {
+    const Vec3 a(&m.v[3 * m.f[f]]), b(&m.v[3 * m.f[f + 1]]), c(&m.v[3 * m.f[f + 2]]);
+    vol += a.dot(b.cross(c)) / 6;
+  }
+  return vol;
+}
+
+// The helper's prism faces inward; this one faces outward (positive volume).
+OwnedMesh outward_prism(const std::vector<Vec2>& poly, double length) {
+  OwnedMesh m;
+  append(m, prism(poly, length), true);
+  return m;
+}
+
+double polygon_area(const std::vector<Vec2>& p) { return std::abs(signed_area(p)); }
+
+// Sutherland-Hodgman: the intersection of two convex counter-clockwise polygons.
+std::vector<Vec2> clip_convex(std::vector<Vec2> subject, const std::vector<Vec2>& clip) {
+  for (std::size_t e = 0; e < clip.size(); ++e) {
+    const Vec2 a = clip[e], b = clip[(e + 1) % clip.size()];
+    auto side = [&](const Vec2& p) {
+      return (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
+    };
+    std::vector<Vec2> out;
+    for (std::size_t i = 0; i < subject.size(); ++i) {
+      const Vec2 p = subject[i], q = subject[(i + 1) % subject.size()];
+      const double sp = side(p), sq = side(q);
+      if (sp >= 0) out.push_back(p);
+      if ((sp >= 0) != (sq >= 0)) out.push_back(p + (sp / (sp - sq)) * (q - p));
+    }
+    subject = out;
+  }
+  return subject;
+}
+
+// Area, first and second moments (about the origin) of a polygon, by triangle fans: a different
+// formula from section.cpp's Green's-theorem sums.
+struct Moments {
+  double a = 0, sx = 0, sy = 0, xx = 0, yy = 0, xy = 0;
+};
+Moments moments(const std::vector<Vec2>& p) {
+  Moments m;
+  for (std::size_t i = 1; i + 1 < p.size(); ++i) {
+    const Vec2 v[3] = {p[0], p[i], p[i + 1]};
+    const double a =
+        0.5 * ((v[1] - v[0]).x() * (v[2] - v[0]).y() - (v[1] - v[0]).y() * (v[2] - v[0]).x());
+    // Exact for a triangle: integral of x^2 = a/6 (sum x_i^2 + sum_{i<j} x_i x_j), etc.
+    double sxx = 0, syy = 0, sxy = 0;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        const double w = r == c ? 2.0 : 1.0;
+        sxx += w * v[r].x() * v[c].x();
+        syy += w * v[r].y() * v[c].y();
+        sxy += w * v[r].x() * v[c].y();
+      }
+    m.a += a;
+    m.sx += a * (v[0].x() + v[1].x() + v[2].x()) / 3;
+    m.sy += a * (v[0].y() + v[1].y() + v[2].y()) / 3;
+    m.xx += a * sxx / 12;
+    m.yy += a * syy / 12;
+    m.xy += a * sxy / 12;
+  }
+  return m;
+}
+
+SectionGeometry cut_at(const OwnedMesh& m, double x, const BoneDomain* domain = nullptr,
+                       std::vector<CutSegment>* keep = nullptr) {
+  const PlaneFrame plane = PlaneFrame::make(Vec3(x, 0, 0), Vec3::UnitX());
+  std::vector<CutSegment> segs;
+  cut_mesh(m.view(), plane, segs, nullptr);
+  if (keep != nullptr) *keep = segs;
+  return select_region(assemble_loops(segs, 0.0), domain);
+}
+
+const double kArea64 = 0.5 * 64 * 25 * std::sin(2 * M_PI / 64);  // r = 5 64-gon, 78.41 mm^2
+
+}  // namespace
+
+TEST(Regions, LoopsKeepTheFacesOrientation) {
+  const auto m = outward_prism(regular_polygon(5, 64), 40);
+  ASSERT_GT(signed_volume(m), 0);  // outward-facing
+  const PlaneFrame plane = PlaneFrame::make(Vec3(13.7, 0, 0), Vec3::UnitX());
+  std::vector<CutSegment> segs;
+  cut_mesh(m.view(), plane, segs, nullptr);
+  const PlaneCut cut = assemble_loops(segs, 0.0);
+  ASSERT_EQ(cut.loops.size(), 1u);
+  EXPECT_NEAR(signed_area(cut.loops[0]), kArea64, 1e-9);  // counter-clockwise
+  OwnedMesh inward;
+  append(inward, m, true);
+  ASSERT_LT(signed_volume(inward), 0);
+  segs.clear();
+  cut_mesh(inward.view(), plane, segs, nullptr);
+  EXPECT_NEAR(signed_area(assemble_loops(segs, 0.0).loops.at(0)), -kArea64, 1e-9);
+}
+
+TEST(Regions, InnerShellAddsNothing) {
+  // An r = 2 closed cylinder inside an r = 5 one (an eye inside a head): the printed section is
+  // the outer 64-gon, 78.4 mm^2, not the 65.9 mm^2 ring an even-odd rule gives.
+  OwnedMesh m = outward_prism(regular_polygon(5, 64), 40);
+  append(m, outward_prism(regular_polygon(2, 64), 40));
+  const SectionGeometry g = cut_at(m, 20.3);
+  ASSERT_TRUE(g.found);
+  EXPECT_FALSE(g.flags & kFlagHollow);
+  EXPECT_EQ(g.containing, 2);
+  EXPECT_TRUE(g.polygon.holes.empty());
+  const SectionProperties p = section_properties(g.polygon);
+  EXPECT_NEAR(p.area, kArea64, 1e-9);
+  EXPECT_NEAR(p.area, 78.4137, 1e-4);
+  const SectionProperties alone = section_properties(SectionPolygon{regular_polygon(5, 64), {}});
+  EXPECT_NEAR(p.modulus, alone.modulus, 1e-9 * alone.modulus);
+}
+
+TEST(Regions, RealTubeKeepsItsHole) {
+  // The inner surface of a tube faces inward (into the bore): winding 0 there, a real hole.
+  OwnedMesh m = outward_prism(regular_polygon(5, 64), 40);
+  append(m, outward_prism(regular_polygon(2, 64), 40), true);
+  const SectionGeometry g = cut_at(m, 20.3);
+  ASSERT_TRUE(g.found);
+  EXPECT_TRUE(g.flags & kFlagHollow);  // the bone point is in the bore
+  ASSERT_EQ(g.polygon.holes.size(), 1u);
+  const double inner = 0.5 * 64 * 4 * std::sin(2 * M_PI / 64);
+  EXPECT_NEAR(section_properties(g.polygon).area, kArea64 - inner, 1e-9);
+}
+
+TEST(Regions, OverlappingCylindersGiveTheirUnion) {
+  // Two closed r = 5 cylinders 4 mm apart (a limb sunk into the body): the union.
+  const auto a = regular_polygon(5, 64);
+  std::vector<Vec2> b = a;
+  for (Vec2& p : b) p.x() += 4;  // plane u = world y
+  OwnedMesh m = outward_prism(a, 40);
+  append(m, shifted(outward_prism(a, 40), Vec3(0, 4, 0)));
+  const SectionGeometry g = cut_at(m, 20.3);
+  ASSERT_TRUE(g.found);
+  EXPECT_FALSE(g.flags & kFlagHollow);
+  EXPECT_TRUE(g.polygon.holes.empty());
+  const SectionProperties p = section_properties(g.polygon);
+  // Reference by inclusion-exclusion: M(A u B) = M(A) + M(B) - M(A n B), with A n B clipped by
+  // Sutherland-Hodgman and the moments from triangle fans.
+  const Moments ma = moments(a), mb = moments(b), mi = moments(clip_convex(a, b));
+  const double area = ma.a + mb.a - mi.a;
+  // Close to the two circles' union (the 117.5 mm^2): 2 pi r^2 minus the lens.
+  const double lens = 2 * 25 * std::acos(0.4) - 2 * std::sqrt(84.0);
+  EXPECT_NEAR(area, 2 * M_PI * 25 - lens, 0.2);
+  EXPECT_NEAR(p.area, area, 1e-9 * area);
+  const Vec2 c((ma.sx + mb.sx - mi.sx) / area, (ma.sy + mb.sy - mi.sy) / area);
+  EXPECT_NEAR((p.centroid - c).norm(), 0, 1e-9);
+  Mat2 j;
+  j << ma.xx + mb.xx - mi.xx - area * c.x() * c.x(), ma.xy + mb.xy - mi.xy - area * c.x() * c.y(),
+      ma.xy + mb.xy - mi.xy - area * c.x() * c.y(), ma.yy + mb.yy - mi.yy - area * c.y() * c.y();
+  EXPECT_NEAR((p.second_moment - j).norm(), 0, 1e-9 * j.norm());
+  // W = 1 / max |J^-1 (p - c)| over the union's extreme points: the vertices of A outside B and
+  // of B outside A (the farthest point of a convex function over a polygon is a hull vertex).
+  const Mat2 inv = j.inverse();
+  double worst = 0;
+  for (const Vec2& q : a)
+    if (!point_in_loop(b, q)) worst = std::max(worst, (inv * (q - c)).norm());
+  for (const Vec2& q : b)
+    if (!point_in_loop(a, q)) worst = std::max(worst, (inv * (q - c)).norm());
+  EXPECT_NEAR(p.modulus, 1 / worst, 1e-9 / worst);
+}
+
+TEST(Regions, SelfOverlapOfPlaneLoopsMerges) {
+  // Direct use of material_regions: two overlapping squares and a far one give two regions.
+  std::vector<Vec2> s1 = rectangle(4, 4), s2 = rectangle(4, 4), far = rectangle(2, 2);
+  for (Vec2& p : s2) p += Vec2(2, 0);
+  for (Vec2& p : far) p += Vec2(20, 0);
+  const auto regions = material_regions({s1, s2, far});
+  ASSERT_EQ(regions.size(), 2u);
+  double total = 0;
+  for (const auto& r : regions) total += polygon_area(r.outer);
+  EXPECT_NEAR(total, 24.0 + 4.0, 1e-9);
+}
+
+TEST(Regions, OutsideBoneTakesItsOwnDomainNotTheNearestSliver) {
+  // Bone 0 owns a thick r = 5 cylinder centred at y = -8; bone 1 owns a thin r = 0.5 rod at
+  // y = +2. The bone point (y = 0) lies in neither: the nearest loop is bone 1's rod, but bone
+  // 0's section is its own cylinder.
+  OwnedMesh m = shifted(outward_prism(regular_polygon(5, 32), 40), Vec3(0, -8, 0));
+  const std::size_t first = m.v.size() / 3;
+  append(m, shifted(outward_prism(regular_polygon(0.5, 16), 40), Vec3(0, 2, 0)));
+  std::vector<int> vertex_bone(m.v.size() / 3, 0);
+  std::fill(vertex_bone.begin() + first, vertex_bone.end(), 1);
+  std::vector<CutSegment> segs;
+  const SectionGeometry nearest = cut_at(m, 20.3, nullptr, &segs);
+  ASSERT_TRUE(nearest.found);
+  EXPECT_NEAR(section_properties(nearest.polygon).centroid.x(), 2.0, 1e-9);
+  const BoneDomain domain{&segs, vertex_bone.data(), 0};
+  const SectionGeometry own = cut_at(m, 20.3, &domain);
+  ASSERT_TRUE(own.found);
+  EXPECT_TRUE(own.flags & kFlagOutside);
+  EXPECT_FALSE(own.flags & kFlagUnreliable);
+  EXPECT_NEAR(section_properties(own.polygon).centroid.x(), -8.0, 1e-9);
+  // A bone that owns no face of this plane: nothing can be tied to it.
+  const BoneDomain none{&segs, vertex_bone.data(), 2};
+  const SectionGeometry doubt = cut_at(m, 20.3, &none);
+  EXPECT_FALSE(doubt.found);
+  EXPECT_TRUE(doubt.flags & kFlagUnreliable);
+}
+
+TEST(Regions, ThicknessIsTheMinimumWidth) {
+  const double d64 = 2 * 5 * std::cos(M_PI / 64);  // a regular 64-gon's width across flats
+  EXPECT_NEAR(region_thickness(SectionPolygon{regular_polygon(5, 64), {}}), d64, 1e-12);
+  EXPECT_NEAR(region_thickness(SectionPolygon{rectangle(30, 0.4), {}}), 0.4, 1e-12);
+  // A rotated plate: still its thickness.
+  std::vector<Vec2> plate = rectangle(30, 0.4);
+  const double t = 0.3;
+  for (Vec2& p : plate)
+    p = Vec2(std::cos(t) * p.x() - std::sin(t) * p.y(), std::sin(t) * p.x() + std::cos(t) * p.y());
+  EXPECT_NEAR(region_thickness(SectionPolygon{plate, {}}), 0.4, 1e-12);
+  // A triangle: its smallest height.
+  EXPECT_NEAR(region_thickness(SectionPolygon{{{0, 0}, {4, 0}, {0, 3}}, {}}), 12.0 / 5.0, 1e-12);
+  EXPECT_EQ(region_thickness(SectionPolygon{{{0, 0}, {1, 1}}, {}}), 0.0);
+}

@@ -1,0 +1,252 @@
+"""The output folder of a batch: per-model files, ``results.jsonl``, ``summary.csv`` and the
+``summary.html`` contact sheet.
+
+Layout of ``--out DIR``::
+
+    results.jsonl        one line per model, appended (and flushed) as each model finishes
+    summary.csv          model, faces, bones, max stress MPa, ratio, weak bones, flags, status, seconds
+    summary.html         contact sheet: stress picture + key numbers, weakest first, sortable
+    models/ID.json       the full report of each model (analyze --json schema + batch fields)
+    models/ID.png        its stress picture
+    models/ID_corrected.EXT   the corrected mesh (with correction on)
+
+A line in ``results.jsonl`` is written after the model's own files, so a line means the model is
+done; ``--resume`` skips the models it lists.
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import json
+import os
+from pathlib import Path
+
+from ..report import finite, to_json
+from .task import summary_line
+
+RESULTS = "results.jsonl"
+MODELS_DIR = "models"
+
+
+def _clean(x):
+    """JSON-safe copy: non-finite floats become None (the report's finite-number rule)."""
+    if isinstance(x, float):
+        return finite(x)
+    if isinstance(x, dict):
+        return {k: _clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_clean(v) for v in x]
+    return x
+
+
+def read_results(out) -> list[dict]:
+    """The complete lines of ``out/results.jsonl`` (a torn last line is ignored); the last line
+    of a model wins when it appears twice."""
+    path = Path(out) / RESULTS
+    if not path.is_file():
+        return []
+    by_model: dict[str, dict] = {}
+    with open(path, encoding="utf-8") as fh:
+        for line in fh:
+            if not line.endswith("\n"):
+                break  # torn by a kill in the middle of a write
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(rec, dict) and "model" in rec:
+                by_model[rec["model"]] = rec
+    return list(by_model.values())
+
+
+def repair_results(out) -> None:
+    """Cut a torn last line of ``results.jsonl`` (the run was killed while writing it)."""
+    path = Path(out) / RESULTS
+    if not path.is_file():
+        return
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        keep = data.rfind(b"\n") + 1
+        with open(path, "r+b") as fh:
+            fh.truncate(keep)
+
+
+class OutputWriter:
+    """Writes each finished model's files and its ``results.jsonl`` line."""
+
+    def __init__(self, out, resume: bool = False):
+        self.out = Path(out)
+        self.models = self.out / MODELS_DIR
+        self.models.mkdir(parents=True, exist_ok=True)
+        if resume:
+            repair_results(self.out)
+        mode = "a" if resume else "w"
+        self._fh = open(self.out / RESULTS, mode, encoding="utf-8")  # noqa: SIM115
+
+    def write(self, record: dict) -> dict:
+        """Write the model's files and append its line; returns the record without file bytes."""
+        files = record.pop("_files", None) or {}
+        for name, data in files.items():
+            (self.models / name).write_bytes(data)
+        rec = _clean(record)
+        if rec.get("status") == "ok":
+            rec["json"] = f"{MODELS_DIR}/{rec['id']}.json"
+            (self.models / f"{rec['id']}.json").write_text(to_json(rec), encoding="utf-8")
+        self._fh.write(json.dumps(summary_line(rec), allow_nan=False) + "\n")
+        self._fh.flush()
+        return rec
+
+    def close(self):
+        self._fh.close()
+
+
+CSV_COLUMNS = [
+    ("model", "model"),
+    ("faces", "faces"),
+    ("bones", "bone_count"),
+    ("max_stress_mpa", "max_stress_mpa"),
+    ("ratio", "stress_ratio"),
+    ("weak_bones", "weak_bones"),
+    ("flags", "flags"),
+    ("status", "status"),
+    ("seconds", "seconds"),
+]
+
+
+def _order(records):
+    """Weakest first (highest stress ratio); models without a ratio (skipped, failed) last."""
+    return sorted(
+        records,
+        key=lambda r: (r.get("stress_ratio") is None, -(r.get("stress_ratio") or 0.0), r.get("model", "")),
+    )
+
+
+def _weak_names(r) -> str:
+    return " ".join(w["bone"] for w in r.get("weak_bones") or [])
+
+
+def _status_text(r) -> str:
+    return r["status"] if not r.get("reason") else f"{r['status']}: {r['reason']}"
+
+
+def write_csv(out, records) -> Path:
+    path = Path(out) / "summary.csv"
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow([c for c, _ in CSV_COLUMNS])
+        for r in _order(records):
+            row = []
+            for col, key in CSV_COLUMNS:
+                v = r.get(key)
+                if col == "weak_bones":
+                    v = _weak_names(r)
+                elif col == "flags":
+                    v = ";".join(v or [])
+                elif col == "status":
+                    v = _status_text(r)
+                elif isinstance(v, float):
+                    v = f"{v:.6g}"
+                row.append("" if v is None else v)
+            w.writerow(row)
+    return path
+
+
+_JS = """
+document.querySelectorAll('th[data-k]').forEach(function (th) {
+  th.addEventListener('click', function () {
+    var tb = document.querySelector('tbody'), k = th.dataset.k, num = th.dataset.num;
+    var up = th.dataset.dir !== 'asc'; th.dataset.dir = up ? 'asc' : 'desc';
+    var rows = Array.prototype.slice.call(tb.rows);
+    rows.sort(function (a, b) {
+      var x = a.dataset[k], y = b.dataset[k];
+      if (num) { x = x === '' ? -Infinity : +x; y = y === '' ? -Infinity : +y; }
+      return (x < y ? -1 : x > y ? 1 : 0) * (up ? 1 : -1);
+    });
+    rows.forEach(function (r) { tb.appendChild(r); });
+  });
+});
+"""
+
+_CSS = """
+body{font:14px sans-serif;margin:1em}table{border-collapse:collapse}
+td,th{border-bottom:1px solid #ddd;padding:4px 8px;vertical-align:top;text-align:left}
+th[data-k]{cursor:pointer;text-decoration:underline dotted}
+img{width:360px;display:block}.weak{color:#b00;font-weight:bold}.failed,.skipped{color:#777}
+.n{text-align:right;font-variant-numeric:tabular-nums}
+"""
+
+
+def write_html(out, records, title="osteon batch") -> Path:
+    """The contact sheet: one row per model, weakest first; click a column head to sort."""
+    recs = _order(records)
+    n_ok = sum(r["status"] == "ok" for r in recs)
+    n_weak = sum((r.get("stress_ratio") or 0) > 1 for r in recs)
+    e = html.escape
+    rows = []
+    for r in recs:
+        ratio = r.get("stress_ratio")
+        cls = r["status"] if r["status"] != "ok" else ("weak" if (ratio or 0) > 1 else "")
+        pic = (
+            f'<a href="{e(MODELS_DIR)}/{e(r["png"])}"><img loading="lazy" '
+            f'src="{e(MODELS_DIR)}/{e(r["png"])}" alt="{e(r["id"])}"></a>'
+            if r.get("png") else ""
+        )
+        link = (
+            f' (<a href="{e(r["json"])}">json</a>)' if r.get("json") else ""
+        )
+        mx = r.get("max_stress_mpa")
+        rows.append(
+            "<tr data-ratio=\"{ratio}\" data-stress=\"{mx}\" data-faces=\"{faces}\" "
+            "data-model=\"{model}\" data-status=\"{status}\" data-seconds=\"{secs}\">"
+            "<td>{pic}</td><td>{name}{link}<br><small>{path}</small></td>"
+            "<td class=\"n {cls}\">{ratio_t}</td><td class=\"n\">{mx_t}</td>"
+            "<td class=\"n\">{faces}</td><td class=\"n\">{bones}</td><td>{weak}</td>"
+            "<td>{flags}</td><td class=\"{cls}\">{status_t}</td><td class=\"n\">{secs_t}</td>"
+            "</tr>".format(
+                ratio="" if ratio is None else f"{ratio:.6g}",
+                mx="" if mx is None else f"{mx:.6g}",
+                faces=r.get("faces", "") if r.get("faces") is not None else "",
+                model=e(r["id"]),
+                status=e(r["status"]),
+                secs=f"{r.get('seconds', 0):.4g}",
+                pic=pic,
+                name=e(r["id"]),
+                link=link,
+                path=e(r["model"]),
+                cls=cls,
+                ratio_t="" if ratio is None else f"{ratio:.2f}",
+                mx_t="" if mx is None else f"{mx:.1f}",
+                bones=r.get("bone_count", "") if r.get("bone_count") is not None else "",
+                weak=e(_weak_names(r)),
+                flags=e(", ".join(r.get("flags") or [])),
+                status_t=e(_status_text(r)),
+                secs_t=f"{r.get('seconds', 0):.2f}",
+            )
+        )
+    head = (
+        "<tr><th>stress picture</th><th data-k=\"model\">model</th>"
+        "<th data-k=\"ratio\" data-num=1 data-dir=\"desc\">σ/[σ]</th>"
+        "<th data-k=\"stress\" data-num=1>max σ MPa</th><th data-k=\"faces\" data-num=1>faces</th>"
+        "<th>bones</th><th>weak bones</th><th>flags</th><th data-k=\"status\">status</th>"
+        "<th data-k=\"seconds\" data-num=1>s</th></tr>"
+    )
+    doc = (
+        f"<!doctype html><html><head><meta charset=\"utf-8\"><title>{e(title)}</title>"
+        f"<style>{_CSS}</style></head><body><h1>{e(title)}</h1>"
+        f"<p>{len(recs)} models: {n_ok} analysed, {n_weak} weak (σ/[σ] &gt; 1), "
+        f"{len(recs) - n_ok} skipped or failed. Weakest first; click a column head to sort."
+        "</p><table><thead>" + head + "</thead><tbody>\n" + "\n".join(rows) +
+        f"\n</tbody></table><script>{_JS}</script></body></html>\n"
+    )
+    path = Path(out) / "summary.html"
+    path.write_text(doc, encoding="utf-8")
+    return path
+
+
+def write_summaries(out) -> list[dict]:
+    """Re-write ``summary.csv`` and ``summary.html`` from every line of ``results.jsonl``."""
+    records = read_results(out)
+    write_csv(out, records)
+    write_html(out, records, title=f"osteon batch: {os.path.basename(os.path.abspath(out))}")
+    return records

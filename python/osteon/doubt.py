@@ -1,0 +1,155 @@
+"""Sections the engine skipped or doubts, counted per bone: no false all-clear (issue 13).
+
+Written over the flag bits the engine exposes (``osteon.SECTION_FLAGS``, name -> bit), so
+flags added later (``unreliable``, ``too_thin``) plug in by name.
+
+* **skipped**: the section has no usable stress (non-finite stress, or a flag in
+  :data:`SKIP_FLAGS` set): it says nothing about the part it cuts.
+* **doubtful**: the section has a stress but its cut is suspect (a flag in
+  :data:`DOUBT_FLAGS`: open mesh, bone outside the mesh, non-manifold edges).
+* a bone with more than :data:`NOT_ANALYSED_SHARE` of its sections skipped is
+  **not analysed**: it is never reported as safe.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: flags that mean the section gave no stress
+SKIP_FLAGS = ("empty", "degenerate", "unreliable", "too_thin")
+#: flags that mean the section's stress rests on a suspect cut
+DOUBT_FLAGS = ("open", "outside", "non_manifold")
+#: a bone with more than this share of its sections skipped is "not analysed"
+NOT_ANALYSED_SHARE = 0.25
+
+#: plain-language reason of each flag (unknown flags are shown by their name)
+REASONS = {
+    "open": "the mesh is open there",
+    "empty": "nothing was cut there",
+    "degenerate": "the cut has no area there",
+    "outside": "the bone lies outside the mesh there",
+    "non_manifold": "the mesh is non-manifold there",
+    "unreliable": "the cut is unreliable there",
+    "too_thin": "the part is thinner than printable there",
+    "hollow": "the bone lies in a hole there",
+    "gap_closed": "gaps in the cut were closed there",
+}
+
+
+def flag_table() -> dict[str, int]:
+    """Name -> bit of every section flag the engine exposes."""
+    try:
+        import osteon
+
+        return dict(osteon.SECTION_FLAGS)
+    except (ImportError, AttributeError):  # pragma: no cover - engine without the table
+        return {}
+
+
+def _mask(flags: np.ndarray, names, table) -> np.ndarray:
+    bits = 0
+    for n in names:
+        bits |= int(table.get(n, 0))
+    return (flags & bits) != 0
+
+
+def reason(names) -> str:
+    """One sentence part from flag names, most telling first (``open`` before ``empty``)."""
+    order = ["open", "outside", "non_manifold", "too_thin", "unreliable", "degenerate", "empty",
+             "hollow", "gap_closed"]
+    names = sorted(set(names), key=lambda n: order.index(n) if n in order else len(order))
+    return "; ".join(REASONS.get(n, n.replace("_", " ")) for n in names[:2])
+
+
+def section_doubt(analysis) -> dict:
+    """Per-section masks and counts of an ``osteon.Analysis`` (or anything with ``stress``,
+    ``section_bone`` and optionally ``section_flags``).
+
+    Returns ``skipped`` (S,) bool, ``doubtful`` (S,) bool (not skipped, suspect cut),
+    ``by_flag`` {flag name: sections with it}, ``skipped_by_flag``, ``flag_names`` (S,) list of
+    lists of names."""
+    stress = np.asarray(analysis.stress, dtype=np.float64)
+    n = len(stress)
+    flags = getattr(analysis, "section_flags", None)
+    flags = np.zeros(n, np.int64) if flags is None else np.asarray(flags, dtype=np.int64)
+    table = flag_table()
+    skipped = ~np.isfinite(stress) | _mask(flags, SKIP_FLAGS, table)
+    doubtful = ~skipped & _mask(flags, DOUBT_FLAGS, table)
+    by_flag = {k: int(np.count_nonzero(flags & b)) for k, b in table.items()}
+    skipped_by_flag = {k: int(np.count_nonzero(((flags & b) != 0) & skipped))
+                       for k, b in table.items()}
+    names = [[k for k, b in table.items() if f & b] for f in flags]
+    return {"skipped": skipped, "doubtful": doubtful, "flags": flags,
+            "by_flag": {k: v for k, v in by_flag.items() if v},
+            "skipped_by_flag": {k: v for k, v in skipped_by_flag.items() if v},
+            "flag_names": names}
+
+
+def bone_doubt(analysis, n_bones: int, share: float = NOT_ANALYSED_SHARE) -> list[dict]:
+    """Per bone: ``sections``, ``skipped_sections``, ``doubtful_sections``, ``not_analysed``
+    (more than ``share`` of its sections skipped, or it has sections and none gave a stress)
+    and ``reason`` ("12 of 61 sections could not be cut: the mesh is open there")."""
+    d = section_doubt(analysis)
+    sb = np.asarray(analysis.section_bone, dtype=np.int64)
+    count = np.bincount(sb, minlength=n_bones)
+    nskip = np.bincount(sb, weights=d["skipped"], minlength=n_bones).astype(int)
+    ndoubt = np.bincount(sb, weights=d["doubtful"], minlength=n_bones).astype(int)
+    out = []
+    for b in range(n_bones):
+        sel = np.flatnonzero((sb == b) & (d["skipped"] | d["doubtful"]))
+        names = [n for i in sel for n in d["flag_names"][i]]
+        if len(sel) and not names:
+            names = ["empty"]
+        na = bool(count[b] > 0 and (nskip[b] > share * count[b] or nskip[b] == count[b]))
+        text = ""
+        if nskip[b]:
+            text = f"{nskip[b]} of {count[b]} sections could not be cut: {reason(names)}"
+        elif ndoubt[b]:
+            text = f"{ndoubt[b]} of {count[b]} sections are doubtful: {reason(names)}"
+        out.append({"sections": int(count[b]), "skipped_sections": int(nskip[b]),
+                    "doubtful_sections": int(ndoubt[b]), "not_analysed": na, "reason": text})
+    return out
+
+
+def worst_section_doubt(analysis) -> list[str]:
+    """Flag names of the section that gives the maximum stress ([] if it is a plain result)."""
+    stress = np.asarray(analysis.stress, dtype=np.float64)
+    ok = np.isfinite(stress)
+    if not ok.any():
+        return []
+    i = int(np.flatnonzero(ok)[np.argmax(stress[ok])])
+    d = section_doubt(analysis)
+    if not (d["doubtful"][i] or d["skipped"][i]):
+        return []
+    return [n for n in d["flag_names"][i] if n in DOUBT_FLAGS or n in SKIP_FLAGS]
+
+
+def summary_text(report: dict) -> str:
+    """The doubt part of a summary line ("" when every section was cut cleanly)."""
+    s = report.get("skipped_sections") or 0
+    parts = []
+    if s:
+        parts.append(f"{s} of {report['sections']} sections could not be cut: "
+                     f"{reason(report.get('skipped_by_flag') or {'empty': 1})}")
+    na = report.get("not_analysed_bones") or []
+    if na:
+        parts.append(f"{len(na)} bone{'s' if len(na) != 1 else ''} not analysed ("
+                     + ", ".join(r["bone"] for r in na[:5]) + ")")
+    doubt = report.get("max_stress_doubt") or []
+    if doubt:
+        parts.append(f"the max stress rests on a doubtful section ({reason(doubt)})")
+    return "; ".join(parts)
+
+
+def analysis_text(analysis, bone_names) -> str:
+    """:func:`summary_text` straight from an analysis (for the CLI's summary line)."""
+    d = section_doubt(analysis)
+    per_bone = bone_doubt(analysis, len(bone_names))
+    return summary_text({
+        "sections": len(d["skipped"]),
+        "skipped_sections": int(np.count_nonzero(d["skipped"])),
+        "skipped_by_flag": d["skipped_by_flag"],
+        "not_analysed_bones": [{"bone": bone_names[b]} for b, r in enumerate(per_bone)
+                               if r["not_analysed"]],
+        "max_stress_doubt": worst_section_doubt(analysis),
+    })

@@ -1,0 +1,72 @@
+"""A small model library generated on the fly for the batch tests: rigged bars (TGF + DMAT
+sidecars), an unrigged bar, an open bar, and files that are not meshes. Units: mm."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from osteon.io import write_dmat, write_mesh, write_tgf
+from shapes import circle, prism
+
+
+def bar(length=60.0, radius=5.0, n=48, stations=31):
+    """A closed round bar along +x from 0 to ``length`` mm: (vertices, faces)."""
+    return prism(circle(radius, n), length, stations=stations)
+
+
+def rigged_bar(folder: Path, name: str, length=60.0, radius=5.0, weights=True, ext=".obj"):
+    """Write NAME.EXT + NAME.tgf (two bones along the axis) [+ NAME.dmat]; returns the mesh path."""
+    V, F = bar(length, radius)
+    path = folder / f"{name}{ext}"
+    write_mesh(path, V, F)
+    joints = np.array([[0.0, 0, 0], [length / 2, 0, 0], [length, 0, 0]])
+    write_tgf(folder / f"{name}.tgf", joints, [[0, 1], [1, 2]])
+    if weights:
+        W = np.zeros((len(V), 2))
+        W[V[:, 0] < length / 2, 0] = 1.0
+        W[V[:, 0] >= length / 2, 1] = 1.0
+        write_dmat(folder / f"{name}.dmat", W)
+    return path
+
+
+def make_library(root: Path) -> dict[str, str]:
+    """A folder tree of models; returns {file name: expected status}."""
+    root.mkdir(parents=True, exist_ok=True)
+    sub = root / "sub" / "deeper"
+    sub.mkdir(parents=True)
+    expected = {}
+    rigged_bar(root, "thin", radius=3.0)
+    expected["thin.obj"] = "ok"
+    rigged_bar(root, "thick", radius=6.0, weights=False)
+    expected["thick.obj"] = "ok"
+    rigged_bar(sub, "short", length=30.0, radius=4.0, ext=".ply")
+    expected["short.ply"] = "ok"
+    V, F = bar()
+    write_mesh(root / "unrigged.stl", V, F)  # no skeleton next to it
+    # rigged by osteon.auto_skeleton where it exists (issue 17), else skipped
+    import osteon
+
+    expected["unrigged.stl"] = "ok" if hasattr(osteon, "auto_skeleton") else "skipped"
+    Vo, Fo = bar(radius=5.0)
+    write_mesh(root / "open.obj", Vo, Fo[: len(Fo) - 40])  # one cap partly removed
+    write_tgf(root / "open.tgf", [[0.0, 0, 0], [30, 0, 0], [60, 0, 0]], [[0, 1], [1, 2]])
+    expected["open.obj"] = "failed"
+    (root / "garbage.stl").write_bytes(bytes(range(256)) * 7)
+    expected["garbage.stl"] = "failed"
+    (sub / "empty.obj").write_text("# nothing here\n")
+    (sub / "empty.tgf").write_text("1 0 0 0\n2 1 0 0\n#\n1 2\n#\n")
+    expected["empty.obj"] = "failed"
+    (root / "notes.txt").write_text("not a model\n")  # not picked up from a folder
+    return expected
+
+
+def crashing_task(path, settings, model_id=None):
+    """The batch task, except that a model whose name has "crash" kills its worker process."""
+    import os
+
+    from osteon.batch import process_model
+
+    if "crash" in os.path.basename(path):
+        os._exit(3)
+    return process_model(path, settings, model_id)

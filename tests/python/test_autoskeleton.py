@@ -1,0 +1,257 @@
+"""osteon.auto_skeleton on generated closed meshes (issue 17): capsule, T, torus, two pieces,
+degenerate input, and a cantilever checked against F·d/W."""
+
+import numpy as np
+import osteon
+import pytest
+from scipy import sparse
+from shapes import merge, revolve
+
+pytest.importorskip("pygel3d")
+
+F = 10.0
+
+
+def capsule(length=80.0, radius=6.0, n=48, stations=40, cap=8):
+    """Closed capsule along +x: cylinder x in [0, length], hemispherical caps; tips at -r, L+r."""
+    a = np.linspace(np.pi / 2, 0, cap + 1)[:-1]
+    xs0 = -radius * np.sin(a)
+    r0 = radius * np.cos(a)
+    xs = np.r_[xs0, np.linspace(0, length, stations), length - xs0[::-1]]
+    rs = np.r_[r0, np.full(stations, radius), r0[::-1]]
+    rs[0] = rs[-1] = radius * 0.05
+    return revolve(xs, rs, n)
+
+
+def voxel_mesh(occ, h, origin, smooth=3):
+    """Closed quad-surface of a boolean voxel grid (triangulated, welded), lightly smoothed."""
+    occ = np.pad(occ, 1)
+    quads = []
+    _nx, ny, nz = occ.shape
+    idx = lambda i, j, k: (i * (ny + 1) + j) * (nz + 1) + k
+    for ax in range(3):
+        diff = np.diff(occ.astype(np.int8), axis=ax)
+        for sign in (1, -1):
+            cells = np.argwhere(diff == sign)
+            i, j, k = cells.T
+            if ax == 0:
+                i = i + 1
+                q = [idx(i, j, k), idx(i, j + 1, k), idx(i, j + 1, k + 1), idx(i, j, k + 1)]
+            elif ax == 1:
+                j = j + 1
+                q = [idx(i, j, k), idx(i, j, k + 1), idx(i + 1, j, k + 1), idx(i + 1, j, k)]
+            else:
+                k = k + 1
+                q = [idx(i, j, k), idx(i + 1, j, k), idx(i + 1, j + 1, k), idx(i, j + 1, k)]
+            q = np.stack(q, 1)
+            if sign == 1:  # empty -> full along +axis: face points -axis
+                q = q[:, ::-1]
+            quads.append(q)
+    q = np.concatenate(quads)
+    used, inv = np.unique(q, return_inverse=True)
+    q = inv.reshape(q.shape)
+    k = used % (nz + 1)
+    j = (used // (nz + 1)) % (ny + 1)
+    i = used // ((nz + 1) * (ny + 1))
+    v = np.column_stack([i, j, k]).astype(float) * h + np.asarray(origin) - h
+    f = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]]).astype(np.int32)
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    a = sparse.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(len(v),) * 2).tocsr()
+    a = sparse.diags(1 / np.asarray(a.sum(1)).ravel()) @ a
+    for _ in range(smooth):
+        v = 0.5 * v + 0.5 * (a @ v)
+    return v, f
+
+
+def t_shape(h=2.0):
+    """A T: bar along x (x in [-40, 40], z in [30, 42]), stem down to z = -40; 12 mm thick."""
+    xs = np.arange(-40, 40, h) + h / 2
+    ys = np.arange(-6, 6, h) + h / 2
+    zs = np.arange(-40, 42, h) + h / 2
+    X, Y, Z = np.meshgrid(xs, ys, zs, indexing="ij")
+    occ = ((Z >= 30) | (np.abs(X) <= 6)) & (np.abs(Y) <= 6)
+    return voxel_mesh(occ, h, (xs[0] - h / 2, ys[0] - h / 2, zs[0] - h / 2))
+
+
+def torus(R=30.0, r=8.0, n=64, m=24):
+    u = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    w = np.linspace(0, 2 * np.pi, m, endpoint=False)
+    U, W = np.meshgrid(u, w, indexing="ij")
+    v = np.column_stack([((R + r * np.cos(W)) * np.cos(U)).ravel(),
+                         ((R + r * np.cos(W)) * np.sin(U)).ravel(), (r * np.sin(W)).ravel()])
+    i, j = np.meshgrid(np.arange(n), np.arange(m), indexing="ij")
+    a, b = i * m + j, ((i + 1) % n) * m + j
+    c, d = ((i + 1) % n) * m + (j + 1) % m, i * m + (j + 1) % m
+    f = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return v, f.astype(np.int32)
+
+
+def free_ends(sk):
+    """Bone end points no other bone touches (limb tips; the root's head if it is an end)."""
+    pts, degree = joints(sk)
+    return pts[degree == 1]
+
+
+def joints(sk, tol=1e-6):
+    """(points, degree): every bone end point and how many bones meet there."""
+    pts = np.concatenate([sk.heads, sk.tails])
+    key = np.round(pts / max(tol, 1e-9)).astype(np.int64)
+    uniq, inv, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    first = np.zeros(len(uniq), np.int64)
+    first[inv.ravel()] = np.arange(len(pts))
+    return pts[first], counts
+
+
+def check_weights(w, nv, nb):
+    assert sparse.issparse(w)
+    assert w.shape == (nv, nb)
+    np.testing.assert_allclose(np.asarray(w.sum(1)).ravel(), 1.0, atol=1e-9)
+    assert np.diff(w.tocsr().indptr).max() <= 4
+    assert w.min() >= 0
+
+
+@pytest.mark.parametrize("root", ["centre", "base"])
+def test_capsule_gets_one_chain_along_its_axis_reaching_both_ends(root):
+    v, f = capsule()
+    sk, w = osteon.auto_skeleton(v, f, root=root, up=(1, 0, 0))
+    check_weights(w, len(v), sk.num_bones)
+    d = (sk.tails - sk.heads) / sk.lengths[:, None]
+    angle = np.degrees(np.arccos(np.clip(np.abs(d[:, 0]), 0, 1)))
+    assert angle.max() < 5.0, angle
+    # a chain: no joint where three bones meet
+    _, degree = joints(sk)
+    assert degree.max() <= 2
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.abs(ends[:, 1:]).max() < 2.0  # on the axis (r = 6 mm)
+    assert ends[:, 0].min() < -6 + 3.0 and ends[:, 0].max() > 86 - 3.0  # within 3 mm of the tips
+    if root == "base":  # held at the end it stands on (the lowest along up = +x)
+        assert sk.parents[0] == -1 and sk.heads[0, 0] < -3.0
+
+
+def test_t_shape_gets_one_junction_and_three_branches():
+    v, f = t_shape()
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    tips = free_ends(sk)
+    assert len(tips) == 3, tips
+    for tip in ([-40, 0, 36], [40, 0, 36], [0, 0, -40]):
+        assert np.linalg.norm(tips - tip, axis=1).min() < 5.0, (tip, tips)
+    pts, degree = joints(sk)
+    junctions = pts[degree >= 3]
+    assert len(junctions) == 1, junctions
+    assert np.linalg.norm(junctions[0] - [0, 0, 36]) < 12.0  # within one bar thickness
+
+
+def test_torus_loop_is_cut_into_a_tree():
+    R, r = 30.0, 8.0
+    v, f = torus(R, r)
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert sk.roots == [0]  # Skeleton() rejects cycles, so this is a tree with one root
+    # bones follow the ring's centre line...
+    mids = 0.5 * (sk.heads + sk.tails)
+    assert np.abs(np.linalg.norm(mids[:, :2], axis=1) - R).max() < r
+    # ...all the way round, cut once: two free ends, opposite the root along the ring
+    tips = free_ends(sk)
+    assert len(tips) == 2
+    assert np.linalg.norm(tips[0] - tips[1]) < 2 * r
+    assert np.linalg.norm(tips.mean(0) - sk.heads[0]) > 1.5 * R
+    covered = np.linalg.norm(np.concatenate([sk.heads, sk.tails])[:, None, :2]
+                             - (R * np.column_stack([np.cos(np.linspace(0, 6.28, 36)),
+                                                     np.sin(np.linspace(0, 6.28, 36))]))[None],
+                             axis=2).min(0)
+    assert covered.max() < 20.0
+
+
+def test_two_pieces_raise_a_clear_error():
+    v, f = merge(capsule(), capsule())
+    v[len(v) // 2 :, 1] += 40.0
+    with pytest.raises(ValueError, match="2 separate pieces"):
+        osteon.auto_skeleton(v, f)
+
+
+@pytest.mark.parametrize(
+    "vertices,faces,match",
+    [
+        (np.zeros((0, 3)), np.zeros((0, 3), int), "vertices"),
+        (np.eye(3), [[0, 1, 2]], "vertices"),
+        (np.r_[np.eye(3), [[0.5, 0.5, 0]]] * 10, [[0, 1, 2], [0, 2, 3], [1, 2, 3], [0, 1, 3]],
+         "no volume"),
+        (np.r_[np.eye(3), [[np.nan, 0, 0]]], [[0, 1, 2], [0, 2, 3], [1, 2, 3], [0, 1, 3]], "NaN"),
+        (np.zeros((4, 3)), [[0, 1, 2], [0, 2, 3], [1, 2, 3], [0, 1, 3]], "size 0"),
+        (np.eye(4)[:, :3], [[0, 1, 2], [0, 2, 9], [1, 2, 3], [0, 1, 3]], "out of range"),
+    ],
+)
+def test_degenerate_input_raises_value_error(vertices, faces, match):
+    with pytest.raises(ValueError, match=match):
+        osteon.auto_skeleton(vertices, faces)
+
+
+def test_bad_options_raise_value_error():
+    v, f = capsule(stations=10)
+    for kw, match in [({"detail": "huge"}, "detail"), ({"root": "top"}, "root"),
+                      ({"up": (0, 0, 0)}, "up"), ({"spur": -1}, "spur")]:
+        with pytest.raises(ValueError, match=match):
+            osteon.auto_skeleton(v, f, **kw)
+
+
+def test_cantilever_on_the_auto_skeleton_matches_f_d_over_w():
+    length, radius, n = 80.0, 6.0, 96
+    v, f = capsule(length, radius, n=n)
+    sk, w = osteon.auto_skeleton(v, f, root="base", up=(1, 0, 0))
+    res = osteon.analyze(v, f, sk, w, force=F, allowable_stress=60.0, interval=2.0)
+    x = res.section_center[:, 0]
+    inner = (res.section_flags == 0) & (x > 0.2 * length) & (x < 0.8 * length)
+    assert inner.sum() > 10
+    # polygon of n sides inscribed in the circle: W = pi r^3/4 within 0.5 %
+    w_exact = np.pi * radius**3 / 4
+    d = (length + radius) - x[inner]  # farthest downstream point: the far tip
+    np.testing.assert_allclose(res.stress[inner], F * d / w_exact, rtol=0.05)
+    # the weakest section is next to the hold
+    assert x[np.argmax(np.where(res.section_flags == 0, res.stress, 0))] < 0.25 * length
+
+
+def test_cli_uses_auto_skeleton_without_a_skeleton_file_and_writes_tgf_dmat(tmp_path, capsys):
+    from osteon.cli import main
+    from osteon.io import read_dmat, read_tgf, write_mesh
+
+    v, f = capsule(stations=20)
+    mesh = tmp_path / "capsule.stl"  # STL: a triangle soup, welded inside auto_skeleton
+    write_mesh(mesh, v, f)
+    assert main(["analyze", str(mesh), "--height-mm", "92", "--json", str(tmp_path / "r.json")]) == 0
+    err = capsys.readouterr().err
+    assert "auto_skeleton" in err
+    assert main(["analyze", str(mesh), "--skeleton", "auto", "-q"]) == 0
+    assert main(["skeleton", str(mesh), "--out", str(tmp_path / "capsule.tgf"),
+                 "--height-mm", "92"]) == 0
+    joints, _, heads, tails, parents = read_tgf(tmp_path / "capsule.tgf")
+    w = read_dmat(tmp_path / "capsule.dmat")
+    assert w.shape[1] == len(parents) and np.allclose(w.sum(1), 1.0)
+    # written in the file's units (the capsule spans x in [-6, 86] in the file)
+    assert np.concatenate([heads, tails])[:, 0].min() < 0 and joints[:, 0].max() > 80
+    assert main(["analyze", str(mesh), "--skeleton", str(tmp_path / "capsule.tgf"),
+                 "--weights", str(tmp_path / "capsule.dmat"), "-q"]) == 0
+
+
+def test_a_blob_gets_one_bone_through_it():
+    v = np.array([[x, y, z] for x in (0, 10) for y in (0, 10) for z in (0, 10)], float)
+    f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7],
+                  [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    sk, w = osteon.auto_skeleton(v, f)
+    assert sk.num_bones >= 1
+    check_weights(w, len(v), sk.num_bones)
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.all((ends > -1e-9) & (ends < 10 + 1e-9))  # inside the cube
+
+
+def test_seed_gives_identical_results():
+    """auto_skeleton(seed=0) twice on the same T: identical bones and weights (bit for bit)."""
+    v, f = t_shape()
+    a_sk, a_w = osteon.auto_skeleton(v, f, seed=0)
+    b_sk, b_w = osteon.auto_skeleton(v, f, seed=0)
+    assert a_sk.num_bones == b_sk.num_bones
+    assert np.array_equal(a_sk.heads, b_sk.heads) and np.array_equal(a_sk.tails, b_sk.tails)
+    assert np.array_equal(a_sk.parents, b_sk.parents)
+    assert (a_w != b_w).nnz == 0
+    with pytest.raises(ValueError, match="seed"):
+        osteon.auto_skeleton(v, f, seed="x")
