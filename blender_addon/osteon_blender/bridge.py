@@ -708,7 +708,6 @@ def tag_redraw_view3d(region_types: tuple = ("UI", "WINDOW")):
                     region.tag_redraw()
 
 
-<<<<<<< HEAD
 # --------------------------------------------------------------------------- print direction
 
 
@@ -785,7 +784,8 @@ def remove_object(name: str) -> None:
     ob = bpy.data.objects.get(name)
     if ob is not None:
         bpy.data.objects.remove(ob, do_unlink=True)
-=======
+
+
 # --------------------------------------------------------------------------- make skeleton
 
 
@@ -864,4 +864,3 @@ def bind_armature(context, obj, arm, auto_weights: bool = False):
     mod = obj.modifiers.new(name="Armature", type="ARMATURE")
     mod.object = arm
     return mod
->>>>>>> main

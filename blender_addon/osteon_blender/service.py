@@ -92,15 +92,6 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
     s = context.scene.osteon
     allowable = inp.params["allowable_stress"]
     culled = getattr(analysis, "vertex_culled", None)
-<<<<<<< HEAD
-    # colours by stress ratio at the print direction (stress itself when isotropic)
-    k = inp.mm_per_unit
-    shown = printdir.colour_stress(analysis, inp.skeleton.heads * k, inp.skeleton.tails * k)
-    rgba = core.stress_colors(shown, allowable, culled)
-    bridge.write_point_colors(inp.obj.data, rgba)
-    bridge.show_colors_in_viewports()
-=======
->>>>>>> main
     report = core.build_report(
         object_name=inp.obj.name, armature_name=inp.arm.name, bone_names=inp.skeleton.names,
         analysis=first_analysis if first_analysis is not None else analysis,
@@ -118,7 +109,10 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
         item.weak = row["weak"]
         item.status = "weak" if row["weak"] else "ok"
     doubt_ui_publish(s, report)
-    rgba = core.stress_colors(analysis.vertex_stress, allowable, culled,
+    # colours by stress ratio at the print direction (stress itself when isotropic)
+    k = inp.mm_per_unit
+    shown = printdir.colour_stress(analysis, inp.skeleton.heads * k, inp.skeleton.tails * k)
+    rgba = core.stress_colors(shown, allowable, culled,
                               not_analysed_vertices(analysis, report, inp.skeleton.names))
     bridge.write_point_colors(inp.obj.data, rgba)
     bridge.show_colors_in_viewports()

@@ -10,8 +10,4 @@ from .select_bone import OSTEON_OT_select_bone
 from .skeleton import OSTEON_OT_make_skeleton
 
 classes = (OSTEON_OT_analyze, OSTEON_OT_correct, OSTEON_OT_reset, OSTEON_OT_apply,
-<<<<<<< HEAD
-           OSTEON_OT_select_bone) + _orientation_classes
-=======
-           OSTEON_OT_select_bone, OSTEON_OT_make_skeleton)
->>>>>>> main
+           OSTEON_OT_select_bone, OSTEON_OT_make_skeleton) + _orientation_classes

@@ -3,11 +3,7 @@
 import bpy
 
 from .. import bridge, core
-<<<<<<< HEAD
-from . import print_panel
-=======
-from . import doubt_ui
->>>>>>> main
+from . import doubt_ui, print_panel
 
 
 class OSTEON_UL_weak_bones(bpy.types.UIList):

@@ -44,14 +44,11 @@ class OsteonBoneResult(bpy.types.PropertyGroup):
     ratio: FloatProperty(name="Stress ratio", description="Max stress / allowable stress "
                          "(> 1 = weak)")
     weak: BoolProperty(name="Weak", description="Stress above the allowable stress now")
-<<<<<<< HEAD
     limit: StringProperty(name="Limit", description="Which strength governs the worst section: "
                           "'across layers' or 'along layers'")
-=======
     status: StringProperty(name="Status", description="weak, ok or not analysed (too many of "
                            "the bone's sections could not be cut)")
     reason: StringProperty(name="Reason", description="Why sections were skipped or doubtful")
->>>>>>> main
     scale: FloatProperty(name="Scale", default=1.0, description="Cross-section scale applied by "
                          "Correct (1 = unchanged)")
 
