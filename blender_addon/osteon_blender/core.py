@@ -169,9 +169,23 @@ def build_report(*, object_name: str, armature_name: str, bone_names: list[str],
         seconds=seconds, correction=correction, corrected_analysis=corrected_analysis)
 
 
+def _preset_exact(s, ratio: float) -> float:
+    """The preset's layer ratio itself when the (float32) property holds it, so that the CLI
+    and the add-on pass the same double to the engine."""
+    m = MATERIAL_BY_KEY.get(s.material)
+    if m is not None and abs(ratio - m.layer_strength_ratio) <= 1e-6:
+        return m.layer_strength_ratio
+    return ratio
+
+
 def settings_of(s) -> Settings:
-    """``scene.osteon`` as the wheel's :class:`osteon.settings.Settings`."""
+    """``scene.osteon`` as the wheel's :class:`osteon.settings.Settings` (the build direction
+    from the "Print direction" setting, the layer ratio from "Layer strength")."""
+    from . import printdir
+
     return Settings(
+        build_direction=printdir.build_direction(s),
+        layer_strength_ratio=_preset_exact(s, float(getattr(s, "layer_strength_ratio", 1.0))),
         force_n=float(s.force_n), interval_mm=float(s.interval_mm), material=s.material,
         strength_mpa=float(s.strength_mpa), safety_factor=float(s.safety_factor),
         held_bone=s.held_bone or None, size_mode=s.size_mode,

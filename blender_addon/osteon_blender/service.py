@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import bridge, core, state
+from . import bridge, core, printdir, state
 from .core import OsteonError
 
 # read-only view: scene name -> the last result (report, Analysis, inputs, correction),
@@ -104,11 +104,15 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
         item.name = row["bone"]
         item.max_stress_mpa = row["max_stress_mpa"]
         item.ratio = row["ratio"]
+        item.limit = row.get("limit") or ""
         item.scale = row["scale"]
         item.weak = row["weak"]
         item.status = "weak" if row["weak"] else "ok"
     doubt_ui_publish(s, report)
-    rgba = core.stress_colors(analysis.vertex_stress, allowable, culled,
+    # colours by stress ratio at the print direction (stress itself when isotropic)
+    k = inp.mm_per_unit
+    shown = printdir.colour_stress(analysis, inp.skeleton.heads * k, inp.skeleton.tails * k)
+    rgba = core.stress_colors(shown, allowable, culled,
                               not_analysed_vertices(analysis, report, inp.skeleton.names))
     bridge.write_point_colors(inp.obj.data, rgba)
     bridge.show_colors_in_viewports()

@@ -29,6 +29,10 @@ class SceneState:
     outlines: tuple | None = None
     #: the operator analysis (``last["analysis"]``) the overlay has already outlined
     outlined_last: object | None = None
+    #: "Find best orientation": ``{"object", "direction" (3,) world, "result"
+    #: (osteon.Orientation), "before", "applied", "matrices" (name -> matrix_world before
+    #: Apply), "preview" (name of the arrow empty)}`` (ops/orientation.py)
+    orientation: dict | None = None
 
 
 _STATES: dict[str, SceneState] = {}

@@ -82,6 +82,20 @@ class Settings:
         return d
 
 
+#: the axis choices of the front ends (Blender's "Print direction"), unit vectors in the
+#: model's (scene's) frame
+AXES = {"+X": (1.0, 0.0, 0.0), "-X": (-1.0, 0.0, 0.0), "+Y": (0.0, 1.0, 0.0),
+        "-Y": (0.0, -1.0, 0.0), "+Z": (0.0, 0.0, 1.0), "-Z": (0.0, 0.0, -1.0)}
+
+
+def axis_direction(axis: str) -> tuple:
+    """The build direction (3,) of an axis name ("+X" ... "-Z"); ``ValueError`` otherwise."""
+    try:
+        return AXES[str(axis).upper()]
+    except KeyError:
+        raise ValueError(f"print axis must be one of {', '.join(AXES)}, got {axis!r}") from None
+
+
 def _positive(value, what: str, unit: str) -> float:
     v = float(value)
     if not (v > 0.0 and math.isfinite(v)):

@@ -4,7 +4,7 @@ import bpy
 import numpy as np
 import pytest
 from conftest import activate, import_rignet
-from osteon_blender import bridge, compat, core
+from osteon_blender import bridge, compat, core, printdir
 from osteon_blender import service as common
 
 
@@ -32,7 +32,11 @@ def test_analyze_sample_rig(sample, engine):
     last = common.LAST[bpy.context.scene.name]
     a = last["analysis"]
     assert isinstance(a, engine.Analysis)
-    expect = core.stress_colors(a.vertex_stress, 30.0, a.vertex_culled)
+    # (PLA: layer ratio 0.55, so the stress is scaled by in-plane / layer-angle allowable)
+    sk, k = last["inputs"].skeleton, last["inputs"].mm_per_unit
+    shown = printdir.colour_stress(a, sk.heads * k, sk.tails * k)
+    assert np.all(shown >= a.vertex_stress - 1e-12)  # never below the stress itself
+    expect = core.stress_colors(shown, 30.0, a.vertex_culled)
     assert np.allclose(rgba, expect, atol=1e-6)
     # something is weak at the default load, the body is not
     s = bpy.context.scene.osteon

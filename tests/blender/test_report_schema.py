@@ -73,6 +73,8 @@ def test_cli_and_batch_reports_share_one_schema_and_numbers(sample, tmp_path):
     # not a trivial case: many sections, weak bones, culled sections
     assert cli["sections"] > 50 and cli["weak_bones"] and cli["culled_sections"] > 0
     assert cli["allowable_stress_mpa"] == pytest.approx(50.0 / 2.0)  # PETG / default factor
+    # not isotropic: both take PETG's layer ratio (one settings -> engine mapping)
+    assert cli["layer_strength_ratio"] == blend["layer_strength_ratio"] == pytest.approx(0.6)
     assert cli["bone_names"] == blend["bone_names"]
     # the strings that name the source differ by nature; everything else is the same
     assert (cli["model"], cli["object"]) == ("figurine.obj", None)

@@ -3,7 +3,7 @@
 import bpy
 
 from .. import bridge, core
-from . import doubt_ui
+from . import doubt_ui, print_panel
 
 
 class OSTEON_UL_weak_bones(bpy.types.UIList):
@@ -17,6 +17,8 @@ class OSTEON_UL_weak_bones(bpy.types.UIList):
         row.label(text=item.name, icon="ERROR" if item.weak else "CHECKMARK")
         row.label(text=f"{item.max_stress_mpa:.1f} MPa")
         row.label(text=f"x{item.ratio:.2f}")
+        if item.limit and context.scene.osteon.layer_strength_ratio != 1.0:
+            row.label(text=item.limit)
         if abs(item.scale - 1.0) > 1e-6:
             row.label(text=f"scale {item.scale:.2f}")
 
@@ -39,6 +41,7 @@ class OSTEON_PT_main(bpy.types.Panel):
                       " MPa")
         except ValueError:
             col.label(text="Allowable: invalid", icon="ERROR")
+        print_panel.draw(layout, s)
         col = layout.column(align=True)
         col.prop(s, "force_n")
         col.prop(s, "size_mode", text="")

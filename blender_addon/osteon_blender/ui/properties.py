@@ -10,7 +10,7 @@ from bpy.props import (
     StringProperty,
 )
 
-from .. import core
+from .. import core, printdir
 
 _MATERIAL_ITEMS = core.MATERIAL_ITEMS
 _DEFAULT = core.materials.get(core.materials.DEFAULT_MATERIAL)
@@ -20,6 +20,7 @@ def _on_material(self, _context):
     m = core.MATERIAL_BY_KEY.get(self.material)
     if m is not None:
         self.strength_mpa = m.strength_mpa
+        self.layer_strength_ratio = m.layer_strength_ratio
 
 
 def _on_bone_row(self, context):
@@ -43,6 +44,8 @@ class OsteonBoneResult(bpy.types.PropertyGroup):
     ratio: FloatProperty(name="Stress ratio", description="Max stress / allowable stress "
                          "(> 1 = weak)")
     weak: BoolProperty(name="Weak", description="Stress above the allowable stress now")
+    limit: StringProperty(name="Limit", description="Which strength governs the worst section: "
+                          "'across layers' or 'along layers'")
     status: StringProperty(name="Status", description="weak, ok or not analysed (too many of "
                            "the bone's sections could not be cut)")
     reason: StringProperty(name="Reason", description="Why sections were skipped or doubtful")
@@ -77,6 +80,15 @@ class OsteonSettings(bpy.types.PropertyGroup):
                             description="Largest number of correction rounds")
     scaling: EnumProperty(name="Scaling", items=core.SCALING_MODES, default="THIN",
                           description="How Correct thickens a weak part")
+    # print direction (FDM layers, docs/printing.md); the engine mapping is osteon.settings'
+    layer_strength_ratio: FloatProperty(
+        name="Layer strength", default=_DEFAULT.layer_strength_ratio, min=0.01, max=1.0,
+        description="Strength across the layers / in-plane strength (1 = isotropic); set by "
+        "the material preset")
+    print_direction: EnumProperty(name="Print direction", items=printdir.MODES, default="Z",
+                                  description="Direction the layers stack along")
+    print_axis: EnumProperty(name="Axis", items=printdir.AXIS_ITEMS, default="+Z",
+                             description="Scene axis the layers stack along")
     # results of the last run
     weak_bones: CollectionProperty(type=OsteonBoneResult)
     weak_bones_index: IntProperty(default=-1, update=_on_bone_row)
