@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "clipper2/clipper.h"
+#include "line_triangle.hpp"
 
 namespace osteon {
 namespace {
@@ -364,17 +365,8 @@ bool inside_shell(const MeshView& mesh, const std::vector<std::int32_t>& faces, 
   for (std::size_t k = 0; k < faces.size(); k += 3) {
     const Vec3 a = mesh.vertex(faces[k]);
     const Vec3 e1 = mesh.vertex(faces[k + 1]) - a, e2 = mesh.vertex(faces[k + 2]) - a;
-    const Vec3 q = dir.cross(e2);
-    const double det = e1.dot(q);
-    if (det == 0.0) continue;
-    const double inv = 1.0 / det;
-    const Vec3 s = p - a;
-    const double u = s.dot(q) * inv;
-    if (u < 0.0 || u > 1.0) continue;
-    const Vec3 r = s.cross(e1);
-    const double v = dir.dot(r) * inv;
-    if (v < 0.0 || u + v > 1.0) continue;
-    if (e2.dot(r) * inv > 0.0) ++hits;
+    double t = 0.0;
+    if (detail::line_hits_triangle(p, dir, a, e1, e2, t) && t > 0.0) ++hits;
   }
   return hits % 2 == 1;
 }

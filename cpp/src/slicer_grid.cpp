@@ -5,6 +5,7 @@
 #include <limits>
 #include <vector>
 
+#include "line_triangle.hpp"
 #include "osteon/slicer.hpp"
 #include "parallel.hpp"
 
@@ -163,20 +164,10 @@ std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, c
       if (!grid.near(c, line)) continue;
       const std::int32_t* t = grid.faces() + 3 * grid.begin(c);
       for (Index f = grid.begin(c); f < grid.end(c); ++f, t += 3) {
-        // Moller-Trumbore for the infinite line.
         const Vec3 a = mesh.vertex(t[0]);
         const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
-        const Vec3 p = dir.cross(e2);
-        const double det = e1.dot(p);
-        if (det == 0.0) continue;
-        const double inv = 1.0 / det;
-        const Vec3 s = point - a;
-        const double u = s.dot(p) * inv;
-        if (u < 0.0 || u > 1.0) continue;
-        const Vec3 q = s.cross(e1);
-        const double v = dir.dot(q) * inv;
-        if (v < 0.0 || u + v > 1.0) continue;
-        hits.push_back(e2.dot(q) * inv);
+        double hit = 0.0;
+        if (detail::line_hits_triangle(point, dir, a, e1, e2, hit)) hits.push_back(hit);
       }
     }
   }
