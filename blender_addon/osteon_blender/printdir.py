@@ -13,11 +13,11 @@ import numpy as np
 from osteon.settings import AXES, axis_direction
 
 MODES = (
-    ("Z", "Up (+Z)", "Layers stack along the scene's +Z: the model prints as it stands in the "
-     "scene (as a slicer places the exported model)"),
+    ("Z", "Up (+Z)", ("Layers stack along the scene's +Z: the model prints as it stands in the "
+                      "scene (as a slicer places the exported model)")),
     ("AXIS", "Chosen axis", "Layers stack along the chosen scene axis"),
-    ("BEST", "Best found", "Layers stack along the direction found by 'Find best orientation' "
-     "(the one with the lowest worst stress ratio)"),
+    ("BEST", "Best found", ("Layers stack along the direction found by 'Find best orientation' "
+                            "(the one with the lowest worst stress ratio)")),
 )
 AXIS_ITEMS = tuple((k, k, f"Layers stack along the scene's {k} axis") for k in AXES)
 

@@ -52,7 +52,7 @@ def test_find_and_apply_orientation_lowers_the_worst_ratio(sample, engine):
 
 
 def test_chosen_axis_and_weak_list_limits(sample):
-    obj, arm = sample
+    _obj, _arm = sample
     s = bpy.context.scene.osteon
     s.material = "PLA"
     s.print_direction = "AXIS"
