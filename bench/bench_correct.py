@@ -10,23 +10,12 @@ Prints the median time, rounds taken and, as a same-process baseline, the median
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import osteon
-from models import load
-
-
-def median_time(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+from models import load, median_time
 
 
 def main(argv=None) -> int:

@@ -4,6 +4,8 @@ midpoint-subdivided copies (weights interpolated) for the ~100k and 1M+ face siz
 from __future__ import annotations
 
 import os
+import statistics
+import time
 from pathlib import Path
 
 import numpy as np
@@ -61,3 +63,13 @@ def load(name: str, height_mm: float = 120.0, subdivisions: int = 0):
     sk = m.skeleton if isinstance(m.skeleton, osteon.Skeleton) else osteon.Skeleton(
         m.heads, m.tails, m.parents, m.bone_names)
     return v, f, sk, w
+
+
+def median_time(fn, repeat: int) -> float:
+    """Median wall time in seconds of ``repeat`` calls of ``fn()``."""
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
