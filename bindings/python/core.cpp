@@ -153,6 +153,8 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["section_thin_axis"] = to_numpy(std::move(r.section_thin_axis));
   d["section_aspect"] = to_numpy(std::move(r.section_aspect));
   d["section_thickness"] = to_numpy(std::move(r.section_thickness));
+  d["section_cut_area"] = to_numpy(std::move(r.section_cut_area));
+  d["section_cut_modulus"] = to_numpy(std::move(r.section_cut_modulus));
   d["moment_arm"] = to_numpy(std::move(r.moment_arm));
   d["moment"] = to_numpy(std::move(r.moment));
   d["stress"] = to_numpy(std::move(r.stress));
@@ -174,6 +176,9 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["outline_points"] = to_numpy(std::move(r.outline_points));
   d["outline_loop_start"] = to_numpy(std::move(r.outline_loop_start));
   d["outline_section_start"] = to_numpy(std::move(r.outline_section_start));
+  d["cut_outline_points"] = to_numpy(std::move(r.cut_outline_points));
+  d["cut_outline_loop_start"] = to_numpy(std::move(r.cut_outline_loop_start));
+  d["cut_outline_section_start"] = to_numpy(std::move(r.cut_outline_section_start));
   py::list loose;
   for (auto& piece : r.loose_pieces) loose.append(to_numpy(std::move(piece)));
   d["loose_pieces"] = loose;
@@ -445,4 +450,5 @@ PYBIND11_MODULE(_core, m) {
   m.attr("FLAG_NON_MANIFOLD") = static_cast<int>(kFlagNonManifold);
   m.attr("FLAG_UNRELIABLE") = static_cast<int>(kFlagUnreliable);
   m.attr("FLAG_TOO_THIN") = static_cast<int>(kFlagTooThin);
+  m.attr("FLAG_JUNCTION") = static_cast<int>(kFlagJunction);
 }

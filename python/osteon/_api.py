@@ -42,6 +42,7 @@ SECTION_FLAGS = {
     "non_manifold": _core.FLAG_NON_MANIFOLD,
     "unreliable": _core.FLAG_UNRELIABLE,
     "too_thin": _core.FLAG_TOO_THIN,
+    "junction": _core.FLAG_JUNCTION,
 }
 
 #: Plain-language reason of each flag (``Analysis.flag_reasons``, the JSON ``sections`` rows).
@@ -56,6 +57,8 @@ FLAG_REASONS = {
     "unreliable": "the bone is outside the mesh and no part here belongs to it: no number, "
                   "left out of every result",
     "too_thin": "too thin to print ({thickness} mm < {minimum} mm)",
+    "junction": "a side branch is cut here: only the material that continues through the plane "
+                "counts ({area} of {cut_area} mm²)",
 }
 #: Values of ``Analysis.section_kind``.
 SECTION_KINDS = {0: "interior", 1: "joint", 2: "end"}
@@ -359,6 +362,13 @@ class Analysis:
     outline_points: np.ndarray | None = None
     outline_loop_start: np.ndarray | None = None
     outline_section_start: np.ndarray | None = None
+    #: (S,) area mm² and modulus W mm³ of the whole cut; differ from section_area /
+    #: section_modulus only at ``junction`` sections (those are the core's, docs/junctions.md)
+    section_cut_area: np.ndarray | None = None
+    section_cut_modulus: np.ndarray | None = None
+    cut_outline_points: np.ndarray | None = None
+    cut_outline_loop_start: np.ndarray | None = None
+    cut_outline_section_start: np.ndarray | None = None
 
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
@@ -367,6 +377,8 @@ class Analysis:
                    min_thickness: float = DEFAULT_MIN_THICKNESS) -> Analysis:
         if len(d["outline_section_start"]) == 0:  # outlines not asked for
             d["outline_points"] = d["outline_loop_start"] = d["outline_section_start"] = None
+            d["cut_outline_points"] = d["cut_outline_loop_start"] = None
+            d["cut_outline_section_start"] = None
         return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
                    bone_names=list(skeleton.names),
                    build_direction=np.array(build_direction, dtype=float),
@@ -381,6 +393,10 @@ class Analysis:
             self.stress_ratio = self.stress / self.section_allowable
         if self.across_layers is None:
             self.across_layers = np.zeros(len(self.stress), bool)
+        if self.section_cut_area is None:
+            self.section_cut_area = np.asarray(self.section_area, dtype=float).copy()
+        if self.section_cut_modulus is None:
+            self.section_cut_modulus = np.asarray(self.section_modulus, dtype=float).copy()
 
     @property
     def num_sections(self) -> int:
@@ -401,6 +417,25 @@ class Analysis:
                 for s in range(len(ss) - 1)]
 
     @property
+    def section_cut_loops(self) -> list[list[np.ndarray]] | None:
+        """With ``keep_outlines=True``: per section (S), the loops of the whole cut of a
+        ``junction`` section (before the stub was left out; :attr:`section_loops` is the core
+        that was used), each (N,3) mm, outer boundary first; ``[]`` for any other section.
+        ``None`` without outlines. Packed as ``cut_outline_*`` like ``outline_*``."""
+        if self.cut_outline_section_start is None:
+            return None
+        pts, ls = self.cut_outline_points, self.cut_outline_loop_start
+        ss = self.cut_outline_section_start
+        return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
+                for s in range(len(ss) - 1)]
+
+    @property
+    def junction(self) -> np.ndarray:
+        """(S,) bool: sections at a junction, whose numbers are those of the core that continues
+        through the plane (not the whole cut, :attr:`section_cut_area`)."""
+        return (self.section_flags & SECTION_FLAGS["junction"]) != 0
+
+    @property
     def valid(self) -> np.ndarray:
         """(S,) bool: sections that were computed (not skipped)."""
         return np.isfinite(self.stress)
@@ -418,7 +453,10 @@ class Analysis:
     def flag_reasons(self, section: int) -> list[str]:
         """Plain-language reason of each flag set on one section (see ``FLAG_REASONS``)."""
         t = float(self.section_thickness[section])
-        return [FLAG_REASONS[name].format(thickness=f"{t:.2g}", minimum=f"{self.min_thickness:g}")
+        area = float(self.section_area[section])
+        cut = float(self.section_cut_area[section])
+        return [FLAG_REASONS[name].format(thickness=f"{t:.2g}", minimum=f"{self.min_thickness:g}",
+                                          area=f"{area:.3g}", cut_area=f"{cut:.3g}")
                 for name in self.flag_names(section)]
 
     @property

@@ -1,0 +1,128 @@
+// Stage 3d of a run: the effective section at junctions (SPEC §3, docs/junctions.md)
+// (Analyzer::Impl).
+//
+// Where a side branch grows out of a bone, the plane through the junction also cuts the stub of
+// the branch, and beam theory would count it. By Saint-Venant's principle a stub shorter than
+// about its own width is not engaged: only the material that continues through the plane, a
+// bone's width before and after it, carries the load. A cheap detector picks the candidates (a
+// cut whose area exceeds its bone's median by a quarter); for these only, two parallel planes at
+// +-delta (delta = 1.25 x the bone's equivalent radius sqrt(A_median / pi): the slab between
+// them is a little longer than the bone is wide) are cut and the section is trimmed to what both
+// neighbours' regions (widened a little) also cover: the core. Trimmed pieces that are nowhere
+// wider than 0.6 equivalent radii (a taper's rim, a tilted bone's crescent) stay in the core.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "analysis_impl.hpp"
+#include "osteon/regions.hpp"
+#include "parallel.hpp"
+
+namespace osteon {
+namespace {
+
+constexpr double kCandidateArea = 1.25;  // candidate: whole cut area > this x the bone's median
+constexpr double kDelta = 1.25;     // neighbour planes at +-this x the bone's equivalent radius
+constexpr double kMargin = 0.05;    // neighbour regions widened by this x the radius (wobble)
+constexpr double kOpening = 0.3;    // trimmed pieces nowhere wider than 2 x this x radius go back
+constexpr double kMaterial = 0.95;  // the core is used when its area < this x the cut's
+
+// Does the slab |(x - point) . normal| <= half reach into the box?
+bool slab_meets_box(const Vec3& point, const Vec3& normal, double half, const Box3& box) {
+  if (box.empty()) return false;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner((c & 1) ? box.hi.x() : box.lo.x(), (c & 2) ? box.hi.y() : box.lo.y(),
+                      (c & 4) ? box.hi.z() : box.lo.z());
+    const double s = (corner - point).dot(normal);
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  return lo <= half && hi >= -half;
+}
+
+// Back to the whole cut (a section that was a junction core but is no longer a candidate).
+void restore_whole(SectionState& st, bool keep) {
+  if (!(st.flags & kFlagJunction)) return;
+  set_section_region(st, st.frame, st.cut, keep);
+  st.flags &= ~kFlagJunction;
+  st.cut_loops.clear();
+}
+
+}  // namespace
+
+void Analyzer::Impl::find_junction_cores(RunState& run) {
+  const int ns = static_cast<int>(specs.size());
+  const bool keep = options.keep_outlines;
+  // Each bone's typical section: the median whole-cut area of its sections inside the mesh.
+  std::vector<std::vector<double>> areas(num_bones);
+  for (int i = 0; i < ns; ++i)
+    if (states[i].found && !(states[i].flags & kFlagOutside))
+      areas[specs[i].bone].push_back(states[i].cut_area);
+  std::vector<double> delta(num_bones, 0.0), median(num_bones, 0.0);
+  for (int b = 0; b < num_bones; ++b) {
+    auto& a = areas[b];
+    if (a.empty()) continue;
+    std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+    median[b] = a[a.size() / 2];
+    delta[b] = kDelta * std::sqrt(median[b] / M_PI);
+  }
+  std::vector<int> todo;
+  for (int i = 0; i < ns; ++i) {
+    SectionState& st = states[i];
+    if (!st.found) continue;
+    const int b = specs[i].bone;
+    const bool candidate =
+        !(st.flags & kFlagOutside) && delta[b] > 0 && st.cut_area > kCandidateArea * median[b];
+    if (!candidate) {
+      restore_whole(st, keep);
+      st.junction_delta = 0.0;
+      continue;
+    }
+    // A check made with the same delta stays right unless the section was re-cut or a change
+    // reaches its neighbour planes.
+    const bool fresh = run.section_dirty[i] || run.all_changed || st.junction_delta != delta[b] ||
+                       slab_meets_box(specs[i].point, specs[i].normal, delta[b], run.changed);
+    if (fresh) todo.push_back(i);
+  }
+  run.junction_checks = static_cast<long>(todo.size());
+  if (todo.empty()) return;
+  if (run.grid.num_cells() == 0) run.grid.build(run.mesh, 12, options.threads);
+  const int workers = detail::worker_count(options.threads, static_cast<long>(todo.size()));
+  std::vector<std::vector<CutSegment>> scratch(workers);
+  detail::parallel_for(static_cast<long>(todo.size()), options.threads, [&](long t, int worker) {
+    const int i = todo[t];
+    SectionState& st = states[i];
+    const int b = specs[i].bone;
+    restore_whole(st, keep);
+    st.junction_delta = delta[b];
+    // The regions around the bone point on the planes at -delta and +delta; a side with no
+    // region of its own there (past a free end, bone outside the mesh, open cut) is left out.
+    SectionPolygon regions[2];
+    std::vector<const SectionPolygon*> neighbours;
+    for (int side = 0; side < 2; ++side) {
+      PlaneFrame frame = st.frame;
+      frame.origin += (side == 0 ? -delta[b] : delta[b]) * frame.normal;
+      auto& segs = scratch[worker];
+      segs.clear();
+      cut_mesh(run.mesh, frame, segs, &run.grid);
+      const BoneDomain domain{&segs, run.vertex_bone.data(), b};
+      SectionGeometry geom = select_region(assemble_loops(segs, run.gap), &domain);
+      if (!geom.found || (geom.flags & (kFlagOutside | kFlagOpen))) continue;
+      regions[side] = std::move(geom.polygon);
+      neighbours.push_back(&regions[side]);
+    }
+    if (neighbours.empty()) return;
+    const SectionGeometry core = junction_core(st.cut, neighbours, kMargin / kDelta * delta[b],
+                                               kOpening / kDelta * delta[b]);
+    if (!core.found) return;
+    const SectionProperties props = section_properties(core.polygon);
+    if (!props.valid || !(props.area < kMaterial * st.cut_area)) return;
+    if (keep) st.cut_loops = st.loops;
+    if (set_section_region(st, st.frame, core.polygon, keep)) st.flags |= kFlagJunction;
+  });
+  if (run.timer.on) std::fprintf(stderr, "junction checks %ld\n", run.junction_checks);
+}
+
+}  // namespace osteon
