@@ -27,6 +27,7 @@ constexpr double kDelta = 1.25;     // neighbour planes at +-this x the bone's e
 constexpr double kMargin = 0.05;    // neighbour regions widened by this x the radius (wobble)
 constexpr double kOpening = 0.3;    // trimmed pieces nowhere wider than 2 x this x radius go back
 constexpr double kMaterial = 0.95;  // the core is used when its area < this x the cut's
+constexpr double kContinues = 0.5;  // ... and >= this x the bone's median area
 
 // Does the slab |(x - point) . normal| <= half reach into the box?
 bool slab_meets_box(const Vec3& point, const Vec3& normal, double half, const Box3& box) {
@@ -113,12 +114,16 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
       regions[side] = std::move(geom.polygon);
       neighbours.push_back(&regions[side]);
     }
-    if (neighbours.empty()) return;
+    // Material continues through the plane only if there is material on both sides.
+    if (neighbours.size() < 2) return;
     const SectionGeometry core = junction_core(st.cut, neighbours, kMargin / kDelta * delta[b],
                                                kOpening / kDelta * delta[b]);
     if (!core.found) return;
     const SectionProperties props = section_properties(core.polygon);
     if (!props.valid || !(props.area < kMaterial * st.cut_area)) return;
+    // A core far smaller than the bone's typical section is not the bone's member passing
+    // through (the planes landed in other parts: a bend, a flare, a bone end): whole cut kept.
+    if (props.area < kContinues * median[b]) return;
     if (keep) st.cut_loops = st.loops;
     if (set_section_region(st, st.frame, core.polygon, keep)) st.flags |= kFlagJunction;
   });

@@ -363,14 +363,20 @@ SectionGeometry junction_core(const SectionPolygon& section,
   }
   std::vector<const PolyPath64*> pieces;
   collect_outers(trimmed, pieces);
-  Paths64 stubs;
+  Paths64 kept = core;
   for (const PolyPath64* piece : pieces) {
     Paths64 paths{piece->Polygon()};
     for (const auto& hole : *piece) paths.push_back(hole->Polygon());
-    if (opening_mm > 0 && offset(paths, -opening_mm * s.scale).empty()) continue;
-    stubs.insert(stubs.end(), paths.begin(), paths.end());
+    if (opening_mm > 0 && offset(paths, -opening_mm * s.scale).empty())
+      kept.insert(kept.end(), paths.begin(), paths.end());
   }
-  core = Clipper2Lib::Difference(whole, stubs, FillRule::NonZero);
+  core = Clipper2Lib::Union(kept, FillRule::NonZero);
+  // Zero-width spikes where pieces meet the boundary: shrink and regrow by 2^-24 of the extent.
+  const double eps = std::ldexp(1.0, 16);
+  core = Clipper2Lib::InflatePaths(core, -eps, Clipper2Lib::JoinType::Miter,
+                                   Clipper2Lib::EndType::Polygon, 2.0);
+  core = Clipper2Lib::InflatePaths(core, eps, Clipper2Lib::JoinType::Miter,
+                                   Clipper2Lib::EndType::Polygon, 2.0);
   PolyTree64 tree;
   Clipper2Lib::Clipper64 clipper;
   clipper.AddSubject(core);
