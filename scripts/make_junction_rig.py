@@ -17,7 +17,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-
 from osteon.io import write_tgf
 
 SEGMENTS = 48

@@ -267,6 +267,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("local_cuts", &AnalysisOptions::local_cuts)
       .def_readwrite("reuse_sections", &AnalysisOptions::reuse_sections)
       .def_readwrite("keep_outlines", &AnalysisOptions::keep_outlines)
+      .def_readwrite("junctions", &AnalysisOptions::junctions)
       .def_readwrite("min_thickness", &AnalysisOptions::min_thickness,
                      "mm; thinner sections are flagged too_thin (0 = no check)")
       .def_property(

@@ -56,6 +56,13 @@ void restore_whole(SectionState& st, bool keep) {
 void Analyzer::Impl::find_junction_cores(RunState& run) {
   const int ns = static_cast<int>(specs.size());
   const bool keep = options.keep_outlines;
+  if (!options.junctions) {
+    for (SectionState& st : states) {
+      restore_whole(st, keep);
+      st.junction_delta = 0.0;
+    }
+    return;
+  }
   // Each bone's typical section: the median whole-cut area of its sections inside the mesh.
   std::vector<std::vector<double>> areas(num_bones);
   for (int i = 0; i < ns; ++i)

@@ -11,8 +11,10 @@
 #include "test_helpers.hpp"
 
 using namespace osteon;
+using osteon::testing::OwnedMesh;
 using osteon::testing::prism;
 using osteon::testing::rectangle;
+using osteon::testing::regular_polygon;
 
 namespace {
 Skeleton bar(double length) {
@@ -162,4 +164,48 @@ TEST(Analysis, OutlinesEncloseTheSectionArea) {
     ++checked;
   }
   EXPECT_GE(checked, 14);
+}
+
+TEST(Analysis, JunctionCountsOnlyTheBarThroughAStub) {
+  // A round bar r = 3 (64-gon) along x, 0..40, and a stub of the same radius fused at x = 20,
+  // along z up to 9: two overlapping closed shells (the engine takes their union).
+  const double r = 3;
+  const OwnedMesh rod = prism(regular_polygon(r, 64), 40, 41);
+  OwnedMesh m = rod;
+  const OwnedMesh stub = prism(regular_polygon(r, 64), 9, 10);
+  const std::int32_t base = static_cast<std::int32_t>(m.v.size() / 3);
+  for (std::size_t i = 0; i < stub.v.size(); i += 3) {  // (x, y, z) -> (20 + y, z, x): a rotation
+    m.v.push_back(20 + stub.v[i + 1]);
+    m.v.push_back(stub.v[i + 2]);
+    m.v.push_back(stub.v[i]);
+  }
+  for (std::int32_t f : stub.f) m.f.push_back(base + f);
+  AnalysisOptions o;
+  const AnalysisResult a = analyze(m.view(), bar(40), nullptr, o);
+  const AnalysisResult plain = analyze(rod.view(), bar(40), nullptr, o);
+  ASSERT_EQ(a.section_modulus.size(), plain.section_modulus.size());
+  const double w_round = M_PI * r * r * r / 4;
+  int through = 0, away = 0;
+  for (std::size_t i = 0; i < a.section_modulus.size(); ++i) {
+    if (a.section_kind[i] != kInterior) continue;
+    const double x = a.section_param[i];
+    if (std::abs(x - 20) < r) {  // x = 18, 20, 22: the plane cuts the stub
+      ++through;
+      EXPECT_TRUE(a.section_flags[i] & kFlagJunction) << x;
+      EXPECT_NEAR(a.section_modulus[i] / w_round, 1.0, 0.10) << x;
+      EXPECT_GT(a.section_cut_modulus[i], 1.6 * w_round) << x;
+      EXPECT_NEAR(a.stress[i], a.moment[i] / a.section_modulus[i], 1e-12 * a.stress[i]);
+    } else if (std::abs(x - 20) > r + 1) {
+      ++away;
+      EXPECT_FALSE(a.section_flags[i] & kFlagJunction) << x;
+      EXPECT_NEAR(a.section_modulus[i], plain.section_modulus[i], 0.01 * plain.section_modulus[i]);
+    }
+  }
+  EXPECT_EQ(through, 3);
+  EXPECT_GE(away, 12);
+  // The prismatic bar: no junction, whole cut == section.
+  for (std::size_t i = 0; i < plain.section_modulus.size(); ++i) {
+    EXPECT_FALSE(plain.section_flags[i] & kFlagJunction);
+    EXPECT_EQ(plain.section_area[i], plain.section_cut_area[i]);
+  }
 }

@@ -609,6 +609,7 @@ class Analyzer:
         layer_strength_ratio: float = 1.0,
         keep_outlines: bool = False,
         min_thickness: float | None = None,
+        junctions: bool = True,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -632,6 +633,7 @@ class Analyzer:
         options.local_cuts = bool(local_cuts)
         options.keep_outlines = bool(keep_outlines)
         options.min_thickness = self.min_thickness
+        options.junctions = bool(junctions)
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
                                     options)
 
@@ -675,6 +677,7 @@ def analyze(
     layer_strength_ratio: float = 1.0,
     keep_outlines: bool = False,
     min_thickness: float | None = None,
+    junctions: bool = True,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -689,7 +692,9 @@ def analyze(
     docs/printing.md); ``keep_outlines`` also return each section's loops
     (:attr:`Analysis.section_loops`); ``min_thickness`` mm: sections thinner than this are
     flagged ``too_thin`` (None: 0.8 mm, FDM; the material presets carry their own; 0 = no
-    check). Raises ValueError on bad input.
+    check); ``junctions`` (default True) counts only the core that continues through the plane
+    where a section cuts a side branch's stub (flag ``junction``, docs/junctions.md); False
+    analyses whole cuts. Raises ValueError on bad input.
     """
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
@@ -699,7 +704,7 @@ def analyze(
                         gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
                         build_direction=build_direction,
                         layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines,
-                        min_thickness=min_thickness)
+                        min_thickness=min_thickness, junctions=junctions)
     return analyzer.run(v)
 
 

@@ -49,6 +49,10 @@ def test_bar_through_a_stub_counts_only_the_bar():
     assert away.sum() >= 12 and not a.junction[away].any()
     np.testing.assert_allclose(a.section_modulus[away], plain.section_modulus[away], rtol=0.01)
     np.testing.assert_allclose(a.section_area[away], plain.section_area[away], rtol=0.01)
+    # junctions=False: the whole cuts, as before (the stub counted)
+    whole = osteon.analyze(*merge(bar, stub), sk, interval=2.0, junctions=False)
+    assert not whole.junction.any()
+    np.testing.assert_allclose(whole.section_modulus[through], a.section_cut_modulus[through])
     # a prismatic bar: nothing is a junction, whole cut == section
     assert not plain.junction.any()
     ok = plain.valid

@@ -24,6 +24,9 @@ struct AnalysisOptions {
   bool local_cuts = true;  ///< cut near the bone first (same result, faster); false: whole planes
   bool reuse_sections = true;  ///< Analyzer::run re-cuts only sections a change can reach (exact)
   bool keep_outlines = false;  ///< fill AnalysisResult's outline_* (the loops of each section)
+  /// Junction cores (docs/junctions.md): where a section cuts a side branch's stub, count only
+  /// the material that continues through the plane (flag kFlagJunction); false: whole cuts.
+  bool junctions = true;
   /// FDM build direction in the model frame (any non-zero vector; default +Z) and layer strength
   /// ratio Z/X (1 = isotropic): each section's allowable is layer_allowable() of the angle
   /// between its normal and this direction (osteon/layers.hpp, docs/printing.md).
