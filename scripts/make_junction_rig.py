@@ -57,7 +57,8 @@ def build():
     body = parts[0]
     for p in parts[1:]:
         body = body + p
-    mesh = body.to_mesh()
+    # well-shaped triangles (edges <= 1.5 mm) so that gmsh meshes the FEM crops quickly
+    mesh = body.refine_to_length(1.5).to_mesh()
     v = np.asarray(mesh.vert_properties)[:, :3].astype(np.float64)
     f = np.asarray(mesh.tri_verts).astype(np.int64)
     names = list(joints)

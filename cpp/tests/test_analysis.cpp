@@ -7,6 +7,7 @@
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
 #include "osteon/skinning.hpp"
+#include "osteon/slicer.hpp"
 #include "osteon/weights.hpp"
 #include "test_helpers.hpp"
 
