@@ -5,7 +5,7 @@
 // the branch, and beam theory would count it. By Saint-Venant's principle a stub shorter than
 // about its own width is not engaged: only the material that continues through the plane, a
 // bone's width before and after it, carries the load. A cheap detector picks the candidates (a
-// cut whose area exceeds its bone's median by a quarter); for these only, two parallel planes at
+// cut whose area exceeds 1.5 x its bone's median); for these only, two parallel planes at
 // +-delta (delta = 1.25 x the bone's equivalent radius sqrt(A_median / pi): the slab between
 // them is a little longer than the bone is wide) are cut and the section is trimmed to what both
 // neighbours' regions (widened a little) also cover: the core. Trimmed pieces that are nowhere
@@ -22,9 +22,9 @@
 namespace osteon {
 namespace {
 
-constexpr double kCandidateArea = 1.25;  // candidate: whole cut area > this x the bone's median
-constexpr double kDelta = 1.25;     // neighbour planes at +-this x the bone's equivalent radius
-constexpr double kMargin = 0.05;    // neighbour regions widened by this x the radius (wobble)
+constexpr double kCandidateArea = 1.5;  // candidate: whole cut area > this x the bone's median
+constexpr double kDelta = 1.25;         // neighbour planes at +-this x the bone's equivalent radius
+constexpr double kMargin = 0.05;        // neighbour regions widened by this x the radius (wobble)
 constexpr double kOpening = 0.3;    // trimmed pieces nowhere wider than 2 x this x radius go back
 constexpr double kMaterial = 0.95;  // the core is used when its area < this x the cut's
 constexpr double kContinues = 0.5;  // ... and >= this x the bone's median area
@@ -91,7 +91,7 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     // A check made with the same delta stays right unless the section was re-cut or a change
     // reaches its neighbour planes.
     const bool fresh = run.section_dirty[i] || run.all_changed || st.junction_delta != delta[b] ||
-                       slab_meets_box(specs[i].point, specs[i].normal, delta[b], run.changed);
+                       slab_meets_box(specs[i].point, specs[i].normal, 1.5 * delta[b], run.changed);
     if (fresh) todo.push_back(i);
   }
   run.junction_checks = static_cast<long>(todo.size());
@@ -109,20 +109,51 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     // region of its own there (past a free end, bone outside the mesh, open cut) is left out.
     SectionPolygon regions[2];
     std::vector<const SectionPolygon*> neighbours;
-    for (int side = 0; side < 2; ++side) {
-      PlaneFrame frame = st.frame;
-      frame.origin += (side == 0 ? -delta[b] : delta[b]) * frame.normal;
-      auto& segs = scratch[worker];
-      segs.clear();
-      cut_mesh(run.mesh, frame, segs, &run.grid);
-      const BoneDomain domain{&segs, run.vertex_bone.data(), b};
-      SectionGeometry geom = select_region(assemble_loops(segs, run.gap), &domain);
-      if (!geom.found || (geom.flags & (kFlagOutside | kFlagOpen))) continue;
-      regions[side] = std::move(geom.polygon);
-      neighbours.push_back(&regions[side]);
+    // Along a bone, the family's own sections m intervals away serve when m * h is within
+    // [0.75, 1.5] delta: already cut, and in the same plane coordinates (u, v are shared and
+    // the origins lie on the bone's axis). Otherwise the two planes are cut.
+    const int job = specs[i].job;
+    const int first = job_section[job];
+    const int count = job_bone[job] >= 0 ? static_cast<int>(slab_params[b].size()) - 2 : 0;
+    const int m = std::max(1, static_cast<int>(std::lround(delta[b] / options.interval)));
+    const double reach = m * options.interval;
+    auto usable = [&](int j) {
+      return states[j].found && !(states[j].flags & (kFlagOutside | kFlagOpen));
+    };
+    const bool family = count > 0 && reach >= 0.75 * delta[b] && reach <= 1.5 * delta[b] &&
+                        i - m >= first && i + m < first + count;
+    if (family) {
+      if (!usable(i - m) || !usable(i + m)) return;  // a side without material of its own
+      neighbours.push_back(&states[i - m].cut);
+      neighbours.push_back(&states[i + m].cut);
+    }
+    // Otherwise the two planes are cut inside a ball around the bone point three times the
+    // section's reach: a neighbour whose region around the bone point leaves that ball (its
+    // loop is clipped open there) is far larger than the section and covers it.
+    int sides = family ? 2 : 0;
+    if (!family) {
+      double extent = 0.0;
+      for (const Vec2& q : st.cut.outer) extent = std::max(extent, q.norm());
+      for (int side = 0; side < 2; ++side) {
+        PlaneFrame frame = st.frame;
+        frame.origin += (side == 0 ? -delta[b] : delta[b]) * frame.normal;
+        const CutRegion ball{frame.origin, Vec3::Zero(), 3.0 * extent + delta[b]};
+        auto& segs = scratch[worker];
+        segs.clear();
+        cut_mesh(run.mesh, frame, segs, &run.grid, &ball);
+        const PlaneCut cut = assemble_loops(segs, 0.0);
+        SectionGeometry geom = select_region(cut, nullptr);
+        if (geom.found && !(geom.flags & kFlagOutside)) {
+          regions[side] = std::move(geom.polygon);
+          neighbours.push_back(&regions[side]);
+          ++sides;
+        } else if (!geom.found && !cut.open_chains.empty() && (geom.flags & kFlagOpen)) {
+          ++sides;  // clipped around the bone point: a far larger member, covering the section
+        }
+      }
     }
     // Material continues through the plane only if there is material on both sides.
-    if (neighbours.size() < 2) return;
+    if (sides < 2 || neighbours.empty()) return;
     const SectionGeometry core = junction_core(st.cut, neighbours, kMargin / kDelta * delta[b],
                                                kOpening / kDelta * delta[b]);
     if (!core.found) return;

@@ -309,19 +309,21 @@ SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain) {
 
 namespace {
 
-// Clipper2 paths of a section polygon, oriented (the outer boundary and its holes, even-odd).
+// Clipper2 paths of a section polygon, oriented: the outer boundary counter-clockwise, holes
+// clockwise (a SectionPolygon's loops may have either orientation).
 Paths64 paths_of(const SectionPolygon& poly, const Scaler& s) {
-  Paths64 raw;
-  auto add = [&](const std::vector<Vec2>& loop) {
+  Paths64 out;
+  auto add = [&](const std::vector<Vec2>& loop, bool outer) {
     if (loop.size() < 3) return;
     Path64 path;
     path.reserve(loop.size());
     for (const Vec2& p : loop) path.push_back(s.to(p));
-    raw.push_back(std::move(path));
+    if ((signed_area(loop) > 0) != outer) std::reverse(path.begin(), path.end());
+    out.push_back(std::move(path));
   };
-  add(poly.outer);
-  for (const auto& hole : poly.holes) add(hole);
-  return Clipper2Lib::Union(raw, Clipper2Lib::FillRule::EvenOdd);
+  add(poly.outer, true);
+  for (const auto& hole : poly.holes) add(hole, false);
+  return out;
 }
 
 // Offset by delta (Clipper2 units), round joins with arcs of about 1 % of |delta| in error.
@@ -346,8 +348,12 @@ SectionGeometry junction_core(const SectionPolygon& section,
   const Scaler s(all);
   const Paths64 whole = paths_of(section, s);
   Paths64 core = whole;
+  // Only the neighbours' material near the section matters: clipped to its box (+ margin).
+  const Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(whole);
+  const std::int64_t pad = static_cast<std::int64_t>(2.0 * margin_mm * s.scale) + 1;
+  const Clipper2Lib::Rect64 near(box.left - pad, box.top - pad, box.right + pad, box.bottom + pad);
   for (const SectionPolygon* n : neighbours) {
-    Paths64 widened = paths_of(*n, s);
+    Paths64 widened = Clipper2Lib::RectClip(near, paths_of(*n, s));
     if (margin_mm > 0) widened = offset(widened, margin_mm * s.scale);
     core = Clipper2Lib::Intersect(core, widened, FillRule::NonZero);
   }
@@ -371,12 +377,6 @@ SectionGeometry junction_core(const SectionPolygon& section,
       kept.insert(kept.end(), paths.begin(), paths.end());
   }
   core = Clipper2Lib::Union(kept, FillRule::NonZero);
-  // Zero-width spikes where pieces meet the boundary: shrink and regrow by 2^-24 of the extent.
-  const double eps = std::ldexp(1.0, 16);
-  core = Clipper2Lib::InflatePaths(core, -eps, Clipper2Lib::JoinType::Miter,
-                                   Clipper2Lib::EndType::Polygon, 2.0);
-  core = Clipper2Lib::InflatePaths(core, eps, Clipper2Lib::JoinType::Miter,
-                                   Clipper2Lib::EndType::Polygon, 2.0);
   PolyTree64 tree;
   Clipper2Lib::Clipper64 clipper;
   clipper.AddSubject(core);
