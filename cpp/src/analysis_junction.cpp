@@ -12,6 +12,7 @@
 // wider than 0.6 equivalent radii (a taper's rim, a tilted bone's crescent) stay in the core.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -97,6 +98,10 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
   run.junction_checks = static_cast<long>(todo.size());
   if (todo.empty()) return;
   if (run.grid.num_cells() == 0) run.grid.build(run.mesh, 12, options.threads);
+  // Which sections may serve as a neighbour (read while other candidates' flags change).
+  std::vector<std::uint8_t> neighbour_ok(ns);
+  for (int j = 0; j < ns; ++j)
+    neighbour_ok[j] = states[j].found && !(states[j].flags & (kFlagOutside | kFlagOpen));
   const int workers = detail::worker_count(options.threads, static_cast<long>(todo.size()));
   std::vector<std::vector<CutSegment>> scratch(workers);
   detail::parallel_for(static_cast<long>(todo.size()), options.threads, [&](long t, int worker) {
@@ -117,9 +122,7 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     const int count = job_bone[job] >= 0 ? static_cast<int>(slab_params[b].size()) - 2 : 0;
     const int m = std::max(1, static_cast<int>(std::lround(delta[b] / options.interval)));
     const double reach = m * options.interval;
-    auto usable = [&](int j) {
-      return states[j].found && !(states[j].flags & (kFlagOutside | kFlagOpen));
-    };
+    auto usable = [&](int j) { return neighbour_ok[j] != 0; };
     const bool family = count > 0 && reach >= 0.75 * delta[b] && reach <= 1.5 * delta[b] &&
                         i - m >= first && i + m < first + count;
     if (family) {
