@@ -75,8 +75,11 @@ def test_clean_closed_box_has_no_doubt():
                        force=20.0, allowable_stress=1e6, interval=1.0)
     r = report.build_report(analysis=a, bone_names=["bone"], allowable_mpa=1e6,
                             settings={"force_n": 20.0}, front_end="test", model="box")
-    # the one section cut exactly on the end cap (param 0) cuts nothing: counted, not more
-    assert r["skipped_sections"] <= 1 and r["not_analysed_bones"] == []
+    # the free head's section on the end cap (param 0) is cut just inside it: nothing skipped
+    assert r["skipped_sections"] == 0 and r["not_analysed_bones"] == []
+    head = np.flatnonzero(np.asarray(a.section_param) == 0.0)
+    assert len(head) == 1 and a.section_area[head[0]] == pytest.approx(100.0, rel=1e-9)
+    assert a.max_stress == a.stress[head[0]]  # the cantilever's largest moment is there
     assert r["verdict"] == "ok" and r["bones"][0]["status"] == "ok"
     assert r["max_stress_doubt"] == [] and r["doubtful_sections"] == 0
 
