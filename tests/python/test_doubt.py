@@ -127,3 +127,23 @@ def test_cli_summary_and_json_show_skipped(tmp_path, capsys):
 @pytest.mark.parametrize("name", sorted(osteon.SECTION_FLAGS))
 def test_every_engine_flag_has_a_category_or_reason(name):
     assert name in doubt.REASONS
+
+
+def test_bone_that_deforms_no_vertex_is_not_listed_not_analysed():
+    """A helper bone with no vertex (a glTF ``_rootJoint`` from the floor to the hips) outside
+    the mesh: its sections are skipped and counted, but there is nothing of the model to analyse
+    along it, so it is not "not analysed"; the bar's own bone is analysed, and the verdict too."""
+    v, f = prism(rectangle(10.0, 10.0), 60.0)
+    v = np.asarray(v, float)
+    sk = osteon.Skeleton([[0, 0, 0], [0, 0, -40]], [[60, 0, 0], [0, 0, -10]], [-1, -1],
+                         names=["bone", "helper"])
+    w = np.zeros((len(v), 2))
+    w[:, 0] = 1.0
+    a = osteon.analyze(v, np.asarray(f), sk, w, force=20.0, allowable_stress=1e6, interval=1.0)
+    rows = doubt.bone_doubt(a, 2)
+    assert rows[1]["skipped_sections"] > 0 and not rows[1]["not_analysed"]
+    assert "deforms no vertex" in rows[1]["reason"]
+    assert rows[0]["skipped_sections"] == 0 and not rows[0]["not_analysed"]
+    r = report.build_report(analysis=a, bone_names=["bone", "helper"], allowable_mpa=1e6,
+                            settings={"force_n": 20.0}, front_end="test", model="box")
+    assert r["not_analysed_bones"] == [] and r["skipped_sections"] == rows[1]["skipped_sections"]
