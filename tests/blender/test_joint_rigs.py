@@ -116,9 +116,12 @@ def test_fbx_dog_joint_segments_match_the_cli(addon, engine):
     print(f"[issue13] dog FBX max {blender_max:.2f} MPa, CLI {a.max_stress:.2f} MPa (0.5 mm)")
     assert blender_max == pytest.approx(a.max_stress, rel=0.10)
     # the same place: the tail's root (the rig file's joint_13 is the FBX's joint_9)
+    # (by stress: the panel's weakest section is by stress ratio, which the print direction's
+    # layer strength changes)
     an = last["analysis"]
-    worst = sk.names[an.section_bone[an.weakest_section]]
-    assert worst == "joint_9" and m.names[a.section_bone[a.weakest_section]] == "joint_13"
+    worst = sk.names[an.section_bone[int(np.nanargmax(an.stress))]]
+    assert worst == "joint_9" and m.names[a.section_bone[int(np.nanargmax(a.stress))]] == \
+        "joint_13"
 
 
 def test_live_mode_reads_the_joint_segments(addon, engine):
