@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import bridge, core, printdir, state
-from .core import OsteonError
+from .core import OsteonError, min_thickness_mm
 
 # read-only view: scene name -> the last result (report, Analysis, inputs, correction),
 # kept in the scene's state object
@@ -315,7 +315,8 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
     progress(0.1)
     t0 = time.perf_counter()
     try:
-        sk, w = osteon.auto_skeleton(verts * k, faces, root=root)
+        sk, w = osteon.auto_skeleton(verts * k, faces, root=root,
+                                     min_thickness=min_thickness_mm(core.settings_of(s)))
     except ValueError as e:
         raise OsteonError(f"Make skeleton: {e}") from e
     progress(0.7)
