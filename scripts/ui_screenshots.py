@@ -7,10 +7,14 @@ that every text it draws fits at the default sidebar width (issue 20).
 (``scripts/ui_screenshots.sh`` runs exactly that.)  Factory settings, the sidebar opened at its
 default width on the "Osteon" tab; then
 
-1. the sample figurine (scripts/make_sample_rig.py): Analyze, screenshot;
-2. a click on the first weak bone (osteon.select_bone, as the list's row does), screenshot;
-3. the RigNet dog FBX from tests/data (an imported rig: joint names, cm units): Analyze,
-   screenshot.
+1. the sample figurine (scripts/make_sample_rig.py): Analyze, screenshot (``sample``);
+2. a click on the first weak bone (osteon.select_bone, as the list's row does), screenshot
+   (``sample_bone``: the bone and its weakest section outlined in yellow, framed);
+   "Next weak bone" must move to the next weak row;
+3. Correct, screenshot (``sample_corrected``: the scale column); Reset must put back the
+   viewport's Solid colour the user had (Analyze switched it to the attribute);
+4. the RigNet dog FBX from tests/data (an imported rig: joint names, cm units): Analyze,
+   screenshot (``dog``), a click on its first weak bone, screenshot (``dog_bone``).
 
 Each step saves the window (``<step>_window.png``) and the sidebar cut out of it
 (``<step>_panel.png``) to the output folder, and checks, from the UI itself:
@@ -181,15 +185,19 @@ def load_dog():
     return mesh
 
 
+def run(op, *args, **kw):
+    win, area, region, _ui = view3d()
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        return op(*args, **kw)
+
+
 def select_first_weak():
     s = bpy.context.scene.osteon
     weak = [b for b in s.weak_bones if b.weak]
     if not weak:
-        fail("sample: no weak bone to click")
+        fail("no weak bone to click")
         return
-    win, area, region, _ui = view3d()
-    with bpy.context.temp_override(window=win, area=area, region=region):
-        res = bpy.ops.osteon.select_bone("INVOKE_DEFAULT", bone=weak[0].name)
+    res = run(bpy.ops.osteon.select_bone, "INVOKE_DEFAULT", bone=weak[0].name)
     if res != {"FINISHED"}:
         fail(f"select_bone({weak[0].name}) returned {res}")
 
@@ -207,6 +215,7 @@ def s_setup():
     if not hasattr(bpy.types.Scene, "osteon"):
         osteon_blender.register()
     open_sidebar()
+    REPORT["color_type_before"] = view3d()[1].spaces.active.shading.color_type
 
 
 for _click in range(2):  # the first click after start-up may only give the window focus
@@ -248,6 +257,32 @@ def s_click():
 def s_click_shot():
     check("sample_bone")
     screenshot("sample_bone")
+    s = bpy.context.scene.osteon
+    weak = [i for i, b in enumerate(s.weak_bones) if b.weak]
+    before = s.weak_bones_index
+    run(bpy.ops.osteon.next_weak_bone)
+    later = [i for i in weak if i > before] or weak
+    if s.weak_bones_index != later[0]:
+        fail(f"Next weak bone went from row {before} to {s.weak_bones_index}, not {later[0]}")
+
+
+@step
+def s_correct():
+    if run(bpy.ops.osteon.correct) != {"FINISHED"}:
+        fail("Correct did not finish")
+
+
+@step
+def s_correct_shot():
+    check("sample_corrected")
+    screenshot("sample_corrected")
+    space = view3d()[1].spaces.active
+    if space.shading.color_type != "VERTEX":
+        fail(f"Analyze left the viewport colour at {space.shading.color_type}, not Attribute")
+    run(bpy.ops.osteon.reset)
+    if space.shading.color_type != REPORT["color_type_before"]:
+        fail(f"Reset left the viewport colour at {space.shading.color_type}, not the user's "
+             f"{REPORT['color_type_before']}")
 
 
 @step
@@ -259,6 +294,13 @@ def s_dog():
 def s_dog_shot():
     check("dog")
     screenshot("dog")
+    select_first_weak()
+
+
+@step
+def s_dog_bone_shot():
+    check("dog_bone")
+    screenshot("dog_bone")
 
 
 state = {"i": 0}
