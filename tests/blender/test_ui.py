@@ -230,3 +230,15 @@ def test_apply_says_osteon_once(sample, capfd):
     assert res == {"FINISHED"}
     line = next(ln for ln in out.splitlines() if "correction applied" in ln)
     assert line.count("osteon:") == 1, line
+
+
+def test_long_texts_wrap_to_the_sidebar(addon):
+    """The doubt text (issue 13) is wrapped at spaces to lines that fit, nothing lost."""
+    text = ("9 of 145 sections could not be cut: the bone lies outside the mesh there; the cut "
+            "is unreliable there")
+    room = 229 - panel.MARGINS - panel.BOX_INSET
+    lines = panel.wrap(text, room, 1.0, icon=True)
+    assert len(lines) >= 3 and " ".join(lines) == text
+    for ln in lines:
+        assert ui_fit.text_width(ln, 1.0) <= room - 32.0
+    assert panel.wrap("short", room, 1.0) == ["short"]
