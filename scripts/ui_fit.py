@@ -78,7 +78,7 @@ class FitLayout:
     def _sub(self, kind, factor=0.0):
         b = Box(kind, factor)
         self.node.children.append(b)
-        return FitLayout(b, self.where)
+        return type(self)(b, self.where)
 
     def row(self, align=False, heading="", **_kw):
         return self._sub("row")
@@ -160,7 +160,7 @@ class FitLayout:
         box = self._sub("list")
         items = getattr(data, prop)
         for i, item in enumerate(items):
-            row = FitLayout(Box("row"), f"{self.where} / {list_type} row {i}")
+            row = type(self)(Box("row"), f"{self.where} / {list_type} row {i}")
             box.node.children.append(row.node)
             ul.draw_item(ul, bpy.context, row, data, item, 0, active_data, active_prop, i)
 

@@ -99,7 +99,7 @@ class OSTEON_UL_weak_bones(bpy.types.UIList):
     """Result rows: bone (a button that shows it; its tooltip has the full name and numbers),
     stress / allowable, and the cross-section scale Correct gave it."""
 
-    COLUMNS = (0.5,)   # the bone's share; the ratio and the scale share the rest
+    COLUMNS = (0.46,)   # the bone's share; the ratio and the scale share the rest
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index):
         split = layout.split(factor=OSTEON_UL_weak_bones.COLUMNS[0], align=True)
@@ -117,7 +117,7 @@ class OSTEON_UL_weak_bones(bpy.types.UIList):
         col.alert = item.weak
         col.label(text=f"{item.ratio:.2f}")
         scaled = abs(item.scale - 1.0) > 1e-6
-        split.label(text=f"x{item.scale:.2f}" if scaled else "-")
+        split.label(text=f"{item.scale:.2f}" if scaled else "-")
 
 
 class OSTEON_PT_main(bpy.types.Panel):
