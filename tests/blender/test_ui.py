@@ -74,7 +74,7 @@ def test_panels_draw_before_and_after_results(sample):
     main = _draw("OSTEON_PT_main")
     ops = [t for t in main if t.startswith("op:")]
     assert ops[:3] == ["op:osteon.analyze", "op:osteon.correct", "op:osteon.reset"]
-    assert "Not analysed yet: press Analyze" in main
+    assert "Not analysed yet" in main
     assert {"op:osteon.find_orientation", "op:osteon.apply_orientation"} <= set(
         _draw("OSTEON_PT_print"))
     assert "Allowable 30.0 MPa" in _draw("OSTEON_PT_material")   # 60 MPa / 2
@@ -154,10 +154,12 @@ def test_result_row_columns_and_tooltip(sample):
     texts = [i.text for i in _items(root, [])]
     assert texts == ["op:osteon.select_bone", row.name, f"{row.ratio:.2f}", "-"]
     assert row.ratio > 1.0
-    assert row.ratio == pytest.approx(row.max_stress_mpa / s.allowable_mpa, rel=1e-3)
+    # PLA's layers are weaker across (0.55): the ratio counts the strength that governs
+    assert row.ratio >= row.max_stress_mpa / s.allowable_mpa - 1e-4
     tip = sb.OSTEON_OT_select_bone.description(bpy.context, type("P", (), {"bone": row.name}))
     assert row.name in tip and f"{row.max_stress_mpa:.1f} MPa" in tip
-    assert f"{row.ratio:.2f} x the allowable {s.allowable_mpa:.1f} MPa" in tip
+    assert f"stress / allowable {row.ratio:.2f} (allowable {s.allowable_mpa:.1f} MPa" in tip
+    assert not row.limit or row.limit in tip
 
 
 def test_row_click_shows_the_weakest_section(sample):

@@ -117,11 +117,10 @@ def row_tooltip(row, allowable_mpa: float) -> str:
     governing strength, scale after Correct."""
     if row.status == "not analysed":
         return f"{row.name}: not analysed. {row.reason}"
-    text = (f"{row.name}: max stress {row.max_stress_mpa:.1f} MPa = {row.ratio:.2f} x the "
-            f"allowable {allowable_mpa:.1f} MPa")
-    text += " (over the limit)" if row.weak else " (within the limit)"
-    if row.limit:
-        text += f"; governed by the strength {row.limit}"
+    text = (f"{row.name}: max stress {row.max_stress_mpa:.1f} MPa; stress / allowable "
+            f"{row.ratio:.2f} (allowable {allowable_mpa:.1f} MPa")
+    text += f", the strength {row.limit} governs)" if row.limit else ")"
+    text += ", over the limit" if row.weak else ", within the limit"
     if abs(row.scale - 1.0) > 1e-6:
         text += f"; Correct scaled its cross-section x{row.scale:.2f}"
     return text + ". Click: select the bone, outline its weakest section, frame it"

@@ -26,7 +26,7 @@ def summary_lines(s) -> list[tuple[str, str]]:
     check): the first is the verdict -- "N bones over the limit", "All within the limit" or
     "Not analysed: <why>" -- never the object's name."""
     if not s.has_result:
-        return [("Not analysed yet: press Analyze", "INFO")]
+        return [("Not analysed yet", "INFO")]
     rows = list(s.weak_bones)
     weak = sum(1 for r in rows if r.weak)
     uncut = [r for r in rows if r.status == "not analysed"]
