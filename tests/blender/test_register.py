@@ -6,7 +6,7 @@ import os
 import bpy
 import osteon_blender
 
-OPS = ("analyze", "correct", "reset", "apply", "select_bone")
+OPS = ("analyze", "correct", "reset", "apply", "select_bone", "next_weak_bone")
 
 
 def _registered() -> bool:
