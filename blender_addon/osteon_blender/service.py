@@ -211,9 +211,11 @@ def run_correct(context, progress=_no_progress) -> dict:
         skeleton = engine_skeleton(osteon, inp)
         try:
             # The bones' own X axes: a thin-direction scale must be one Blender's pose scale
-            # X or Z can reproduce.
+            # X or Z can reproduce; on a joint rig, also the local axis each bone scales
+            # across (its segment is not its Y axis).
             fix = osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
-                                 bone_x_axes=inp.skeleton.x_axes, keep_outlines=True,
+                                 bone_x_axes=inp.skeleton.x_axes,
+                                 bone_long_axes=inp.skeleton.long_axes, keep_outlines=True,
                                  **core.engine_params(s, arm, inp.skeleton.names, correct=True))
         except ValueError as e:
             raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
