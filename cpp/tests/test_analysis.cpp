@@ -90,6 +90,62 @@ TEST(Skinning, ScalesAcrossTheBoneOnly) {
   }
 }
 
+TEST(Skinning, LongAxisGivesTheAxisScaledAcross) {
+  // A joint rig's Blender bone: segment along x, but the bone scales across its own local axis
+  // z (long_axis), x along (1, 0, 0) and z = x cross long = (0, -1, 0): p -> (sx px, sz py, pz)
+  // about the head, whatever the segment (Blender's pose scale (sx, 1, sz) on those axes).
+  const auto m = prism(rectangle(4, 2), 20);
+  const Skeleton s = bar(20);
+  const BoneWeights w = nearest_bone_weights(m.view(), s);
+  AxisScales scales{{2.0}, {3.0}, {Vec3(1, 0, 0)}, {Vec3(0, 0, 5)}};
+  std::vector<double> out(m.v.size());
+  skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, scales, out.data());
+  for (std::size_t i = 0; i < m.v.size(); i += 3) {
+    EXPECT_NEAR(out[i], 2 * m.v[i], 1e-12);
+    EXPECT_NEAR(out[i + 1], 3 * m.v[i + 1], 1e-12);
+    EXPECT_EQ(out[i + 2], m.v[i + 2]);
+  }
+  // uniform: both axes across the long axis; the long axis along the segment is the default
+  AxisScales uniform{{2.0}, {2.0}, {Vec3::Zero()}, {Vec3(0, 0, 1)}};
+  skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, uniform, out.data());
+  for (std::size_t i = 0; i < m.v.size(); i += 3) {
+    EXPECT_NEAR(out[i], 2 * m.v[i], 1e-12);
+    EXPECT_NEAR(out[i + 1], 2 * m.v[i + 1], 1e-12);
+    EXPECT_EQ(out[i + 2], m.v[i + 2]);
+  }
+  std::vector<double> a(m.v.size()), b(m.v.size());
+  AxisScales along{{2.0}, {1.5}, {Vec3(0, 1, 0)}, {Vec3(1, 0, 0)}};
+  skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, along, a.data());
+  along.long_axis.clear();
+  skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, along, b.data());
+  EXPECT_EQ(a, b);
+  along.long_axis = {Vec3::Zero()};
+  EXPECT_THROW(skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, along, a.data()),
+               std::invalid_argument);
+}
+
+TEST(Analysis, FreeHeadOnTheEndCapIsCut) {
+  // The bar's head lies on the prism's end cap: its end section is the cap's outline (the
+  // section just inside), with the cantilever's largest moment, not an empty cut.
+  const auto m = prism(rectangle(6, 6), 90, 31);
+  AnalysisOptions o;
+  o.force = 10;
+  o.interval = 3;
+  const AnalysisResult r = analyze(m.view(), bar(90), nullptr, o);
+  const double w = 216.0 / (6 * std::sqrt(2.0));
+  int ends = 0;
+  for (std::size_t i = 0; i < r.stress.size(); ++i) {
+    EXPECT_EQ(r.section_flags[i], 0u) << "section " << i << " at " << r.section_param[i];
+    if (r.section_kind[i] != kEnd || r.section_param[i] != 0.0) continue;
+    const double d = std::sqrt(90.0 * 90.0 + 18.0);
+    EXPECT_NEAR(r.section_area[i], 36.0, 1e-9);
+    EXPECT_NEAR(r.stress[i], 10 * d / w, 1e-6 * r.stress[i]);
+    EXPECT_DOUBLE_EQ(r.max_stress, r.stress[i]);
+    ++ends;
+  }
+  EXPECT_EQ(ends, 1);
+}
+
 TEST(Correction, BarFixedByCubeRootOfStressRatio) {
   const auto m = prism(rectangle(6, 6), 90, 31);
   AnalysisOptions o;

@@ -726,6 +726,7 @@ def correct(
     scaling: str = DEFAULT_SCALING,
     flat_aspect: float = 2.0,
     bone_x_axes: Any = None,
+    bone_long_axes: Any = None,
     build_direction: Any = (0.0, 0.0, 1.0),
     layer_strength_ratio: float = 1.0,
     keep_outlines: bool = False,
@@ -743,7 +744,12 @@ def correct(
     by ``sqrt(stress / target)`` (a plate's W grows as t²), along the bone's local x or z axis
     nearest to it (round sections still get both axes). ``bone_x_axes`` (B,3) gives each bone's
     local x axis (e.g. Blender's, so that pose-bone scale X/Z reproduce the result); None lets
-    each bone's axes follow the first flat section scaled on it. ``build_direction`` and
+    each bone's axes follow the first flat section scaled on it. ``bone_long_axes`` (B,3): the
+    axis each bone scales across (kept at scale 1), None: its segment. A joint rig imported into
+    Blender (FBX/glTF) has bones whose local Y is not the segment analysed; scaling across the
+    bone's own local axis nearest the segment is what Blender's pose scale can reproduce exactly
+    (the sections stay perpendicular to the segments: every round re-analyses the scaled mesh,
+    so this changes how the bone is thickened, not what is checked). ``build_direction`` and
     ``layer_strength_ratio`` as in :func:`analyze`: the loop is driven by the stress ratio
     against each section's direction-dependent allowable. ``keep_outlines``: ``before``
     and ``after`` carry their sections' loops (:attr:`Analysis.section_loops`).
@@ -761,6 +767,7 @@ def correct(
             )
     if not isinstance(skeleton, Skeleton):
         raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
+    long_axes = _long_axes(bone_long_axes, skeleton.num_bones)
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
         raise ValueError("empty mesh: vertices has no rows")
@@ -790,6 +797,7 @@ def correct(
     co.max_scale, co.max_rounds = float(max_scale), max_rounds
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"
     co.flat_aspect, co.bone_x_axes = float(flat_aspect), axes
+    co.bone_long_axes = long_axes
     d = _core.correct(v, f, skeleton._engine(), dense, csr, options, co)
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
           "interval": interval, "build_direction": build_direction,
@@ -800,12 +808,27 @@ def correct(
     return Correction(**d)
 
 
+def _long_axes(value, n_bones: int):
+    """(B,3) float rows of ``bone_long_axes`` (finite, non-zero), or None."""
+    if value is None:
+        return None
+    axes = _float_rows(value, "bone_long_axes")
+    if len(axes) != n_bones:
+        raise ValueError(f"bone_long_axes must have shape ({n_bones}, 3), got {axes.shape}")
+    if not (np.linalg.norm(axes, axis=1) > 1e-9).all():
+        raise ValueError("bone_long_axes must be non-zero vectors (the axis a bone scales across)")
+    return axes
+
+
 def skin(vertices: Any, skeleton: Skeleton, weights: Any, bone_scale: Any, *,
-         bone_scale_z: Any = None, bone_x_axes: Any = None) -> np.ndarray:
+         bone_scale_z: Any = None, bone_x_axes: Any = None,
+         bone_long_axes: Any = None) -> np.ndarray:
     """Linear blend skinning of rest ``vertices`` (V,3) mm with per-bone cross-section scales
     ``bone_scale`` (B,): each bone scales the two axes across itself about its own axis. With
     ``bone_scale_z`` (B,) and ``bone_x_axes`` (B,3), ``bone_scale`` applies along each bone's x
-    axis and ``bone_scale_z`` along z = x × direction (as :class:`Correction` reports them)."""
+    axis and ``bone_scale_z`` along z = x × direction (as :class:`Correction` reports them).
+    ``bone_long_axes`` (B,3): each bone scales across this axis through its head instead of its
+    segment (x is then made perpendicular to it and z = x × long; see :func:`correct`)."""
     v = _float_rows(vertices, "vertices")
     dense, csr = _weights_args(weights, len(v), skeleton.num_bones)
     if dense is None and csr is None:
@@ -826,7 +849,8 @@ def skin(vertices: Any, skeleton: Skeleton, weights: Any, bone_scale: Any, *,
         if bone_x_axes is None:
             raise ValueError("bone_scale_z needs bone_x_axes (B,3): the axes it scales along")
         axes = _float_rows(bone_x_axes, "bone_x_axes")
-    return _core.skin(v, skeleton._engine(), dense, csr, scales[0], scales[1], axes)
+    long_axes = _long_axes(bone_long_axes, skeleton.num_bones)
+    return _core.skin(v, skeleton._engine(), dense, csr, scales[0], scales[1], axes, long_axes)
 
 
 def section_properties(outer: Any, holes: Sequence[Any] = ()) -> dict:
