@@ -33,7 +33,7 @@ REASONS = {
     "too_thin": "the part is thinner than printable there",
     "hollow": "the bone lies in a hole there",
     "gap_closed": "gaps in the cut were closed there",
-    "junction": "a side branch is cut there (only the continuing core counts)",
+    "junction": "a side branch is cut there: only the core that continues counts",
 }
 
 
@@ -57,7 +57,7 @@ def _mask(flags: np.ndarray, names, table) -> np.ndarray:
 def reason(names) -> str:
     """One sentence part from flag names, most telling first (``open`` before ``empty``)."""
     order = ["open", "outside", "non_manifold", "too_thin", "unreliable", "degenerate", "empty",
-             "hollow", "gap_closed"]
+             "hollow", "gap_closed", "junction"]
     names = sorted(set(names), key=lambda n: order.index(n) if n in order else len(order))
     return "; ".join(REASONS.get(n, n.replace("_", " ")) for n in names[:2])
 
