@@ -6,7 +6,7 @@ import os
 import bpy
 import osteon_blender
 
-OPS = ("analyze", "correct", "reset", "apply", "select_bone")
+OPS = ("analyze", "correct", "reset", "apply", "select_bone", "select_loose_pieces")
 
 
 def _registered() -> bool:

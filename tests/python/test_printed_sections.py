@@ -152,3 +152,49 @@ def test_loose_pieces_are_listed():
     np.testing.assert_array_equal(np.sort(a.loose_pieces[0]), np.arange(start, len(v)))
     v1, f1 = merge(body, eye)
     assert osteon.analyze(v1, f1, _bone(40), interval=4).loose_pieces == []
+
+
+def test_loose_piece_is_no_load_point():
+    # A 4 x 4 mm bar along x (0..40 mm) and, far beyond its end, a detached ball-like capsule
+    # (x = 70..74 mm): it falls off the print, so it carries no load. Each section's moment is
+    # F times the distance from its centroid to the bar's farthest corner (x = 40, y = z = ±2).
+    bar = prism(rectangle(4, 4), 40)
+    ball = cylinder_along((70, 0, 0), (74, 0, 0), 2.0, n=16, stations=4)
+    v, f = merge(bar, ball)
+    force = 20.0
+    a = osteon.analyze(v, f, _bone(40), interval=4, force=force)
+    bar_only = osteon.analyze(*bar, _bone(40), interval=4, force=force)
+    assert len(a.loose_pieces) == 1
+    np.testing.assert_array_equal(np.sort(a.loose_pieces[0]), np.arange(len(bar[0]), len(v)))
+    i = _interior(a)
+    assert i.sum() > 5
+    c = a.section_center[i]
+    d = np.sqrt((40 - c[:, 0]) ** 2 + (2 + np.abs(c[:, 1])) ** 2 + (2 + np.abs(c[:, 2])) ** 2)
+    np.testing.assert_allclose(a.moment[i], force * d, rtol=1e-9)
+    np.testing.assert_allclose(a.moment, bar_only.moment, rtol=1e-12)
+    # the load points are bar corners, never the loose piece
+    assert np.all(a.load_point[:, 0] <= 40 + 1e-9)
+    # the loose piece keeps no stress (it is not analysed as if attached)
+    assert np.all(a.vertex_stress[len(bar[0]):] == 0)
+    np.testing.assert_allclose(a.vertex_stress[:len(bar[0])], bar_only.vertex_stress, rtol=1e-12)
+
+
+@pytest.mark.parametrize(("inner", "expect"), [
+    (4.0, np.cos(np.pi / 64)),  # a tube r 5 / r 4: its wall (parallel 64-gon edges cos(π/64) apart)
+    (None, 10 * np.cos(np.pi / 64)),  # a solid round: its diameter (across flats)
+])
+def test_thickness_of_a_hollow_wall(inner, expect):
+    outer = circle(5, 64)
+    mesh = prism(outer, 40) if inner is None else prism(outer, 40, hole=circle(inner, 64))
+    a = osteon.analyze(*mesh, _bone(40), interval=4, min_thickness=0)
+    i = _interior(a)
+    np.testing.assert_allclose(a.section_thickness[i], expect, rtol=1e-9)
+    # a 1 mm wall is thick enough for FDM (0.8 mm), too thin for a 1.5 mm minimum
+    thin = osteon.analyze(*mesh, _bone(40), interval=4, min_thickness=1.5)
+    assert bool(np.all(thin.section_flags[i] & osteon.SECTION_FLAGS["too_thin"])) == (
+        inner is not None)
+
+
+def test_plate_thickness():
+    a = osteon.analyze(*prism(rectangle(30, 0.6), 40), _bone(40), interval=4, min_thickness=0)
+    np.testing.assert_allclose(a.section_thickness[_interior(a)], 0.6, rtol=1e-9)

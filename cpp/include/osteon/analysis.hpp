@@ -53,7 +53,7 @@ struct AnalysisResult {
   std::vector<Vec3>
       section_thin_axis;               ///< S unit in-plane direction the section is thinnest across
   std::vector<double> section_aspect;  ///< S width / thickness (sqrt of J's eigenvalue ratio)
-  std::vector<double> section_thickness;  ///< S minimum width of the region, mm (NaN: skipped)
+  std::vector<double> section_thickness;  ///< S region thickness, mm (regions.hpp; NaN: skipped)
   std::vector<double> moment_arm;         ///< S distance centroid -> load point d, mm
   std::vector<double> moment;             ///< S bending moment M = F d, N mm
   std::vector<double> stress;  ///< S peak bending stress M / W, MPa (NaN when skipped/unreliable)
@@ -83,7 +83,8 @@ struct AnalysisResult {
   std::vector<std::int64_t> outline_loop_start;     ///< L+1 first point of each loop
   std::vector<std::int64_t> outline_section_start;  ///< S+1 first loop of each section
   /// Vertex indices of each loose piece: a shell that neither touches nor overlaps the held piece
-  /// (it would fall off the print); its sections are still computed like any other.
+  /// (it would fall off the print). Its vertices are no load point of any section and keep
+  /// vertex_stress 0 (it carries no load); sections along its bones are still cut.
   std::vector<std::vector<std::int32_t>> loose_pieces;
 };
 

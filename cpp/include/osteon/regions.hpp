@@ -35,10 +35,12 @@ std::vector<SectionPolygon> material_regions(const std::vector<std::vector<Vec2>
 /// around the origin (any orientation), for parity checks.
 SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain = nullptr);
 
-/// Thickness of a region (mm): its minimum width, i.e. the smallest distance between two parallel
-/// lines enclosing the outer boundary (the narrowest direction of its convex hull). A solid round
-/// section gives its diameter, a b x t plate t; holes are not subtracted (a tube gives its outer
-/// diameter). 0 for fewer than three points.
+/// Thickness of a region (mm), the width a printer has to lay down there: the smallest of its
+/// minimum width (the smallest distance between two parallel lines enclosing the outer boundary,
+/// i.e. the narrowest direction of its convex hull) and, around each hole, the thinnest wall
+/// (the hole's distance to the outer boundary and to every other hole). A solid round gives its
+/// diameter, a b x t plate t, a tube of radii R > r its wall R - r. 0 for fewer than three
+/// points.
 double region_thickness(const SectionPolygon& polygon);
 
 }  // namespace osteon
