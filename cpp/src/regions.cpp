@@ -718,13 +718,15 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
   auto overlap = [&](std::size_t a, std::size_t b) {
     if ((lo[a].array() > hi[b].array()).any() || (lo[b].array() > hi[a].array()).any())
       return false;
-    // Vertices of the smaller piece (16 sampled) inside the larger one.
-    const bool a_small = faces[a].size() <= faces[b].size();
-    const std::size_t from = a_small ? a : b, into = a_small ? b : a;
-    if (faces[into].empty()) return false;
-    const std::size_t n = verts[from].size(), step = std::max<std::size_t>(1, n / 16);
-    for (std::size_t k = 0; k < n; k += step)
-      if (inside_shell(mesh, faces[into], mesh.vertex(verts[from][k]))) return true;
+    // Vertices of either piece (16 sampled of each) inside the other one.
+    auto some_inside = [&](std::size_t from, std::size_t into) {
+      if (faces[into].empty()) return false;
+      const std::size_t n = verts[from].size(), step = std::max<std::size_t>(1, n / 16);
+      for (std::size_t k = 0; k < n; k += step)
+        if (inside_shell(mesh, faces[into], mesh.vertex(verts[from][k]))) return true;
+      return false;
+    };
+    if (some_inside(a, b) || some_inside(b, a)) return true;
     return false;
   };
   std::vector<std::uint8_t> attached(np, 0);

@@ -50,8 +50,8 @@ namespace osteon {
 /// Loose pieces of a mesh: its shells (faces connected by shared vertices or by vertices at
 /// exactly the same position) that neither touch nor overlap the held piece, directly or through
 /// other attached shells. The held piece is the shell with the most vertices of `held_bone`
-/// (vertex_bone, #V), else the largest. Two shells overlap when a vertex of the smaller one (16
-/// sampled) lies inside the larger (ray parity). Returns the vertex indices of each loose piece.
+/// (vertex_bone, #V), else the largest. Two shells overlap when a vertex of one (16 sampled of
+/// each) lies inside the other (ray parity). Returns the vertex indices of each loose piece.
 std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     const std::vector<int>& vertex_bone,
                                                     int held_bone);
