@@ -727,7 +727,42 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
       return false;
     };
     if (some_inside(a, b) || some_inside(b, a)) return true;
-    return false;
+    // Surfaces that pass through each other (a wing plate through a body): an edge of one
+    // crosses a face of the other, inside the boxes' common part. Past a work cap the pieces
+    // count as attached: calling a piece loose drops its load, so doubt keeps it held.
+    const Vec3 clo = lo[a].cwiseMax(lo[b]), chi = hi[a].cwiseMin(hi[b]);
+    auto in_common = [&](const Vec3& p, const Vec3& q, const Vec3& r) {
+      const Vec3 l = p.cwiseMin(q).cwiseMin(r), h = p.cwiseMax(q).cwiseMax(r);
+      return !((l.array() > chi.array()).any() || (h.array() < clo.array()).any());
+    };
+    std::vector<std::int32_t> fa, fb;
+    for (int side = 0; side < 2; ++side) {
+      auto& out = side == 0 ? fa : fb;
+      const auto& fs = faces[side == 0 ? a : b];
+      for (std::size_t k = 0; k < fs.size(); k += 3)
+        if (in_common(mesh.vertex(fs[k]), mesh.vertex(fs[k + 1]), mesh.vertex(fs[k + 2])))
+          out.insert(out.end(), fs.begin() + k, fs.begin() + k + 3);
+    }
+    if (fa.empty() || fb.empty()) return false;
+    if (static_cast<double>(fa.size()) * static_cast<double>(fb.size()) > 9e7) return true;
+    auto edges_cross = [&](const std::vector<std::int32_t>& edges_of,
+                           const std::vector<std::int32_t>& faces_of) {
+      for (std::size_t k = 0; k < edges_of.size(); k += 3)
+        for (int e = 0; e < 3; ++e) {
+          const Vec3 p = mesh.vertex(edges_of[k + e]);
+          const Vec3 d = mesh.vertex(edges_of[k + (e + 1) % 3]) - p;
+          for (std::size_t m = 0; m < faces_of.size(); m += 3) {
+            const Vec3 t0 = mesh.vertex(faces_of[m]);
+            double t = 0.0;
+            if (detail::line_hits_triangle(p, d, t0, mesh.vertex(faces_of[m + 1]) - t0,
+                                           mesh.vertex(faces_of[m + 2]) - t0, t) &&
+                t >= 0.0 && t <= 1.0)
+              return true;
+          }
+        }
+      return false;
+    };
+    return edges_cross(fa, fb) || edges_cross(fb, fa);
   };
   std::vector<std::uint8_t> attached(np, 0);
   std::vector<std::size_t> queue{held};
