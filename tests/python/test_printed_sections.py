@@ -257,3 +257,17 @@ def test_bent_knee_section_is_the_capsules_cut():
             assert a.section_flags[s] & osteon.SECTION_FLAGS["outside"]  # the bone is off the leg
             assert a.section_area[s] > 0.9 * np.pi * r**2  # not a sliver
     assert knee_seen
+
+
+def test_plate_through_a_body_is_attached():
+    # A thin plate (0.4 x 120 x 1 mm) pushed through a closed r = 5 body between two of its
+    # vertex rings: no vertex of either lies inside the other, but their surfaces cross, so the
+    # plate is held (not loose) and its far corners load the body's sections.
+    body = prism(circle(5, 64), 40)
+    pv, pf = prism(rectangle(120, 1), 0.4, stations=2)
+    plate = (pv + [18.3, 0.0, 0.0], pf)
+    v, f = merge(body, plate)
+    a = osteon.analyze(v, f, _bone(40), interval=4)
+    assert a.loose_pieces == []
+    far = np.flatnonzero(_interior(a) & (a.section_param < 18))
+    assert len(far) > 2 and np.all(np.abs(a.load_point[far, 1]) > 59)  # the plate's corners
