@@ -90,6 +90,8 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
   run.timer.lap("slicing phase 1");
   cut_retries(run);
   run.timer.lap("slicing");
+  find_junction_cores(run);
+  run.timer.lap("junctions");
   AnalysisResult result = compute_loads(run);
   run.timer.lap("moment arms");
   compute_vertex_stress(run, result);

@@ -106,8 +106,10 @@ def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
 
 def section_rows(a, bone_names) -> list[dict]:
     """Every section of an ``osteon.Analysis``: bone, position (mm), area (mm²), modulus
-    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. An object without
-    section geometry (no ``section_center``) gives ``[]``."""
+    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. At a ``junction``
+    section area and modulus are the core's (the material that continues through the plane,
+    docs/junctions.md) and ``cut_area_mm2`` / ``cut_modulus_mm3`` the whole cut's (elsewhere the
+    same numbers). An object without section geometry (no ``section_center``) gives ``[]``."""
     if not hasattr(a, "section_center"):
         return []
     n = len(a.stress)
@@ -115,10 +117,13 @@ def section_rows(a, bone_names) -> list[dict]:
     allow = getattr(a, "section_allowable", None)
     ratio = getattr(a, "stress_ratio", None)
     across = getattr(a, "across_layers", None)
+    cut_area = getattr(a, "section_cut_area", None)
+    cut_modulus = getattr(a, "section_cut_modulus", None)
     rows = []
     for i in range(n):
         b = int(a.section_bone[i])
         rows.append({
+            "index": i,
             "bone": bone_names[b],
             "bone_index": b,
             "param_mm": finite(param[i]) if param is not None else None,
@@ -126,6 +131,9 @@ def section_rows(a, bone_names) -> list[dict]:
             "normal": [finite(x) for x in a.section_normal[i]],
             "area_mm2": finite(a.section_area[i]),
             "modulus_mm3": finite(a.section_modulus[i]),
+            "cut_area_mm2": finite((a.section_area if cut_area is None else cut_area)[i]),
+            "cut_modulus_mm3": finite((a.section_modulus if cut_modulus is None
+                                       else cut_modulus)[i]),
             "moment_arm_mm": finite(a.moment_arm[i]),
             "moment_nmm": finite(a.moment[i]),
             "stress_mpa": finite(a.stress[i]),
@@ -279,6 +287,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     report["too_thin_sections"] = printable["too_thin"]
     report["unreliable_sections"] = printable["unreliable"]
     report["loose_pieces"] = printable["loose_pieces"]
+    # junctions (docs/junctions.md): sections whose numbers are the core's, not the whole cut's
+    report["junction_sections"] = [int(i) for i in np.flatnonzero(
+        np.asarray(getattr(shown, "junction", np.zeros(len(shown.stress), bool))))]
     # what the numbers above do not cover (osteon.doubt): skipped sections, bones not analysed,
     # a maximum resting on a doubtful section
     d = doubt.section_doubt(shown)
