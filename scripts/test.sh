@@ -2,7 +2,8 @@
 # Runs every test: C++ unit tests (GoogleTest via ctest), the Python suite on the installed
 # wheel (engine, readers, CLI, FEM cross-check, robustness, hypothesis), the Blender add-on tests
 # in Debian's Blender 3.4, the bpy 4.5 wheel (Python 3.11) and the bpy 5.2 wheel (Python 3.13;
-# scripts/blender_tests.sh builds the cp313 engine wheel for it), a libFuzzer smoke run of the slicer, and the
+# scripts/blender_tests.sh builds the cp313 engine wheel for it), the sidebar's screenshots in a
+# real window under Xvfb (scripts/ui_screenshots.sh, out/screenshots/), a libFuzzer smoke run of the slicer, and the
 # C++ tests + Python suite again under AddressSanitizer + UndefinedBehaviorSanitizer.
 # Installs what it needs first (scripts/setup.sh). OSTEON_QUICK=1 skips fuzzing and sanitizers.
 set -euo pipefail
@@ -22,6 +23,9 @@ echo "== Python tests"
 
 echo "== Blender add-on tests (Debian Blender 3.4.1, bpy 4.5, bpy 5.2)"
 bash scripts/blender_tests.sh
+
+echo "== Sidebar screenshots and fit check (Debian Blender 3.4.1 in a window under Xvfb)"
+bash scripts/ui_screenshots.sh
 
 if [ "${OSTEON_QUICK:-0}" != 1 ]; then
   echo "== Fuzz smoke run (libFuzzer, 20000 inputs)"

@@ -522,16 +522,42 @@ def remove_point_colors(mesh, name: str = LAYER) -> bool:
     return True
 
 
-def show_colors_in_viewports(screen_owner=None):
-    """Solid shading shows the colour attribute in every open 3D viewport (UI only)."""
+#: the Solid shading colour each 3D viewport had before osteon switched it to the colour
+#: attribute: ``space.as_pointer() -> color_type`` (restore_viewport_colors puts it back)
+SHADING_BEFORE: dict[int, str] = {}
+
+
+def _view3d_spaces():
     wm = getattr(bpy.context, "window_manager", None)
     for win in getattr(wm, "windows", None) or []:
         for area in win.screen.areas:
             if area.type != "VIEW_3D":
                 continue
             for space in area.spaces:
-                if space.type == "VIEW_3D" and space.shading.type == "SOLID":
-                    space.shading.color_type = "VERTEX"
+                if space.type == "VIEW_3D":
+                    yield space
+
+
+def show_colors_in_viewports(screen_owner=None):
+    """Solid shading shows the colour attribute in every open 3D viewport (UI only); the
+    colour setting each had is remembered for :func:`restore_viewport_colors`."""
+    for space in _view3d_spaces():
+        if space.shading.type == "SOLID" and space.shading.color_type != "VERTEX":
+            SHADING_BEFORE[space.as_pointer()] = space.shading.color_type
+            space.shading.color_type = "VERTEX"
+
+
+def restore_viewport_colors() -> int:
+    """Put back the Solid shading colour osteon replaced (Reset); returns how many viewports
+    changed.  A viewport the user has set to another colour since is left alone."""
+    n = 0
+    for space in _view3d_spaces():
+        before = SHADING_BEFORE.pop(space.as_pointer(), None)
+        if before is not None and space.shading.color_type == "VERTEX":
+            space.shading.color_type = before
+            n += 1
+    SHADING_BEFORE.clear()
+    return n
 
 
 # --------------------------------------------------------------------------- pose scales

@@ -1,5 +1,10 @@
 """Viewport overlay: the section outlines of the last analysis, coloured by stress ratio.
 
+By default only the weak sections (over the limit) and the doubtful ones (a suspect cut,
+``osteon.doubt``) are drawn, so that the colours on the surface stay visible; the live
+settings' "All sections" adds every other outline, thin and half transparent.  The bone the
+result list shows (``ops/select_bone``) is drawn in yellow with its weakest section.
+
 The outlines are computed OUTSIDE the draw callback, right after an analysis (by the live
 mode, or once after the Analyze button when the overlay is on), as world-space line
 segments in NumPy arrays; the draw callback only uploads them once per new result and
@@ -23,11 +28,16 @@ import numpy as np
 
 from . import core, state
 
-WIDTH = 2.0        # px, ordinary sections
-WEAK_WIDTH = 5.0   # px, weak sections
+WIDTH = 1.0        # px, ordinary sections (only with "All sections")
+WEAK_WIDTH = 3.0   # px, weak sections
+DOUBT_WIDTH = 2.0  # px, doubtful sections
+HIGHLIGHT_WIDTH = 4.0  # px, the shown bone and its weakest section
 WEAK_RGBA = (1.0, 0.0, 0.75, 1.0)      # magenta-red: stands out on the red (weak) surface
-CULLED_RGBA = (0.25, 0.25, 0.25, 0.9)
+DOUBT_RGBA = (1.0, 0.55, 0.0, 0.9)     # orange: a suspect cut
+HIGHLIGHT_RGBA = (1.0, 0.9, 0.1, 1.0)  # yellow: the bone shown from the result list
+CULLED_RGBA = (0.25, 0.25, 0.25, 0.5)
 SHADE = 0.55   # ordinary outlines: the stress colour darkened, to stand out on the surface
+ALPHA = 0.5    # ordinary outlines: half transparent over the colours
 CUT_WIDTH = 1.0   # px, the whole cut of a junction section (dashed, dimmer)
 CUT_ALPHA = 0.45
 
@@ -44,6 +54,8 @@ class Outlines:
     weak_colors: np.ndarray    # (2M, 4) float32
     section_ids: np.ndarray    # (K,) int, sections that got an outline
     weak_ids: np.ndarray       # (k,) int, weak sections among them
+    #: (2D, 3) float32 segments of the doubtful sections that are not weak (also in ``lines``)
+    doubt_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
     version: int = field(default_factory=lambda: next(_versions))
     # the whole cut of junction sections: every other segment (dashed), dimmer
     cut_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
@@ -84,7 +96,7 @@ def compute_outlines(analysis, mm_per_unit: float = 1.0) -> Outlines:
     ratio = stress / float(analysis.allowable_stress)
     culled = np.asarray(analysis.culled, dtype=bool)
     weak = np.asarray(analysis.weak, dtype=bool)
-    rgba = np.ones((len(stress), 4), dtype=np.float32)
+    rgba = np.full((len(stress), 4), ALPHA, dtype=np.float32)
     rgba[:, :3] = SHADE * core.ramp(ratio)
     rgba[culled] = CULLED_RGBA
 
@@ -100,12 +112,39 @@ def compute_outlines(analysis, mm_per_unit: float = 1.0) -> Outlines:
     colors = np.repeat(rgba[point_section[sel]], 2, axis=0)
     weak_lines, _ = lines_of(outlined & weak)
     weak_colors = np.broadcast_to(np.float32(WEAK_RGBA), (len(weak_lines), 4)).copy()
+    doubt_lines, _ = lines_of(outlined & ~weak & doubtful_sections(analysis, len(stress)))
     cut_lines, cut_colors = _dashed_cuts(analysis, rgba, k)
     return Outlines(lines=np.ascontiguousarray(lines), colors=np.ascontiguousarray(colors),
                     weak_lines=np.ascontiguousarray(weak_lines), weak_colors=weak_colors,
                     section_ids=np.flatnonzero(outlined).astype(np.int64),
                     weak_ids=np.flatnonzero(outlined & weak).astype(np.int64),
+                    doubt_lines=np.ascontiguousarray(doubt_lines),
                     cut_lines=cut_lines, cut_colors=cut_colors)
+
+
+def doubtful_sections(analysis, n: int) -> np.ndarray:
+    """(n,) bool: sections with a stress but a suspect cut (``osteon.doubt``); all False when
+    the engine's Python package or the flags are not there."""
+    try:
+        from osteon.doubt import section_doubt
+
+        d = np.asarray(section_doubt(analysis)["doubtful"], dtype=bool)
+    except Exception:  # noqa: BLE001 -- a drawing aid: no doubt outlines rather than no overlay
+        return np.zeros(n, dtype=bool)
+    return d if d.shape == (n,) else np.zeros(n, dtype=bool)
+
+
+def highlight_lines(where: dict) -> np.ndarray:
+    """(2H, 3) float32 LINES segments of a shown bone (``ops/select_bone.weakest_section``):
+    its segment and its weakest section's outline loops, world space."""
+    segs = [np.asarray(where["bone"], dtype=np.float32)]
+    for loop in where["loops"]:
+        p = np.asarray(loop, dtype=np.float32)
+        seg = np.empty((2 * len(p), 3), dtype=np.float32)
+        seg[0::2] = p
+        seg[1::2] = np.roll(p, -1, axis=0)
+        segs.append(seg)
+    return np.ascontiguousarray(np.concatenate(segs))
 
 
 def _dashed_cuts(analysis, rgba, k):
@@ -147,9 +186,22 @@ def get_outlines(scene_name: str) -> Outlines | None:
     return st.outlines[1] if st is not None and st.outlines else None
 
 
+def set_highlight(scene, where: dict | None) -> None:
+    """Show (``where`` from ``ops/select_bone.weakest_section``) or forget the highlighted
+    bone; the draw handler is on while a bone is shown (UI only)."""
+    st = state.of(scene)
+    if where is None:
+        st.highlight = None
+    else:
+        st.highlight = dict(where, lines=highlight_lines(where), version=next(_versions))
+    if not bpy.app.background:
+        sync(scene if not isinstance(scene, str) else bpy.data.scenes.get(scene))
+        bridge_redraw()
+
+
 def clear() -> None:
     for st in state.all_states():
-        st.outlines = st.outlined_last = None
+        st.outlines = st.outlined_last = st.highlight = None
     _pending_refresh.clear()
     _batches.clear()
     _batches["version"] = None
@@ -217,9 +269,19 @@ def _make_batches(out: Outlines) -> dict:
     b["weak"] = (batch_for_shader(shader, "LINES", {"pos": out.weak_lines,
                                                    "color": out.weak_colors})
                  if len(out.weak_lines) else None)
+    b["doubt"] = _flat_batch(shader, out.doubt_lines, DOUBT_RGBA)
     b["cut"] = (batch_for_shader(shader, "LINES", {"pos": out.cut_lines, "color": out.cut_colors})
                 if len(out.cut_lines) else None)
     return b
+
+
+def _flat_batch(shader, lines: np.ndarray, rgba):
+    from gpu_extras.batch import batch_for_shader
+
+    if not len(lines):
+        return None
+    colors = np.broadcast_to(np.float32(rgba), (len(lines), 4)).copy()
+    return batch_for_shader(shader, "LINES", {"pos": lines, "color": colors})
 
 
 def _draw_batch(b: dict, batch, width: float, region) -> None:
@@ -240,29 +302,58 @@ def _draw():
     ctx = bpy.context
     scene = ctx.scene
     settings = getattr(scene, "osteon_live", None)
-    if settings is None or not settings.show_sections:
+    if settings is None:
         return
-    _maybe_schedule_refresh(scene.name)
-    out = get_outlines(scene.name)
-    if out is None:
+    st = state.get(scene.name)
+    hl = st.highlight if st is not None else None
+    if hl is not None and (not st.last or st.last.get("analysis") is not hl.get("analysis")):
+        hl = None                       # a newer result (or Reset): the highlight is stale
+    out = None
+    if settings.show_sections:
+        _maybe_schedule_refresh(scene.name)
+        out = get_outlines(scene.name)
+    if out is None and hl is None:
         return
     global _batches
-    if _batches.get("version") != out.version:
+    if out is not None and _batches.get("version") != out.version:
         _batches = _make_batches(out)
     import gpu
 
     region = ctx.region
     gpu.state.blend_set("ALPHA")
     gpu.state.depth_test_set("NONE")   # outlines lie on the surface: show them all, X-ray like
-    if _batches.get("cut") is not None:
-        _draw_batch(_batches, _batches["cut"], CUT_WIDTH, region)
-    if _batches.get("lines") is not None:
-        _draw_batch(_batches, _batches["lines"], WIDTH, region)
-    if _batches.get("weak") is not None:
-        _draw_batch(_batches, _batches["weak"], WEAK_WIDTH, region)
-    if not _batches["polyline"]:
+    if out is not None:
+        if settings.show_all_sections and _batches.get("cut") is not None:
+            _draw_batch(_batches, _batches["cut"], CUT_WIDTH, region)
+        if settings.show_all_sections and _batches.get("lines") is not None:
+            _draw_batch(_batches, _batches["lines"], WIDTH, region)
+        if _batches.get("doubt") is not None:
+            _draw_batch(_batches, _batches["doubt"], DOUBT_WIDTH, region)
+        if _batches.get("weak") is not None:
+            _draw_batch(_batches, _batches["weak"], WEAK_WIDTH, region)
+    if hl is not None:
+        _draw_highlight(hl, region)
+    if _batches.get("polyline") is False:
         gpu.state.line_width_set(1.0)
     gpu.state.blend_set("NONE")
+
+
+def _draw_highlight(hl: dict, region) -> None:
+    if hl.get("batch_version") != hl["version"]:
+        shader, name = builtin_shader("polyline")
+        polyline = shader is not None
+        if not polyline:
+            shader, name = builtin_shader("smooth")
+        hl["batch"] = {"shader": shader, "polyline": polyline, "name": name,
+                       "lines": _flat_batch(shader, hl["lines"], HIGHLIGHT_RGBA)}
+        hl["batch_version"] = hl["version"]
+    b = hl["batch"]
+    if b["lines"] is not None:
+        _draw_batch(b, b["lines"], HIGHLIGHT_WIDTH, region)
+        if not b["polyline"]:
+            import gpu
+
+            gpu.state.line_width_set(1.0)
 
 
 def _maybe_schedule_refresh(scene_name: str) -> None:
@@ -301,9 +392,12 @@ def is_enabled() -> bool:
 
 
 def sync(scene) -> bool:
-    """Handler present iff the scene's "Show sections" is on (and not headless)."""
+    """Handler present iff the scene's "Show sections" is on or a bone is highlighted (and not
+    headless)."""
     settings = getattr(scene, "osteon_live", None) if scene is not None else None
-    if settings is not None and settings.show_sections:
+    st = state.get(scene.name) if scene is not None else None
+    if settings is not None and (settings.show_sections
+                                 or (st is not None and st.highlight is not None)):
         return enable()
     disable()
     return False

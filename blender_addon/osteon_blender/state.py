@@ -29,6 +29,9 @@ class SceneState:
     outlines: tuple | None = None
     #: the operator analysis (``last["analysis"]``) the overlay has already outlined
     outlined_last: object | None = None
+    #: the bone the result list shows (ops/select_bone.weakest_section: its segment and
+    #: weakest section, world space), drawn in yellow by the overlay
+    highlight: dict | None = None
     #: "Find best orientation": ``{"object", "direction" (3,) world, "result"
     #: (osteon.Orientation), "before", "applied", "matrices" (name -> matrix_world before
     #: Apply), "preview" (name of the arrow empty)}`` (ops/orientation.py)

@@ -1,82 +1,246 @@
-"""The sidebar panel and the weak-bone list draw without errors and only name real
-properties (drawn against a recording layout: background Blender has no window)."""
+"""The sidebar (issue 20): its panels draw and only name real properties and operators, the
+summary leads with the verdict, every text fits the default sidebar width, a result row
+shows where its bone is weakest, "Next weak bone" walks the weak bones, Apply's message.
+
+Drawn against a recording layout (``scripts/ui_fit.py``): background Blender has no window.
+``scripts/ui_screenshots.py`` draws the same panels in a real window (Xvfb) and saves
+screenshots."""
+
+import re
 
 import bpy
-from conftest import activate
+import numpy as np
+import pytest
+import ui_fit
+from conftest import activate, run_op
+from osteon_blender import overlay, state
+from osteon_blender.ops import select_bone as sb
+from osteon_blender.ui import doubt_ui, panel
+
+PANELS = ("OSTEON_PT_main", "OSTEON_PT_results", "OSTEON_PT_material", "OSTEON_PT_load",
+          "OSTEON_PT_print", "OSTEON_PT_correction", "OSTEON_PT_live")
 
 
-class Recorder:
-    """Stands in for bpy's UILayout: records prop()/operator()/label() calls."""
+def _items(node, out):
+    for k in node.children:
+        if isinstance(k, ui_fit.Item):
+            out.append(k)
+        else:
+            _items(k, out)
+    return out
 
-    def __init__(self, log):
-        self.log = log
-        self.scale_y = 1.0
 
-    def _sub(self, *args, **kwargs):
-        return Recorder(self.log)
-
-    row = column = box = split = _sub
+class Recorder(ui_fit.FitLayout):
+    """FitLayout that also checks every prop / operator it is given exists."""
 
     def prop(self, data, name, **kwargs):
-        self.log.append(("prop", data, name))
+        assert name in data.bl_rna.properties, name
+        self.node.children.append(ui_fit.Item("prop", f"prop:{name}", where=self.where))
+        return super().prop(data, name, **kwargs)
 
     def prop_search(self, data, name, search_data, search_name, **kwargs):
-        self.log.append(("prop", data, name))
-        self.log.append(("prop", search_data, search_name))
+        assert name in data.bl_rna.properties, name
+        assert search_name in search_data.bl_rna.properties, search_name
+        self.node.children.append(ui_fit.Item("prop", f"prop:{name}", where=self.where))
+        return super().prop_search(data, name, search_data, search_name, **kwargs)
 
     def operator(self, idname, **kwargs):
-        self.log.append(("operator", idname))
-
-    def label(self, text="", **kwargs):
-        self.log.append(("label", text))
-
-    def template_list(self, list_type, list_id, data, prop, active_data, active_prop, **kw):
-        self.log.append(("list", list_type))
-        self.log.append(("prop", data, prop))
-        self.log.append(("prop", active_data, active_prop))
+        mod, name = idname.split(".")
+        assert hasattr(getattr(bpy.ops, mod), name), idname
+        self.node.children.append(ui_fit.Item("operator", f"op:{idname}", where=self.where))
+        return super().operator(idname, **kwargs)
 
 
-def _draw(context):
-    log = []
-    panel = bpy.types.OSTEON_PT_main
-    fake = type("P", (), {"layout": Recorder(log)})()
-    panel.draw(fake, context)
-    for entry in log:
-        if entry[0] == "prop":
-            _, data, name = entry
-            assert name in data.bl_rna.properties, name
-        if entry[0] == "operator":
-            idname = entry[1].split(".")
-            assert hasattr(getattr(bpy.ops, idname[0]), idname[1]), entry[1]
-    return log
+def _draw(name, context=None):
+    """Texts (and 'prop:' / 'op:' markers) a panel draws, in order."""
+    context = context or bpy.context
+    cls = getattr(bpy.types, name)
+    root = ui_fit.Box("column")
+    cls.draw(type("P", (), {"layout": Recorder(root, name)})(), context)
+    return [i.text for i in _items(root, [])]
 
 
-def test_panel_draws_before_and_after_results(sample):
-    assert bpy.types.OSTEON_PT_main.bl_category == "Osteon"
-    assert bpy.types.OSTEON_PT_main.bl_region_type == "UI"
-    log = _draw(bpy.context)
-    ops = [e[1] for e in log if e[0] == "operator"]
-    main_ops = ("osteon.analyze", "osteon.correct", "osteon.reset")
-    assert [o for o in ops if o in main_ops] == list(main_ops)
-    assert {"osteon.find_orientation", "osteon.apply_orientation"} <= set(ops)  # Print direction
-    assert ("label", "Allowable: 30.0 MPa") in log
+def test_panels_are_subpanels_of_one_tab(addon):
+    for name in PANELS:
+        cls = getattr(bpy.types, name)
+        assert cls.bl_category == "Osteon" and cls.bl_region_type == "UI", name
+        assert not hasattr(cls, "poll"), f"{name} polls: panels would jump between redraws"
+        if name != "OSTEON_PT_main":
+            assert cls.bl_parent_id == "OSTEON_PT_main", name
+    assert not hasattr(bpy.types.OSTEON_PT_live, "draw_header"), "one Live control only"
+
+
+def test_panels_draw_before_and_after_results(sample):
+    main = _draw("OSTEON_PT_main")
+    ops = [t for t in main if t.startswith("op:")]
+    assert ops[:3] == ["op:osteon.analyze", "op:osteon.correct", "op:osteon.reset"]
+    assert "Not analysed yet" in main
+    assert {"op:osteon.find_orientation", "op:osteon.apply_orientation"} <= set(
+        _draw("OSTEON_PT_print"))
+    assert "Allowable 30.0 MPa" in _draw("OSTEON_PT_material")   # 60 MPa / 2
+    corr = _draw("OSTEON_PT_correction")
+    assert {"prop:scaling", "prop:max_scale", "prop:max_rounds"} <= set(corr)
+    live = _draw("OSTEON_PT_live")
+    assert [t for t in live if t == "prop:enabled"] == ["prop:enabled"]
+    assert _draw("OSTEON_PT_results") == ["No result yet"]
     assert bpy.ops.osteon.analyze() == {"FINISHED"}
-    log = _draw(bpy.context)
-    assert ("list", "OSTEON_UL_weak_bones") in log
+    res = _draw("OSTEON_PT_results")
+    assert res[:3] == ["Bone", "σ/[σ]", "Scale"] and "op:osteon.next_weak_bone" in res
     assert bpy.ops.osteon.correct() == {"FINISHED"}
-    log = _draw(bpy.context)
-    assert ("operator", "osteon.apply") in log
+    assert "op:osteon.apply" in _draw("OSTEON_PT_main")
     activate(None)
-    _draw(bpy.context)
+    for name in PANELS:
+        _draw(name)
 
 
-def test_weak_bone_rows_show_stress_and_ratio(sample):
+def test_summary_leads_with_the_verdict(sample):
+    s = bpy.context.scene.osteon
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    rep = state.get(bpy.context.scene).last["report"]
+    weak = [r for r in rep["weak_bones"] if r["weak"]]
+    assert len(weak) >= 2
+    lines = [t for t, _ in doubt_ui.summary_lines(s)]
+    assert lines[0] == f"{len(weak)} bones over the limit"
+    worst = max(r["ratio"] for r in rep["weak_bones"])
+    assert lines[1].startswith(f"Worst σ/[σ] {worst:.2f}, {rep['max_stress_mpa']:.1f} MPa")
+    assert lines[2] == f"{rep['weak_sections']} of {rep['sections']} sections over"
+    assert not any(rep["object"] in t for t in lines), "the verdict, not the object's name"
+    # 20 N -> 2 N: the stresses fall tenfold (sigma = F l / W), the worst ratio below 1
+    s.force_n = 2.0
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    rep2 = state.get(bpy.context.scene).last["report"]
+    assert rep2["max_stress_mpa"] == pytest.approx(rep["max_stress_mpa"] / 10.0, rel=1e-6)
+    assert doubt_ui.summary_lines(s)[0] == ("All within the limit", "CHECKMARK")
+
+
+def test_every_text_fits_the_default_sidebar(sample):
+    """At 229 px and UI scale 1, with a result and a correction (the longest lists)."""
+    import osteon_blender
+
+    def misfits():
+        bad, items = ui_fit.check_panels(osteon_blender._classes, bpy.context, 229, 1.0)
+        assert len(items) > 20
+        return [str(m) for m in bad]
+
+    assert misfits() == []
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    assert misfits() == []
+    assert bpy.ops.osteon.correct() == {"FINISHED"}
+    assert misfits() == []
+
+
+def test_fit_check_catches_the_old_wide_labels(addon):
+    """The check can fail: the old panel's labels do not fit (issue 20's "Section interval
+    (m", "Ana..." at 229 px), short ones do."""
+    room = 229 - ui_fit.PANEL_MARGIN
+    assert ui_fit.text_width("Section interval (mm)  2.000", 1.0) > room * 0.75
+    assert ui_fit.text_width("Interval (mm)  2.00", 1.0) < room * 0.75
+    root = ui_fit.Box("row")
+    lay = ui_fit.FitLayout(root, "test")
+    for text in ("Find best orientation", "Apply orientation"):
+        lay.label(text=text, icon="BONE_DATA")
+    bad = []
+    ui_fit._measure(root, room, 1.0, bad, [])
+    assert len(bad) == 2
+
+
+def test_result_row_columns_and_tooltip(sample):
     assert bpy.ops.osteon.analyze() == {"FINISHED"}
     s = bpy.context.scene.osteon
-    log = []
+    row = s.weak_bones[0]
+    root = ui_fit.Box("row")
     ul = bpy.types.OSTEON_UL_weak_bones
-    ul.draw_item(None, bpy.context, Recorder(log), s, s.weak_bones[0], 0, s, "weak_bones_index", 0)
-    texts = [e[1] for e in log if e[0] == "label"]
-    assert texts[0] == s.weak_bones[0].name
-    assert texts[1].endswith(" MPa") and texts[2].startswith("x")
-    assert float(texts[2][1:]) > 1.0
+    ul.draw_item(None, bpy.context, Recorder(root, "row"), s, row, 0, s, "weak_bones_index", 0)
+    texts = [i.text for i in _items(root, [])]
+    assert texts == ["op:osteon.select_bone", row.name, f"{row.ratio:.2f}", "-"]
+    assert row.ratio > 1.0
+    # PLA's layers are weaker across (0.55): the ratio counts the strength that governs
+    assert row.ratio >= row.max_stress_mpa / s.allowable_mpa - 1e-4
+    tip = sb.OSTEON_OT_select_bone.description(bpy.context, type("P", (), {"bone": row.name}))
+    assert row.name in tip and f"{row.max_stress_mpa:.1f} MPa" in tip
+    assert f"stress / allowable {row.ratio:.2f} (allowable {s.allowable_mpa:.1f} MPa" in tip
+    assert not row.limit or row.limit in tip
+
+
+def test_row_click_shows_the_weakest_section(sample):
+    obj, arm = sample
+    activate(obj)
+    s = bpy.context.scene.osteon
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    last = state.get(bpy.context.scene).last
+    a, inp = last["analysis"], last["inputs"]
+    name = s.weak_bones[0].name
+    assert bpy.ops.osteon.select_bone(bone=name) == {"FINISHED"}
+    assert s.weak_bones_index == 0 and arm.data.bones.active.name == name
+    hl = state.get(bpy.context.scene).highlight
+    b = list(inp.skeleton.names).index(name)
+    mine = [i for i in range(len(a.stress)) if a.section_bone[i] == b
+            and np.isfinite(a.stress_ratio[i])]
+    worst = max(mine, key=lambda i: a.stress_ratio[i])
+    assert hl["section"] == worst
+    # the bone's weakest section is its row's ratio
+    assert a.stress_ratio[worst] == pytest.approx(s.weak_bones[0].ratio, rel=1e-5)
+    ss, ls = a.outline_section_start, a.outline_loop_start
+    npts = sum(ls[j + 1] - ls[j] for j in range(ss[worst], ss[worst + 1]))
+    assert len(hl["lines"]) == 2 + 2 * npts            # the bone segment + the outline
+    centre = np.asarray(a.section_center[worst]) / inp.mm_per_unit
+    assert np.allclose(hl["centre"], centre)
+    seg = hl["lines"][2:]
+    assert np.allclose(seg.mean(axis=0), centre, atol=hl["radius"])
+
+
+def test_next_weak_bone_walks_the_weak_rows(sample, capfd):
+    s = bpy.context.scene.osteon
+    s.force_n = 60.0
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    weak = [i for i, r in enumerate(s.weak_bones) if r.weak]
+    assert len(weak) >= 2
+    seen = []
+    for _ in range(len(weak) + 1):
+        res, out = run_op(bpy.ops.osteon.next_weak_bone, capfd)
+        assert res == {"FINISHED"}
+        seen.append(s.weak_bones_index)
+        name = s.weak_bones[s.weak_bones_index].name
+        assert re.search(rf"osteon: {re.escape(name)} \(\d+ of {len(weak)}\)", out)
+    assert seen == [*weak, weak[0]]
+    s.force_n = 0.5
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    with pytest.raises(RuntimeError, match="all within the limit"):
+        bpy.ops.osteon.next_weak_bone()
+
+
+def test_overlay_default_draws_weak_and_doubtful_only(sample):
+    s = bpy.context.scene.osteon
+    s.force_n = 60.0
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    live = bpy.context.scene.osteon_live
+    assert not live.show_all_sections
+    a = state.get(bpy.context.scene).last["analysis"]
+    out = overlay.compute_outlines(a, 1.0)
+    weak = np.asarray(a.weak, bool)
+    assert len(out.weak_ids) == np.count_nonzero(weak[out.section_ids]) > 0
+    doubt = overlay.doubtful_sections(a, len(a.stress)) & ~weak
+    ss, ls = a.outline_section_start, a.outline_loop_start
+    npts = sum(ls[ss[i + 1]] - ls[ss[i]] for i in np.flatnonzero(doubt))
+    assert len(out.doubt_lines) == 2 * npts
+    assert overlay.WIDTH < overlay.WEAK_WIDTH and out.colors[:, 3].max() <= overlay.ALPHA
+
+
+def test_apply_says_osteon_once(sample, capfd):
+    assert bpy.ops.osteon.correct() == {"FINISHED"}
+    res, out = run_op(bpy.ops.osteon.apply, capfd)
+    assert res == {"FINISHED"}
+    line = next(ln for ln in out.splitlines() if "correction applied" in ln)
+    assert line.count("osteon:") == 1, line
+
+
+def test_long_texts_wrap_to_the_sidebar(addon):
+    """The doubt text (issue 13) is wrapped at spaces to lines that fit, nothing lost."""
+    text = ("9 of 145 sections could not be cut: the bone lies outside the mesh there; the cut "
+            "is unreliable there")
+    room = 229 - panel.MARGINS - panel.BOX_INSET
+    lines = panel.wrap(text, room, 1.0, icon=True)
+    assert len(lines) >= 3 and " ".join(lines) == text
+    for ln in lines:
+        assert ui_fit.text_width(ln, 1.0) <= room - 32.0
+    assert panel.wrap("short", room, 1.0) == ["short"]

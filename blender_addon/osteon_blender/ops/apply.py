@@ -16,4 +16,6 @@ class OSTEON_OT_apply(OsteonOperator, bpy.types.Operator):
 
     def run(self, context):
         report = service.run_apply(context)
-        return "osteon: correction applied to the mesh; " + service.summary(report)
+        # service.summary starts with "osteon: " itself
+        return "osteon: correction applied to the mesh; " + service.summary(report).removeprefix(
+            "osteon: ")

@@ -1,6 +1,26 @@
-import bpy
+"""Show where a bone of the result is: osteon.select_bone (a row of the result list) and
+osteon.next_weak_bone (walks through the weak and not-analysed bones).
 
-from .. import bridge, compat
+Showing a bone (issue 20):
+
+* the bone becomes the armature's only selected and active bone (Pose Mode shows it at once
+  when the user is in it; the mode is never changed);
+* the viewport overlay draws the bone (its analysed segment) and the outline of its weakest
+  section in yellow, over the mesh, whatever the mode and even with the armature hidden
+  inside the mesh (``overlay.set_highlight``) -- nothing in the scene is shown, hidden or
+  moved for it;
+* every 3D viewport of the window turns to that section (view centre on it, distance from
+  the bone's length): ``region_3d.view_location`` / ``view_distance``, which behave the same
+  in Blender 3.4, 4.x and 5.x, instead of ``view3d.view_selected`` with a context override
+  (that would need the bone's vertices selected, i.e. an edit of the user's selection).
+"""
+
+from __future__ import annotations
+
+import bpy
+import numpy as np
+
+from .. import bridge, compat, overlay, state
 from ..core import OsteonError
 from ._base import OsteonOperator
 
@@ -17,8 +37,105 @@ def select_bone(context, arm, name: str) -> None:
     bones.active = bone
 
 
+def weakest_section(scene, name: str) -> dict | None:
+    """Where bone ``name`` of the scene's last result is weakest, in world space (Blender
+    units): ``{"analysis": the result's, "bone": (2, 3) head/tail, "section": index or None, "centre": (3,),
+    "loops": list of (n, 3) outline loops, "radius": float}``; None without a result or when
+    the result has no such bone."""
+    st = state.get(scene)
+    last = st.last if st is not None else None
+    if not last:
+        return None
+    analysis, inp = last["analysis"], last["inputs"]
+    names = list(inp.skeleton.names)
+    if name not in names:
+        return None
+    b = names.index(name)
+    head = np.asarray(inp.skeleton.heads[b], dtype=np.float64)
+    tail = np.asarray(inp.skeleton.tails[b], dtype=np.float64)
+    k = float(inp.mm_per_unit)
+    sb = np.asarray(analysis.section_bone, dtype=np.int64)
+    ratio = np.asarray(analysis.stress_ratio, dtype=np.float64)
+    mine = np.flatnonzero((sb == b) & np.isfinite(ratio))
+    out = {"analysis": analysis, "bone": np.stack([head, tail]), "section": None, "centre": (head + tail) / 2.0,
+           "loops": [], "radius": max(float(np.linalg.norm(tail - head)) / 2.0, 1e-6)}
+    if len(mine) == 0:
+        return out
+    s = int(mine[np.argmax(ratio[mine])])
+    out["section"] = s
+    out["centre"] = np.asarray(analysis.section_center[s], dtype=np.float64) / k
+    ss = getattr(analysis, "outline_section_start", None)
+    if ss is not None and len(ss) > s + 1:
+        pts = np.asarray(analysis.outline_points, dtype=np.float64) / k
+        ls = np.asarray(analysis.outline_loop_start, dtype=np.int64)
+        for loop in range(int(ss[s]), int(ss[s + 1])):
+            out["loops"].append(pts[ls[loop]:ls[loop + 1]])
+    if out["loops"]:
+        allp = np.concatenate(out["loops"])
+        out["radius"] = max(out["radius"], float(np.max(np.linalg.norm(
+            allp - out["centre"], axis=1))))
+    return out
+
+
+def frame(context, centre, radius: float) -> int:
+    """Turn every 3D viewport of the window to ``centre`` (world, Blender units) at a
+    distance that shows ``radius`` around it; returns how many viewports moved (0 headless)."""
+    win = getattr(context, "window", None)
+    screen = getattr(win, "screen", None)
+    moved = 0
+    for area in getattr(screen, "areas", None) or []:
+        if area.type != "VIEW_3D":
+            continue
+        r3d = area.spaces.active.region_3d
+        r3d.view_location = tuple(float(x) for x in centre)
+        r3d.view_distance = 4.0 * float(radius)
+        area.tag_redraw()
+        moved += 1
+    return moved
+
+
+def show_bone(context, arm, name: str) -> dict | None:
+    """Select bone ``name``, outline it and its weakest section, frame it (module doc)."""
+    select_bone(context, arm, name)
+    where = weakest_section(context.scene, name)
+    if where is None:
+        overlay.set_highlight(context.scene, None)
+        return None
+    overlay.set_highlight(context.scene, where)
+    frame(context, where["centre"], where["radius"])
+    return where
+
+
+def result_rows(scene) -> list:
+    """The result list's rows to walk through: weak or not analysed, in list order."""
+    s = scene.osteon
+    return [i for i, r in enumerate(s.weak_bones) if r.weak or r.status == "not analysed"]
+
+
+def row_tooltip(row, allowable_mpa: float) -> str:
+    """The full text of one result row (the list's tooltip): name, stress (MPa), ratio,
+    governing strength, scale after Correct."""
+    if row.status == "not analysed":
+        return f"{row.name}: not analysed. {row.reason}"
+    text = (f"{row.name}: max stress {row.max_stress_mpa:.1f} MPa; stress / allowable "
+            f"{row.ratio:.2f} (allowable {allowable_mpa:.1f} MPa")
+    text += f", the strength {row.limit} governs)" if row.limit else ")"
+    text += ", over the limit" if row.weak else ", within the limit"
+    if abs(row.scale - 1.0) > 1e-6:
+        text += f"; Correct scaled its cross-section x{row.scale:.2f}"
+    return text + ". Click: select the bone, outline its weakest section, frame it"
+
+
+def _armature(context):
+    s = context.scene.osteon
+    arm = context.scene.objects.get(s.result_armature)
+    if arm is None or arm.type != "ARMATURE":
+        _obj, arm = bridge.find_target(context)
+    return arm
+
+
 class OSTEON_OT_select_bone(OsteonOperator, bpy.types.Operator):
-    """Select a bone of the analysed armature (and make it active)"""
+    """Show a bone of the result: select it, outline its weakest section, frame it"""
 
     bl_idname = "osteon.select_bone"
     bl_label = "Select Bone"
@@ -26,10 +143,53 @@ class OSTEON_OT_select_bone(OsteonOperator, bpy.types.Operator):
 
     bone: bpy.props.StringProperty(name="Bone", description="Name of the bone to select")
 
+    @classmethod
+    def description(cls, context, properties):
+        s = context.scene.osteon
+        row = s.weak_bones.get(properties.bone)
+        if row is None:
+            return cls.__doc__
+        return row_tooltip(row, s.allowable_mpa)
+
     def run(self, context):
         s = context.scene.osteon
-        arm = context.scene.objects.get(s.result_armature)
-        if arm is None:
-            _obj, arm = bridge.find_target(context)
-        select_bone(context, arm, self.bone)
+        arm = _armature(context)
+        i = s.weak_bones.find(self.bone)
+        if i >= 0 and i != s.weak_bones_index and self.bone in arm.data.bones:
+            s.weak_bones_index = i           # the list's highlight; its update shows the bone
+        else:
+            show_bone(context, arm, self.bone)
         return ""
+
+
+class OSTEON_OT_next_weak_bone(OsteonOperator, bpy.types.Operator):
+    """Show the next bone over the limit (or not analysed) of the result: select it,
+    outline its weakest section, frame it"""
+
+    bl_idname = "osteon.next_weak_bone"
+    bl_label = "Next weak bone"
+    bl_options = {"REGISTER", "UNDO"}  # noqa: RUF012
+
+    def run(self, context):
+        s = context.scene.osteon
+        if not s.has_result:
+            raise OsteonError("No result: press Analyze first")
+        rows = result_rows(context.scene)
+        if not rows:
+            raise OsteonError("No weak bone: all within the limit")
+        later = [i for i in rows if i > s.weak_bones_index]
+        i = later[0] if later else rows[0]
+        arm = _armature(context)
+        if i == s.weak_bones_index:
+            show_bone(context, arm, s.weak_bones[i].name)
+        else:
+            s.weak_bones_index = i
+        row = s.weak_bones[i]
+        n = rows.index(i) + 1
+        if row.status == "not analysed":
+            return f"osteon: {row.name} ({n} of {len(rows)}): not analysed"
+        return (f"osteon: {row.name} ({n} of {len(rows)}): {row.max_stress_mpa:.1f} MPa, "
+                f"{row.ratio:.2f} x allowable")
+
+
+classes = (OSTEON_OT_select_bone, OSTEON_OT_next_weak_bone)

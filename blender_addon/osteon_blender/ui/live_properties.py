@@ -1,4 +1,5 @@
-"""scene.osteon_live: the live mode's settings (Live on/off, throttle, Show sections)."""
+"""scene.osteon_live: the live mode's settings (Live on/off, throttle, Show sections, All
+sections)."""
 
 import bpy
 from bpy.props import BoolProperty, IntProperty
@@ -49,8 +50,12 @@ class OsteonLiveSettings(bpy.types.PropertyGroup):
                     "least as long as the previous one took)")
     show_sections: BoolProperty(
         name="Show sections", default=False, update=_on_show_sections,
-        description="Draw the section outlines of the last analysis in the viewport, "
-                    "coloured by stress / allowable (weak ones red and thick)")
+        description="Draw the outlines of the last analysis's weak sections (magenta) and "
+                    "doubtful ones (orange) in the viewport")
+    show_all_sections: BoolProperty(
+        name="All sections", default=False, update=_on_show_sections,
+        description="With Show sections: also draw every other section, thin, coloured by "
+                    "stress / allowable (blue 0 to red at the allowable stress, MPa)")
 
 
 classes = (OsteonLiveSettings,)

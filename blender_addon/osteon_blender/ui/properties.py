@@ -24,17 +24,17 @@ def _on_material(self, _context):
 
 
 def _on_bone_row(self, context):
-    """Clicking a row of the weak-bone list selects that bone."""
+    """Clicking a row of the weak-bone list shows that bone (ops/select_bone.show_bone)."""
     i = self.weak_bones_index
     if not (0 <= i < len(self.weak_bones)):
         return
     arm = context.scene.objects.get(self.result_armature)
     if arm is None or arm.type != "ARMATURE":
         return
-    from ..ops.select_bone import select_bone
+    from ..ops.select_bone import show_bone
 
     if self.weak_bones[i].name in arm.data.bones:
-        select_bone(context, arm, self.weak_bones[i].name)
+        show_bone(context, arm, self.weak_bones[i].name)
 
 
 class OsteonBoneResult(bpy.types.PropertyGroup):
@@ -57,24 +57,25 @@ class OsteonSettings(bpy.types.PropertyGroup):
     material: EnumProperty(name="Material", items=_MATERIAL_ITEMS, default=_DEFAULT.key,
                            update=_on_material, description="Print material preset: sets the "
                            "strength (MPa)")
-    strength_mpa: FloatProperty(name="Strength (MPa)", default=_DEFAULT.strength_mpa, min=0.001, soft_max=200.0,
+    strength_mpa: FloatProperty(name="Strength (MPa)", default=_DEFAULT.strength_mpa, min=0.001,
+                                soft_max=200.0, precision=1,
                                 description="Tensile strength of the printed material, MPa")
     safety_factor: FloatProperty(name="Safety factor", default=core.DEFAULT_SAFETY_FACTOR,
-                                 min=0.01, soft_max=10.0, description="Allowable stress = "
+                                 min=0.01, soft_max=10.0, precision=2, description="Allowable stress = "
                                  "strength / safety factor")
-    force_n: FloatProperty(name="Force (N)", default=20.0, min=0.0, soft_max=500.0,
+    force_n: FloatProperty(name="Force (N)", default=20.0, min=0.0, soft_max=500.0, precision=1,
                            description="Force on the worst point of each branch, newtons")
     size_mode: EnumProperty(name="Print size", items=core.SIZE_MODES, default="HEIGHT",
                             description="How Blender units become mm of the printed object")
-    print_size_mm: FloatProperty(name="Printed size (mm)", default=120.0, min=0.001,
+    print_size_mm: FloatProperty(name="Size (mm)", default=120.0, min=0.001, precision=1,
                                  soft_max=1000.0, description="Printed height (or largest "
                                  "dimension) of the model, mm")
-    interval_mm: FloatProperty(name="Section interval (mm)", default=2.0, min=0.01,
+    interval_mm: FloatProperty(name="Interval (mm)", default=2.0, min=0.01, precision=2,
                                soft_max=20.0, description="Distance between sections along a "
                                "bone, mm of the printed object")
     held_bone: StringProperty(name="Held bone", default="", description="Bone where the object "
                               "is held (empty = the root bone)")
-    max_scale: FloatProperty(name="Max scale", default=3.0, min=1.0, soft_max=10.0,
+    max_scale: FloatProperty(name="Max scale", default=3.0, min=1.0, soft_max=10.0, precision=2,
                              description="Largest cross-section scale Correct may give a bone")
     max_rounds: IntProperty(name="Max rounds", default=100, min=1, soft_max=1000,
                             description="Largest number of correction rounds")
