@@ -6,7 +6,9 @@
 
 Prints one Markdown row per model: sections, count of each flag, max stress (MPa) and the flags
 of the section it sits on, and the weak sections whose area is below a tenth of the median area
-of their bone's sections ("slivers"). Run it with two builds to compare before / after.
+of their bone's sections ("slivers"), and how many of those are isolated drops (below a tenth of
+their nearest analysed interior neighbours on the bone too; the others are parts that really are
+thin there, e.g. a tapering tail whose bone also cuts the body). Run it with two builds to compare before / after.
 """
 
 from __future__ import annotations
@@ -46,32 +48,44 @@ def audit(mesh, skel, weights) -> dict:
     flags = {name: int(np.count_nonzero(a.section_flags & bit))
              for name, bit in osteon.SECTION_FLAGS.items()}
     ok = np.isfinite(a.stress) & (a.section_area > 0)
-    slivers = 0
+    slivers = isolated = 0
     for b in np.unique(a.section_bone):
         sel = (a.section_bone == b) & ok
         if not sel.any():
             continue
         med = np.median(a.section_area[sel])
-        slivers += int(np.count_nonzero(sel & a.weak & (a.section_area < 0.1 * med)))
+        small = np.flatnonzero(sel & a.weak & (a.section_area < 0.1 * med))
+        slivers += len(small)
+        # Isolated: also below a tenth of its nearest analysed interior neighbours on the bone
+        # (a sudden drop, not a part that really is thin there, like a tapering tail).
+        inner = np.flatnonzero(sel & (a.section_kind == 0))
+        inner = inner[np.argsort(a.section_param[inner])]
+        for i in small:
+            k = np.searchsorted(a.section_param[inner], a.section_param[i])
+            nb = [inner[j] for j in (k - 1, k + 1 if k < len(inner) and inner[k] == i else k)
+                  if 0 <= j < len(inner) and inner[j] != i]
+            if all(a.section_area[i] < 0.1 * a.section_area[j] for j in nb):
+                isolated += 1
     w = a.weakest_section
     at = a.flag_names(w) if w >= 0 else []
     return {"sections": a.num_sections, "flags": flags, "max": a.max_stress, "at": at,
-            "slivers": slivers, "loose": len(getattr(a, "loose_pieces", []))}
+            "slivers": slivers, "isolated": isolated, "loose": len(getattr(a, "loose_pieces", []))}
 
 
 def main(argv: list[str]) -> None:
     todo = [(Path(p), None, None) for p in argv] if argv else models()
-    print("| model | sections | flags | max stress MPa (flags there) | weak slivers | loose |")
-    print("|---|---|---|---|---|---|")
+    print("| model | sections | flags | max stress MPa (flags there) | weak < 1/10 bone median "
+          "| of which isolated drops | loose |")
+    print("|---|---|---|---|---|---|---|")
     for mesh, skel, weights in todo:
         try:
             r = audit(mesh, skel, weights)
         except Exception as e:  # noqa: BLE001 - report and go on
-            print(f"| {mesh.stem} | error: {e} | | | | |")
+            print(f"| {mesh.stem} | error: {e} | | | | | |")
             continue
         fl = ", ".join(f"{k} {v}" for k, v in r["flags"].items() if v)
         print(f"| {mesh.stem} | {r['sections']} | {fl} | {r['max']:.4g} ({', '.join(r['at'])})"
-              f" | {r['slivers']} | {r['loose']} |", flush=True)
+              f" | {r['slivers']} | {r['isolated']} | {r['loose']} |", flush=True)
 
 
 if __name__ == "__main__":

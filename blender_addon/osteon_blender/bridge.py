@@ -114,6 +114,27 @@ def read_co(mesh, out: np.ndarray) -> None:
         mesh.vertices.foreach_get("co", out)
 
 
+def select_vertices(mesh, indices: np.ndarray) -> None:
+    """Vertex selection of a mesh datablock (Object Mode): exactly the vertices ``indices``
+    (int array) selected; edges and faces selected where all their vertices are (bulk
+    ``foreach_get/foreach_set``)."""
+    nv = len(mesh.vertices)
+    sel = np.zeros(nv, dtype=bool)
+    sel[np.asarray(indices, dtype=np.int64)] = True
+    mesh.vertices.foreach_set("select", sel)
+    ev = np.empty(len(mesh.edges) * 2, dtype=np.int32)
+    mesh.edges.foreach_get("vertices", ev)
+    mesh.edges.foreach_set("select", sel[ev.reshape(-1, 2)].all(axis=1))
+    corners = corner_vertices(mesh)
+    npoly = len(mesh.polygons)
+    if npoly:
+        start = np.empty(npoly, dtype=np.int32)
+        mesh.polygons.foreach_get("loop_start", start)
+        all_in = np.logical_and.reduceat(sel[corners], start) if len(corners) else np.zeros(0, bool)
+        mesh.polygons.foreach_set("select", all_in)
+    mesh.update()
+
+
 def evaluated_positions(obj, depsgraph) -> np.ndarray:
     """World-space (V, 3) float64 positions of the POSED, evaluated mesh (Blender units).
 

@@ -150,6 +150,7 @@ MATERIALS = materials.MATERIALS
 MATERIAL_BY_KEY = {m.key: m for m in MATERIALS}
 DEFAULT_SAFETY_FACTOR = materials.DEFAULT_SAFETY_FACTOR
 allowable_stress = report.allowable_stress
+loose_pieces_sentence = report.loose_pieces_sentence
 #: the material enum: the presets, then "Custom" (your own strength)
 MATERIAL_ITEMS = [(m.key, m.label, f"{m.note}; strength {m.strength_mpa:g} MPa ({m.strength_source})")
                   for m in MATERIALS]

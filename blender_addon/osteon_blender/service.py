@@ -126,8 +126,11 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
     s.sections = report["sections"]
     s.weak_sections = report["weak_sections"]
     s.converged = report["converged"]
-    state.of(context.scene).last = {"report": report, "analysis": analysis, "inputs": inp,
-                                    "correction": correction}
+    st = state.of(context.scene)
+    st.last = {"report": report, "analysis": analysis, "inputs": inp, "correction": correction}
+    st.loose_pieces = {"object": inp.obj.name, "vertices": len(inp.vertices_mm),
+                       "pieces": [np.asarray(p, dtype=np.int64)
+                                  for p in getattr(analysis, "loose_pieces", [])]}
     return report
 
 
@@ -168,6 +171,7 @@ def clear_results(context):
     st = state.get(context.scene)
     if st is not None:
         st.last = None
+        st.loose_pieces = None
 
 
 def summary(report: dict) -> str:
@@ -180,6 +184,9 @@ def summary(report: dict) -> str:
         msg += " (" + ", ".join(weak[:5]) + ")"
     if report.get("doubt"):
         msg += "; NOT A CLEAN RESULT: " + report["doubt"]
+    loose = core.loose_pieces_sentence(report.get("loose_pieces") or [])
+    if loose:
+        msg += "; " + loose + " (Select Loose Pieces shows them)"
     return msg
 
 

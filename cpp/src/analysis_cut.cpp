@@ -218,13 +218,22 @@ void Analyzer::Impl::cut_retries(RunState& run) {
     if (any) units.push_back(static_cast<int>(job));
   }
   std::stable_partition(units.begin(), units.end(), [&](int job) { return job_bone[job] >= 0; });
-  // The moment-arm index (stage 4) needs no section: it is built as one more unit, third in
-  // line, so that it fills a core while the other cuts.
+  // The loose pieces and the moment-arm index (stage 4) need no section: they are one more
+  // unit, third in line, so that it fills a core while the other cuts.
   const long index_unit = std::min<long>(2, static_cast<long>(units.size()));
   detail::parallel_for(
       static_cast<long>(units.size()) + 1, options.threads, [&](long u, int worker) {
         if (u == index_unit) {
-          run.arms = std::make_unique<MomentArmIndex>(mesh, sk, tree, run.vertex_bone, slab_params);
+          // Loose pieces fall off the print: their vertices are no load point (full runs; the
+          // correction's partial re-cuts move no piece apart, so they keep the last run's).
+          if (!run.partial) {
+            loose = loose_pieces(mesh, run.vertex_bone, tree.held_bone);
+            loose_vertex.assign(num_vertices, 0);
+            for (const auto& piece : loose)
+              for (std::int32_t v : piece) loose_vertex[v] = 1;
+          }
+          run.arms = std::make_unique<MomentArmIndex>(mesh, sk, tree, run.vertex_bone, slab_params,
+                                                      loose.empty() ? nullptr : &loose_vertex);
           return;
         }
         const int job = units[u > index_unit ? u - 1 : u];

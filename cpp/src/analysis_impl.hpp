@@ -154,6 +154,9 @@ struct Analyzer::Impl {
   std::vector<int> job_bone;     // >= 0: interior family of that bone; -1: a single plane
   std::vector<int> job_section;  // first section of the job
   LoadTree tree;
+  // Loose pieces (full runs; a partial run keeps them): vertex lists, and #V 1 = loose vertex.
+  std::vector<std::vector<std::int32_t>> loose;
+  std::vector<std::uint8_t> loose_vertex;
 
   // Inputs of the last run, so that the next run re-cuts only what changed (live mode).
   std::vector<double> last_vertices;
@@ -181,7 +184,8 @@ struct Analyzer::Impl {
   void prepare_cuts(RunState& run);
   /// 3b. Phase 1: one local cut per family of parallel planes; queues what it cannot prove.
   void cut_local(RunState& run);
-  /// 3c. Phase 2: queued sections re-cut wider or whole (and the moment-arm index built).
+  /// 3c. Phase 2: queued sections re-cut wider or whole (and, beside them, the loose pieces
+  /// found and the moment-arm index built over the vertices of the attached ones).
   void cut_retries(RunState& run);
   /// 3d. Junctions (SPEC §3, docs/junctions.md): sections whose whole cut is much larger than
   /// their bone's typical section are re-cut at +-delta; where only a core continues through

@@ -5,7 +5,6 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
-#include "osteon/regions.hpp"
 #include "parallel.hpp"
 
 namespace osteon {
@@ -43,8 +42,9 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   r.vertex_stress.assign(num_vertices, 0.0);
   r.vertex_culled.assign(num_vertices, 0);
   r.vertex_bone = vertex_bone;
-  // Loose pieces: full runs only (the correction's partial re-cuts move no piece apart).
-  if (!run.partial) r.loose_pieces = loose_pieces(mesh, vertex_bone, tree.held_bone);
+  // Loose pieces (found with the moment-arm index) carry no load: their vertices stay at 0.
+  r.loose_pieces = loose;
+  const bool any_loose = !loose.empty();
   const Index block = 8192;
   detail::parallel_for(
       static_cast<long>((num_vertices + block - 1) / block), options.threads, [&](long chunk, int) {
@@ -52,7 +52,7 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
         for (Index v = chunk * block; v < end; ++v) {
           const int b = vertex_bone[v];
           const auto& p = sp[b];
-          if (p.empty()) continue;
+          if (p.empty() || (any_loose && loose_vertex[v])) continue;
           const double t = (mesh.vertex(v) - sk.heads[b]).dot(run.axis[b]);
           const std::size_t j = std::upper_bound(p.begin(), p.end(), t) - p.begin();
           if (j == 0) {

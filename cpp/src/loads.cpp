@@ -95,7 +95,8 @@ LoadTree build_load_tree(const Skeleton& s, int held_bone,
 
 MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const LoadTree& tree,
                                const std::vector<int>& vertex_bone,
-                               const std::vector<std::vector<double>>& slab_params)
+                               const std::vector<std::vector<double>>& slab_params,
+                               const std::vector<std::uint8_t>* skip)
     : tree_(&tree), slab_params_(slab_params) {
   const int nb = s.num_bones();
   // Slab j of bone b holds the vertices with params in [p[j-1], p[j]) (slab 0: below p[0],
@@ -108,7 +109,11 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
   std::vector<Index> count(ngroups + 1, 0);
   std::vector<Vec3> axis(nb);
   for (int b = 0; b < nb; ++b) axis[b] = s.direction(b);
+  auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
+  Index kept = 0;
   for (Index v = 0; v < mesh.num_vertices; ++v) {
+    if (skipped(v)) continue;
+    ++kept;
     const int b = vertex_bone[v];
     const auto& p = slab_params_[b];
     const double t = (mesh.vertex(v) - s.heads[b]).dot(axis[b]);
@@ -125,10 +130,11 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
     groups_[g].lo = Vec3::Constant(inf);
     groups_[g].hi = Vec3::Constant(-inf);
   }
-  packed_xyz_.resize(3 * mesh.num_vertices);
-  packed_index_.resize(mesh.num_vertices);
+  packed_xyz_.resize(3 * kept);
+  packed_index_.resize(kept);
   std::vector<Index> fill(count.begin(), count.end() - 1);
   for (Index v = 0; v < mesh.num_vertices; ++v) {
+    if (skipped(v)) continue;
     const Index g = vertex_group[v];
     const Index k = fill[g]++;
     const Vec3 p = mesh.vertex(v);

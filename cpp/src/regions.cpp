@@ -162,6 +162,158 @@ bool owned(const CutSegment& s, const BoneDomain& d) {
   return count >= 2;
 }
 
+// True when any two segments of the given loops (not two neighbours of one loop) cross, touch
+// or come within rounding distance of each other; then only a polygon clipper can say what the
+// non-zero winding of the loops is. Segments are bucketed in a uniform grid over the loops' box
+// (about one per cell), so the test costs about the number of segments. Degenerate (zero-length)
+// segments and loops of fewer than three points count as touching.
+bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
+  struct Seg {
+    Vec2 a, b;
+    std::uint32_t loop, index, size;
+  };
+  std::vector<Seg> segs;
+  Box2 all;
+  for (std::size_t l = 0; l < loops.size(); ++l) {
+    const auto& loop = *loops[l];
+    const std::size_t n = loop.size();
+    if (n < 3) return true;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2& a = loop[i];
+      const Vec2& b = loop[i + 1 == n ? 0 : i + 1];
+      if (a == b) return true;
+      segs.push_back({a, b, static_cast<std::uint32_t>(l), static_cast<std::uint32_t>(i),
+                      static_cast<std::uint32_t>(n)});
+      all.add(a);
+    }
+  }
+  const Vec2 size = all.hi - all.lo;
+  const double extent = std::max(size.x(), size.y());
+  if (!(extent > 0) || !std::isfinite(extent)) return true;
+  // Orientation values below this (mm^2) are treated as zero: near-touching counts as touching.
+  const double eps = 1e-12 * extent * extent;
+  const double margin = 1e-9 * extent;
+  const std::size_t m = segs.size();
+  const int cells = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(m))), 1, 1024);
+  const double cell = extent / cells * (1 + 1e-9);
+  auto cell_of = [&](double x, double lo) {
+    return std::clamp(static_cast<int>((x - lo) / cell), 0, cells - 1);
+  };
+  std::vector<std::uint32_t> count(static_cast<std::size_t>(cells) * cells + 1, 0);
+  auto for_cells = [&](const Seg& s, auto&& fn) {
+    const int x0 = cell_of(std::min(s.a.x(), s.b.x()) - margin, all.lo.x());
+    const int x1 = cell_of(std::max(s.a.x(), s.b.x()) + margin, all.lo.x());
+    const int y0 = cell_of(std::min(s.a.y(), s.b.y()) - margin, all.lo.y());
+    const int y1 = cell_of(std::max(s.a.y(), s.b.y()) + margin, all.lo.y());
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) fn(static_cast<std::size_t>(y) * cells + x);
+  };
+  for (const Seg& s : segs) for_cells(s, [&](std::size_t c) { ++count[c + 1]; });
+  for (std::size_t c = 0; c + 1 < count.size(); ++c) count[c + 1] += count[c];
+  std::vector<std::uint32_t> bucket(count.back()), fill(count.begin(), count.end() - 1);
+  for (std::size_t k = 0; k < m; ++k)
+    for_cells(segs[k], [&](std::size_t c) { bucket[fill[c]++] = static_cast<std::uint32_t>(k); });
+  auto orient = [&](const Vec2& o, const Vec2& a, const Vec2& b) {
+    const double c = (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+    return c > eps ? 1 : (c < -eps ? -1 : 0);
+  };
+  auto meet = [&](const Seg& s, const Seg& t) {
+    if (std::min(s.a.x(), s.b.x()) > std::max(t.a.x(), t.b.x()) + margin ||
+        std::min(t.a.x(), t.b.x()) > std::max(s.a.x(), s.b.x()) + margin ||
+        std::min(s.a.y(), s.b.y()) > std::max(t.a.y(), t.b.y()) + margin ||
+        std::min(t.a.y(), t.b.y()) > std::max(s.a.y(), s.b.y()) + margin)
+      return false;
+    const int d1 = orient(t.a, t.b, s.a), d2 = orient(t.a, t.b, s.b);
+    const int d3 = orient(s.a, s.b, t.a), d4 = orient(s.a, s.b, t.b);
+    return d1 * d2 <= 0 && d3 * d4 <= 0;
+  };
+  for (std::size_t c = 0; c + 1 < count.size(); ++c)
+    for (std::uint32_t i = count[c]; i < count[c + 1]; ++i)
+      for (std::uint32_t j = i + 1; j < count[c + 1]; ++j) {
+        const Seg& s = segs[bucket[i]];
+        const Seg& t = segs[bucket[j]];
+        if (s.loop == t.loop) {
+          const std::uint32_t d = s.index > t.index ? s.index - t.index : t.index - s.index;
+          if (d == 1 || d + 1 == s.size) continue;  // neighbours share their common point
+        }
+        if (meet(s, t)) return true;
+      }
+  return false;
+}
+
+// The non-zero-winding region around the origin, without a clipper, when the cluster's loops
+// (indices into `loops`) neither cross nor touch: then they nest, the winding number of the
+// face just inside a loop is the sum of the orientations (+1 counter-clockwise, -1 clockwise) of
+// the loop and the loops around it, and the region around the origin is bounded outside by the
+// outermost loop reached through non-zero faces and inside by the loops whose inside has winding
+// zero (real holes). This is exactly the union Clipper2 computes for such loops (the clipper
+// itself is used whenever loops may cross, touch or the origin is in no material). `around`:
+// the loops holding the origin. Returns false when the shortcut does not apply.
+bool nested_region(const std::vector<std::vector<Vec2>>& loops, const std::vector<int>& cluster,
+                   const std::vector<int>& around, const std::vector<Box2>& boxes,
+                   SectionPolygon& out) {
+  const std::size_t k = cluster.size();
+  std::vector<const std::vector<Vec2>*> ptrs(k);
+  std::vector<double> area(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    ptrs[i] = &loops[cluster[i]];
+    area[i] = signed_area(*ptrs[i]);
+    if (!(area[i] != 0) || !std::isfinite(area[i])) return false;
+  }
+  if (loops_may_cross(ptrs)) return false;
+  // Parent of each loop: the smallest loop around it (loops that do not cross nest, so one
+  // vertex tells whether a loop lies inside another).
+  std::vector<int> parent(k, -1);
+  for (std::size_t i = 0; i < k; ++i) {
+    const Box2& bi = boxes[cluster[i]];
+    for (std::size_t j = 0; j < k; ++j) {
+      if (j == i || std::abs(area[j]) <= std::abs(area[i])) continue;
+      const Box2& bj = boxes[cluster[j]];
+      if (!(bj.contains(bi.lo) && bj.contains(bi.hi))) continue;
+      if (parent[i] >= 0 && std::abs(area[j]) >= std::abs(area[parent[i]])) continue;
+      if (point_in_loop(*ptrs[j], ptrs[i]->front())) parent[i] = static_cast<int>(j);
+    }
+  }
+  std::vector<int> winding(k, 0), order;
+  order.reserve(k);
+  // Windings from the roots down: a loop's winding needs its parent's.
+  std::vector<std::vector<int>> children(k);
+  for (std::size_t i = 0; i < k; ++i)
+    if (parent[i] < 0)
+      order.push_back(static_cast<int>(i));
+    else
+      children[parent[i]].push_back(static_cast<int>(i));
+  for (std::size_t q = 0; q < order.size(); ++q) {
+    const int i = order[q];
+    winding[i] = (parent[i] >= 0 ? winding[parent[i]] : 0) + (area[i] > 0 ? 1 : -1);
+    for (int c : children[i]) order.push_back(c);
+  }
+  if (order.size() != k) return false;
+  // The innermost loop around the origin.
+  int inner = -1;
+  for (int g : around) {
+    const auto it = std::find(cluster.begin(), cluster.end(), g);
+    if (it == cluster.end()) return false;
+    const int i = static_cast<int>(it - cluster.begin());
+    if (inner < 0 || std::abs(area[i]) < std::abs(area[inner])) inner = i;
+  }
+  if (inner < 0 || winding[inner] == 0) return false;  // in no material or in a hole: clipper
+  int top = inner;
+  while (parent[top] >= 0 && winding[parent[top]] != 0) top = parent[top];
+  out.outer = *ptrs[top];
+  out.holes.clear();
+  std::vector<int> stack(children[top].begin(), children[top].end());
+  while (!stack.empty()) {
+    const int c = stack.back();
+    stack.pop_back();
+    if (winding[c] == 0)
+      out.holes.push_back(*ptrs[c]);
+    else
+      stack.insert(stack.end(), children[c].begin(), children[c].end());
+  }
+  return true;
+}
+
 }  // namespace
 
 std::vector<SectionPolygon> material_regions(const std::vector<std::vector<Vec2>>& loops) {
@@ -237,6 +389,9 @@ SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain) {
           in[j] = 1;
           cluster.push_back(static_cast<int>(j));
         }
+    SectionPolygon nested;
+    if (nested_region(cut.loops, cluster, containing, boxes, nested))
+      return finish(std::move(nested));
     if (cluster.size() < n) {
       std::vector<std::vector<Vec2>> near;
       near.reserve(cluster.size());
@@ -390,45 +545,167 @@ SectionGeometry junction_core(const SectionPolygon& section,
   return geom;
 }
 
-double region_thickness(const SectionPolygon& polygon) {
-  std::vector<Vec2> pts = polygon.outer;
-  if (pts.size() < 3) return 0.0;
+namespace {
+
+double cross2(const Vec2& o, const Vec2& a, const Vec2& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+
+// Counter-clockwise convex hull of any point set (Andrew's monotone chain, O(n log n)).
+std::vector<Vec2> hull_sorted(std::vector<Vec2> pts) {
   std::sort(pts.begin(), pts.end(), [](const Vec2& a, const Vec2& b) {
     return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
   });
-  auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
-    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-  };
-  // Andrew's monotone chain: counter-clockwise convex hull.
   std::vector<Vec2> hull(2 * pts.size());
   std::size_t k = 0;
   for (std::size_t i = 0; i < pts.size(); ++i) {
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+    while (k >= 2 && cross2(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
     hull[k++] = pts[i];
   }
   for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
-    while (k >= t && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+    while (k >= t && cross2(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
     hull[k++] = pts[i];
   }
   hull.resize(k > 1 ? k - 1 : k);
+  return hull;
+}
+
+// Counter-clockwise convex hull of a simple closed polygon in O(n) (Melkman's algorithm). For a
+// polygon that is not simple the result may miss points: the caller checks.
+std::vector<Vec2> hull_of_simple(const std::vector<Vec2>& loop) {
+  const std::size_t n = loop.size();
+  std::size_t i2 = 2;
+  while (i2 < n && cross2(loop[0], loop[1], loop[i2]) == 0) ++i2;
+  if (i2 == n) return {};
+  std::vector<Vec2> d(2 * n + 3);
+  std::size_t bot = n, top = n + 3;  // d[bot] == d[top - 1]
+  const bool ccw = cross2(loop[0], loop[1], loop[i2]) > 0;
+  d[bot] = loop[i2];
+  d[bot + 1] = ccw ? loop[0] : loop[1];
+  d[bot + 2] = ccw ? loop[1] : loop[0];
+  d[bot + 3] = loop[i2];
+  top = bot + 3;  // index of the last element
+  for (std::size_t i = i2 + 1; i < n; ++i) {
+    const Vec2& p = loop[i];
+    if (cross2(d[bot], d[bot + 1], p) > 0 && cross2(d[top - 1], d[top], p) > 0) continue;
+    while (top - bot >= 2 && cross2(d[top - 1], d[top], p) <= 0) --top;
+    d[++top] = p;
+    while (top - bot >= 2 && cross2(d[bot], d[bot + 1], p) <= 0) ++bot;
+    d[--bot] = p;
+  }
+  return std::vector<Vec2>(d.begin() + bot, d.begin() + top);
+}
+
+// Rotating calipers over a counter-clockwise hull: the smallest height of the hull over one of
+// its edges (the antipodal point only moves forward; one square root per edge). Sets the edge.
+double hull_width(const std::vector<Vec2>& hull, Vec2& edge_a, Vec2& edge_b) {
   const std::size_t h = hull.size();
-  if (h < 3) return 0.0;
-  // Rotating calipers: for each hull edge the farthest hull point; the width is the minimum.
-  auto height = [&](std::size_t e, std::size_t m) {
-    const Vec2& a = hull[e];
-    const Vec2& b = hull[(e + 1) % h];
-    const double len = (b - a).norm();
-    return len > 0 ? cross(a, b, hull[m]) / len : 0.0;
-  };
   double best = std::numeric_limits<double>::infinity();
+  if (h < 3) return best;
   std::size_t far = 1;
   for (std::size_t e = 0; e < h; ++e) {
+    const Vec2& a = hull[e];
+    const Vec2& b = hull[(e + 1) % h];
     if (far == e) far = (e + 1) % h;
-    for (std::size_t steps = 0; steps < h && height(e, (far + 1) % h) >= height(e, far); ++steps)
+    for (std::size_t steps = 0;
+         steps < h && cross2(a, b, hull[(far + 1) % h]) >= cross2(a, b, hull[far]); ++steps)
       far = (far + 1) % h;
-    if ((hull[(e + 1) % h] - hull[e]).norm() > 0) best = std::min(best, height(e, far));
+    const double len = (b - a).norm();
+    if (len > 0 && cross2(a, b, hull[far]) / len < best) {
+      best = cross2(a, b, hull[far]) / len;
+      edge_a = a;
+      edge_b = b;
+    }
   }
-  return std::isfinite(best) ? best : 0.0;
+  return best;
+}
+
+// Minimum width of a closed polygon (mm): the smallest distance between two parallel lines
+// enclosing it, by rotating calipers on its convex hull. The hull is first taken in linear time
+// as for a simple polygon; the width is exact when every point lies within the slab it found
+// (then no direction is narrower), otherwise the hull is recomputed from sorted points. 0 below
+// three points.
+double minimum_width(const std::vector<Vec2>& pts) {
+  if (pts.size() < 3) return 0.0;
+  Vec2 a = Vec2::Zero(), b = Vec2::Zero();
+  double width = hull_width(hull_of_simple(pts), a, b);
+  if (std::isfinite(width)) {
+    const double len = (b - a).norm();
+    const Box2 box = box_of(pts);
+    const double eps = 1e-12 * (box.hi - box.lo).norm();
+    bool inside = true;
+    for (const Vec2& p : pts) {
+      const double h = cross2(a, b, p) / len;
+      if (h < -eps || h > width + eps) {
+        inside = false;
+        break;
+      }
+    }
+    if (inside) return width;
+  }
+  width = hull_width(hull_sorted(pts), a, b);
+  return std::isfinite(width) ? width : 0.0;
+}
+
+// Smallest distance (mm) between two closed loops that do not cross (the nearest vertex of one
+// to an edge of the other, both ways), or `bound` when they are no nearer than that. Only the
+// parts of each loop within `bound` of the other's box are visited.
+double loop_distance(const std::vector<Vec2>& a, const std::vector<Vec2>& b, double bound) {
+  double best = bound * bound;
+  // A first bound from a few vertices of `a` to every vertex of `b` keeps the visited parts small.
+  const std::size_t step = std::max<std::size_t>(1, a.size() / 8);
+  for (std::size_t i = 0; i < a.size(); i += step)
+    for (const Vec2& q : b) best = std::min(best, (a[i] - q).squaredNorm());
+  auto near = [](const std::vector<Vec2>& loop, const Box2& box, double d) {
+    // Indices i of edges (i, i + 1) with an end within d of the box.
+    std::vector<std::uint32_t> out;
+    const std::size_t n = loop.size();
+    auto close = [&](const Vec2& p) {
+      return p.x() >= box.lo.x() - d && p.x() <= box.hi.x() + d && p.y() >= box.lo.y() - d &&
+             p.y() <= box.hi.y() + d;
+    };
+    for (std::size_t i = 0; i < n; ++i)
+      if (close(loop[i]) || close(loop[i + 1 == n ? 0 : i + 1]))
+        out.push_back(static_cast<std::uint32_t>(i));
+    return out;
+  };
+  auto one_way = [&](const std::vector<Vec2>& from, const std::vector<Vec2>& to) {
+    const Box2 to_box = box_of(to);
+    const std::vector<std::uint32_t> points = near(from, to_box, std::sqrt(best));
+    if (points.empty()) return;
+    Box2 from_box;
+    for (std::uint32_t i : points) from_box.add(from[i]);
+    const std::vector<std::uint32_t> edges = near(to, from_box, std::sqrt(best));
+    const std::size_t n = to.size();
+    for (std::uint32_t i : points) {
+      const Vec2& q = from[i];
+      for (std::uint32_t e : edges) {
+        const Vec2& p0 = to[e];
+        const Vec2 d = to[e + 1 == n ? 0 : e + 1] - p0;
+        const double len2 = d.squaredNorm();
+        const double t = len2 > 0 ? std::clamp((q - p0).dot(d) / len2, 0.0, 1.0) : 0.0;
+        best = std::min(best, (p0 + t * d - q).squaredNorm());
+      }
+    }
+  };
+  one_way(a, b);
+  one_way(b, a);
+  return std::sqrt(best);
+}
+
+}  // namespace
+
+double region_thickness(const SectionPolygon& polygon) {
+  double thickness = minimum_width(polygon.outer);
+  // The thinnest wall around each hole: its distance to the outer boundary and other holes.
+  const auto& holes = polygon.holes;
+  for (std::size_t h = 0; h < holes.size(); ++h) {
+    if (holes[h].size() < 3) continue;
+    thickness = loop_distance(holes[h], polygon.outer, thickness);
+    for (std::size_t k = h + 1; k < holes.size(); ++k)
+      if (holes[k].size() >= 3) thickness = loop_distance(holes[h], holes[k], thickness);
+  }
+  return thickness;
 }
 
 }  // namespace osteon
@@ -524,14 +801,51 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
   auto overlap = [&](std::size_t a, std::size_t b) {
     if ((lo[a].array() > hi[b].array()).any() || (lo[b].array() > hi[a].array()).any())
       return false;
-    // Vertices of the smaller piece (16 sampled) inside the larger one.
-    const bool a_small = faces[a].size() <= faces[b].size();
-    const std::size_t from = a_small ? a : b, into = a_small ? b : a;
-    if (faces[into].empty()) return false;
-    const std::size_t n = verts[from].size(), step = std::max<std::size_t>(1, n / 16);
-    for (std::size_t k = 0; k < n; k += step)
-      if (inside_shell(mesh, faces[into], mesh.vertex(verts[from][k]))) return true;
-    return false;
+    // Vertices of either piece (16 sampled of each) inside the other one.
+    auto some_inside = [&](std::size_t from, std::size_t into) {
+      if (faces[into].empty()) return false;
+      const std::size_t n = verts[from].size(), step = std::max<std::size_t>(1, n / 16);
+      for (std::size_t k = 0; k < n; k += step)
+        if (inside_shell(mesh, faces[into], mesh.vertex(verts[from][k]))) return true;
+      return false;
+    };
+    if (some_inside(a, b) || some_inside(b, a)) return true;
+    // Surfaces that pass through each other (a wing plate through a body): an edge of one
+    // crosses a face of the other, inside the boxes' common part. Past a work cap the pieces
+    // count as attached: calling a piece loose drops its load, so doubt keeps it held.
+    const Vec3 clo = lo[a].cwiseMax(lo[b]), chi = hi[a].cwiseMin(hi[b]);
+    auto in_common = [&](const Vec3& p, const Vec3& q, const Vec3& r) {
+      const Vec3 l = p.cwiseMin(q).cwiseMin(r), h = p.cwiseMax(q).cwiseMax(r);
+      return !((l.array() > chi.array()).any() || (h.array() < clo.array()).any());
+    };
+    std::vector<std::int32_t> fa, fb;
+    for (int side = 0; side < 2; ++side) {
+      auto& out = side == 0 ? fa : fb;
+      const auto& fs = faces[side == 0 ? a : b];
+      for (std::size_t k = 0; k < fs.size(); k += 3)
+        if (in_common(mesh.vertex(fs[k]), mesh.vertex(fs[k + 1]), mesh.vertex(fs[k + 2])))
+          out.insert(out.end(), fs.begin() + k, fs.begin() + k + 3);
+    }
+    if (fa.empty() || fb.empty()) return false;
+    if (static_cast<double>(fa.size()) * static_cast<double>(fb.size()) > 9e7) return true;
+    auto edges_cross = [&](const std::vector<std::int32_t>& edges_of,
+                           const std::vector<std::int32_t>& faces_of) {
+      for (std::size_t k = 0; k < edges_of.size(); k += 3)
+        for (int e = 0; e < 3; ++e) {
+          const Vec3 p = mesh.vertex(edges_of[k + e]);
+          const Vec3 d = mesh.vertex(edges_of[k + (e + 1) % 3]) - p;
+          for (std::size_t m = 0; m < faces_of.size(); m += 3) {
+            const Vec3 t0 = mesh.vertex(faces_of[m]);
+            double t = 0.0;
+            if (detail::line_hits_triangle(p, d, t0, mesh.vertex(faces_of[m + 1]) - t0,
+                                           mesh.vertex(faces_of[m + 2]) - t0, t) &&
+                t >= 0.0 && t <= 1.0)
+              return true;
+          }
+        }
+      return false;
+    };
+    return edges_cross(fa, fb) || edges_cross(fb, fa);
   };
   std::vector<std::uint8_t> attached(np, 0);
   std::vector<std::size_t> queue{held};

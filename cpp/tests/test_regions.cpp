@@ -253,6 +253,99 @@ TEST(Regions, ThicknessIsTheMinimumWidth) {
   EXPECT_EQ(region_thickness(SectionPolygon{{{0, 0}, {1, 1}}, {}}), 0.0);
 }
 
+namespace {
+
+std::vector<Vec2> reversed(std::vector<Vec2> loop) {
+  std::reverse(loop.begin(), loop.end());
+  return loop;
+}
+
+std::vector<Vec2> moved(std::vector<Vec2> loop, const Vec2& d) {
+  for (Vec2& p : loop) p += d;
+  return loop;
+}
+
+// The region around the origin in Clipper2's union of all loops (material_regions), for
+// comparison with select_region's shortcut for loops that do not cross.
+SectionProperties clipper_region(const std::vector<std::vector<Vec2>>& loops) {
+  for (const SectionPolygon& poly : material_regions(loops)) {
+    bool in = point_in_loop(poly.outer, Vec2::Zero());
+    for (const auto& hole : poly.holes) in = in && !point_in_loop(hole, Vec2::Zero());
+    if (in) return section_properties(poly);
+  }
+  return {};
+}
+
+}  // namespace
+
+TEST(Regions, NestedLoopsGiveClippersUnion) {
+  // Loops that do not cross are resolved without the clipper: the same region as Clipper2's
+  // non-zero union. A far loop whose box reaches the others keeps the cluster from the one-loop
+  // fast path.
+  const auto outer = regular_polygon(5, 64);
+  const auto far = moved(regular_polygon(1, 16), Vec2(5.5, 5.5));
+  const std::vector<std::vector<std::vector<Vec2>>> cases = {
+      {outer, regular_polygon(2, 64), far},                                 // an eye inside a head
+      {outer, moved(reversed(regular_polygon(2, 64)), Vec2(2.5, 0)), far},  // a real hole
+      {outer, regular_polygon(2, 64), moved(reversed(regular_polygon(1, 32)), Vec2(3, 0)),
+       far},  // an eye and a hole
+      {outer, reversed(regular_polygon(4, 64)), regular_polygon(3, 64),
+       reversed(regular_polygon(2, 64)), far},  // an island in the tube's hole, with its hole
+  };
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    PlaneCut cut;
+    cut.loops = cases[c];
+    // The origin sits in material in each case except the island's hole (c = 3: the origin is
+    // in the island's hole, r < 2, so the region is the island's wall: flag hollow).
+    const SectionGeometry geom = select_region(cut);
+    ASSERT_TRUE(geom.found) << c;
+    const SectionProperties got = section_properties(geom.polygon);
+    if (c == 3) {
+      EXPECT_TRUE(geom.flags & kFlagHollow);
+      EXPECT_NEAR(got.area,
+                  polygon_area(regular_polygon(3, 64)) - polygon_area(regular_polygon(2, 64)),
+                  1e-9);
+      continue;
+    }
+    const SectionProperties want = clipper_region(cut.loops);
+    ASSERT_TRUE(want.valid) << c;
+    EXPECT_NEAR(got.area, want.area, 1e-9 * want.area) << c;
+    EXPECT_NEAR(got.modulus, want.modulus, 1e-9 * want.modulus) << c;
+    EXPECT_NEAR((got.centroid - want.centroid).norm(), 0.0, 1e-9) << c;
+    EXPECT_EQ(geom.polygon.holes.size(), c == 0 ? 0u : 1u) << c;
+  }
+}
+
+TEST(Regions, ThicknessOfAHollowWall) {
+  // A 64-gon tube r 5 / r 4: parallel edges cos(pi/64) apart (the wall, ~1 mm), not the
+  // outer diameter; an off-centre hole: its thinnest side.
+  const auto outer = regular_polygon(5, 64);
+  EXPECT_NEAR(region_thickness(SectionPolygon{outer, {reversed(regular_polygon(4, 64))}}),
+              std::cos(M_PI / 64), 1e-12);
+  // Hole r 1 centred at (3.5, 0): its vertex (4.5, 0) faces the outer edges through (5, 0).
+  EXPECT_NEAR(
+      region_thickness(SectionPolygon{outer, {moved(regular_polygon(1, 64), Vec2(3.5, 0))}}),
+      0.5 * std::cos(M_PI / 64), 1e-12);
+  // Two holes 0.3 mm apart: the wall between them.
+  const auto h1 = moved(rectangle(2, 2), Vec2(-1.15, 0));
+  const auto h2 = moved(rectangle(2, 2), Vec2(1.15, 0));
+  EXPECT_NEAR(region_thickness(SectionPolygon{outer, {h1, h2}}), 0.3, 1e-12);
+}
+
+TEST(Regions, ThicknessOfALoopThatCrossesItself) {
+  // A bow-tie ordering of a 4 x 3 rectangle's corners: the linear-time hull of a simple polygon
+  // does not apply; the width is still the hull's, 3.
+  EXPECT_NEAR(region_thickness(SectionPolygon{{{0, 0}, {4, 3}, {4, 0}, {0, 3}}, {}}), 3.0, 1e-12);
+  // A star (a self-crossing pentagram) through the vertices of a regular pentagon of
+  // circumradius 1: the pentagon's width, 1 + cos(pi / 5).
+  std::vector<Vec2> star;
+  for (int k = 0; k < 5; ++k) {
+    const double t = M_PI / 2 + 2 * M_PI * (2 * k % 5) / 5;
+    star.emplace_back(std::cos(t), std::sin(t));
+  }
+  EXPECT_NEAR(region_thickness(SectionPolygon{star, {}}), 1 + std::cos(M_PI / 5), 1e-12);
+}
+
 TEST(Regions, JunctionCoreLeavesOutAStubKeepsTapersAndTilts) {
   // A round bar r = 3 (64-gon) with a stub 6 wide reaching to 9 from its axis, cut through the
   // stub; the neighbour planes see the bar alone.

@@ -154,9 +154,9 @@ def section_rows(a, bone_names) -> list[dict]:
 def printability(a, bone_names) -> dict:
     """What the print cannot do, apart from overloading: ``too_thin`` (sections thinner than the
     minimum printable thickness: bone, position mm, thickness mm, reason), ``unreliable``
-    (sections no material could be tied to) and ``loose_pieces`` (vertex count and the first
-    vertex index of each shell that would fall off; the vertex lists are in
-    ``Analysis.loose_pieces``)."""
+    (sections no material could be tied to) and ``loose_pieces`` (vertex count, first vertex
+    index, the bone most of its vertices follow, and the vertex indices of each shell that would
+    fall off; also ``Analysis.loose_pieces``)."""
     out = {"too_thin": [], "unreliable": [], "loose_pieces": []}
     flags = getattr(a, "section_flags", None)
     if flags is None or not hasattr(a, "flag_reasons"):
@@ -174,12 +174,34 @@ def printability(a, bone_names) -> dict:
         b = int(a.section_bone[i])
         out["unreliable"].append({"bone": bone_names[b], "section": int(i),
                                   "param_mm": finite(a.section_param[i])})
+    vertex_bone = getattr(a, "vertex_bone", None)
     for piece in getattr(a, "loose_pieces", []):
-        piece = np.asarray(piece)
+        piece = np.asarray(piece, dtype=np.int64)
+        bone = None
+        if vertex_bone is not None and len(piece):
+            vb = np.asarray(vertex_bone, dtype=np.int64)[piece]
+            vb = vb[(vb >= 0) & (vb < len(bone_names))]
+            if len(vb):
+                bone = bone_names[int(np.bincount(vb).argmax())]
         out["loose_pieces"].append({"vertices": len(piece),
                                     "first_vertex": int(piece[0]) if len(piece) else None,
+                                    "bone": bone,
                                     "vertex_indices": [int(v) for v in piece]})
     return out
+
+
+def loose_pieces_sentence(pieces: list) -> str:
+    """One plain sentence naming the loose pieces of a report (``report["loose_pieces"]``), e.g.
+    "2 loose pieces would fall off the print: 24 vertices at bone 'eye.L', 8 vertices"; "" when
+    there are none."""
+    if not pieces:
+        return ""
+    n = len(pieces)
+    names = [f"{p['vertices']} vertices" + (f" at bone '{p['bone']}'" if p.get("bone") else "")
+             for p in pieces[:5]]
+    more = f" and {n - 5} more" if n > 5 else ""
+    return (f"{n} loose piece{'s' if n != 1 else ''} would fall off the print: "
+            + ", ".join(names) + more)
 
 
 def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,

@@ -6,7 +6,8 @@ import os
 import bpy
 import osteon_blender
 
-OPS = ("analyze", "correct", "reset", "apply", "select_bone", "next_weak_bone")
+OPS = ("analyze", "correct", "reset", "apply", "select_bone", "next_weak_bone",
+       "select_loose_pieces")
 
 
 def _registered() -> bool:

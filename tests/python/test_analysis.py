@@ -106,10 +106,12 @@ def test_culling_and_weak_flags_are_consistent():
 
 
 def branching():
-    """A trunk along x with two disjoint branches: one at the tail (+y), one at the middle (-y)."""
+    """A trunk along x with two branches: one at the tail (+y), one at the middle (-y). Each
+    branch starts 3 mm inside the trunk (r = 5): sunk into it, as game meshes are built, so it is
+    held through the trunk (a detached branch would be a loose piece, no load)."""
     trunk = cylinder_along([0, 0, 0], [60, 0, 0], 5.0)
-    tail_branch = cylinder_along([60, 7, 0], [60, 40, 0], 3.0)
-    mid_branch = cylinder_along([30, -7, 0], [30, -30, 0], 3.0)
+    tail_branch = cylinder_along([60, 2, 0], [60, 40, 0], 3.0)
+    mid_branch = cylinder_along([30, -2, 0], [30, -30, 0], 3.0)
     v, f = merge(trunk, tail_branch, mid_branch)
     part = np.repeat([0, 1, 2], [len(trunk[0]), len(tail_branch[0]), len(mid_branch[0])])
     sk = osteon.Skeleton(

@@ -152,3 +152,122 @@ def test_loose_pieces_are_listed():
     np.testing.assert_array_equal(np.sort(a.loose_pieces[0]), np.arange(start, len(v)))
     v1, f1 = merge(body, eye)
     assert osteon.analyze(v1, f1, _bone(40), interval=4).loose_pieces == []
+
+
+def test_loose_piece_is_no_load_point():
+    # A 4 x 4 mm bar along x (0..40 mm) and, far beyond its end, a detached ball-like capsule
+    # (x = 70..74 mm): it falls off the print, so it carries no load. Each section's moment is
+    # F times the distance from its centroid to the bar's farthest corner (x = 40, y = z = ±2).
+    bar = prism(rectangle(4, 4), 40)
+    ball = cylinder_along((70, 0, 0), (74, 0, 0), 2.0, n=16, stations=4)
+    v, f = merge(bar, ball)
+    force = 20.0
+    a = osteon.analyze(v, f, _bone(40), interval=4, force=force)
+    bar_only = osteon.analyze(*bar, _bone(40), interval=4, force=force)
+    assert len(a.loose_pieces) == 1
+    np.testing.assert_array_equal(np.sort(a.loose_pieces[0]), np.arange(len(bar[0]), len(v)))
+    i = _interior(a)
+    assert i.sum() > 5
+    c = a.section_center[i]
+    d = np.sqrt((40 - c[:, 0]) ** 2 + (2 + np.abs(c[:, 1])) ** 2 + (2 + np.abs(c[:, 2])) ** 2)
+    np.testing.assert_allclose(a.moment[i], force * d, rtol=1e-9)
+    np.testing.assert_allclose(a.moment, bar_only.moment, rtol=1e-12)
+    # the load points are bar corners, never the loose piece
+    assert np.all(a.load_point[:, 0] <= 40 + 1e-9)
+    # the loose piece keeps no stress (it is not analysed as if attached)
+    assert np.all(a.vertex_stress[len(bar[0]):] == 0)
+    np.testing.assert_allclose(a.vertex_stress[:len(bar[0])], bar_only.vertex_stress, rtol=1e-12)
+
+
+@pytest.mark.parametrize(("inner", "expect"), [
+    (4.0, np.cos(np.pi / 64)),  # a tube r 5 / r 4: its wall (parallel 64-gon edges cos(π/64) apart)
+    (None, 10 * np.cos(np.pi / 64)),  # a solid round: its diameter (across flats)
+])
+def test_thickness_of_a_hollow_wall(inner, expect):
+    outer = circle(5, 64)
+    mesh = prism(outer, 40) if inner is None else prism(outer, 40, hole=circle(inner, 64))
+    a = osteon.analyze(*mesh, _bone(40), interval=4, min_thickness=0)
+    i = _interior(a)
+    np.testing.assert_allclose(a.section_thickness[i], expect, rtol=1e-9)
+    # a 1 mm wall is thick enough for FDM (0.8 mm), too thin for a 1.5 mm minimum
+    thin = osteon.analyze(*mesh, _bone(40), interval=4, min_thickness=1.5)
+    assert bool(np.all(thin.section_flags[i] & osteon.SECTION_FLAGS["too_thin"])) == (
+        inner is not None)
+
+
+def test_plate_thickness():
+    a = osteon.analyze(*prism(rectangle(30, 0.6), 40), _bone(40), interval=4, min_thickness=0)
+    np.testing.assert_allclose(a.section_thickness[_interior(a)], 0.6, rtol=1e-9)
+
+
+def _capsule(start, end, r, n=64, cap_stations=12, stations=24):
+    """Closed capsule (cylinder with hemispherical ends) of radius r from start to end."""
+    from shapes import revolve
+
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    axis = end - start
+    length = np.linalg.norm(axis)
+    t = np.linspace(0, np.pi / 2, cap_stations, endpoint=False)[1:]
+    xs = np.concatenate([-r * np.cos(t), np.linspace(0, length, stations), length + r * np.sin(t)])
+    radii = np.concatenate([r * np.sin(t), np.full(stations, r), r * np.cos(t)])
+    v, f = revolve(xs, radii, n)
+    x = axis / length
+    helper = np.array([0.0, 0.0, 1.0]) if abs(x[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    y = np.cross(helper, x)
+    y /= np.linalg.norm(y)
+    z = np.cross(x, y)
+    return start + v @ np.stack([x, y, z]), f
+
+
+def _segment_distance(p, a, b):
+    ab = b - a
+    t = np.clip(((p - a) @ ab) / (ab @ ab), 0, 1)
+    return np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
+
+
+def test_bent_knee_section_is_the_capsules_cut():
+    # A leg bent at the knee: thigh capsule hip (0,0,60) -> knee (15,0,30), shin capsule knee ->
+    # ankle (0,0,0), r = 5 (two fused, overlapping shells). The bone runs straight from hip to
+    # ankle along z and leaves the leg between z ~ 10 and 50 (the knee is 15 mm off it). Every
+    # section must be the leg's own cut by its plane (the union of both capsules' cuts), never
+    # a sliver and never unreliable; the reference is an independent raster of the two ideal
+    # capsules' cut.
+    hip, knee, ankle, r = np.array([0, 0, 60.0]), np.array([15, 0, 30.0]), np.zeros(3), 5.0
+    v, f = merge(_capsule(hip, knee, r), _capsule(knee, ankle, r))
+    sk = osteon.Skeleton([hip], [ankle], [-1], ["leg"])
+    a = osteon.analyze(v, f, sk, interval=5, min_thickness=0)
+    i = np.flatnonzero(a.section_kind == 0)
+    assert len(i) >= 9
+    n = 600
+    xs = np.linspace(-8, 22, n)
+    ys = np.linspace(-6, 6, 240)
+    xx, yy = np.meshgrid(xs, ys)
+    cell = (xs[1] - xs[0]) * (ys[1] - ys[0])
+    knee_seen = False
+    for s in i:
+        z = a.section_point[s][2]
+        pts = np.column_stack([xx.ravel(), yy.ravel(), np.full(xx.size, z)])
+        inside = np.minimum(_segment_distance(pts, hip, knee), _segment_distance(pts, knee, ankle))
+        want = np.count_nonzero(inside <= r) * cell
+        assert not (a.section_flags[s] & osteon.SECTION_FLAGS["unreliable"]), z
+        # within a few % (the mesh is a 64-gon with 12 cap rings; the raster cell is 0.05 mm)
+        assert a.section_area[s] == pytest.approx(want, rel=0.03), z
+        if abs(z - 30) < 1e-6:
+            knee_seen = True
+            assert a.section_flags[s] & osteon.SECTION_FLAGS["outside"]  # the bone is off the leg
+            assert a.section_area[s] > 0.9 * np.pi * r**2  # not a sliver
+    assert knee_seen
+
+
+def test_plate_through_a_body_is_attached():
+    # A thin plate (0.4 x 120 x 1 mm) pushed through a closed r = 5 body between two of its
+    # vertex rings: no vertex of either lies inside the other, but their surfaces cross, so the
+    # plate is held (not loose) and its far corners load the body's sections.
+    body = prism(circle(5, 64), 40)
+    pv, pf = prism(rectangle(120, 1), 0.4, stations=2)
+    plate = (pv + [18.3, 0.0, 0.0], pf)
+    v, f = merge(body, plate)
+    a = osteon.analyze(v, f, _bone(40), interval=4)
+    assert a.loose_pieces == []
+    far = np.flatnonzero(_interior(a) & (a.section_param < 18))
+    assert len(far) > 2 and np.all(np.abs(a.load_point[far, 1]) > 59)  # the plate's corners

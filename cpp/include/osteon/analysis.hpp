@@ -56,7 +56,7 @@ struct AnalysisResult {
   std::vector<Vec3>
       section_thin_axis;               ///< S unit in-plane direction the section is thinnest across
   std::vector<double> section_aspect;  ///< S width / thickness (sqrt of J's eigenvalue ratio)
-  std::vector<double> section_thickness;  ///< S minimum width of the region, mm (NaN: skipped)
+  std::vector<double> section_thickness;  ///< S region thickness, mm (regions.hpp; NaN: skipped)
   /// S area (mm^2) and modulus W (mm^3) of the whole cut around the bone point; they differ from
   /// section_area / section_modulus only at a junction (kFlagJunction), where those are the
   /// core's (the material that continues through the plane, docs/junctions.md). 0 / NaN: skipped.
@@ -97,7 +97,8 @@ struct AnalysisResult {
   std::vector<std::int64_t> cut_outline_loop_start;     ///< first point of each loop (+1 entry)
   std::vector<std::int64_t> cut_outline_section_start;  ///< S+1 first loop of each section
   /// Vertex indices of each loose piece: a shell that neither touches nor overlaps the held piece
-  /// (it would fall off the print); its sections are still computed like any other.
+  /// (it would fall off the print). Its vertices are no load point of any section and keep
+  /// vertex_stress 0 (it carries no load); sections along its bones are still cut.
   std::vector<std::vector<std::int32_t>> loose_pieces;
 };
 

@@ -1,6 +1,7 @@
 // Load analysis (paper §4.4): the skeleton re-rooted at the held bone, and moment arms.
 #pragma once
 
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -31,9 +32,12 @@ LoadTree build_load_tree(const Skeleton& skeleton, int held_bone,
 class MomentArmIndex {
  public:
   /// vertex_bone: #V bone of each vertex; slab_params[b]: sorted section params along bone b (mm).
+  /// skip (optional, #V): vertices that carry no load (loose pieces that fall off the print) are
+  /// never a load point.
   MomentArmIndex(const MeshView& mesh, const Skeleton& skeleton, const LoadTree& tree,
                  const std::vector<int>& vertex_bone,
-                 const std::vector<std::vector<double>>& slab_params);
+                 const std::vector<std::vector<double>>& slab_params,
+                 const std::vector<std::uint8_t>* skip = nullptr);
 
   /// Farthest downstream vertex from `center` for a section of `bone` at slab boundary `boundary`
   /// (index into slab_params[bone]); downstream is the far side (plus = beyond the param).

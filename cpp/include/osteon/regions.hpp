@@ -48,10 +48,12 @@ SectionGeometry junction_core(const SectionPolygon& section,
                               const std::vector<const SectionPolygon*>& neighbours,
                               double margin_mm, double opening_mm);
 
-/// Thickness of a region (mm): its minimum width, i.e. the smallest distance between two parallel
-/// lines enclosing the outer boundary (the narrowest direction of its convex hull). A solid round
-/// section gives its diameter, a b x t plate t; holes are not subtracted (a tube gives its outer
-/// diameter). 0 for fewer than three points.
+/// Thickness of a region (mm), the width a printer has to lay down there: the smallest of its
+/// minimum width (the smallest distance between two parallel lines enclosing the outer boundary,
+/// i.e. the narrowest direction of its convex hull) and, around each hole, the thinnest wall
+/// (the hole's distance to the outer boundary and to every other hole). A solid round gives its
+/// diameter, a b x t plate t, a tube of radii R > r its wall R - r. 0 for fewer than three
+/// points.
 double region_thickness(const SectionPolygon& polygon);
 
 }  // namespace osteon
@@ -61,8 +63,10 @@ namespace osteon {
 /// Loose pieces of a mesh: its shells (faces connected by shared vertices or by vertices at
 /// exactly the same position) that neither touch nor overlap the held piece, directly or through
 /// other attached shells. The held piece is the shell with the most vertices of `held_bone`
-/// (vertex_bone, #V), else the largest. Two shells overlap when a vertex of the smaller one (16
-/// sampled) lies inside the larger (ray parity). Returns the vertex indices of each loose piece.
+/// (vertex_bone, #V), else the largest. Two shells overlap when a vertex of one (16 sampled of
+/// each) lies inside the other (ray parity) or an edge of one crosses a face of the other (in
+/// the common part of their boxes; past ~1e8 edge-face pairs they count as attached). Returns
+/// the vertex indices of each loose piece.
 std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     const std::vector<int>& vertex_bone,
                                                     int held_bone);

@@ -1,0 +1,92 @@
+"""This build of osteon against another build, in alternating child processes.
+
+    python bench/compare_builds.py OTHER_PYTHONPATH [--rounds 7] [--model cow --subdivisions 1]
+
+OTHER_PYTHONPATH is a directory holding another build's ``osteon`` package (its
+``python/osteon`` directory with its compiled ``_core`` module inside). Two pybind11 builds
+cannot share one process (their types clash), so each round runs one child process per build,
+back to back (the order alternates), each timing 3 analyses after a warm-up; machine load then
+hits both builds alike (``--cpu``: one thread, process CPU time). Prints, per interval h, the median time (ms) of each build over all
+rounds and the ratio this build / other build.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+CHILD = """
+import json, os, sys, time
+if os.environ.get("OSTEON_OTHER_BUILD"):
+    # An editable install's import redirect would win over PYTHONPATH: drop it.
+    sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
+    sys.path.insert(0, os.environ["OSTEON_OTHER_BUILD"])
+sys.path.insert(0, {here!r})
+import osteon
+from models import load
+v, f, sk, w = load({model!r}, subdivisions={sub})
+out = {{}}
+for h in (2.0, 8.0):
+    osteon.analyze(v, f, sk, w, interval=h, threads={threads})
+    ts = []
+    for _ in range(3):
+        t0 = {clock}()
+        osteon.analyze(v, f, sk, w, interval=h, threads={threads})
+        ts.append({clock}() - t0)
+    out[str(h)] = ts
+print(json.dumps({{"faces": len(f), "times": out, "file": osteon.__file__}}))
+"""
+
+
+def run_child(pythonpath: str | None, model: str, sub: int, cpu: bool) -> dict:
+    env = dict(os.environ)
+    if pythonpath:
+        env["OSTEON_OTHER_BUILD"] = pythonpath
+    code = CHILD.format(here=str(HERE), model=model, sub=sub, threads=1 if cpu else 0,
+                        clock="time.process_time" if cpu else "time.perf_counter")
+    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True)
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("other", help="PYTHONPATH entry holding the other build's osteon package")
+    ap.add_argument("--rounds", type=int, default=7)
+    ap.add_argument("--model", default="cow")
+    ap.add_argument("--subdivisions", type=int, default=1)
+    ap.add_argument("--cpu", action="store_true",
+                    help="one thread, CPU time (steadier than wall time on a loaded machine)")
+    args = ap.parse_args(argv)
+    times = {"this": {}, "other": {}}
+    faces = 0
+    for r in range(args.rounds):
+        order = [("this", None), ("other", args.other)]
+        if r % 2:
+            order.reverse()
+        for name, path in order:
+            out = run_child(path, args.model, args.subdivisions, args.cpu)
+            faces = out["faces"]
+            if path and not out["file"].startswith(path):
+                raise SystemExit(f"the other build was not imported: {out['file']}")
+            for h, ts in out["times"].items():
+                times[name].setdefault(h, []).extend(ts)
+    print("| model | faces | h (mm) | this build median (ms) | other build median (ms) | ratio |")
+    print("|---|---|---|---|---|---|")
+    for h in times["this"]:
+        a = statistics.median(times["this"][h]) * 1e3
+        b = statistics.median(times["other"][h]) * 1e3
+        print(f"| {args.model} x{4 ** args.subdivisions} | {faces} | {float(h):g} | {a:.2f} | "
+              f"{b:.2f} | {a / b:.3f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
