@@ -149,6 +149,7 @@ void Analyzer::Impl::cut_local(RunState& run) {
   // Sections whose local cut is not provably right, and all joints, are queued for phase 2.
   detail::parallel_for(jobs, options.threads, [&](long job, int worker) {
     if (!run.job_dirty[job]) return;
+    run.check_cancel();
     const int first = job_section[job];
     const int b = job_bone[job];
     if (b < 0) {
@@ -165,16 +166,19 @@ void Analyzer::Impl::cut_local(RunState& run) {
     for (int k = 1; k <= n; ++k) {
       const int si = first + k - 1;
       if (!run.section_dirty[si]) continue;
+      run.check_cancel();
       PlaneFrame frame = base;
       frame.origin = specs[si].point;
       if (!local) {
         states[si] = finish_whole(frame, segs[k - 1], run.gap, run.vertex_bone.data(), b, keep);
+        run.sections_done();
         continue;
       }
       const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
       const SectionGeometry geom = select_region(cut, nullptr);
       if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
         states[si] = finish(frame, geom, &region, keep);
+        run.sections_done();
         continue;
       }
       run.retry[si] = geom.found ? kWholePlane : kGrowFamily;
@@ -216,6 +220,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
           run.arms = std::make_unique<MomentArmIndex>(mesh, sk, tree, run.vertex_bone, slab_params);
           return;
         }
+        run.check_cancel();
         const int job = units[u > index_unit ? u - 1 : u];
         const int first = job_section[job];
         const int b = job_bone[job];
@@ -239,6 +244,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
               done = &previous;
               if (local_ok(run, cut, geom, inside)) {
                 states[first] = finish(frame, geom, &ball, keep);
+                run.sections_done();
                 return;
               }
               if (geom.found) break;  // found but not provably right: cut the whole plane
@@ -246,6 +252,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
           }
           cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
           states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, keep);
+          run.sections_done();
           return;
         }
         const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
@@ -274,10 +281,12 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             if (!wanted[k - 1]) continue;
             add_kept(k);
             if (retry[first + k - 1] != kGrowFamily) continue;
+            run.check_cancel();
             const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
             const SectionGeometry geom = select_region(cut, nullptr);
             if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
               states[first + k - 1] = finish(frame_of(k), geom, &wide, keep);
+              run.sections_done();
               wanted[k - 1] = 0;
             }
           }
@@ -286,9 +295,11 @@ void Analyzer::Impl::cut_retries(RunState& run) {
         cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, nullptr, wanted.data(), done);
         for (int k = 1; k <= n; ++k) {
           if (!wanted[k - 1]) continue;
+          run.check_cancel();
           add_kept(k);
           states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap,
                                                run.vertex_bone.data(), b, keep);
+          run.sections_done();
         }
       });
   if (run.timer.on) {

@@ -36,6 +36,7 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   run.timer.lap("moment index");
   const MomentArmIndex& arms = *run.arms;
   detail::parallel_for((ns + 63) / 64, options.threads, [&](long chunk, int) {
+    run.check_cancel();
     const int end = std::min(ns, static_cast<int>(chunk + 1) * 64);
     for (int i = static_cast<int>(chunk) * 64; i < end; ++i) {
       const SectionSpec& spec = specs[i];

@@ -48,6 +48,7 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   const Index block = 8192;
   detail::parallel_for(
       static_cast<long>((num_vertices + block - 1) / block), options.threads, [&](long chunk, int) {
+        run.check_cancel();
         const Index end = std::min(num_vertices, (chunk + 1) * block);
         for (Index v = chunk * block; v < end; ++v) {
           const int b = vertex_bone[v];
