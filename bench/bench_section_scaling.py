@@ -1,6 +1,7 @@
 """Cost per section as the section count grows (issue 20): it must stay flat.
 
     python bench/bench_section_scaling.py [--model cow] [--repeat 5] [--counts 1000 10000 100000]
+        [--cancel]
 
 The same rigged model is printed bigger and bigger at h = 2 mm, so that the analysis makes
 about 1k, 10k, 100k sections (``osteon.estimate_sections`` picks the print size; it is exact).
@@ -43,6 +44,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--counts", type=int, nargs="+", default=[1000, 10_000, 100_000])
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--cancel", action="store_true",
+                    help="also time Progress.cancel() -> Cancelled at the largest count")
     args = ap.parse_args(argv)
     h = 2.0
     v, f, sk, w = load(args.model, height_mm=120.0)
@@ -81,7 +84,42 @@ def main(argv=None) -> int:
         print(f"| {n} | {size:.0f} | {t_an * 1e3:.1f} | {per_an:.1f} | {per_an / base[0]:.2f} | "
               f"{t_rep * 1e3:.1f} | {per_rep:.1f} | {per_rep / base[1]:.2f} | {t_est * 1e6:.0f} |",
               flush=True)
+    if args.cancel:
+        cancel_latency(v, f, sk, w, h, args)
     return 0
+
+
+def cancel_latency(v, f, sk, w, h, args) -> None:
+    """Median time from ``Progress.cancel()`` (another thread, at 30 % of the sections of the
+    largest count) to the analysis raising ``Cancelled``: the engine's share of Esc in Blender."""
+    import statistics
+    import threading
+
+    k = size_for(sk, args.counts[-1], h) / 120.0
+    vk, skk = v * k, sk.scaled(k)
+    total = osteon.estimate_sections(skk, h)
+    stops = []
+    for _ in range(args.repeat):
+        p = osteon.Progress()
+        out = {}
+
+        def work(p=p, out=out):
+            try:
+                osteon.analyze(vk, f, skk, w, interval=h, threads=args.threads,
+                               keep_outlines=True, progress=p)
+            except osteon.Cancelled:
+                out["end"] = time.perf_counter()
+
+        t = threading.Thread(target=work)
+        t.start()
+        while p.sections_done < 0.3 * total and t.is_alive():
+            time.sleep(0.001)
+        t0 = time.perf_counter()
+        p.cancel()
+        t.join()
+        stops.append(out["end"] - t0)
+    print(f"cancel at 30 % of {total} sections: stopped after a median "
+          f"{statistics.median(stops) * 1e3:.2f} ms ({[round(x * 1e3, 2) for x in stops]})")
 
 
 if __name__ == "__main__":

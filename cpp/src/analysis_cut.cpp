@@ -161,10 +161,24 @@ void Analyzer::Impl::cut_local(RunState& run) {
     auto& segs = run.family_segments[worker];
     const CutRegion region{sk.heads[b], sk.direction(b), run.reach[b]};
     const bool local = options.local_cuts;
-    cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, local ? &region : nullptr,
-                      run.section_dirty.data() + first);
+    // The family is cut `chunk` planes at a time (the same planes, bit for bit): a long bone's
+    // segments never all sit in memory at once, and a cancel waits for one chunk's pass only.
+    // (At most 64 passes per bone: each pass costs O(n) bookkeeping besides its planes.)
+    const int chunk = std::max(512, (n + 63) / 64);
+    std::vector<std::uint8_t> wanted(n, 0);
     for (int k = 1; k <= n; ++k) {
       const int si = first + k - 1;
+      if ((k - 1) % chunk == 0) {
+        run.check_cancel();
+        for (int j = std::max(1, k - chunk); j < k; ++j) {
+          wanted[j - 1] = 0;
+          std::vector<CutSegment>().swap(segs[j - 1]);  // the last chunk's buffers
+        }
+        const int end = std::min(n, k + chunk - 1);
+        for (int j = k; j <= end; ++j) wanted[j - 1] = run.section_dirty[first + j - 1];
+        cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, local ? &region : nullptr,
+                          wanted.data());
+      }
       if (!run.section_dirty[si]) continue;
       run.check_cancel();
       PlaneFrame frame = base;

@@ -115,6 +115,7 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
     r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
     r.weak[i] = r.stress[i] > r.section_allowable[i];
   }
+  run.check_cancel();
   if (options.keep_outlines) {
     r.outline_section_start.reserve(ns + 1);
     r.outline_loop_start.push_back(0);

@@ -44,7 +44,9 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   r.vertex_culled.assign(num_vertices, 0);
   r.vertex_bone = vertex_bone;
   // Loose pieces: full runs only (the correction's partial re-cuts move no piece apart).
+  run.check_cancel();
   if (!run.partial) r.loose_pieces = loose_pieces(mesh, vertex_bone, tree.held_bone);
+  run.check_cancel();
   const Index block = 8192;
   detail::parallel_for(
       static_cast<long>((num_vertices + block - 1) / block), options.threads, [&](long chunk, int) {
