@@ -2,9 +2,12 @@
 
 For each model (120 mm print): bones, time (median of --repeat runs), for each real leaf bone
 the distance from its tail to the nearest auto bone end (% of the model size = largest bounding
-box side), and the max-stress section with the real rig vs the auto skeleton (20 N, position
-distance in % of the model size). Then the skeleton extraction time on the cow subdivided to
-~93k faces. Reads ../shared/data (or OSTEON_DATA).
+box side), and the analysis' weakest section (``Analysis.weakest_section``: issue 12's
+unreliable / too-thin sections left out) with the real rig vs the auto skeleton (20 N, 60 MPa,
+2 mm interval; position distance in % of the model size). Where they disagree, the second table
+says what the auto skeleton's weakest section is (kind, thickness, lever arm) and how far the
+real rig's nearest analysed section is from it. Then the skeleton extraction time on the cow
+subdivided to ~93k faces, per stage (cProfile). Reads ../shared/data (or OSTEON_DATA).
 
     python bench/bench_autoskeleton.py [--repeat 3] [--models arm cow ...] [--skip-big]
 """
@@ -28,12 +31,13 @@ def leaf_tails(sk: osteon.Skeleton) -> np.ndarray:
     return sk.tails[~has_child]
 
 
-def max_stress_point(v, f, sk, w):
+KINDS = {0: "interior", 1: "joint", 2: "end"}
+
+
+def weakest(v, f, sk, w):
+    """(analysis, index of its weakest section)."""
     res = osteon.analyze(v, f, sk, w, force=20.0, allowable_stress=60.0, interval=2.0)
-    # well-formed sections only (no gap closed, open, outside, ... flag)
-    stress = np.where(res.section_flags == 0, np.nan_to_num(res.stress, nan=0.0), 0.0)
-    i = int(np.argmax(stress))
-    return float(res.stress[i]), res.section_center[i]
+    return res, int(res.weakest_section)
 
 
 def run(name: str, repeat: int) -> dict:
@@ -48,9 +52,19 @@ def run(name: str, repeat: int) -> dict:
     ends = np.concatenate([sk.heads, sk.tails])
     tips = leaf_tails(real)
     tip_d = np.linalg.norm(tips[:, None] - ends[None], axis=2).min(1) / size * 100
-    s_real, c_real = max_stress_point(v, f, real, real_w)
-    s_auto, c_auto = max_stress_point(v, f, sk, w)
+    rr, i_real = weakest(v, f, real, real_w)
+    ra, i_auto = weakest(v, f, sk, w)
+    s_real, c_real = float(rr.stress[i_real]), rr.section_center[i_real]
+    s_auto, c_auto = float(ra.stress[i_auto]), ra.section_center[i_auto]
+    ok = np.flatnonzero(rr.valid)
+    near = ok[np.argmin(np.linalg.norm(rr.section_center[ok] - c_auto, axis=1))]
     return {
+        "auto_kind": KINDS.get(int(ra.section_kind[i_auto]), "?"),
+        "auto_thickness": float(ra.section_thickness[i_auto]),
+        "auto_area": float(ra.section_area[i_auto]), "auto_arm": float(ra.moment_arm[i_auto]),
+        "real_near_pct": float(np.linalg.norm(rr.section_center[near] - c_auto) / size * 100),
+        "real_near_area": float(rr.section_area[near]),
+        "real_near_stress": float(rr.stress[near]),
         "model": name, "faces": len(f), "real_bones": real.num_bones, "bones": sk.num_bones,
         "time_s": statistics.median(times), "cpu_s": statistics.median(cpu), "real_leaves": len(tips),
         "tip_max_pct": float(tip_d.max()), "tip_median_pct": float(np.median(tip_d)),
@@ -70,24 +84,53 @@ def main() -> None:
           "| tip dist. median / max (% size) | max stress real / auto (MPa) "
           "| max-stress section distance (% size) |")
     print("|---|---|---|---|---|---|---|---|---|")
+    rows = []
     for name in args.models:
         r = run(name, args.repeat)
+        rows.append(r)
         print(f"| {r['model']} | {r['faces']} | {r['real_bones']} | {r['bones']} | "
               f"{r['time_s']:.2f} / {r['cpu_s']:.2f} | {r['tips_within_10pct']}/{r['real_leaves']} | "
               f"{r['tip_median_pct']:.1f} / {r['tip_max_pct']:.1f} | "
               f"{r['stress_real']:.1f} / {r['stress_auto']:.1f} | "
               f"{r['max_stress_dist_pct']:.1f} |", flush=True)
+    print("\n| model | auto's weakest section: kind, thickness mm, area mm², lever arm mm "
+          "| real rig's nearest analysed section: distance (% size), area mm², stress MPa |")
+    print("|---|---|---|")
+    for r in rows:
+        print(f"| {r['model']} | {r['auto_kind']}, {r['auto_thickness']:.2f}, {r['auto_area']:.1f}, "
+              f"{r['auto_arm']:.1f} | {r['real_near_pct']:.1f}, {r['real_near_area']:.1f}, "
+              f"{r['real_near_stress']:.1f} |")
     if not args.skip_big:
-        v, f, _, _ = load("cow", subdivisions=1)
-        times, cpu = [], []
-        for _ in range(args.repeat):
-            t, c = time.perf_counter(), time.process_time()
-            sk, _w = osteon.auto_skeleton(v, f)
-            times.append(time.perf_counter() - t)
-            cpu.append(time.process_time() - c)
-        print(f"\ncow x4: {len(f)} faces, {sk.num_bones} bones, auto_skeleton median "
-              f"{statistics.median(times):.2f} s wall, {statistics.median(cpu):.2f} s CPU over "
-              f"{args.repeat} runs")
+        big(args.repeat)
+
+
+def big(repeat: int) -> None:
+    """auto_skeleton on the cow subdivided once (~93k faces): median wall / CPU time of
+    ``repeat`` runs, then one profiled run's CPU per stage."""
+    import cProfile
+    import pstats
+
+    v, f, _, _ = load("cow", subdivisions=1)
+    times, cpu = [], []
+    for _ in range(repeat):
+        t, c = time.perf_counter(), time.process_time()
+        sk, _w = osteon.auto_skeleton(v, f)
+        times.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
+    print(f"\ncow x4: {len(f)} faces, {len(v)} vertices, {sk.num_bones} bones, auto_skeleton "
+          f"median {statistics.median(times):.2f} s wall, {statistics.median(cpu):.2f} s CPU "
+          f"over {repeat} runs")
+    prof = cProfile.Profile(time.process_time)
+    prof.runcall(osteon.auto_skeleton, v, f)
+    stats = pstats.Stats(prof).stats
+    total = sum(tt for (_cc, _nc, tt, _ct, _callers) in stats.values())
+    stages = {"_check_mesh": "checks + weld", "from_triangles": "pygel3d mesh",
+              "__init__": "MeshDistance (+ other constructors)", "quadric_simplify": "simplify",
+              "LS_skeleton_and_map": "LS skeleton", "signed_distance": "distance queries",
+              "query": "k-d tree queries"}
+    print(f"stages (CPU s, one run, {total:.2f} s in all):", ", ".join(
+        f"{label} {sum(st[3] for key, st in stats.items() if key[2] == fn):.2f}"
+        for fn, label in stages.items()))
 
 
 if __name__ == "__main__":

@@ -7,7 +7,8 @@
 #     when engine sources are newer than the wheel.
 #  3. Debian's Blender imports the engine from /usr/local/lib/python3.X/dist-packages, which is
 #     on its sys.path: `pip install --no-deps --target` of the wheel there.
-#  4. the bpy 4.5 wheel in its own venv (.venv-bpy: bpy==4.5.*, pytest, scipy, pygel3d, osteon wheel).
+#  4. the bpy 4.5 wheel in its own venv (.venv-bpy: bpy==4.5.*, pytest, scipy, pygel3d, pygltflib,
+#     osteon wheel).
 #  5. Blender 5.1+ embeds Python 3.13: a cp313 osteon wheel built with a Python 3.13
 #     (OSTEON_PY313, else python3.13 on PATH, else pyenv's 3.13) in a build venv
 #     (.venv-py313: scikit-build-core, pybind11, cmake, ninja), and the bpy 5.2 wheel in its own
@@ -87,6 +88,9 @@ if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
   "$BPY_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL"
   "$BPY_VENV/bin/python" -c 'import pygel3d' >/dev/null 2>&1 ||
     "$BPY_VENV/bin/python" -m pip install -q "pygel3d>=0.8"
+  # the wheel's glTF reader: the Fox test compares Blender's glTF import with it
+  "$BPY_VENV/bin/python" -c 'import pygltflib' >/dev/null 2>&1 ||
+    "$BPY_VENV/bin/python" -m pip install -q "pygltflib>=1.16"
   log "bpy wheel ready in $BPY_VENV"
 fi
 
@@ -131,6 +135,8 @@ if [ "${OSTEON_SKIP_BPY:-0}" != 1 ]; then
   "$BPY52_VENV/bin/python" -m pip install -q --no-deps --force-reinstall "$WHEEL313"
   "$BPY52_VENV/bin/python" -c 'import pygel3d' >/dev/null 2>&1 ||
     "$BPY52_VENV/bin/python" -m pip install -q "pygel3d>=0.8"
+  "$BPY52_VENV/bin/python" -c 'import pygltflib' >/dev/null 2>&1 ||
+    "$BPY52_VENV/bin/python" -m pip install -q "pygltflib>=1.16"
   log "bpy 5.2 wheel ready in $BPY52_VENV"
 fi
 

@@ -154,6 +154,8 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["section_thin_axis"] = to_numpy(std::move(r.section_thin_axis));
   d["section_aspect"] = to_numpy(std::move(r.section_aspect));
   d["section_thickness"] = to_numpy(std::move(r.section_thickness));
+  d["section_cut_area"] = to_numpy(std::move(r.section_cut_area));
+  d["section_cut_modulus"] = to_numpy(std::move(r.section_cut_modulus));
   d["moment_arm"] = to_numpy(std::move(r.moment_arm));
   d["moment"] = to_numpy(std::move(r.moment));
   d["stress"] = to_numpy(std::move(r.stress));
@@ -175,6 +177,9 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["outline_points"] = to_numpy(std::move(r.outline_points));
   d["outline_loop_start"] = to_numpy(std::move(r.outline_loop_start));
   d["outline_section_start"] = to_numpy(std::move(r.outline_section_start));
+  d["cut_outline_points"] = to_numpy(std::move(r.cut_outline_points));
+  d["cut_outline_loop_start"] = to_numpy(std::move(r.cut_outline_loop_start));
+  d["cut_outline_section_start"] = to_numpy(std::move(r.cut_outline_section_start));
   py::list loose;
   for (auto& piece : r.loose_pieces) loose.append(to_numpy(std::move(piece)));
   d["loose_pieces"] = loose;
@@ -287,6 +292,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("local_cuts", &AnalysisOptions::local_cuts)
       .def_readwrite("reuse_sections", &AnalysisOptions::reuse_sections)
       .def_readwrite("keep_outlines", &AnalysisOptions::keep_outlines)
+      .def_readwrite("junctions", &AnalysisOptions::junctions)
       .def_readwrite("min_thickness", &AnalysisOptions::min_thickness,
                      "mm; thinner sections are flagged too_thin (0 = no check)")
       .def_property(
@@ -321,7 +327,20 @@ PYBIND11_MODULE(_core, m) {
             for (py::ssize_t b = 0; b < a.shape(0); ++b)
               o.bone_x_axes.emplace_back(u(b, 0), u(b, 1), u(b, 2));
           },
-          "(B,3) local x axes of the bones, or empty");
+          "(B,3) local x axes of the bones, or empty")
+      .def_property(
+          "bone_long_axes",
+          [](const CorrectionOptions& o) { return to_numpy(std::vector<Vec3>(o.bone_long_axes)); },
+          [](CorrectionOptions& o, const py::object& axes) {
+            o.bone_long_axes.clear();
+            if (axes.is_none()) return;
+            const DoubleArray a = axes.cast<DoubleArray>();
+            require_rows3(a, "bone_long_axes");
+            auto u = a.unchecked<2>();
+            for (py::ssize_t b = 0; b < a.shape(0); ++b)
+              o.bone_long_axes.emplace_back(u(b, 0), u(b, 1), u(b, 2));
+          },
+          "(B,3) axes the bones scale across (scale 1 along them), or empty: the segments");
 
   py::class_<PyAnalyzer>(m, "Analyzer", "Reusable analysis of one mesh topology.")
       .def(py::init<const Int32Array&, Index, int, const py::object&, const py::object&,
@@ -374,14 +393,16 @@ PYBIND11_MODULE(_core, m) {
       "skin",
       [](const DoubleArray& vertices, const Skeleton& s, const py::object& dense,
          const py::object& csr, const std::vector<double>& bone_scale,
-         const py::object& bone_scale_z, const py::object& bone_x_axes) {
+         const py::object& bone_scale_z, const py::object& bone_x_axes,
+         const py::object& bone_long_axes) {
         require_rows3(vertices, "vertices");
         auto weights = make_weights(dense, csr, vertices.shape(0), s.num_bones());
         if (!weights) throw std::invalid_argument("skin() needs skinning weights");
         validate_weights(*weights, vertices.shape(0), s.num_bones());
         if (bone_scale.size() != static_cast<std::size_t>(s.num_bones()))
           throw std::invalid_argument("bone_scale must have one entry per bone");
-        AxisScales scales{bone_scale, bone_scale, std::vector<Vec3>(s.num_bones(), Vec3::Zero())};
+        AxisScales scales{
+            bone_scale, bone_scale, std::vector<Vec3>(s.num_bones(), Vec3::Zero()), {}};
         if (!bone_scale_z.is_none()) scales.z = bone_scale_z.cast<std::vector<double>>();
         if (!bone_x_axes.is_none()) {
           const DoubleArray axes = bone_x_axes.cast<DoubleArray>();
@@ -392,6 +413,15 @@ PYBIND11_MODULE(_core, m) {
           for (py::ssize_t b = 0; b < axes.shape(0); ++b)
             scales.x_axis[b] = Vec3(a(b, 0), a(b, 1), a(b, 2));
         }
+        if (!bone_long_axes.is_none()) {
+          const DoubleArray axes = bone_long_axes.cast<DoubleArray>();
+          require_rows3(axes, "bone_long_axes");
+          if (axes.shape(0) != s.num_bones())
+            throw std::invalid_argument("bone_long_axes must have one row per bone");
+          auto a = axes.unchecked<2>();
+          for (py::ssize_t b = 0; b < axes.shape(0); ++b)
+            scales.long_axis.emplace_back(a(b, 0), a(b, 1), a(b, 2));
+        }
         std::vector<double> out(vertices.size());
         {
           py::gil_scoped_release release;
@@ -401,7 +431,7 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("vertices"), py::arg("skeleton"), py::arg("dense"), py::arg("csr"),
       py::arg("bone_scale"), py::arg("bone_scale_z") = py::none(),
-      py::arg("bone_x_axes") = py::none(),
+      py::arg("bone_x_axes") = py::none(), py::arg("bone_long_axes") = py::none(),
       "Linear blend skinning with per-bone cross-section scales (x, optionally z and x axes).");
 
   m.def(
@@ -471,4 +501,5 @@ PYBIND11_MODULE(_core, m) {
   m.attr("FLAG_NON_MANIFOLD") = static_cast<int>(kFlagNonManifold);
   m.attr("FLAG_UNRELIABLE") = static_cast<int>(kFlagUnreliable);
   m.attr("FLAG_TOO_THIN") = static_cast<int>(kFlagTooThin);
+  m.attr("FLAG_JUNCTION") = static_cast<int>(kFlagJunction);
 }

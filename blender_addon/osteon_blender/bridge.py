@@ -186,10 +186,13 @@ class SkeletonArrays:
     x_axes: np.ndarray | None = None  # (B, 3) world unit X axis of each posed bone (roll)
     bone_axes: np.ndarray | None = None  # (B, 3, 3) world unit X, Y, Z axes of each posed bone
     # joint rigs (osteon.io.joints): the Blender tails before the engine's segments replaced
-    # them, which bones changed, and the local axes (scale X, scale Z, length) of each bone
+    # them, which bones changed, the local axes (scale X, scale Z, length) of each bone, and
+    # (B, 3) world direction of the local axis each bone scales across (its "length" slot),
+    # passed to osteon.correct as bone_long_axes
     blender_tails: np.ndarray | None = None
     segment_changed: np.ndarray | None = None
     scale_slots: np.ndarray | None = None
+    long_axes: np.ndarray | None = None
 
 
 def skeleton_arrays(arm) -> SkeletonArrays:
@@ -232,9 +235,11 @@ def use_joint_segments(sk: SkeletonArrays, vertices: np.ndarray, weights) -> Ske
     arbitrary tails), through the wheel's one function ``osteon.io.joints.joint_segments``;
     a rig whose bones end at their children's heads is left as it is.  ``vertices`` (V, 3)
     world, same units as ``sk``; ``weights`` (V, B).  Updates ``sk`` in place: ``tails`` become
-    the segments' ends, ``x_axes`` the local axis that carries the correction's scale X and
+    the segments' ends, ``x_axes`` the local axis that carries the correction's scale X,
     ``scale_slots`` which local axes get (scale X, scale Z, 1) (see
-    :func:`correction_pose_scales`)."""
+    :func:`correction_pose_scales`) and ``long_axes`` the local axis that keeps scale 1, which
+    the engine's correction scales across (``osteon.correct(bone_long_axes=...)``) so that the
+    pose scales reproduce its vertices exactly."""
     from osteon.io import joints
 
     new_tails, changed = joints.joint_segments(sk.heads, sk.tails, sk.parents, vertices, weights)
@@ -246,6 +251,7 @@ def use_joint_segments(sk: SkeletonArrays, vertices: np.ndarray, weights) -> Ske
         if sk.bone_axes is not None:
             sk.x_axes, sk.scale_slots = joints.cross_section_axes(new_tails - sk.heads,
                                                                   sk.bone_axes)
+            sk.long_axes = sk.bone_axes[np.arange(len(sk.names)), sk.scale_slots[:, 2]]
     return sk
 
 

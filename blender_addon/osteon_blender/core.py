@@ -144,7 +144,7 @@ def import_engine():
 # (osteon.materials, osteon.report, osteon.settings): the CLI and batch runs use the same ones.
 import_engine()
 from osteon import materials, report
-from osteon.settings import Settings, engine_arguments
+from osteon.settings import Settings, engine_arguments, min_thickness_mm  # noqa: F401 (service)
 
 MATERIALS = materials.MATERIALS
 MATERIAL_BY_KEY = {m.key: m for m in MATERIALS}

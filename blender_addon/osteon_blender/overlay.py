@@ -7,6 +7,8 @@ draws them with the ``gpu`` module (no ``bgl``).  Weak sections (stress > allowa
 drawn thick and magenta-red, culled (surely safe) ones dark grey, the others blue -> red
 by stress / allowable like the ``osteon_stress`` colour layer (darkened so that the lines
 stand out on the coloured surface).  Lines are drawn without depth test (X-ray like).
+At a junction (a side branch cut, docs/junctions.md) the outline is the core that was
+analysed, and the whole cut is drawn dimmer and dashed around it.
 
 Nothing is drawn, and no draw handler is ever added, in background mode.
 """
@@ -26,6 +28,8 @@ WEAK_WIDTH = 5.0   # px, weak sections
 WEAK_RGBA = (1.0, 0.0, 0.75, 1.0)      # magenta-red: stands out on the red (weak) surface
 CULLED_RGBA = (0.25, 0.25, 0.25, 0.9)
 SHADE = 0.55   # ordinary outlines: the stress colour darkened, to stand out on the surface
+CUT_WIDTH = 1.0   # px, the whole cut of a junction section (dashed, dimmer)
+CUT_ALPHA = 0.45
 
 _versions = itertools.count(1)
 
@@ -41,6 +45,9 @@ class Outlines:
     section_ids: np.ndarray    # (K,) int, sections that got an outline
     weak_ids: np.ndarray       # (k,) int, weak sections among them
     version: int = field(default_factory=lambda: next(_versions))
+    # the whole cut of junction sections: every other segment (dashed), dimmer
+    cut_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
+    cut_colors: np.ndarray = field(default_factory=lambda: np.empty((0, 4), np.float32))
 
     @property
     def num_sections(self) -> int:
@@ -93,10 +100,32 @@ def compute_outlines(analysis, mm_per_unit: float = 1.0) -> Outlines:
     colors = np.repeat(rgba[point_section[sel]], 2, axis=0)
     weak_lines, _ = lines_of(outlined & weak)
     weak_colors = np.broadcast_to(np.float32(WEAK_RGBA), (len(weak_lines), 4)).copy()
+    cut_lines, cut_colors = _dashed_cuts(analysis, rgba, k)
     return Outlines(lines=np.ascontiguousarray(lines), colors=np.ascontiguousarray(colors),
                     weak_lines=np.ascontiguousarray(weak_lines), weak_colors=weak_colors,
                     section_ids=np.flatnonzero(outlined).astype(np.int64),
-                    weak_ids=np.flatnonzero(outlined & weak).astype(np.int64))
+                    weak_ids=np.flatnonzero(outlined & weak).astype(np.int64),
+                    cut_lines=cut_lines, cut_colors=cut_colors)
+
+
+def _dashed_cuts(analysis, rgba, k):
+    """Every other segment of the whole-cut loops of junction sections (``cut_outline_*``),
+    in the section's colour at CUT_ALPHA."""
+    ss = getattr(analysis, "cut_outline_section_start", None)
+    if ss is None or len(ss) < 2 or ss[-1] == 0:
+        return np.empty((0, 3), np.float32), np.empty((0, 4), np.float32)
+    pts = np.asarray(analysis.cut_outline_points, dtype=np.float64)
+    ls = np.asarray(analysis.cut_outline_loop_start, dtype=np.int64)
+    nxt = np.arange(1, len(pts) + 1)
+    nxt[ls[1:] - 1] = ls[:-1]
+    loop_of = np.repeat(np.arange(len(ls) - 1), np.diff(ls))
+    sel = np.flatnonzero((np.arange(len(pts)) - ls[loop_of]) % 2 == 0)
+    seg = np.empty((2 * len(sel), 3), dtype=np.float32)
+    seg[0::2], seg[1::2] = pts[sel], pts[nxt[sel]]
+    section_of = np.repeat(np.repeat(np.arange(len(ss) - 1), np.diff(ss)), np.diff(ls))
+    colors = np.repeat(rgba[section_of[sel]], 2, axis=0)
+    colors[:, 3] = CUT_ALPHA
+    return np.ascontiguousarray(seg / k), np.ascontiguousarray(colors)
 
 
 # --------------------------------------------------------------------------- state
@@ -188,6 +217,8 @@ def _make_batches(out: Outlines) -> dict:
     b["weak"] = (batch_for_shader(shader, "LINES", {"pos": out.weak_lines,
                                                    "color": out.weak_colors})
                  if len(out.weak_lines) else None)
+    b["cut"] = (batch_for_shader(shader, "LINES", {"pos": out.cut_lines, "color": out.cut_colors})
+                if len(out.cut_lines) else None)
     return b
 
 
@@ -223,6 +254,8 @@ def _draw():
     region = ctx.region
     gpu.state.blend_set("ALPHA")
     gpu.state.depth_test_set("NONE")   # outlines lie on the surface: show them all, X-ray like
+    if _batches.get("cut") is not None:
+        _draw_batch(_batches, _batches["cut"], CUT_WIDTH, region)
     if _batches.get("lines") is not None:
         _draw_batch(_batches, _batches["lines"], WIDTH, region)
     if _batches.get("weak") is not None:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import bridge, core, printdir, state
-from .core import OsteonError
+from .core import OsteonError, min_thickness_mm
 
 # read-only view: scene name -> the last result (report, Analysis, inputs, correction),
 # kept in the scene's state object
@@ -291,9 +291,11 @@ def correct_steps(job: Job):
         def engine_correct():
             try:
                 # The bones' own X axes: a thin-direction scale must be one Blender's pose
-                # scale X or Z can reproduce.
+                # scale X or Z can reproduce; on a joint rig, also the local axis each bone
+                # scales across (its segment is not its Y axis).
                 return osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
-                                      bone_x_axes=inp.skeleton.x_axes, keep_outlines=True,
+                                      bone_x_axes=inp.skeleton.x_axes,
+                                      bone_long_axes=inp.skeleton.long_axes, keep_outlines=True,
                                       progress=job.progress, **params)
             except ValueError as e:
                 raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
@@ -406,7 +408,8 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
     progress(0.1)
     t0 = time.perf_counter()
     try:
-        sk, w = osteon.auto_skeleton(verts * k, faces, root=root)
+        sk, w = osteon.auto_skeleton(verts * k, faces, root=root,
+                                     min_thickness=min_thickness_mm(core.settings_of(s)))
     except ValueError as e:
         raise OsteonError(f"Make skeleton: {e}") from e
     progress(0.7)

@@ -105,6 +105,9 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     cut_retries(run);
     run.timer.lap("slicing");
     run.check_cancel();
+    find_junction_cores(run);
+    run.timer.lap("junctions");
+    run.check_cancel();
     AnalysisResult result = compute_loads(run);
     run.timer.lap("moment arms");
     run.check_cancel();

@@ -59,29 +59,12 @@ SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const 
   st.whole_plane = region == nullptr;
   if (region != nullptr) st.region = *region;
   if (geom.found) {
-    const SectionProperties props = section_properties(geom.polygon);
-    if (props.valid) {
+    if (set_section_region(st, frame, geom.polygon, keep)) {
       st.found = true;
-      st.area = props.area;
-      st.modulus = props.modulus;
-      st.center = frame.to_world(props.centroid);
-      // Principal second moments: the smaller one is across the thinnest direction (a b x t
-      // rectangle has b^3 t / 12 and b t^3 / 12, so the aspect is b / t).
-      const Eigen::SelfAdjointEigenSolver<Mat2> eig(props.second_moment);
-      const Vec2 thin = eig.eigenvectors().col(0);
-      st.thin_axis = (thin.x() * frame.u + thin.y() * frame.v).normalized();
-      const double lo = std::max(eig.eigenvalues()(0), 0.0), hi = eig.eigenvalues()(1);
-      st.aspect = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
-      st.thickness = region_thickness(geom.polygon);
-      if (keep) {
-        auto to_world = [&](const std::vector<Vec2>& loop) {
-          std::vector<Vec3> out(loop.size());
-          for (std::size_t k = 0; k < loop.size(); ++k) out[k] = frame.to_world(loop[k]);
-          return out;
-        };
-        st.loops.push_back(to_world(geom.polygon.outer));
-        for (const auto& hole : geom.polygon.holes) st.loops.push_back(to_world(hole));
-      }
+      st.frame = frame;
+      st.cut = geom.polygon;
+      st.cut_area = st.area;
+      st.cut_modulus = st.modulus;
     } else {
       st.flags |= kFlagDegenerate;
     }
@@ -100,6 +83,34 @@ SectionState finish_whole(const PlaneFrame& frame, const std::vector<CutSegment>
 }
 
 }  // namespace
+
+bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
+                        bool keep) {
+  const SectionProperties props = section_properties(polygon);
+  if (!props.valid) return false;
+  st.area = props.area;
+  st.modulus = props.modulus;
+  st.center = frame.to_world(props.centroid);
+  // Principal second moments: the smaller one is across the thinnest direction (a b x t
+  // rectangle has b^3 t / 12 and b t^3 / 12, so the aspect is b / t).
+  const Eigen::SelfAdjointEigenSolver<Mat2> eig(props.second_moment);
+  const Vec2 thin = eig.eigenvectors().col(0);
+  st.thin_axis = (thin.x() * frame.u + thin.y() * frame.v).normalized();
+  const double lo = std::max(eig.eigenvalues()(0), 0.0), hi = eig.eigenvalues()(1);
+  st.aspect = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
+  st.thickness = region_thickness(polygon);
+  st.loops.clear();
+  if (keep) {
+    auto to_world = [&](const std::vector<Vec2>& loop) {
+      std::vector<Vec3> out(loop.size());
+      for (std::size_t k = 0; k < loop.size(); ++k) out[k] = frame.to_world(loop[k]);
+      return out;
+    };
+    st.loops.push_back(to_world(polygon.outer));
+    for (const auto& hole : polygon.holes) st.loops.push_back(to_world(hole));
+  }
+  return true;
+}
 
 void Analyzer::Impl::prepare_cuts(RunState& run) {
   const MeshView& mesh = run.mesh;

@@ -9,6 +9,7 @@
 //   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run, Impl::remember_inputs
 //   analysis_cut.cpp            Impl::prepare_cuts, Impl::cut_local (phase 1),
 //                               Impl::cut_retries (phase 2)
+//   analysis_junction.cpp       Impl::find_junction_cores
 //   analysis_loads.cpp          Impl::compute_loads
 //   analysis_vertex_stress.cpp  Impl::compute_vertex_stress
 #pragma once
@@ -75,7 +76,20 @@ struct SectionState {
   double aspect = 1.0;            // width / thickness
   double thickness = 0.0;         // minimum width of the region, mm
   std::vector<std::vector<Vec3>> loops;  // keep_outlines: outer boundary, then holes, 3D mm
+  // The whole cut (before a junction core replaced it): frame, region, area and modulus.
+  PlaneFrame frame;           // plane frame of `cut` (origin = bone point)
+  SectionPolygon cut;         // region of the whole cut around the bone point, plane coords, mm
+  double cut_area = 0.0;      // mm^2
+  double cut_modulus = 0.0;   // mm^3
+  double junction_delta = 0;  // > 0: junction check made with neighbour planes at +-delta, mm
+  std::vector<std::vector<Vec3>> cut_loops;  // keep_outlines, junction only: the whole cut's loops
 };
+
+/// Sets a found section's properties (area, W, centroid, thin axis, aspect, thickness and, with
+/// `keep`, its 3D loops) from a region in `frame`'s plane coordinates; false (nothing changed)
+/// when the region is degenerate.
+bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
+                        bool keep);
 
 /// Working data of one run, handed from stage to stage (see Analyzer::Impl::run).
 struct RunState {
@@ -125,6 +139,12 @@ struct RunState {
   std::vector<std::vector<CutSegment>> single_segments;               // per worker scratch
   std::atomic<int> local_used{0}, local_failed{0};
   long retried = 0;
+
+  // What changed since the last run (partial and live runs): junction cores whose neighbour
+  // planes reach it are re-checked. all_changed: a fresh run.
+  bool all_changed = true;
+  Box3 changed;
+  long junction_checks = 0;
 
   // Loads (built during cut_retries, used by compute_loads).
   std::unique_ptr<MomentArmIndex> arms;
@@ -179,6 +199,10 @@ struct Analyzer::Impl {
   void cut_local(RunState& run);
   /// 3c. Phase 2: queued sections re-cut wider or whole (and the moment-arm index built).
   void cut_retries(RunState& run);
+  /// 3d. Junctions (SPEC §3, docs/junctions.md): sections whose whole cut is much larger than
+  /// their bone's typical section are re-cut at +-delta; where only a core continues through
+  /// the plane, the section's properties are the core's (flag kFlagJunction).
+  void find_junction_cores(RunState& run);
   /// 4. Per section: load point, moment arm, moment, stress, culled and weak flags.
   AnalysisResult compute_loads(RunState& run);
   /// 5. Per vertex: stress interpolated along its bone between its sections.

@@ -27,6 +27,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   r.section_thin_axis.resize(ns);
   r.section_aspect.resize(ns);
   r.section_thickness.resize(ns);
+  r.section_cut_area.resize(ns);
+  r.section_cut_modulus.resize(ns);
   r.moment_arm.resize(ns);
   r.moment.resize(ns);
   r.stress.resize(ns);
@@ -58,6 +60,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       r.section_thin_axis[i] = st.found ? st.thin_axis : Vec3(kNaN, kNaN, kNaN);
       r.section_aspect[i] = st.found ? st.aspect : kNaN;
       r.section_thickness[i] = st.found ? st.thickness : kNaN;
+      r.section_cut_area[i] = st.found ? st.cut_area : 0.0;
+      r.section_cut_modulus[i] = st.found ? st.cut_modulus : kNaN;
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
@@ -89,7 +93,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       std::uint32_t& flags = r.section_flags[i];
       if ((flags & kFlagOutside) && states[i].area < 0.1 * median[specs[i].bone]) {
         flags |= kFlagUnreliable;
-        r.section_area[i] = 0.0;
+        r.section_area[i] = r.section_cut_area[i] = 0.0;
+        r.section_cut_modulus[i] = kNaN;
         r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
         r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
         continue;
@@ -129,6 +134,19 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       }
     }
     r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
+    r.cut_outline_section_start.reserve(ns + 1);
+    r.cut_outline_loop_start.push_back(0);
+    for (int i = 0; i < ns; ++i) {
+      r.cut_outline_section_start.push_back(
+          static_cast<std::int64_t>(r.cut_outline_loop_start.size()) - 1);
+      if (!states[i].found || !(r.section_flags[i] & kFlagJunction)) continue;
+      for (const auto& loop : states[i].cut_loops) {
+        r.cut_outline_points.insert(r.cut_outline_points.end(), loop.begin(), loop.end());
+        r.cut_outline_loop_start.push_back(static_cast<std::int64_t>(r.cut_outline_points.size()));
+      }
+    }
+    r.cut_outline_section_start.push_back(
+        static_cast<std::int64_t>(r.cut_outline_loop_start.size()) - 1);
   }
   return r;
 }

@@ -25,6 +25,9 @@ int interior_count(double length, double interval) {
   return static_cast<int>(n);
 }
 
+// How far (a fraction of the bone's length) a free head's section moves into the bone.
+constexpr double kCapNudge = 1e-7;
+
 struct Endpoint {
   int bone;
   bool tail;
@@ -167,6 +170,11 @@ void Analyzer::Impl::plan_sections(RunState& run) {
     const double param = tail ? sk.length(bone) : 0.0;
     spec.plus_side = param >= tree.entry_param[bone];
     spec.point = tail ? sk.tails[bone] : sk.heads[bone];
+    // A free head sits where a bone usually starts: on the mesh's end cap. The slicer counts a
+    // vertex on the plane as above it, so a plane exactly on the cap cuts nothing (the limit from
+    // outside); nudged into the bone by kCapNudge of its length it cuts the cap's outline (the
+    // limit from inside). A free tail already gets that limit, and a joint is inside the mesh.
+    if (kind == kEnd && !tail) spec.point += kCapNudge * sk.length(bone) * sk.direction(bone);
     const Vec3 unit = normal.normalized();
     spec.normal = unit.dot(sk.direction(bone)) < 0 ? Vec3(-unit) : unit;
     job_bone.push_back(-1);

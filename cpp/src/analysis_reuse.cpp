@@ -31,6 +31,8 @@ void Analyzer::Impl::mark_dirty(RunState& run) {
   run.section_dirty.assign(specs.size(), 1);
   if (!run.partial) return;
   const Box3& dirty = *run.dirty;
+  run.all_changed = false;
+  run.changed = dirty;
   // A section changes only if the moved triangles cross its plane inside the region its cut
   // was proven in (and, for a ball, away from its bone's axis: the inside test uses that line).
   const Vec3 center = 0.5 * (dirty.lo + dirty.hi), half = 0.5 * (dirty.hi - dirty.lo);
@@ -80,6 +82,8 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
   }
   const Vec3 center = 0.5 * (moved_box.lo + moved_box.hi),
              half = 0.5 * (moved_box.hi - moved_box.lo);
+  run.all_changed = false;
+  run.changed = moved_box;
   std::fill(run.job_dirty.begin(), run.job_dirty.end(), 0);
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const SectionSpec& a = specs[i];

@@ -64,10 +64,24 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
   if (!(co.flat_aspect >= 1.0)) throw std::invalid_argument("flat_aspect must be >= 1");
   if (!co.bone_x_axes.empty() && static_cast<int>(co.bone_x_axes.size()) != nb)
     throw std::invalid_argument("bone_x_axes must have one axis per bone");
-  AxisScales scales{std::vector<double>(nb, 1.0), std::vector<double>(nb, 1.0),
-                    std::vector<Vec3>(nb)};
+  if (!co.bone_long_axes.empty() && static_cast<int>(co.bone_long_axes.size()) != nb)
+    throw std::invalid_argument("bone_long_axes must have one axis per bone");
+  AxisScales scales{
+      std::vector<double>(nb, 1.0), std::vector<double>(nb, 1.0), std::vector<Vec3>(nb), {}};
+  // The axis each bone scales across: its segment, or the given long axis.
+  std::vector<Vec3> long_axis(nb);
   for (int b = 0; b < nb; ++b) {
-    const Vec3 d = sk.direction(b);
+    long_axis[b] = sk.direction(b);
+    if (co.bone_long_axes.empty()) continue;
+    const Vec3& l = co.bone_long_axes[b];
+    if (!l.allFinite() || !(l.norm() > 1e-6))
+      throw std::invalid_argument("bone_long_axes[" + std::to_string(b) +
+                                  "] must be a finite non-zero vector");
+    long_axis[b] = l.normalized();
+  }
+  if (!co.bone_long_axes.empty()) scales.long_axis = long_axis;
+  for (int b = 0; b < nb; ++b) {
+    const Vec3 d = long_axis[b];
     Vec3 x = co.bone_x_axes.empty() ? PlaneFrame::make(sk.heads[b], d).u : co.bone_x_axes[b];
     x -= x.dot(d) * d;
     if (!x.allFinite() || !(x.norm() > 1e-6))
@@ -118,7 +132,7 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     int axis = 0;
     AxisScales trial = scales;
     if (co.thin_direction && current.section_aspect[worst] >= co.flat_aspect) {
-      const Vec3 d = sk.direction(bone);
+      const Vec3 d = long_axis[bone];
       Vec3 thin = current.section_thin_axis[worst];
       thin -= thin.dot(d) * d;
       if (thin.norm() > 0.5) {  // the section's thin direction lies mostly across the bone

@@ -307,6 +307,89 @@ SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain) {
   return finish(std::move(polys[pick]));
 }
 
+namespace {
+
+// Clipper2 paths of a section polygon, oriented: the outer boundary counter-clockwise, holes
+// clockwise (a SectionPolygon's loops may have either orientation).
+Paths64 paths_of(const SectionPolygon& poly, const Scaler& s) {
+  Paths64 out;
+  auto add = [&](const std::vector<Vec2>& loop, bool outer) {
+    if (loop.size() < 3) return;
+    Path64 path;
+    path.reserve(loop.size());
+    for (const Vec2& p : loop) path.push_back(s.to(p));
+    if ((signed_area(loop) > 0) != outer) std::reverse(path.begin(), path.end());
+    out.push_back(std::move(path));
+  };
+  add(poly.outer, true);
+  for (const auto& hole : poly.holes) add(hole, false);
+  return out;
+}
+
+// Offset by delta (Clipper2 units), round joins with arcs of about 1 % of |delta| in error.
+Paths64 offset(const Paths64& paths, double delta) {
+  return Clipper2Lib::InflatePaths(paths, delta, Clipper2Lib::JoinType::Round,
+                                   Clipper2Lib::EndType::Polygon, 2.0, 0.01 * std::abs(delta));
+}
+
+}  // namespace
+
+SectionGeometry junction_core(const SectionPolygon& section,
+                              const std::vector<const SectionPolygon*>& neighbours,
+                              double margin_mm, double opening_mm) {
+  using Clipper2Lib::FillRule;
+  SectionGeometry geom;
+  std::vector<std::vector<Vec2>> all{section.outer};
+  all.insert(all.end(), section.holes.begin(), section.holes.end());
+  for (const SectionPolygon* n : neighbours) {
+    all.push_back(n->outer);
+    all.insert(all.end(), n->holes.begin(), n->holes.end());
+  }
+  const Scaler s(all);
+  const Paths64 whole = paths_of(section, s);
+  Paths64 core = whole;
+  // Only the neighbours' material near the section matters: clipped to its box (+ margin).
+  const Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(whole);
+  const std::int64_t pad = static_cast<std::int64_t>(2.0 * margin_mm * s.scale) + 1;
+  const Clipper2Lib::Rect64 near(box.left - pad, box.top - pad, box.right + pad, box.bottom + pad);
+  for (const SectionPolygon* n : neighbours) {
+    Paths64 widened = Clipper2Lib::RectClip(near, paths_of(*n, s));
+    if (margin_mm > 0) widened = offset(widened, margin_mm * s.scale);
+    core = Clipper2Lib::Intersect(core, widened, FillRule::NonZero);
+  }
+  // The trimmed-off material, piece by piece: a piece is a stub (left out whole) only when it is
+  // wider than 2 * opening somewhere (its erosion by `opening` is not empty); a thin piece (the
+  // rim of a taper, a tilted bone's crescent) goes back into the core.
+  PolyTree64 trimmed;
+  {
+    Clipper2Lib::Clipper64 clipper;
+    clipper.AddSubject(whole);
+    clipper.AddClip(core);
+    clipper.Execute(Clipper2Lib::ClipType::Difference, FillRule::NonZero, trimmed);
+  }
+  std::vector<const PolyPath64*> pieces;
+  collect_outers(trimmed, pieces);
+  Paths64 kept = core;
+  for (const PolyPath64* piece : pieces) {
+    Paths64 paths{piece->Polygon()};
+    for (const auto& hole : *piece) paths.push_back(hole->Polygon());
+    if (opening_mm > 0 && offset(paths, -opening_mm * s.scale).empty())
+      kept.insert(kept.end(), paths.begin(), paths.end());
+  }
+  core = Clipper2Lib::Union(kept, FillRule::NonZero);
+  PolyTree64 tree;
+  Clipper2Lib::Clipper64 clipper;
+  clipper.AddSubject(core);
+  clipper.Execute(Clipper2Lib::ClipType::Union, FillRule::NonZero, tree);
+  bool hollow = false;
+  if (const PolyPath64* outer = locate(tree, s.to(Vec2::Zero()), hollow)) {
+    if (hollow) geom.flags |= kFlagHollow;
+    geom.polygon = polygon_of(*outer, s);
+    geom.found = true;
+  }
+  return geom;
+}
+
 double region_thickness(const SectionPolygon& polygon) {
   std::vector<Vec2> pts = polygon.outer;
   if (pts.size() < 3) return 0.0;

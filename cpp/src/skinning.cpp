@@ -12,7 +12,7 @@ void skin_cross_section_scales(const double* rest, Index num_vertices, const Ske
                                double* out) {
   if (static_cast<int>(bone_scale.size()) != s.num_bones())
     throw std::invalid_argument("bone_scale must have one entry per bone");
-  AxisScales scales{bone_scale, bone_scale, std::vector<Vec3>(s.num_bones(), Vec3::Zero())};
+  AxisScales scales{bone_scale, bone_scale, std::vector<Vec3>(s.num_bones(), Vec3::Zero()), {}};
   skin_axis_scales(rest, num_vertices, s, w, scales, out);
 }
 
@@ -22,11 +22,20 @@ void skin_axis_scales(const double* rest, Index num_vertices, const Skeleton& s,
   if (static_cast<int>(scales.x.size()) != nb || static_cast<int>(scales.z.size()) != nb ||
       static_cast<int>(scales.x_axis.size()) != nb)
     throw std::invalid_argument("bone scales and axes must have one entry per bone");
+  if (!scales.long_axis.empty() && static_cast<int>(scales.long_axis.size()) != nb)
+    throw std::invalid_argument("bone long axes must be empty or have one entry per bone");
   if (out != rest) std::copy(rest, rest + 3 * num_vertices, out);
   std::vector<Vec3> axis(nb), x_axis(nb), z_axis(nb);
   std::vector<std::uint8_t> scaled(nb), uniform(nb);
   for (int b = 0; b < nb; ++b) {
     axis[b] = s.direction(b);
+    if (!scales.long_axis.empty()) {
+      const Vec3& l = scales.long_axis[b];
+      if (!l.allFinite() || !(l.norm() > 1e-9))
+        throw std::invalid_argument("long axis of bone " + std::to_string(b) +
+                                    " must be a finite non-zero vector");
+      axis[b] = l.normalized();
+    }
     scaled[b] = scales.x[b] != 1.0 || scales.z[b] != 1.0;
     uniform[b] = scales.x[b] == scales.z[b];
     if (uniform[b]) continue;

@@ -7,12 +7,15 @@
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
 #include "osteon/skinning.hpp"
+#include "osteon/slicer.hpp"
 #include "osteon/weights.hpp"
 #include "test_helpers.hpp"
 
 using namespace osteon;
+using osteon::testing::OwnedMesh;
 using osteon::testing::prism;
 using osteon::testing::rectangle;
+using osteon::testing::regular_polygon;
 
 namespace {
 Skeleton bar(double length) {
@@ -85,6 +88,62 @@ TEST(Skinning, ScalesAcrossTheBoneOnly) {
     EXPECT_NEAR(out[i + 1], 2 * m.v[i + 1], 1e-12);
     EXPECT_NEAR(out[i + 2], 2 * m.v[i + 2], 1e-12);
   }
+}
+
+TEST(Skinning, LongAxisGivesTheAxisScaledAcross) {
+  // A joint rig's Blender bone: segment along x, but the bone scales across its own local axis
+  // z (long_axis), x along (1, 0, 0) and z = x cross long = (0, -1, 0): p -> (sx px, sz py, pz)
+  // about the head, whatever the segment (Blender's pose scale (sx, 1, sz) on those axes).
+  const auto m = prism(rectangle(4, 2), 20);
+  const Skeleton s = bar(20);
+  const BoneWeights w = nearest_bone_weights(m.view(), s);
+  AxisScales scales{{2.0}, {3.0}, {Vec3(1, 0, 0)}, {Vec3(0, 0, 5)}};
+  std::vector<double> out(m.v.size());
+  skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, scales, out.data());
+  for (std::size_t i = 0; i < m.v.size(); i += 3) {
+    EXPECT_NEAR(out[i], 2 * m.v[i], 1e-12);
+    EXPECT_NEAR(out[i + 1], 3 * m.v[i + 1], 1e-12);
+    EXPECT_EQ(out[i + 2], m.v[i + 2]);
+  }
+  // uniform: both axes across the long axis; the long axis along the segment is the default
+  AxisScales uniform{{2.0}, {2.0}, {Vec3::Zero()}, {Vec3(0, 0, 1)}};
+  skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, uniform, out.data());
+  for (std::size_t i = 0; i < m.v.size(); i += 3) {
+    EXPECT_NEAR(out[i], 2 * m.v[i], 1e-12);
+    EXPECT_NEAR(out[i + 1], 2 * m.v[i + 1], 1e-12);
+    EXPECT_EQ(out[i + 2], m.v[i + 2]);
+  }
+  std::vector<double> a(m.v.size()), b(m.v.size());
+  AxisScales along{{2.0}, {1.5}, {Vec3(0, 1, 0)}, {Vec3(1, 0, 0)}};
+  skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, along, a.data());
+  along.long_axis.clear();
+  skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, along, b.data());
+  EXPECT_EQ(a, b);
+  along.long_axis = {Vec3::Zero()};
+  EXPECT_THROW(skin_axis_scales(m.v.data(), m.view().num_vertices, s, w, along, a.data()),
+               std::invalid_argument);
+}
+
+TEST(Analysis, FreeHeadOnTheEndCapIsCut) {
+  // The bar's head lies on the prism's end cap: its end section is the cap's outline (the
+  // section just inside), with the cantilever's largest moment, not an empty cut.
+  const auto m = prism(rectangle(6, 6), 90, 31);
+  AnalysisOptions o;
+  o.force = 10;
+  o.interval = 3;
+  const AnalysisResult r = analyze(m.view(), bar(90), nullptr, o);
+  const double w = 216.0 / (6 * std::sqrt(2.0));
+  int ends = 0;
+  for (std::size_t i = 0; i < r.stress.size(); ++i) {
+    EXPECT_EQ(r.section_flags[i], 0u) << "section " << i << " at " << r.section_param[i];
+    if (r.section_kind[i] != kEnd || r.section_param[i] != 0.0) continue;
+    const double d = std::sqrt(90.0 * 90.0 + 18.0);
+    EXPECT_NEAR(r.section_area[i], 36.0, 1e-9);
+    EXPECT_NEAR(r.stress[i], 10 * d / w, 1e-6 * r.stress[i]);
+    EXPECT_DOUBLE_EQ(r.max_stress, r.stress[i]);
+    ++ends;
+  }
+  EXPECT_EQ(ends, 1);
 }
 
 TEST(Correction, BarFixedByCubeRootOfStressRatio) {
@@ -162,4 +221,48 @@ TEST(Analysis, OutlinesEncloseTheSectionArea) {
     ++checked;
   }
   EXPECT_GE(checked, 14);
+}
+
+TEST(Analysis, JunctionCountsOnlyTheBarThroughAStub) {
+  // A round bar r = 3 (64-gon) along x, 0..40, and a stub of the same radius fused at x = 20,
+  // along z up to 9: two overlapping closed shells (the engine takes their union).
+  const double r = 3;
+  const OwnedMesh rod = prism(regular_polygon(r, 64), 40, 41);
+  OwnedMesh m = rod;
+  const OwnedMesh stub = prism(regular_polygon(r, 64), 9, 10);
+  const std::int32_t base = static_cast<std::int32_t>(m.v.size() / 3);
+  for (std::size_t i = 0; i < stub.v.size(); i += 3) {  // (x, y, z) -> (20 + y, z, x): a rotation
+    m.v.push_back(20 + stub.v[i + 1]);
+    m.v.push_back(stub.v[i + 2]);
+    m.v.push_back(stub.v[i]);
+  }
+  for (std::int32_t f : stub.f) m.f.push_back(base + f);
+  AnalysisOptions o;
+  const AnalysisResult a = analyze(m.view(), bar(40), nullptr, o);
+  const AnalysisResult plain = analyze(rod.view(), bar(40), nullptr, o);
+  ASSERT_EQ(a.section_modulus.size(), plain.section_modulus.size());
+  const double w_round = M_PI * r * r * r / 4;
+  int through = 0, away = 0;
+  for (std::size_t i = 0; i < a.section_modulus.size(); ++i) {
+    if (a.section_kind[i] != kInterior) continue;
+    const double x = a.section_param[i];
+    if (std::abs(x - 20) < r) {  // x = 18, 20, 22: the plane cuts the stub
+      ++through;
+      EXPECT_TRUE(a.section_flags[i] & kFlagJunction) << x;
+      EXPECT_NEAR(a.section_modulus[i] / w_round, 1.0, 0.10) << x;
+      EXPECT_GT(a.section_cut_modulus[i], 1.6 * w_round) << x;
+      EXPECT_NEAR(a.stress[i], a.moment[i] / a.section_modulus[i], 1e-12 * a.stress[i]);
+    } else if (std::abs(x - 20) > r + 1) {
+      ++away;
+      EXPECT_FALSE(a.section_flags[i] & kFlagJunction) << x;
+      EXPECT_NEAR(a.section_modulus[i], plain.section_modulus[i], 0.01 * plain.section_modulus[i]);
+    }
+  }
+  EXPECT_EQ(through, 3);
+  EXPECT_GE(away, 12);
+  // The prismatic bar: no junction, whole cut == section.
+  for (std::size_t i = 0; i < plain.section_modulus.size(); ++i) {
+    EXPECT_FALSE(plain.section_flags[i] & kFlagJunction);
+    EXPECT_EQ(plain.section_area[i], plain.section_cut_area[i]);
+  }
 }

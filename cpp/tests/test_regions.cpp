@@ -252,3 +252,48 @@ TEST(Regions, ThicknessIsTheMinimumWidth) {
   EXPECT_NEAR(region_thickness(SectionPolygon{{{0, 0}, {4, 0}, {0, 3}}, {}}), 12.0 / 5.0, 1e-12);
   EXPECT_EQ(region_thickness(SectionPolygon{{{0, 0}, {1, 1}}, {}}), 0.0);
 }
+
+TEST(Regions, JunctionCoreLeavesOutAStubKeepsTapersAndTilts) {
+  // A round bar r = 3 (64-gon) with a stub 6 wide reaching to 9 from its axis, cut through the
+  // stub; the neighbour planes see the bar alone.
+  const auto bar = regular_polygon(3, 64);
+  std::vector<Vec2> stub = {{-3, 0}, {3, 0}, {3, 9}, {-3, 9}};
+  const std::vector<SectionPolygon> whole = material_regions({bar, stub});
+  ASSERT_EQ(whole.size(), 1u);
+  SectionPolygon neighbour;
+  neighbour.outer = bar;
+  const SectionProperties round = section_properties(neighbour);
+  const SectionGeometry core = junction_core(whole[0], {&neighbour, &neighbour}, 0.15, 0.9);
+  ASSERT_TRUE(core.found);
+  const SectionProperties p = section_properties(core.polygon);
+  // The core is the bar plus the stub's root within the 0.15 margin: at most the band of width
+  // 0.15 over the upper half circle (the stub is as wide as the bar), pi * 3.15 * 0.15 more.
+  EXPECT_GE(p.area, round.area - 1e-6);
+  EXPECT_LE(p.area, round.area + M_PI * 3.15 * 0.15);
+  EXPECT_NEAR(p.modulus / round.modulus, 1.0, 0.05);
+  EXPECT_GT(section_properties(whole[0]).modulus, 2.5 * round.modulus);
+  // A taper: neighbours r = 2.6 and 3.4 (the rim trimmed off is 0.4 - 0.15 wide, under 2 x 0.9):
+  // nothing is left out.
+  SectionPolygon section, smaller, larger;
+  section.outer = bar;
+  smaller.outer = regular_polygon(2.6, 64);
+  larger.outer = regular_polygon(3.4, 64);
+  const SectionGeometry taper = junction_core(section, {&smaller, &larger}, 0.15, 0.9);
+  ASSERT_TRUE(taper.found);
+  EXPECT_NEAR(section_properties(taper.polygon).area, round.area, 1e-6 * round.area);
+  EXPECT_NEAR(section_properties(taper.polygon).modulus, round.modulus, 1e-6 * round.modulus);
+  // A tilted bone: neighbours shifted by -0.5 and +0.5 (crescents 0.5 - 0.15 wide): unchanged.
+  SectionPolygon left, right;
+  left.outer = bar;
+  right.outer = bar;
+  for (Vec2& q : left.outer) q.x() -= 0.5;
+  for (Vec2& q : right.outer) q.x() += 0.5;
+  const SectionGeometry tilt = junction_core(section, {&left, &right}, 0.15, 0.9);
+  ASSERT_TRUE(tilt.found);
+  EXPECT_NEAR(section_properties(tilt.polygon).area, round.area, 1e-6 * round.area);
+  // The bone point outside the core (the neighbours hold only far material): not found.
+  SectionPolygon far;
+  far.outer = rectangle(2, 2);
+  for (Vec2& q : far.outer) q.y() += 7;
+  EXPECT_FALSE(junction_core(whole[0], {&far, &far}, 0.15, 0.9).found);
+}

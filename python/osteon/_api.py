@@ -79,6 +79,7 @@ SECTION_FLAGS = {
     "non_manifold": _core.FLAG_NON_MANIFOLD,
     "unreliable": _core.FLAG_UNRELIABLE,
     "too_thin": _core.FLAG_TOO_THIN,
+    "junction": _core.FLAG_JUNCTION,
 }
 
 #: Plain-language reason of each flag (``Analysis.flag_reasons``, the JSON ``sections`` rows).
@@ -93,6 +94,8 @@ FLAG_REASONS = {
     "unreliable": "the bone is outside the mesh and no part here belongs to it: no number, "
                   "left out of every result",
     "too_thin": "too thin to print ({thickness} mm < {minimum} mm)",
+    "junction": "a side branch is cut here: only the material that continues through the plane "
+                "counts ({area} of {cut_area} mm²)",
 }
 #: Values of ``Analysis.section_kind``.
 SECTION_KINDS = {0: "interior", 1: "joint", 2: "end"}
@@ -396,6 +399,13 @@ class Analysis:
     outline_points: np.ndarray | None = None
     outline_loop_start: np.ndarray | None = None
     outline_section_start: np.ndarray | None = None
+    #: (S,) area mm² and modulus W mm³ of the whole cut; differ from section_area /
+    #: section_modulus only at ``junction`` sections (those are the core's, docs/junctions.md)
+    section_cut_area: np.ndarray | None = None
+    section_cut_modulus: np.ndarray | None = None
+    cut_outline_points: np.ndarray | None = None
+    cut_outline_loop_start: np.ndarray | None = None
+    cut_outline_section_start: np.ndarray | None = None
 
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
@@ -404,6 +414,8 @@ class Analysis:
                    min_thickness: float = DEFAULT_MIN_THICKNESS) -> Analysis:
         if len(d["outline_section_start"]) == 0:  # outlines not asked for
             d["outline_points"] = d["outline_loop_start"] = d["outline_section_start"] = None
+            d["cut_outline_points"] = d["cut_outline_loop_start"] = None
+            d["cut_outline_section_start"] = None
         return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
                    bone_names=list(skeleton.names),
                    build_direction=np.array(build_direction, dtype=float),
@@ -418,6 +430,10 @@ class Analysis:
             self.stress_ratio = self.stress / self.section_allowable
         if self.across_layers is None:
             self.across_layers = np.zeros(len(self.stress), bool)
+        if self.section_cut_area is None:
+            self.section_cut_area = np.asarray(self.section_area, dtype=float).copy()
+        if self.section_cut_modulus is None:
+            self.section_cut_modulus = np.asarray(self.section_modulus, dtype=float).copy()
 
     @property
     def num_sections(self) -> int:
@@ -438,6 +454,25 @@ class Analysis:
                 for s in range(len(ss) - 1)]
 
     @property
+    def section_cut_loops(self) -> list[list[np.ndarray]] | None:
+        """With ``keep_outlines=True``: per section (S), the loops of the whole cut of a
+        ``junction`` section (before the stub was left out; :attr:`section_loops` is the core
+        that was used), each (N,3) mm, outer boundary first; ``[]`` for any other section.
+        ``None`` without outlines. Packed as ``cut_outline_*`` like ``outline_*``."""
+        if self.cut_outline_section_start is None:
+            return None
+        pts, ls = self.cut_outline_points, self.cut_outline_loop_start
+        ss = self.cut_outline_section_start
+        return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
+                for s in range(len(ss) - 1)]
+
+    @property
+    def junction(self) -> np.ndarray:
+        """(S,) bool: sections at a junction, whose numbers are those of the core that continues
+        through the plane (not the whole cut, :attr:`section_cut_area`)."""
+        return (self.section_flags & SECTION_FLAGS["junction"]) != 0
+
+    @property
     def valid(self) -> np.ndarray:
         """(S,) bool: sections that were computed (not skipped)."""
         return np.isfinite(self.stress)
@@ -455,7 +490,10 @@ class Analysis:
     def flag_reasons(self, section: int) -> list[str]:
         """Plain-language reason of each flag set on one section (see ``FLAG_REASONS``)."""
         t = float(self.section_thickness[section])
-        return [FLAG_REASONS[name].format(thickness=f"{t:.2g}", minimum=f"{self.min_thickness:g}")
+        area = float(self.section_area[section])
+        cut = float(self.section_cut_area[section])
+        return [FLAG_REASONS[name].format(thickness=f"{t:.2g}", minimum=f"{self.min_thickness:g}",
+                                          area=f"{area:.3g}", cut_area=f"{cut:.3g}")
                 for name in self.flag_names(section)]
 
     @property
@@ -608,6 +646,7 @@ class Analyzer:
         layer_strength_ratio: float = 1.0,
         keep_outlines: bool = False,
         min_thickness: float | None = None,
+        junctions: bool = True,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -631,6 +670,7 @@ class Analyzer:
         options.local_cuts = bool(local_cuts)
         options.keep_outlines = bool(keep_outlines)
         options.min_thickness = self.min_thickness
+        options.junctions = bool(junctions)
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
                                     options)
 
@@ -679,6 +719,7 @@ def analyze(
     keep_outlines: bool = False,
     min_thickness: float | None = None,
     progress: Progress | None = None,
+    junctions: bool = True,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -693,9 +734,11 @@ def analyze(
     docs/printing.md); ``keep_outlines`` also return each section's loops
     (:attr:`Analysis.section_loops`); ``min_thickness`` mm: sections thinner than this are
     flagged ``too_thin`` (None: 0.8 mm, FDM; the material presets carry their own; 0 = no
-    check). ``progress``: a :class:`Progress` to follow the run from another thread or cancel
-    it (then :class:`Cancelled` is raised); :func:`estimate_sections` tells the section count
-    beforehand. Raises ValueError on bad input.
+    check); ``junctions`` (default True) counts only the core that continues through the plane
+    where a section cuts a side branch's stub (flag ``junction``, docs/junctions.md); False
+    analyses whole cuts. ``progress``: a :class:`Progress` to follow the run from another
+    thread or cancel it (then :class:`Cancelled` is raised); :func:`estimate_sections` tells
+    the section count beforehand. Raises ValueError on bad input.
     """
     progress = _progress(progress)
     v = _float_rows(vertices, "vertices")
@@ -706,7 +749,7 @@ def analyze(
                         gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
                         build_direction=build_direction,
                         layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines,
-                        min_thickness=min_thickness)
+                        min_thickness=min_thickness, junctions=junctions)
     return analyzer.run(v, progress=progress)
 
 
@@ -728,6 +771,7 @@ def correct(
     scaling: str = DEFAULT_SCALING,
     flat_aspect: float = 2.0,
     bone_x_axes: Any = None,
+    bone_long_axes: Any = None,
     build_direction: Any = (0.0, 0.0, 1.0),
     layer_strength_ratio: float = 1.0,
     keep_outlines: bool = False,
@@ -746,7 +790,12 @@ def correct(
     by ``sqrt(stress / target)`` (a plate's W grows as t²), along the bone's local x or z axis
     nearest to it (round sections still get both axes). ``bone_x_axes`` (B,3) gives each bone's
     local x axis (e.g. Blender's, so that pose-bone scale X/Z reproduce the result); None lets
-    each bone's axes follow the first flat section scaled on it. ``build_direction`` and
+    each bone's axes follow the first flat section scaled on it. ``bone_long_axes`` (B,3): the
+    axis each bone scales across (kept at scale 1), None: its segment. A joint rig imported into
+    Blender (FBX/glTF) has bones whose local Y is not the segment analysed; scaling across the
+    bone's own local axis nearest the segment is what Blender's pose scale can reproduce exactly
+    (the sections stay perpendicular to the segments: every round re-analyses the scaled mesh,
+    so this changes how the bone is thickened, not what is checked). ``build_direction`` and
     ``layer_strength_ratio`` as in :func:`analyze`: the loop is driven by the stress ratio
     against each section's direction-dependent allowable. ``keep_outlines``: ``before``
     and ``after`` carry their sections' loops (:attr:`Analysis.section_loops`).
@@ -767,6 +816,7 @@ def correct(
             )
     if not isinstance(skeleton, Skeleton):
         raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
+    long_axes = _long_axes(bone_long_axes, skeleton.num_bones)
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
         raise ValueError("empty mesh: vertices has no rows")
@@ -796,6 +846,7 @@ def correct(
     co.max_scale, co.max_rounds = float(max_scale), max_rounds
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"
     co.flat_aspect, co.bone_x_axes = float(flat_aspect), axes
+    co.bone_long_axes = long_axes
     d = _core.correct(v, f, skeleton._engine(), dense, csr, options, co, progress)
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
           "interval": interval, "build_direction": build_direction,
@@ -818,12 +869,27 @@ def estimate_sections(skeleton: Skeleton, interval: float = 2.0) -> int:
     return int(_core.count_sections(skeleton._engine(), _positive(interval, "interval", "mm")))
 
 
+def _long_axes(value, n_bones: int):
+    """(B,3) float rows of ``bone_long_axes`` (finite, non-zero), or None."""
+    if value is None:
+        return None
+    axes = _float_rows(value, "bone_long_axes")
+    if len(axes) != n_bones:
+        raise ValueError(f"bone_long_axes must have shape ({n_bones}, 3), got {axes.shape}")
+    if not (np.linalg.norm(axes, axis=1) > 1e-9).all():
+        raise ValueError("bone_long_axes must be non-zero vectors (the axis a bone scales across)")
+    return axes
+
+
 def skin(vertices: Any, skeleton: Skeleton, weights: Any, bone_scale: Any, *,
-         bone_scale_z: Any = None, bone_x_axes: Any = None) -> np.ndarray:
+         bone_scale_z: Any = None, bone_x_axes: Any = None,
+         bone_long_axes: Any = None) -> np.ndarray:
     """Linear blend skinning of rest ``vertices`` (V,3) mm with per-bone cross-section scales
     ``bone_scale`` (B,): each bone scales the two axes across itself about its own axis. With
     ``bone_scale_z`` (B,) and ``bone_x_axes`` (B,3), ``bone_scale`` applies along each bone's x
-    axis and ``bone_scale_z`` along z = x × direction (as :class:`Correction` reports them)."""
+    axis and ``bone_scale_z`` along z = x × direction (as :class:`Correction` reports them).
+    ``bone_long_axes`` (B,3): each bone scales across this axis through its head instead of its
+    segment (x is then made perpendicular to it and z = x × long; see :func:`correct`)."""
     v = _float_rows(vertices, "vertices")
     dense, csr = _weights_args(weights, len(v), skeleton.num_bones)
     if dense is None and csr is None:
@@ -844,7 +910,8 @@ def skin(vertices: Any, skeleton: Skeleton, weights: Any, bone_scale: Any, *,
         if bone_x_axes is None:
             raise ValueError("bone_scale_z needs bone_x_axes (B,3): the axes it scales along")
         axes = _float_rows(bone_x_axes, "bone_x_axes")
-    return _core.skin(v, skeleton._engine(), dense, csr, scales[0], scales[1], axes)
+    long_axes = _long_axes(bone_long_axes, skeleton.num_bones)
+    return _core.skin(v, skeleton._engine(), dense, csr, scales[0], scales[1], axes, long_axes)
 
 
 def section_properties(outer: Any, holes: Sequence[Any] = ()) -> dict:

@@ -40,9 +40,13 @@ from scipy import sparse
 from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
-from ._api import Skeleton, _faces, _float_rows
+from ._api import Skeleton, _faces, _float_rows, _min_thickness
 
 __all__ = ["DETAIL_LEVELS", "auto_skeleton"]
+
+#: A limb's end bone stops where the distance to the limb's end is END_RATIO x the radius there
+#: (beam sections need some distance from the load; see ``limb_end`` in ``auto_skeleton``).
+END_RATIO = 1.25
 
 #: ``detail=`` names -> vertex count of the simplified mesh the skeleton is computed on.
 DETAIL_LEVELS = {"coarse": 800, "medium": 1500, "fine": 3000}
@@ -111,7 +115,8 @@ def _simplified_graph(v: np.ndarray, f: np.ndarray, target: int, deterministic: 
     """pygel3d skeleton of the mesh simplified to about ``target`` vertices.
 
     Returns (simplified vertex positions (S,3), simplified edges (E,2), skeleton node positions
-    (N,3), skeleton edges (K,2), simplified vertex -> skeleton node (S,))."""
+    (N,3), skeleton edges (K,2), simplified vertex -> skeleton node (S,), a
+    ``pygel3d.hmesh.MeshDistance`` of the full mesh (signed distance in mm, < 0 inside))."""
     try:
         from pygel3d import graph, hmesh
     except ImportError as exc:  # pragma: no cover - pygel3d is a dependency
@@ -120,6 +125,9 @@ def _simplified_graph(v: np.ndarray, f: np.ndarray, target: int, deterministic: 
     m = hmesh.Manifold.from_triangles(v, f)
     if len(m.positions()) < len(used):
         raise ValueError("mesh is not manifold enough to skeletonise (pygel3d dropped vertices)")
+    # Distance to the full mesh's surface (GEL's MeshDistance keeps its own copy of the
+    # triangles, so the simplification below does not change it).
+    surface = hmesh.MeshDistance(m)
     if len(used) > target:
         hmesh.quadric_simplify(m, target / len(used))
         m.cleanup()
@@ -134,7 +142,7 @@ def _simplified_graph(v: np.ndarray, f: np.ndarray, target: int, deterministic: 
     npos = np.array(skel.positions(), dtype=np.float64)
     kedges = _graph_edges(skel, len(npos))
     vmap = np.fromiter(mapping, dtype=np.int64, count=len(pos))
-    return pos, sedges, npos, kedges, vmap
+    return pos, sedges, npos, kedges, vmap, surface
 
 
 @contextlib.contextmanager
@@ -193,10 +201,11 @@ def auto_skeleton(
     detail: str | int = "medium",
     root: str = "centre",
     up: Any = (0.0, 0.0, 1.0),
-    spur: float = 1.5,
+    spur: float = 1.0,
     bend: float = 0.5,
     smooth: int = 4,
     seed: int | None = 0,
+    min_thickness: float | None = None,
 ) -> tuple[Skeleton, sparse.csr_matrix]:
     """A bone skeleton and skinning weights for an unrigged closed mesh.
 
@@ -209,8 +218,8 @@ def auto_skeleton(
             barycentre, and bone 0 (parent -1) starts there; "base": at the skeleton point
             nearest the lowest vertex along ``up`` (the base the model stands on).
         up: (3,) the model's up direction for ``root="base"`` (default +Z).
-        spur: leaf branches whose tip is within ``spur`` × the junction's radius of the
-            junction are pruned (bumps, not limbs).
+        spur: a leaf branch that sticks out of the body at its junction by less than ``spur``
+            × its own width (mm / mm) is pruned: a bump, not a limb.
         bend: a branch is split into bones where it leaves the straight line between its ends
             by more than ``bend`` × its radius (mm / mm).
         smooth: neighbour-averaging rounds on the simplified mesh that blend weights at joints.
@@ -221,6 +230,9 @@ def auto_skeleton(
             faster but random: GEL draws samples with libc ``rand()`` from one thread per core,
             so the result depends on thread timing and no seed can fix it (bone counts vary
             by 2-3 between runs). pygel3d takes no seed, so any int gives the same result.
+        min_thickness: mm (None: 0.8, FDM; pass the material's ``min_thickness_mm``): a leaf
+            branch whose limb is thinner than this along most of its length cannot be printed
+            and gets no bone (its vertices go to the bone it hangs from).
 
     Returns:
         (Skeleton, weights): bones in mm (one root bone, parent -1, at the root point; bones
@@ -251,6 +263,7 @@ def auto_skeleton(
     for name, val in (("spur", spur), ("bend", bend)):
         if not (isinstance(val, (int, float)) and val > 0 and math.isfinite(val)):
             raise ValueError(f"{name} must be a positive number, got {val!r}")
+    min_t = _min_thickness(min_thickness)
 
     v, f, weld = _check_mesh(vertices, faces)
     used = np.unique(f)
@@ -258,8 +271,21 @@ def auto_skeleton(
 
     if seed is not None and not isinstance(seed, (int, np.integer)):
         raise ValueError(f"seed must be an int or None, got {seed!r}")
-    spos, sedges, npos, kedges, smap = _simplified_graph(v, f, target, seed is not None)
+    spos, sedges, npos, kedges, smap, surface = _simplified_graph(v, f, target, seed is not None)
+
+    def inner_radius(pts: np.ndarray) -> np.ndarray:
+        """(N,) distance from each point (N,3) inside the mesh to its surface, mm (0 outside)."""
+        pts = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
+        d = np.atleast_1d(np.asarray(surface.signed_distance(pts), dtype=np.float64))
+        return np.maximum(-d, 0.0)
+
     stree = cKDTree(spos)
+    # The 4 nearest simplified vertices of every mesh vertex (limb ends here, weights below).
+    kq = min(4, len(spos))
+    near_d, near_i = stree.query(v, k=kq)
+    near_d, near_i = near_d.reshape(len(v), kq), near_i.reshape(len(v), kq)
+    is_used = np.zeros(len(v), bool)
+    is_used[used] = True
     nn = len(npos)
     if nn < 2:  # no curve skeleton (a blob): one bone along the principal axis
         c = v[used].mean(0)
@@ -271,8 +297,8 @@ def auto_skeleton(
     if bad.any():  # simplified vertices the map left out: nearest skeleton node
         smap = smap.copy()
         smap[bad] = cKDTree(npos).query(spos[bad])[1]
-    # Body radius at each skeleton node: distance to the nearest surface vertex (mm).
-    nradius = stree.query(npos)[0]
+    # Body radius at each skeleton node: distance to the surface (mm; 0 if the node is outside).
+    nradius = inner_radius(npos)
 
     # Barycentre / base -> root node.
     if root == "base":
@@ -323,22 +349,67 @@ def auto_skeleton(
             return 0.0
         return max(0.0, float(((pts - npos[leaf]) @ direction).max()))
 
-    def tip_point(leaf: int, direction: np.ndarray) -> np.ndarray:
+    def tip_point(leaf: int, direction: np.ndarray) -> np.ndarray | None:
         """The middle of the limb's end cap beyond ``leaf``: the mean of its surface vertices
-        within half a radius of the farthest one along ``direction`` (mm)."""
+        within half a radius of the farthest one along ``direction`` (mm); None if the limb
+        does not reach beyond ``leaf``."""
         pts = spos[owner == leaf]
         if len(pts) == 0:
-            return npos[leaf]
+            return None
         proj = (pts - npos[leaf]) @ direction
         if proj.max() <= 0:
-            return npos[leaf]
+            return None
         margin = max(0.5 * nradius[leaf], 1e-3 * size)
-        cap = pts[proj >= proj.max() - margin]
-        # Stop a tip radius inside the surface, at most 2 % of the model: a section cut at the
-        # surface itself would be a sliver (on a pointed tip, F·d/W grows without bound as the
-        # cut nears the point).
-        tip = cap.mean(0) - direction * min(margin + nradius[leaf], 0.02 * size)
-        return tip if (tip - npos[leaf]) @ direction > 0 else npos[leaf]
+        return pts[proj >= proj.max() - margin].mean(0)
+
+    def limb_end(line: np.ndarray, leaf: int) -> tuple[np.ndarray, int]:
+        """Where a limb's end bone stops (mm).  ``line`` (K,3): the branch's polyline from its
+        start out to the limb's last node ``leaf``.
+
+        Beam theory (σ = M/W) holds at a section only some way from the load (Saint-Venant): a
+        section closer to the limb's end than its own radius is inside the end cap, where a
+        round end's sections shrink to a sliver and F·d/W grows without bound as the cut nears
+        the surface.  So the bone ends, on the limb's axis, at the first point walking in from
+        the limb's end whose distance to the end is at least ``END_RATIO`` × its radius
+        (distance to the surface): on a capsule just past the cap's centre (where its medial
+        axis ends), on a pointed spike at its point (a cone is a slender beam to its point;
+        sections thinner than printable are ``too_thin``), but never where the section is a
+        sliver (under a tenth of the limb's median area).  The axis is the line fitted to the
+        branch's last stretch (3 branch radii), so a last node in a corner of a blunt end
+        does not bend it.
+
+        Returns (the end point (3,), k): the bone's polyline is ``line[:k]`` then the end point
+        (1 <= k <= K)."""
+        n = len(line)
+        # The limb's own radius: the median over its nodes outside the body's ball at the
+        # branch's start (those inside it measure the body, not the limb).
+        r_line = inner_radius(line)
+        own = np.linalg.norm(line - line[0], axis=1) > r_line[0]
+        rad = max(float(np.median(r_line[own] if own.any() else r_line)), 1e-3 * size)
+        arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(line[::-1], axis=0), axis=1))]
+        m = int(np.searchsorted(arc, 3.0 * rad)) + 1  # nodes of the last stretch, >= 2
+        stretch = line[max(n - max(m, 2), 0):]
+        if len(stretch) < 2:
+            return line[-1], max(n - 1, 1)
+        c = stretch.mean(0)
+        d = np.linalg.svd(stretch - c, full_matrices=False)[2][0]
+        if (stretch[-1] - stretch[0]) @ d < 0:
+            d = -d
+        ends = v[is_used & (owner[near_i[:, 0]] == leaf)]  # the limb's end, full mesh
+        far = float((ends @ d).max()) if len(ends) else float(line[-1] @ d)
+        a = c + d * ((stretch[0] - c) @ d)  # the axis point level with the stretch's start
+        length = far - a @ d
+        if length <= 0:
+            return line[-1], max(n - 1, 1)
+        t = np.linspace(length, 0.0, 400)  # from the end inwards
+        pts = a + t[:, None] * d
+        radius = inner_radius(pts)
+        # ... and not a sliver: at least a tenth of the limb's median section area (the
+        # engine's sliver rule), i.e. radius >= sqrt(0.1) x the limb's median radius.
+        ok = np.flatnonzero((radius >= math.sqrt(0.1) * rad) & (length - t >= END_RATIO * radius))
+        stop = pts[ok[0]] if len(ok) else a
+        k = n - len(stretch) + 1  # the bone keeps the nodes before the last stretch
+        return stop, max(k, 1)
 
     def leaf_direction(leaf: int) -> np.ndarray:
         # Direction of the last stretch of the branch (up to ~2 radii back).
@@ -358,6 +429,7 @@ def auto_skeleton(
     while changed:
         changed = False
         ch = children_lists()
+        thin: list[tuple[list[int], int]] = []
         for leaf in np.flatnonzero(alive):
             leaf = int(leaf)
             if ch[leaf] or leaf == root_node:
@@ -384,14 +456,115 @@ def auto_skeleton(
             reach = np.linalg.norm(npos[leaf] - npos[junction]) + tip_extent(
                 leaf, leaf_direction(leaf)
             )
-            if reach < spur * nradius[junction]:
+            # The branch's own width: twice the median radius of its nodes (mm).
+            width = 2.0 * float(np.median(nradius[path]))
+            if width < min_t:  # thinner than printable along most of its length
+                thin.append((path, junction))
+            elif reach - nradius[junction] < spur * width and not thin:
+                # a bump: sticks out of the body by less than spur x its own width
                 for p in path:
                     alive[p] = False
                     owner[owner == p] = junction
                 changed = True
                 break  # children lists changed
+        # Limbs too thin to print get no bone: all of this round's at once (pruning one by one
+        # would leave the last sibling hanging on as part of its parent's limb).
+        for path, junction in thin if not changed else []:
+            for p in path:
+                alive[p] = False
+                owner[owner == p] = junction
+            changed = True
 
     ch = children_lists()
+
+    # 2b. Re-centre junctions: a local-separator skeleton puts a junction node at the centroid
+    # of a separator, which can sit off the limbs' axes by a limb's width or more. Move it to
+    # the least-squares meeting point of the axes of the branches that meet there (each axis
+    # fitted to the branch's first nodes, at least two and up to 3 junction radii out), if the
+    # axes are not parallel, the point is inside the mesh and within 3 limb radii; nodes the move
+    # leaves behind the junction (on the way back) are folded into it.
+    def branch_nodes(j: int, first: int, upward: bool) -> list[int]:
+        hi = 4.0 * max(nradius[j], 1e-3 * size)
+        out, node, prev, arc = [], first, j, 0.0
+        while node >= 0 and alive[node]:
+            arc += float(np.linalg.norm(npos[node] - npos[prev]))
+            out.append(node)
+            if arc >= hi and len(out) >= 2:
+                break
+            if upward and node == root_node:  # the root on a limb: go on down its other side
+                other = [c for c in ch[node] if c != prev]
+                if len(other) != 1:
+                    break
+                upward, prev, node = False, node, other[0]
+                continue
+            prev = node
+            if upward:
+                if len(ch[node]) > 1:
+                    break
+                node = int(parent[node])
+            elif len(ch[node]) == 1:
+                node = ch[node][0]
+            else:
+                break
+        return out
+
+    def fold(node: int, into: int) -> None:
+        alive[node] = False
+        owner[owner == node] = into
+
+    for j in range(nn):
+        if not alive[j] or len(ch[j]) + (parent[j] >= 0) < 3:
+            continue
+        branches = [(c, branch_nodes(j, c, False), False) for c in ch[j]]
+        if parent[j] >= 0:
+            branches.append((int(parent[j]), branch_nodes(j, int(parent[j]), True), True))
+        a_sum, b_sum, axes, reach = np.zeros((3, 3)), np.zeros(3), [], nradius[j]
+        c_sum, n_axes = 0.0, 0
+        for _first, nodes, _up in branches:
+            pts = npos[nodes]
+            far = np.linalg.norm(pts - npos[j], axis=1) >= nradius[j]
+            if far.sum() >= 2:  # nodes inside the junction's ball are bent towards it
+                pts = pts[far]
+            if len(pts) < 2:
+                axes.append(None)
+                continue
+            c = pts.mean(0)
+            d = np.linalg.svd(pts - c, full_matrices=False)[2][0]
+            if (c - npos[j]) @ d < 0:
+                d = -d  # pointing away from the junction
+            proj = np.eye(3) - np.outer(d, d)
+            a_sum += proj
+            b_sum += proj @ c
+            c_sum += c @ proj @ c
+            n_axes += 1
+            axes.append(d)
+            reach = max(reach, float(nradius[nodes].max()))
+        if np.linalg.eigvalsh(a_sum)[0] < 0.2:  # fewer than two non-parallel axes
+            continue
+        x = np.linalg.solve(a_sum, b_sum)
+        # the axes must really meet there: RMS distance from x to them under half a radius
+        miss = math.sqrt(max(float(x @ a_sum @ x - 2 * x @ b_sum + c_sum), 0.0) / n_axes)
+        if (np.linalg.norm(x - npos[j]) > 3.0 * reach or miss > 0.5 * max(nradius[j], 1e-9)
+                or inner_radius(x)[0] <= 0):
+            continue
+        npos[j] = x
+        nradius[j] = inner_radius(x)[0]
+        # Fold the first nodes of each branch that now lie behind the junction.
+        for (_first, nodes, upward), d in zip(branches, axes, strict=True):
+            if d is None:
+                continue
+            for node in nodes[:-1]:
+                if (npos[node] - x) @ d >= 0 or node == root_node or len(ch[node]) > 1 \
+                        or (upward and parent[node] < 0):
+                    break
+                if upward:
+                    parent[j] = parent[node]
+                else:
+                    for c in ch[node]:
+                        parent[c] = j
+                fold(node, j)
+                ch = children_lists()
+        ch = children_lists()
 
     # 3. Branches -> bones.
     heads: list[np.ndarray] = []
@@ -408,14 +581,17 @@ def auto_skeleton(
                 path.append(ch[path[-1]][0])
             pts = npos[path].copy()
             end = path[-1]
-            if not ch[end]:  # leaf: reach the tip
-                pts[-1] = tip_point(end, leaf_direction(end))
+            bpath = path  # bpath[i]: the node of pts[i] (nodes past a limb's end: none)
+            if not ch[end]:  # leaf: reach the limb's end, short of its end cap
+                stop, k = limb_end(pts, end)
+                pts = np.vstack([pts[:k], stop])
             if start == root_node and len(ch[start]) == 1:  # the root is an end: reach it
                 d = pts[0] - pts[min(2, len(pts) - 1)]
                 dn = np.linalg.norm(d)
                 if dn > 0:
-                    d /= dn
-                    pts[0] = tip_point(root_node, d)
+                    stop, k = limb_end(pts[::-1], root_node)
+                    bpath = [path[0], *path[len(pts) - k :]]  # bpath[0] is never assigned
+                    pts = np.vstack([stop, pts[len(pts) - k :]])
             rad = float(np.median(nradius[path]))
             keep = _rdp(pts, bend * max(rad, 1e-3 * size))
             # Drop breakpoints that would make bones shorter than 1e-3 of the model.
@@ -437,7 +613,7 @@ def auto_skeleton(
                 parents.append(prev)
                 if root_bone < 0:
                     root_bone = b
-                node_bone[path[s0 + 1 : s1 + 1]] = b
+                node_bone[bpath[s0 + 1 : s1 + 1]] = b
                 prev = b
             stack.append((end, prev))
     if not heads:  # a blob: one bone along the principal axis through the barycentre
@@ -475,7 +651,7 @@ def auto_skeleton(
             w = a @ w
     wd = w.toarray()
     k = min(4, ns)
-    d, idx = stree.query(v, k=k)
+    d, idx = near_d, near_i
     d = d.reshape(len(v), k)
     idx = idx.reshape(len(v), k)
     inv = 1.0 / np.maximum(d, 1e-6 * size) ** 2

@@ -87,23 +87,31 @@ def section_doubt(analysis) -> dict:
 
 def bone_doubt(analysis, n_bones: int, share: float = NOT_ANALYSED_SHARE) -> list[dict]:
     """Per bone: ``sections``, ``skipped_sections``, ``doubtful_sections``, ``not_analysed``
-    (more than ``share`` of its sections skipped, or it has sections and none gave a stress)
-    and ``reason`` ("12 of 61 sections could not be cut: the mesh is open there")."""
+    (more than ``share`` of its sections skipped, or it has sections and none gave a stress;
+    never a bone that deforms no vertex, e.g. a glTF ``_rootJoint``: there is nothing of the
+    model to analyse along it) and ``reason`` ("12 of 61 sections could not be cut: the mesh is
+    open there")."""
     d = section_doubt(analysis)
     sb = np.asarray(analysis.section_bone, dtype=np.int64)
     count = np.bincount(sb, minlength=n_bones)
     nskip = np.bincount(sb, weights=d["skipped"], minlength=n_bones).astype(int)
     ndoubt = np.bincount(sb, weights=d["doubtful"], minlength=n_bones).astype(int)
+    vb = getattr(analysis, "vertex_bone", None)
+    owns = (np.bincount(np.asarray(vb, dtype=np.int64)[np.asarray(vb) >= 0], minlength=n_bones)
+            > 0 if vb is not None else np.ones(n_bones, bool))
     out = []
     for b in range(n_bones):
         sel = np.flatnonzero((sb == b) & (d["skipped"] | d["doubtful"]))
         names = [n for i in sel for n in d["flag_names"][i]]
         if len(sel) and not names:
             names = ["empty"]
-        na = bool(count[b] > 0 and (nskip[b] > share * count[b] or nskip[b] == count[b]))
+        na = bool(count[b] > 0 and owns[b]
+                  and (nskip[b] > share * count[b] or nskip[b] == count[b]))
         text = ""
         if nskip[b]:
             text = f"{nskip[b]} of {count[b]} sections could not be cut: {reason(names)}"
+            if not owns[b]:
+                text += " (the bone deforms no vertex: nothing to analyse)"
         elif ndoubt[b]:
             text = f"{ndoubt[b]} of {count[b]} sections are doubtful: {reason(names)}"
         out.append({"sections": int(count[b]), "skipped_sections": int(nskip[b]),

@@ -119,8 +119,10 @@ def _finite_list(x) -> list:
 
 def section_rows(a, bone_names) -> list[dict]:
     """Every section of an ``osteon.Analysis``: bone, position (mm), area (mm²), modulus
-    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. An object without
-    section geometry (no ``section_center``) gives ``[]``."""
+    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. At a ``junction``
+    section area and modulus are the core's (the material that continues through the plane,
+    docs/junctions.md) and ``cut_area_mm2`` / ``cut_modulus_mm3`` the whole cut's (elsewhere the
+    same numbers). An object without section geometry (no ``section_center``) gives ``[]``."""
     if not hasattr(a, "section_center"):
         return []
     n = len(a.stress)
@@ -128,6 +130,8 @@ def section_rows(a, bone_names) -> list[dict]:
     allow = getattr(a, "section_allowable", None)
     ratio = getattr(a, "stress_ratio", None)
     across = getattr(a, "across_layers", None)
+    cut_area = getattr(a, "section_cut_area", None)
+    cut_modulus = getattr(a, "section_cut_modulus", None)
     none = [None] * n
     bones = np.asarray(a.section_bone, dtype=np.int64).tolist()
     cols = {
@@ -136,6 +140,9 @@ def section_rows(a, bone_names) -> list[dict]:
         "normal": _finite_list(a.section_normal),
         "area_mm2": _finite_list(a.section_area),
         "modulus_mm3": _finite_list(a.section_modulus),
+        "cut_area_mm2": _finite_list(a.section_area if cut_area is None else cut_area),
+        "cut_modulus_mm3": _finite_list(a.section_modulus if cut_modulus is None
+                                        else cut_modulus),
         "moment_arm_mm": _finite_list(a.moment_arm),
         "moment_nmm": _finite_list(a.moment),
         "stress_mpa": _finite_list(a.stress),
@@ -159,6 +166,7 @@ def section_rows(a, bone_names) -> list[dict]:
     for i in range(n):
         b = bones[i]
         rows.append({
+            "index": i,
             "bone": bone_names[b],
             "bone_index": b,
             "param_mm": cols["param_mm"][i],
@@ -166,6 +174,8 @@ def section_rows(a, bone_names) -> list[dict]:
             "normal": cols["normal"][i],
             "area_mm2": cols["area_mm2"][i],
             "modulus_mm3": cols["modulus_mm3"][i],
+            "cut_area_mm2": cols["cut_area_mm2"][i],
+            "cut_modulus_mm3": cols["cut_modulus_mm3"][i],
             "moment_arm_mm": cols["moment_arm_mm"][i],
             "moment_nmm": cols["moment_nmm"][i],
             "stress_mpa": cols["stress_mpa"][i],
@@ -295,6 +305,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     report["too_thin_sections"] = printable["too_thin"]
     report["unreliable_sections"] = printable["unreliable"]
     report["loose_pieces"] = printable["loose_pieces"]
+    # junctions (docs/junctions.md): sections whose numbers are the core's, not the whole cut's
+    report["junction_sections"] = [int(i) for i in np.flatnonzero(
+        np.asarray(getattr(shown, "junction", np.zeros(len(shown.stress), bool))))]
     # what the numbers above do not cover (osteon.doubt): skipped sections, bones not analysed,
     # a maximum resting on a doubtful section
     d = doubt.section_doubt(shown)

@@ -77,3 +77,49 @@ def test_overlay_draws_outlines_offscreen(sample):
     wr, wg, wb = overlay.WEAK_RGBA[:3]
     weak = drawn & (np.abs(r - wr) < 0.1) & (np.abs(g - wg) < 0.1) & (np.abs(bl - wb) < 0.1)
     assert weak.sum() > 10, "no weak-section colour drawn"
+
+
+def _closed_cylinder(a, b, r, n=48, stations=12):
+    """Closed cylinder from a to b (mm): side quads and fan caps, outward faces."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    z = (b - a) / np.linalg.norm(b - a)
+    x = np.cross([0.0, 0.0, 1.0] if abs(z[2]) < 0.9 else [1.0, 0.0, 0.0], z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = r * (np.outer(np.cos(t), x) + np.outer(np.sin(t), y))
+    v = np.concatenate([a + s * (b - a) + ring for s in np.linspace(0, 1, stations)] + [[a, b]])
+    f = []
+    for s in range(stations - 1):
+        for i in range(n):
+            j = (i + 1) % n
+            p, q = s * n + i, s * n + j
+            f += [[p, q, q + n], [p, q + n, p + n]]
+    ca, cb = len(v) - 2, len(v) - 1
+    last = (stations - 1) * n
+    for i in range(n):
+        j = (i + 1) % n
+        f += [[ca, j, i], [cb, last + i, last + j]]
+    return v, np.array(f, np.int32)
+
+
+def test_overlay_dashes_the_whole_cut_of_junction_sections():
+    # A bar r = 3 with a stub fused at mid-length (two overlapping shells): the bar's sections
+    # through the stub are junctions; the overlay draws their core as usual and the whole cut
+    # (reaching the stub's top, z = 9) dashed and dimmer.
+    import osteon
+
+    bar = _closed_cylinder([0, 0, 0], [40, 0, 0], 3.0, stations=41)
+    stub = _closed_cylinder([20, 0, 0], [20, 0, 9], 3.0, stations=10)
+    v = np.concatenate([bar[0], stub[0]])
+    f = np.concatenate([bar[1], stub[1] + len(bar[0])])
+    sk = osteon.Skeleton([[0, 0, 0]], [[40, 0, 0]], [-1])
+    a = osteon.analyze(v, f, sk, interval=2.0, keep_outlines=True)
+    assert a.junction.sum() == 3
+    out = overlay.compute_outlines(a, mm_per_unit=1.0)
+    cut_points = sum(len(loop) for s in np.flatnonzero(a.junction)
+                     for loop in a.section_cut_loops[s])
+    assert 0.45 * cut_points <= len(out.cut_lines) // 2 <= 0.55 * cut_points + 3  # every other
+    assert np.allclose(out.cut_colors[:, 3], overlay.CUT_ALPHA)
+    assert out.cut_lines[:, 2].max() > 8.9  # the stub's top
+    assert np.concatenate([out.lines, out.weak_lines])[:, 2].max() < 3.3  # cores stay at the bar

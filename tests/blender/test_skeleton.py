@@ -1,6 +1,11 @@
 """osteon.make_skeleton: an unrigged capsule gets an Armature (osteon.auto_skeleton), vertex
 groups and an Armature modifier; then Analyze gives a varied stress colour layer."""
 
+import json
+import os
+import shutil
+import subprocess
+
 import bpy
 import numpy as np
 import pytest
@@ -108,3 +113,85 @@ def test_make_skeleton_is_undone_by_ctrl_z(capsule):
     assert bridge.armature_of(obj) is None
     assert not any(m.type == "ARMATURE" for m in obj.modifiers)
     assert len(obj.vertex_groups) == 0
+
+
+def _capsule_tip_distance_mm(obj, arm, mm_per_unit):
+    """Farthest distance (mm) along the capsule's axis (X) from the held point (bone 0's head)
+    to the mesh: the lever arm of the load at the root section."""
+    hold = (arm.matrix_world @ arm.data.bones[0].head_local).x
+    x = bridge.local_positions(obj.data)[:, 0]  # the capsule's object transform is identity
+    return float(np.abs(x - hold).max()) * mm_per_unit
+
+
+def test_batch_auto_skeleton_rigs_and_analyses_in_process(capsule, engine, tmp_path):
+    """``batch.py --auto-skeleton`` (in this Blender): Make skeleton, then Analyze; the report's
+    maximum stress is the cantilever's F·d/W at the hold (W = πr³/4 of the 4 mm radius, d the
+    hold's distance to the far tip), within the polygon and section-spacing error."""
+    from osteon_blender import batch
+
+    rep = tmp_path / "r.json"
+    assert batch.run(["--auto-skeleton", "--report", str(rep), "--print-size", "40",
+                      "--force", "80", "--interval", "1"]) == 0
+    arm = bridge.armature_of(capsule)
+    assert arm is not None and len(arm.data.bones) >= 1
+    data = json.loads(rep.read_text())
+    assert data["sections"] > 20
+    k = 40.0 / 5.0  # the capsule is 5 units long (-0.5 .. 4.5), printed 40 mm: 8 mm per unit
+    d = _capsule_tip_distance_mm(capsule, arm, k)
+    w = np.pi * (0.5 * k) ** 3 / 4
+    assert data["max_stress_mpa"] == pytest.approx(80.0 * d / w, rel=0.15)
+    rgba = bridge.read_point_colors(capsule.data)
+    assert rgba[:, :3].std(axis=0).max() > 0.05, "stress layer is flat"
+
+
+_MAKE_CAPSULE = """
+import json, os, bpy
+data = json.load(open(os.environ["OSTEON_TEST_CAPSULE"]))
+for o in list(bpy.data.objects):
+    bpy.data.objects.remove(o, do_unlink=True)
+me = bpy.data.meshes.new("capsule")
+me.from_pydata(data["v"], [], data["f"])
+me.update()
+obj = bpy.data.objects.new("capsule", me)
+bpy.context.collection.objects.link(obj)
+"""
+
+
+def _blender():
+    return bpy.app.binary_path or shutil.which("blender")
+
+
+@pytest.mark.skipif(not _blender(), reason="no Blender binary to run the batch command with")
+def test_batch_command_auto_skeleton(tmp_path):
+    """The headless command: ``blender -b --python batch.py -- --auto-skeleton --report r.json``
+    on a scene with one unrigged mesh rigs it, analyses it and exits 0; without a mesh to rig it
+    exits non-zero with the reason."""
+    from conftest import ROOT, blender_env
+
+    batch_py = os.path.join(ROOT, "blender_addon", "osteon_blender", "batch.py")
+    v, f = _capsule()
+    spec = tmp_path / "capsule.json"
+    spec.write_text(json.dumps({"v": np.asarray(v).tolist(), "f": [list(x) for x in f]}))
+    make = tmp_path / "make_capsule.py"
+    make.write_text(_MAKE_CAPSULE)
+    env = blender_env(OSTEON_TEST_CAPSULE=str(spec))
+    rep = tmp_path / "r.json"
+    ok = subprocess.run([_blender(), "-b", "--factory-startup", "--python", str(make),
+                         "--python", batch_py, "--", "--auto-skeleton", "--report", str(rep),
+                         "--print-size", "40", "--force", "80"],
+                        check=False, capture_output=True, text=True, env=env, timeout=600)
+    assert ok.returncode == 0, ok.stdout[-2000:] + ok.stderr[-2000:]
+    assert "skeleton made by osteon.auto_skeleton" in ok.stdout
+    data = json.loads(rep.read_text())
+    assert data["sections"] > 10 and data["max_stress_mpa"] > 0
+    # nothing to rig: the factory scene's cube is removed and no mesh is left
+    empty = tmp_path / "empty.py"
+    empty.write_text("import bpy\nfor o in list(bpy.data.objects):\n"
+                     "    bpy.data.objects.remove(o, do_unlink=True)\n")
+    bad = subprocess.run([_blender(), "-b", "--factory-startup", "--python", str(empty),
+                          "--python", batch_py, "--", "--auto-skeleton", "--report",
+                          str(tmp_path / "bad.json")],
+                         check=False, capture_output=True, text=True, env=env, timeout=300)
+    assert bad.returncode != 0
+    assert "no mesh without an Armature modifier" in bad.stderr
+    assert not (tmp_path / "bad.json").exists()

@@ -67,8 +67,8 @@ def test_unrigged_mesh_uses_auto_skeleton_when_there_is_one(library, monkeypatch
     lib, _ = library
     calls = []
 
-    def fake_auto_skeleton(vertices, faces):
-        calls.append(len(vertices))
+    def fake_auto_skeleton(vertices, faces, min_thickness=None):
+        calls.append(min_thickness)
         x0, x1 = vertices[:, 0].min(), vertices[:, 0].max()
         mid = 0.5 * (x0 + x1)
         sk = osteon.Skeleton([[x0, 0, 0], [mid, 0, 0]], [[mid, 0, 0], [x1, 0, 0]], [-1, 0])
@@ -79,6 +79,8 @@ def test_unrigged_mesh_uses_auto_skeleton_when_there_is_one(library, monkeypatch
     assert r["status"] == "ok", r["reason"]
     assert "auto skeleton" in r["flags"]
     assert calls and r["bone_count"] == 2
+    # limbs thinner than the material prints get no bone: the preset's minimum is passed on
+    assert calls[0] == materials.get("PLA").min_thickness_mm
     # the bar is scaled to 120 mm before the skeleton is made (mm in, mm out)
     assert r["faces"] > 0 and r["max_stress_mpa"] > 0
 

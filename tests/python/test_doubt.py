@@ -75,8 +75,11 @@ def test_clean_closed_box_has_no_doubt():
                        force=20.0, allowable_stress=1e6, interval=1.0)
     r = report.build_report(analysis=a, bone_names=["bone"], allowable_mpa=1e6,
                             settings={"force_n": 20.0}, front_end="test", model="box")
-    # the one section cut exactly on the end cap (param 0) cuts nothing: counted, not more
-    assert r["skipped_sections"] <= 1 and r["not_analysed_bones"] == []
+    # the free head's section on the end cap (param 0) is cut just inside it: nothing skipped
+    assert r["skipped_sections"] == 0 and r["not_analysed_bones"] == []
+    head = np.flatnonzero(np.asarray(a.section_param) == 0.0)
+    assert len(head) == 1 and a.section_area[head[0]] == pytest.approx(100.0, rel=1e-9)
+    assert a.max_stress == a.stress[head[0]]  # the cantilever's largest moment is there
     assert r["verdict"] == "ok" and r["bones"][0]["status"] == "ok"
     assert r["max_stress_doubt"] == [] and r["doubtful_sections"] == 0
 
@@ -124,3 +127,23 @@ def test_cli_summary_and_json_show_skipped(tmp_path, capsys):
 @pytest.mark.parametrize("name", sorted(osteon.SECTION_FLAGS))
 def test_every_engine_flag_has_a_category_or_reason(name):
     assert name in doubt.REASONS
+
+
+def test_bone_that_deforms_no_vertex_is_not_listed_not_analysed():
+    """A helper bone with no vertex (a glTF ``_rootJoint`` from the floor to the hips) outside
+    the mesh: its sections are skipped and counted, but there is nothing of the model to analyse
+    along it, so it is not "not analysed"; the bar's own bone is analysed, and the verdict too."""
+    v, f = prism(rectangle(10.0, 10.0), 60.0)
+    v = np.asarray(v, float)
+    sk = osteon.Skeleton([[0, 0, 0], [0, 0, -40]], [[60, 0, 0], [0, 0, -10]], [-1, -1],
+                         names=["bone", "helper"])
+    w = np.zeros((len(v), 2))
+    w[:, 0] = 1.0
+    a = osteon.analyze(v, np.asarray(f), sk, w, force=20.0, allowable_stress=1e6, interval=1.0)
+    rows = doubt.bone_doubt(a, 2)
+    assert rows[1]["skipped_sections"] > 0 and not rows[1]["not_analysed"]
+    assert "deforms no vertex" in rows[1]["reason"]
+    assert rows[0]["skipped_sections"] == 0 and not rows[0]["not_analysed"]
+    r = report.build_report(analysis=a, bone_names=["bone", "helper"], allowable_mpa=1e6,
+                            settings={"force_n": 20.0}, front_end="test", model="box")
+    assert r["not_analysed_bones"] == [] and r["skipped_sections"] == rows[1]["skipped_sections"]

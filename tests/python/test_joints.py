@@ -99,3 +99,57 @@ def test_cross_section_axes_pick_the_axis_along_the_segment():
     x, slots = joints.cross_section_axes(seg, ax)
     assert slots.tolist() == [[0, 2, 1], [1, 2, 0], [0, 1, 2]]
     np.testing.assert_allclose(x, [[1, 0, 0], [0, 1, 0], [1, 0, 0]])
+
+
+def test_correct_scales_across_the_given_long_axes():
+    """A joint-rig bone scaled across its own local axis (bone_long_axes), not its segment: the
+    corrected vertices are exactly ``skin`` with those axes (Blender's pose scale on them), and
+    the correction still ends with no weak section (each round re-analyses the scaled mesh)."""
+    import osteon
+    from shapes import prism, rectangle
+
+    v, f = prism(rectangle(6.0, 6.0), 60.0)
+    v = np.asarray(v, float)
+    # the head inside the bar (5 mm from its end cap): the cap, sheared by an off-segment
+    # scale, is then not cut by the head's section (a plane through a tilted cap is a sliver)
+    sk = osteon.Skeleton([[5, 0, 0]], [[60, 0, 0]], [-1], names=["bone"])
+    w = np.ones((len(v), 1))
+    before = osteon.analyze(v, f, sk, w, force=10.0, allowable_stress=60.0, interval=2.0)
+    allowable = before.max_stress / 2
+    # the bone's "length" axis 5 degrees off its segment, in the x-y plane; x axis across it
+    # (far off, scaling across it also shears the bar: at 20 degrees its free end moves 5 mm
+    # sideways and the load's lever arm grows faster than the section)
+    a = np.radians(5.0)
+    long_axis = np.array([[np.cos(a), np.sin(a), 0.0]])
+    x_axis = np.array([[0.0, 0.0, 1.0]])
+    fix = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable, interval=2.0,
+                         bone_x_axes=x_axis, bone_long_axes=long_axis)
+    assert fix.converged and fix.after.max_stress <= allowable
+    assert fix.bone_scale[0] > 1.0
+    again = osteon.skin(v, sk, w, fix.bone_scale_x, bone_scale_z=fix.bone_scale_z,
+                        bone_x_axes=fix.bone_x_axis, bone_long_axes=long_axis)
+    np.testing.assert_allclose(fix.vertices, again, rtol=0, atol=1e-12 * 60)
+    # closed form of one vertex: scale s_x along x_axis, s_z along z = x × long, 1 along long
+    z = np.cross(x_axis[0], long_axis[0])
+    p = v[-1] - [5, 0, 0]
+    want = [5, 0, 0] + (fix.bone_scale_x[0] * (p @ x_axis[0]) * x_axis[0]
+                        + fix.bone_scale_z[0] * (p @ z) * z + (p @ long_axis[0]) * long_axis[0])
+    np.testing.assert_allclose(fix.vertices[-1], want, atol=1e-9)
+    # a long axis along the segment is the default, bit for bit
+    plain = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable, interval=2.0)
+    along = osteon.correct(v, f, sk, w, force=10.0, allowable_stress=allowable, interval=2.0,
+                           bone_long_axes=[[2.0, 0.0, 0.0]])
+    assert np.array_equal(plain.vertices, along.vertices)
+
+
+@pytest.mark.parametrize("bad", [[[0.0, 0.0, 0.0]], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                                 [[np.nan, 0.0, 1.0]]])
+def test_bad_long_axes_name_the_problem(bad):
+    import osteon
+
+    sk = osteon.Skeleton([[0, 0, 0]], [[1, 0, 0]], [-1])
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    with pytest.raises(ValueError, match="bone_long_axes"):
+        osteon.correct(v, [[0, 1, 2]], sk, np.ones((3, 1)), bone_long_axes=bad)
+    with pytest.raises(ValueError, match="bone_long_axes"):
+        osteon.skin(v, sk, np.ones((3, 1)), [2.0], bone_long_axes=bad)

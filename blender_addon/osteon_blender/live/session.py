@@ -53,6 +53,7 @@ class LiveInputs:
     weights: object = None
     want_outlines: bool = False
     t_read: float = 0.0
+    skeleton: object = None             # bridge.SkeletonArrays as read (Blender's tails)
 
 
 @dataclass
@@ -82,6 +83,7 @@ class Session:
         self.analyzer = None
         self.analyzer_key = None
         self.faces = None
+        self.engine_weights = None      # (V, B) sparse weights the analyzer was built with
         self.last_sig = None            # (co, matrix, heads, tails, settings) last analysed
         self.settings_key = None
         self.future = None              # running analysis job
@@ -175,7 +177,7 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
         names=list(sk.names), size_mode=s.size_mode, print_size_mm=float(s.print_size_mm),
         unit_scale=float(scene.unit_settings.scale_length),
         params=params,
-        analyzer_key=key, want_outlines=want)
+        analyzer_key=key, want_outlines=want, skeleton=sk)
     if rebuild:
         if sess.weights_stale:
             sess.weights.clear()
@@ -206,9 +208,14 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
     world = np.multiply(w, k, dtype=np.float64)    # world mm, one pass
     if inp.faces is not None:
         sess.faces = inp.faces
+        sess.engine_weights = inp.weights
         sess.analyzer = None
+    tails = inp.tails
+    if inp.skeleton is not None:
+        # joint rigs (FBX/glTF imports): the same joint-segment step as Analyze (service.gather)
+        tails = bridge.use_joint_segments(inp.skeleton, w, sess.engine_weights).tails
     try:
-        skeleton = osteon.Skeleton(inp.heads * k, inp.tails * k, inp.parents, names=inp.names)
+        skeleton = osteon.Skeleton(inp.heads * k, tails * k, inp.parents, names=inp.names)
         if sess.analyzer is None:
             sess.analyzer = osteon.Analyzer(sess.faces, len(world), skeleton, inp.weights,
                                             keep_outlines=True, **inp.params)

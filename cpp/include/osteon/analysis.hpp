@@ -25,6 +25,9 @@ struct AnalysisOptions {
   bool local_cuts = true;  ///< cut near the bone first (same result, faster); false: whole planes
   bool reuse_sections = true;  ///< Analyzer::run re-cuts only sections a change can reach (exact)
   bool keep_outlines = false;  ///< fill AnalysisResult's outline_* (the loops of each section)
+  /// Junction cores (docs/junctions.md): where a section cuts a side branch's stub, count only
+  /// the material that continues through the plane (flag kFlagJunction); false: whole cuts.
+  bool junctions = true;
   /// FDM build direction in the model frame (any non-zero vector; default +Z) and layer strength
   /// ratio Z/X (1 = isotropic): each section's allowable is layer_allowable() of the angle
   /// between its normal and this direction (osteon/layers.hpp, docs/printing.md).
@@ -55,8 +58,13 @@ struct AnalysisResult {
       section_thin_axis;               ///< S unit in-plane direction the section is thinnest across
   std::vector<double> section_aspect;  ///< S width / thickness (sqrt of J's eigenvalue ratio)
   std::vector<double> section_thickness;  ///< S minimum width of the region, mm (NaN: skipped)
-  std::vector<double> moment_arm;         ///< S distance centroid -> load point d, mm
-  std::vector<double> moment;             ///< S bending moment M = F d, N mm
+  /// S area (mm^2) and modulus W (mm^3) of the whole cut around the bone point; they differ from
+  /// section_area / section_modulus only at a junction (kFlagJunction), where those are the
+  /// core's (the material that continues through the plane, docs/junctions.md). 0 / NaN: skipped.
+  std::vector<double> section_cut_area;
+  std::vector<double> section_cut_modulus;
+  std::vector<double> moment_arm;  ///< S distance centroid -> load point d, mm
+  std::vector<double> moment;      ///< S bending moment M = F d, N mm
   std::vector<double> stress;  ///< S peak bending stress M / W, MPa (NaN when skipped/unreliable)
   std::vector<std::uint8_t> culled;       ///< S W > safe modulus: safe for sure (drawn grey)
   std::vector<std::uint8_t> weak;         ///< S stress > section_allowable
@@ -83,6 +91,12 @@ struct AnalysisResult {
   std::vector<Vec3> outline_points;                 ///< P loop points, mm
   std::vector<std::int64_t> outline_loop_start;     ///< L+1 first point of each loop
   std::vector<std::int64_t> outline_section_start;  ///< S+1 first loop of each section
+  /// The whole cut of each junction section (kFlagJunction), packed the same way (only with
+  /// keep_outlines): section s owns loops cut_outline_section_start[s] .. [s+1]; none for a
+  /// section that is not a junction (its whole cut is its outline above).
+  std::vector<Vec3> cut_outline_points;                 ///< loop points, mm
+  std::vector<std::int64_t> cut_outline_loop_start;     ///< first point of each loop (+1 entry)
+  std::vector<std::int64_t> cut_outline_section_start;  ///< S+1 first loop of each section
   /// Vertex indices of each loose piece: a shell that neither touches nor overlaps the held piece
   /// (it would fall off the print); its sections are still computed like any other.
   std::vector<std::vector<std::int32_t>> loose_pieces;

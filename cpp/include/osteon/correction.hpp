@@ -20,6 +20,11 @@ struct CorrectionOptions {
   /// B local X axes of the bones (e.g. Blender's, so that pose-bone scale X/Z reproduce the
   /// result); empty: each bone's axes follow the first flat section scaled on it.
   std::vector<Vec3> bone_x_axes;
+  /// B axes each bone scales across (they keep scale 1), or empty: the bones' segments. A joint
+  /// rig imported into Blender (FBX/glTF) has bones whose local Y is not the segment the
+  /// engine analyses; giving the bone's local axis nearest the segment here (and bone_x_axes
+  /// perpendicular to it) makes Blender's pose scale X/Y/Z reproduce the result exactly.
+  std::vector<Vec3> bone_long_axes;
 };
 
 /// One scaling round: which bone, by what factor, and the largest stress after it.

@@ -35,6 +35,19 @@ std::vector<SectionPolygon> material_regions(const std::vector<std::vector<Vec2>
 /// around the origin (any orientation), for parity checks.
 SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain = nullptr);
 
+/// The junction core of a section (SPEC §3, docs/junctions.md): the part of `section` that
+/// continues through the plane, i.e. that the regions `neighbours` (the regions around the bone
+/// point on parallel planes a short distance before and after, in the same plane coordinates,
+/// mm) also contain. Each neighbour is widened by `margin_mm` (Clipper2 InflatePaths, round
+/// joins) so that facet wobble does not trim a plain tube; of the material trimmed off, only the
+/// pieces wider than 2 * opening_mm somewhere (their erosion by opening_mm is not empty: stubs)
+/// are left out, whole; thin pieces (the rim of a taper, a tilted bone's crescent) stay. Returns
+/// the region of the core around the plane origin (the bone point), or found = false when the
+/// origin is not in the core (then the caller keeps the whole section).
+SectionGeometry junction_core(const SectionPolygon& section,
+                              const std::vector<const SectionPolygon*>& neighbours,
+                              double margin_mm, double opening_mm);
+
 /// Thickness of a region (mm): its minimum width, i.e. the smallest distance between two parallel
 /// lines enclosing the outer boundary (the narrowest direction of its convex hull). A solid round
 /// section gives its diameter, a b x t plate t; holes are not subtracted (a tube gives its outer

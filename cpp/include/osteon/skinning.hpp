@@ -23,9 +23,16 @@ struct AxisScales {
   std::vector<double> x;     ///< B scale along each bone's x axis (1 = unchanged)
   std::vector<double> z;     ///< B scale along each bone's z axis
   std::vector<Vec3> x_axis;  ///< B unit axis across each bone; not used where x == z
+  /// B unit axes that keep scale 1 (the "length" axis), or empty: each bone's segment direction.
+  /// A joint rig's Blender bone (FBX/glTF import) points elsewhere than its segment; scaling
+  /// across its own local axis nearest the segment is what Blender's pose scale does.
+  std::vector<Vec3> long_axis;
 };
 
-/// As skin_cross_section_scales, with a scale per axis; where x == z it is that function exactly.
+/// As skin_cross_section_scales, with a scale per axis; where x == z (and long_axis is empty) it
+/// is that function exactly. Each bone b scales about the line through its head along
+/// long_axis[b] (its direction when long_axis is empty): x along x_axis made perpendicular to
+/// that line, z along z = x × long. rest, out: #V by 3 row-major mm (out may alias rest).
 void skin_axis_scales(const double* rest, Index num_vertices, const Skeleton& skeleton,
                       const BoneWeights& weights, const AxisScales& scales, double* out);
 

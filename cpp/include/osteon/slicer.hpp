@@ -22,7 +22,8 @@ enum SectionFlag : std::uint32_t {
   kFlagDegenerate = 1u << 5,   ///< zero area or singular second moment: section skipped
   kFlagNonManifold = 1u << 6,  ///< non-manifold edges were cut (more than two faces on an edge)
   kFlagUnreliable = 1u << 7,   ///< bone outside and no region tied to it: no number, left out
-  kFlagTooThin = 1u << 8,  ///< thinner than the printable minimum: reported apart, not corrected
+  kFlagTooThin = 1u << 8,   ///< thinner than the printable minimum: reported apart, not corrected
+  kFlagJunction = 1u << 9,  ///< a side branch is cut: only the core that continues is counted
 };
 
 /// An orthonormal plane frame: origin, unit normal and in-plane axes u, v (u x v = normal).

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..settings import SECTION_LIMIT
+from ..settings import SECTION_LIMIT, min_thickness_mm
 from .settings import BatchSettings
 
 #: ``status`` values: analysed; not analysed because the model has no skeleton (and no automatic
@@ -86,7 +86,7 @@ def _auto_rigged(path: Path, s: BatchSettings):
         if size <= 0:
             raise ValueError("mesh has zero size; cannot scale it")
         V = V * (height / size)
-    sk, W = osteon.auto_skeleton(V, F)
+    sk, W = osteon.auto_skeleton(V, F, min_thickness=min_thickness_mm(s.settings))
     names = list(getattr(sk, "names", None) or [f"bone_{i}" for i in range(len(sk.parents))])
     return RiggedModel(
         V, F, sk.heads, sk.tails, sk.parents, names, W, source=str(path), notes=["auto skeleton"]

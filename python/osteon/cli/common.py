@@ -13,7 +13,7 @@ import numpy as np
 from .. import materials
 from ..report import bone_table as _bone_rows
 from ..report import build_report, to_json
-from ..settings import Settings, engine_arguments
+from ..settings import Settings, engine_arguments, min_thickness_mm
 
 
 class CliError(Exception):
@@ -118,7 +118,11 @@ def auto_model_of(args, axis, root="centre"):
     m = RiggedModel(v, f, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int64), [],
                     source=str(args.model)).scaled_to(args.height_mm, axis)
     t = time.perf_counter()
-    sk, w = auto_skeleton(m.vertices, m.faces, root=root)
+    try:  # limbs thinner than the material prints get no bone
+        min_t = min_thickness_mm(settings_from_args(args))
+    except (AttributeError, ValueError):  # a command without material options
+        min_t = None
+    sk, w = auto_skeleton(m.vertices, m.faces, root=root, min_thickness=min_t)
     note = (f"skeleton: made by osteon.auto_skeleton ({sk.num_bones} bones in "
             f"{time.perf_counter() - t:.1f} s); no skeleton file was given or found")
     if not getattr(args, "quiet", False):

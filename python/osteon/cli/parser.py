@@ -214,6 +214,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="sections tested with FEM, at most one per bone (default 4)",
     )
     pv.add_argument(
+        "--junctions",
+        action="store_true",
+        help="with --fem: test junction sections (a side branch cut, only the core counted; "
+        "docs/junctions.md) instead of plain ones",
+    )
+    pv.add_argument(
         "--mesh-size",
         type=float,
         metavar="MM",

@@ -42,7 +42,11 @@ def cmd_validate(args, out):
             missing = fem.missing_tools_message("--fem")
             if missing is not None:
                 raise ValueError(missing)
-            secs_list = fem.pick_sections(a, model.heads, model.tails, n=args.sections)
+            # junctions sit near joints by nature: any distance from the bone's ends
+            junctions = getattr(args, "junctions", False)
+            tiers = ((0.0, 2.0),) if junctions else ((1.5, 3.0), (0.75, 2.0))
+            secs_list = fem.pick_sections(a, model.heads, model.tails, n=args.sections,
+                                          tiers=tiers, junctions=junctions)
             if not secs_list:
                 raise ValueError(
                     "no section suitable for the FEM common.check (all near joints, the "

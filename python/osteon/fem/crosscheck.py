@@ -173,6 +173,8 @@ def _finish_section(rep, k, s, nodes, tets, S3, force):
                     "elements",
                     "surface",
                     "clamp_distance",
+                    "junction",
+                    "osteon_cut_stress",
                 )
                 if k2 in s
             },

@@ -12,7 +12,8 @@ def hold_point(analysis, heads):
 
 
 def pick_sections(
-    analysis, heads, tails, n=4, vertices=None, per_bone=1, tiers=((1.5, 3.0), (0.75, 2.0))
+    analysis, heads, tails, n=4, vertices=None, per_bone=1, tiers=((1.5, 3.0), (0.75, 2.0)),
+    junctions=False,
 ):
     """Choose up to ``n`` sections for the FEM check, at most ``per_bone`` per bone, highest
     stress first, where beam theory is meant to hold: interior sections (not at joints or bone
@@ -22,6 +23,10 @@ def pick_sections(
     at least ``slenderness`` × r, with r = √(area/π). Returns section dicts for
     :func:`cross_check`, each with its ``tier`` (0 = strictest), ``slenderness`` = arm / r and
     ``end_distance`` = distance to the nearer bone end / r.
+
+    ``junctions=True`` picks only ``junction`` sections (no other flag; docs/junctions.md),
+    with r from the core's area, to check the core against FEM read on the same plane; their
+    dicts also carry ``junction`` and ``osteon_cut_stress`` (the stress with the whole cut).
     """
     a = analysis
     heads, tails = np.asarray(heads, float), np.asarray(tails, float)
@@ -42,8 +47,15 @@ def pick_sections(
     if kind is not None:
         base &= np.asarray(kind) == 0
     flags = getattr(a, "section_flags", None)
+    junction_bit = 0
+    if junctions:
+        from .. import SECTION_FLAGS
+
+        junction_bit = int(SECTION_FLAGS["junction"])
     if flags is not None:
-        base &= np.asarray(flags) == 0
+        base &= np.asarray(flags) == junction_bit
+    elif junctions:
+        base &= False
     hp = hold_point(a, heads)
     depth = 0.0
     if vertices is not None:
@@ -77,6 +89,10 @@ def pick_sections(
                     "end_distance": float(end[i] / r[i]),
                 }
             )
+            if junctions:
+                w_cut = float(np.asarray(a.section_cut_modulus)[i])
+                out[-1]["junction"] = True
+                out[-1]["osteon_cut_stress"] = float(a.moment[i] / w_cut)
             if len(out) >= n:
                 return out
     return out

@@ -10,7 +10,8 @@ means:
   weighted centroid of its vertices seen from the joint);
 * a leaf (no child apart from the joint itself) runs along its own skinning domain: from the
   joint in the direction of the domain's centroid (its principal axis if the centroid sits on
-  the joint), as far as the domain's weighted mean distance along it (:data:`LEAF_REACH`; the
+  the joint), :data:`LEAF_FACTOR` of the domain's weighted mean distance along it, never less
+  than :data:`NEAR_REL` of the rig's size (:data:`LEAF_REACH`; the
   farthest vertex made the last sections tiny caps around the tip, cut off-centre, whose
   stresses were nonsense: 7.7e30 MPa on the RigNet dog's leaf, against 25.2 MPa with the mean);
 * a bone with neither a child nor weights keeps its tail.
@@ -147,8 +148,9 @@ def joint_segments(heads, tails, parents, vertices=None, weights=None, *,
         t = (p - h) @ d
         reach = LEAF_FACTOR * (float((w * t).sum() / w.sum()) if LEAF_REACH == "centroid"
                                else float(t.max()))
-        if reach > near:
-            out[b] = h + reach * d
+        # never shorter than `near`: a domain wrapped around its joint (a paw around the ankle)
+        # has almost no reach, and Blender's arbitrary tail (up the leg) is worse than a stub
+        out[b] = h + max(reach, near) * d
     changed = np.linalg.norm(out - tails, axis=1) > meet_rel * size
     return out, changed
 

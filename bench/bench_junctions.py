@@ -1,0 +1,55 @@
+"""Cost of the junction cores (docs/junctions.md): ``osteon.analyze`` with ``junctions=True``
+(the default) vs ``junctions=False`` (whole cuts, the analysis before issue 16), run
+interleaved in the same process.
+
+    python bench/bench_junctions.py [--repeat 9] [--quick]
+
+Prints per model and interval h the median times, their ratio (target <= 1.10) and the number
+of junction sections found.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import osteon
+from models import load
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=9)
+    ap.add_argument("--quick", action="store_true", help="skip the 1M+ face model")
+    args = ap.parse_args(argv)
+    cases = [("rignet2982", 0), ("arm", 0), ("cow", 1), ("cow", 3)]
+    if args.quick:
+        cases = cases[:3]
+    print("| model | faces | h (mm) | sections | junction sections | whole cuts median (ms) "
+          "| junction cores median (ms) | ratio |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, subdivisions in cases:
+        v, f, sk, w = load(name, subdivisions=subdivisions)
+        for h in (2.0, 8.0):
+            def run(junctions, v=v, f=f, sk=sk, w=w, h=h):
+                return osteon.analyze(v, f, sk, w, interval=h, junctions=junctions)
+
+            a = run(True)
+            times = {False: [], True: []}
+            for _ in range(args.repeat):
+                for j in (False, True):
+                    t0 = time.perf_counter()
+                    run(j)
+                    times[j].append(time.perf_counter() - t0)
+            off, on = (1000 * statistics.median(times[k]) for k in (False, True))
+            print(f"| {name} | {len(f)} | {h:g} | {a.num_sections} | {int(a.junction.sum())} "
+                  f"| {off:.1f} | {on:.1f} | {on / off:.3f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,174 @@
+// Stage 3d of a run: the effective section at junctions (SPEC §3, docs/junctions.md)
+// (Analyzer::Impl).
+//
+// Where a side branch grows out of a bone, the plane through the junction also cuts the stub of
+// the branch, and beam theory would count it. By Saint-Venant's principle a stub shorter than
+// about its own width is not engaged: only the material that continues through the plane, a
+// bone's width before and after it, carries the load. A cheap detector picks the candidates (a
+// cut whose area exceeds 1.5 x its bone's median); for these only, two parallel planes at
+// +-delta (delta = 1.25 x the bone's equivalent radius sqrt(A_median / pi): the slab between
+// them is a little longer than the bone is wide) are cut and the section is trimmed to what both
+// neighbours' regions (widened a little) also cover: the core. Trimmed pieces that are nowhere
+// wider than 0.6 equivalent radii (a taper's rim, a tilted bone's crescent) stay in the core.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "analysis_impl.hpp"
+#include "osteon/regions.hpp"
+#include "parallel.hpp"
+
+namespace osteon {
+namespace {
+
+constexpr double kCandidateArea = 1.5;  // candidate: whole cut area > this x the bone's median
+constexpr double kDelta = 1.25;         // neighbour planes at +-this x the bone's equivalent radius
+constexpr double kMargin = 0.05;        // neighbour regions widened by this x the radius (wobble)
+constexpr double kOpening = 0.3;    // trimmed pieces nowhere wider than 2 x this x radius go back
+constexpr double kMaterial = 0.95;  // the core is used when its area < this x the cut's
+constexpr double kContinues = 0.5;  // ... and >= this x the bone's median area
+
+// Does the slab |(x - point) . normal| <= half reach into the box?
+bool slab_meets_box(const Vec3& point, const Vec3& normal, double half, const Box3& box) {
+  if (box.empty()) return false;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner((c & 1) ? box.hi.x() : box.lo.x(), (c & 2) ? box.hi.y() : box.lo.y(),
+                      (c & 4) ? box.hi.z() : box.lo.z());
+    const double s = (corner - point).dot(normal);
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  return lo <= half && hi >= -half;
+}
+
+// Back to the whole cut (a section that was a junction core but is no longer a candidate).
+void restore_whole(SectionState& st, bool keep) {
+  if (!(st.flags & kFlagJunction)) return;
+  set_section_region(st, st.frame, st.cut, keep);
+  st.flags &= ~kFlagJunction;
+  st.cut_loops.clear();
+}
+
+}  // namespace
+
+void Analyzer::Impl::find_junction_cores(RunState& run) {
+  const int ns = static_cast<int>(specs.size());
+  const bool keep = options.keep_outlines;
+  if (!options.junctions) {
+    for (SectionState& st : states) {
+      restore_whole(st, keep);
+      st.junction_delta = 0.0;
+    }
+    return;
+  }
+  // Each bone's typical section: the median whole-cut area of its sections inside the mesh.
+  std::vector<std::vector<double>> areas(num_bones);
+  for (int i = 0; i < ns; ++i)
+    if (states[i].found && !(states[i].flags & kFlagOutside))
+      areas[specs[i].bone].push_back(states[i].cut_area);
+  std::vector<double> delta(num_bones, 0.0), median(num_bones, 0.0);
+  for (int b = 0; b < num_bones; ++b) {
+    auto& a = areas[b];
+    if (a.empty()) continue;
+    std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+    median[b] = a[a.size() / 2];
+    delta[b] = kDelta * std::sqrt(median[b] / M_PI);
+  }
+  std::vector<int> todo;
+  for (int i = 0; i < ns; ++i) {
+    SectionState& st = states[i];
+    if (!st.found) continue;
+    const int b = specs[i].bone;
+    const bool candidate =
+        !(st.flags & kFlagOutside) && delta[b] > 0 && st.cut_area > kCandidateArea * median[b];
+    if (!candidate) {
+      restore_whole(st, keep);
+      st.junction_delta = 0.0;
+      continue;
+    }
+    // A check made with the same delta stays right unless the section was re-cut or a change
+    // reaches its neighbour planes.
+    const bool fresh = run.section_dirty[i] || run.all_changed || st.junction_delta != delta[b] ||
+                       slab_meets_box(specs[i].point, specs[i].normal, 1.5 * delta[b], run.changed);
+    if (fresh) todo.push_back(i);
+  }
+  run.junction_checks = static_cast<long>(todo.size());
+  if (todo.empty()) return;
+  if (run.grid.num_cells() == 0) run.grid.build(run.mesh, 12, options.threads);
+  // Which sections may serve as a neighbour (read while other candidates' flags change).
+  std::vector<std::uint8_t> neighbour_ok(ns);
+  for (int j = 0; j < ns; ++j)
+    neighbour_ok[j] = states[j].found && !(states[j].flags & (kFlagOutside | kFlagOpen));
+  const int workers = detail::worker_count(options.threads, static_cast<long>(todo.size()));
+  std::vector<std::vector<CutSegment>> scratch(workers);
+  detail::parallel_for(static_cast<long>(todo.size()), options.threads, [&](long t, int worker) {
+    const int i = todo[t];
+    SectionState& st = states[i];
+    const int b = specs[i].bone;
+    restore_whole(st, keep);
+    st.junction_delta = delta[b];
+    // The regions around the bone point on the planes at -delta and +delta; a side with no
+    // region of its own there (past a free end, bone outside the mesh, open cut) is left out.
+    SectionPolygon regions[2];
+    std::vector<const SectionPolygon*> neighbours;
+    // Along a bone, the family's own sections m intervals away serve when m * h is within
+    // [0.75, 1.5] delta: already cut, and in the same plane coordinates (u, v are shared and
+    // the origins lie on the bone's axis). Otherwise the two planes are cut.
+    const int job = specs[i].job;
+    const int first = job_section[job];
+    const int count = job_bone[job] >= 0 ? static_cast<int>(slab_params[b].size()) - 2 : 0;
+    const int m = std::max(1, static_cast<int>(std::lround(delta[b] / options.interval)));
+    const double reach = m * options.interval;
+    auto usable = [&](int j) { return neighbour_ok[j] != 0; };
+    const bool family = count > 0 && reach >= 0.75 * delta[b] && reach <= 1.5 * delta[b] &&
+                        i - m >= first && i + m < first + count;
+    if (family) {
+      if (!usable(i - m) || !usable(i + m)) return;  // a side without material of its own
+      neighbours.push_back(&states[i - m].cut);
+      neighbours.push_back(&states[i + m].cut);
+    }
+    // Otherwise the two planes are cut inside a ball around the bone point three times the
+    // section's reach: a neighbour whose region around the bone point leaves that ball (its
+    // loop is clipped open there) is far larger than the section and covers it.
+    int sides = family ? 2 : 0;
+    if (!family) {
+      double extent = 0.0;
+      for (const Vec2& q : st.cut.outer) extent = std::max(extent, q.norm());
+      for (int side = 0; side < 2; ++side) {
+        PlaneFrame frame = st.frame;
+        frame.origin += (side == 0 ? -delta[b] : delta[b]) * frame.normal;
+        const CutRegion ball{frame.origin, Vec3::Zero(), 3.0 * extent + delta[b]};
+        auto& segs = scratch[worker];
+        segs.clear();
+        cut_mesh(run.mesh, frame, segs, &run.grid, &ball);
+        const PlaneCut cut = assemble_loops(segs, 0.0);
+        SectionGeometry geom = select_region(cut, nullptr);
+        if (geom.found && !(geom.flags & kFlagOutside)) {
+          regions[side] = std::move(geom.polygon);
+          neighbours.push_back(&regions[side]);
+          ++sides;
+        } else if (!geom.found && !cut.open_chains.empty() && (geom.flags & kFlagOpen)) {
+          ++sides;  // clipped around the bone point: a far larger member, covering the section
+        }
+      }
+    }
+    // Material continues through the plane only if there is material on both sides.
+    if (sides < 2 || neighbours.empty()) return;
+    const SectionGeometry core = junction_core(st.cut, neighbours, kMargin / kDelta * delta[b],
+                                               kOpening / kDelta * delta[b]);
+    if (!core.found) return;
+    const SectionProperties props = section_properties(core.polygon);
+    if (!props.valid || !(props.area < kMaterial * st.cut_area)) return;
+    // A core far smaller than the bone's typical section is not the bone's member passing
+    // through (the planes landed in other parts: a bend, a flare, a bone end): whole cut kept.
+    if (props.area < kContinues * median[b]) return;
+    if (keep) st.cut_loops = st.loops;
+    if (set_section_region(st, st.frame, core.polygon, keep)) st.flags |= kFlagJunction;
+  });
+  if (run.timer.on) std::fprintf(stderr, "junction checks %ld\n", run.junction_checks);
+}
+
+}  // namespace osteon

@@ -1,0 +1,128 @@
+"""Junctions (issue 16): at a side branch only the material that continues through the plane
+carries the load (SPEC §3, docs/junctions.md). Numbers from closed forms: a round bar's
+W = π r³/4, and the same bar analysed without the stub."""
+
+import json
+
+import numpy as np
+import osteon
+import pytest
+from shapes import cylinder_along, merge
+
+R = 3.0
+W_ROUND = np.pi * R**3 / 4  # mm³
+
+
+def tbar(stub_radius=R):
+    """Round bar r = 3 mm along x (0..40 mm) with a perpendicular stub fused at mid-length: two
+    overlapping closed shells (the engine takes their union, as a slicer does)."""
+    bar = cylinder_along([0, 0, 0], [40, 0, 0], R, n=64, stations=41)
+    stub = cylinder_along([20, 0, 0], [20, 0, 9], stub_radius, n=64, stations=10)
+    sk = osteon.Skeleton([[0, 0, 0]], [[40, 0, 0]], [-1])
+    return bar, stub, sk
+
+
+def polygon_area(loop, normal):
+    """Area of a planar 3D loop (shoelace in 3D)."""
+    s = np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0)
+    return 0.5 * abs(float(s @ normal))
+
+
+def test_bar_through_a_stub_counts_only_the_bar():
+    bar, stub, sk = tbar()
+    a = osteon.analyze(*merge(bar, stub), sk, interval=2.0)
+    plain = osteon.analyze(*bar, sk, interval=2.0)
+    interior = a.section_kind == 0
+    x = a.section_param
+    through = interior & (np.abs(x - 20) < R)  # planes that cut the stub: x = 18, 20, 22
+    assert through.sum() == 3
+    assert a.junction[through].all()
+    # the whole cut counts the stub (what beam theory did before: 1.7-2.7 x the bar's W)
+    assert (a.section_cut_modulus[through] > 1.6 * W_ROUND).all()
+    # the core is the bar: W within 10 % of π r³ / 4
+    np.testing.assert_allclose(a.section_modulus[through], W_ROUND, rtol=0.10)
+    np.testing.assert_allclose(a.section_area[through], np.pi * R**2, rtol=0.10)
+    # the stress follows the core: M / W_core
+    np.testing.assert_allclose(a.stress[through], a.moment[through] / a.section_modulus[through])
+    # sections away from the stub: unchanged to 1 % (same plan as the bar alone)
+    away = interior & (np.abs(x - 20) > R + 1)
+    assert away.sum() >= 12 and not a.junction[away].any()
+    np.testing.assert_allclose(a.section_modulus[away], plain.section_modulus[away], rtol=0.01)
+    np.testing.assert_allclose(a.section_area[away], plain.section_area[away], rtol=0.01)
+    # junctions=False: the whole cuts, as before (the stub counted)
+    whole = osteon.analyze(*merge(bar, stub), sk, interval=2.0, junctions=False)
+    assert not whole.junction.any()
+    np.testing.assert_allclose(whole.section_modulus[through], a.section_cut_modulus[through])
+    # a prismatic bar: nothing is a junction, whole cut == section
+    assert not plain.junction.any()
+    ok = plain.valid
+    np.testing.assert_array_equal(plain.section_cut_modulus[ok], plain.section_modulus[ok])
+    np.testing.assert_array_equal(plain.section_cut_area, plain.section_area)
+
+
+def test_junction_reason_and_outlines_show_core_and_whole_cut():
+    bar, stub, sk = tbar()
+    a = osteon.analyze(*merge(bar, stub), sk, interval=2.0, keep_outlines=True)
+    i = int(np.flatnonzero(a.junction & (np.abs(a.section_param - 20) < 0.5))[0])
+    assert "junction" in a.flag_names(i)
+    (reason,) = a.flag_reasons(i)
+    assert "side branch" in reason and f"{a.section_cut_area[i]:.3g}" in reason
+    n = a.section_normal[i]
+    core, cut = a.section_loops[i], a.section_cut_loops[i]
+    assert len(core) == 1 and len(cut) == 1
+    assert polygon_area(core[0], n) == pytest.approx(a.section_area[i], rel=1e-9)
+    assert polygon_area(cut[0], n) == pytest.approx(a.section_cut_area[i], rel=1e-9)
+    # the whole cut reaches the stub's top (z = 9), the core stays near the bar (r + margin)
+    assert cut[0][:, 2].max() == pytest.approx(9.0, abs=1e-6)
+    assert core[0][:, 2].max() < 1.1 * R
+    # not a junction: no whole-cut loops (its outline is the whole cut)
+    assert all(a.section_cut_loops[k] == [] for k in np.flatnonzero(~a.junction))
+
+
+def test_json_report_carries_the_core_and_the_whole_cut():
+    from osteon.report import build_report, to_json
+
+    bar, stub, sk = tbar()
+    v, f = merge(bar, stub)
+    a = osteon.analyze(v, f, sk, interval=2.0)
+    rep = json.loads(to_json(build_report(analysis=a, bone_names=["bar"], allowable_mpa=60.0,
+                                          settings={"force_n": 20.0}, front_end="test",
+                                          model="t-bar")))
+    rows = rep["section_table"]
+    junction_rows = [r for r in rows if "junction" in r["flags"]]
+    assert len(junction_rows) == int(a.junction.sum()) == 3
+    for r in junction_rows:
+        k = r["index"]
+        assert r["cut_area_mm2"] == pytest.approx(a.section_cut_area[k])
+        assert r["cut_modulus_mm3"] == pytest.approx(a.section_cut_modulus[k])
+        assert r["modulus_mm3"] == pytest.approx(a.section_modulus[k])
+        assert r["cut_modulus_mm3"] > 1.6 * r["modulus_mm3"]
+    assert rep["junction_sections"] == sorted(int(k) for k in np.flatnonzero(a.junction))
+
+
+def test_correction_thickens_the_bar_where_the_junction_core_is_weak():
+    # A thick body (r = 4.5, bone 0) and a bar (r = 3, bone 1) with the stub at x = 20: the
+    # bar's sections through the stub are its weakest by their core; counted with the stub
+    # they would be the strongest. The allowable lies between the two: only the core makes
+    # them weak, and the correction must thicken bone 1 until they are not.
+    body = cylinder_along([0, 0, 0], [17, 0, 0], 4.5, n=48, stations=18)
+    bar = cylinder_along([16, 0, 0], [40, 0, 0], R, n=48, stations=25)
+    stub = cylinder_along([20, 0, 0], [20, 0, 9], R, n=48, stations=10)
+    v, f = merge(body, bar, stub)
+    sk = osteon.Skeleton([[0, 0, 0], [16, 0, 0]], [[16, 0, 0], [40, 0, 0]], [-1, 0])
+    a = osteon.analyze(v, f, sk, interval=2.0)
+    j = a.junction
+    assert j.sum() == 3 and (a.section_bone[j] == 1).all()
+    core = a.stress[j].max()
+    cut_based = a.moment / a.section_cut_modulus  # the stress with the stub counted
+    others = max(np.nanmax(a.stress[~j]), np.nanmax(cut_based))
+    assert core > 1.1 * others
+    allow = 0.5 * (core + others)
+    c = osteon.correct(v, f, sk, None, allowable_stress=allow, interval=2.0)
+    assert c.before.weak[j].all() and not c.before.weak[~j].any()
+    assert c.bone_scale[0] == 1.0
+    # W ∝ scale³: at least the cube root of the junction core's stress ratio
+    assert c.bone_scale[1] >= 0.99 * np.cbrt(core / (0.99 * allow))
+    assert c.converged and not c.after.weak.any()
+    after_j = c.after.junction
+    assert after_j.sum() == 3 and (c.after.stress[after_j] <= allow).all()
