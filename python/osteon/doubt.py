@@ -33,6 +33,7 @@ REASONS = {
     "too_thin": "the part is thinner than printable there",
     "hollow": "the bone lies in a hole there",
     "gap_closed": "gaps in the cut were closed there",
+    "junction": "a side branch is cut there (only the continuing core counts)",
 }
 
 
