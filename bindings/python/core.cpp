@@ -14,6 +14,7 @@
 
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
+#include "osteon/progress.hpp"
 #include "osteon/section.hpp"
 #include "osteon/skinning.hpp"
 #include "osteon/slicer.hpp"
@@ -209,7 +210,7 @@ class PyAnalyzer {
     }
     num_vertices_ = num_vertices;
   }
-  py::dict run(const DoubleArray& vertices, const Skeleton& s) {
+  py::dict run(const DoubleArray& vertices, const Skeleton& s, Progress* progress) {
     require_rows3(vertices, "vertices");
     if (vertices.shape(0) != num_vertices_)
       throw std::invalid_argument("vertices has " + std::to_string(vertices.shape(0)) +
@@ -220,7 +221,7 @@ class PyAnalyzer {
       py::gil_scoped_release release;
       // One analyzer keeps per-run state: concurrent calls on the same object take turns.
       std::lock_guard<std::mutex> lock(mutex_);
-      r = analyzer_->run(vertices.data(), s);
+      r = analyzer_->run(vertices.data(), s, progress);
     }
     return result_to_dict(std::move(r));
   }
@@ -235,6 +236,8 @@ class PyAnalyzer {
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "osteon engine (C++): skeleton-sectional structural analysis; mm, N, MPa";
+  // A cancelled run (Progress.cancel()) raises osteon._core.Cancelled, not a ValueError.
+  py::register_exception<Cancelled>(m, "Cancelled");
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -255,6 +258,28 @@ PYBIND11_MODULE(_core, m) {
            "heads, tails (B,3) mm, parents (B,) int (-1 = root), names (B); ValueError naming "
            "the problem (cycle, zero-length bone, ...).")
       .def_property_readonly("num_bones", &Skeleton::num_bones, "Number of bones B.");
+
+  py::class_<Progress>(m, "Progress",
+                       "Progress and cancel switch of a run, shared with the engine's threads.")
+      .def(py::init<>())
+      .def_property_readonly(
+          "sections_done", [](const Progress& p) { return p.sections_done.load(); },
+          "sections of the current analysis whose cut is done")
+      .def_property_readonly(
+          "sections_total", [](const Progress& p) { return p.sections_total.load(); },
+          "sections the current analysis plans (0 until planned)")
+      .def_property_readonly(
+          "runs_done", [](const Progress& p) { return p.runs_done.load(); },
+          "analyses finished (a correction runs several)")
+      .def_property_readonly("cancelled", &Progress::cancelled, "True once cancel() was called")
+      .def("cancel", &Progress::cancel, "Ask the run to stop (any thread); it raises Cancelled")
+      .def("reset", &Progress::reset, "Clear the counters and the cancel switch");
+
+  m.def(
+      "count_sections",
+      [](const Skeleton& s, double interval) { return count_sections(s, interval); },
+      py::arg("skeleton"), py::arg("interval"),
+      "Exact number of sections an analysis plans at interval (mm), before any cut.");
 
   py::class_<AnalysisOptions>(m, "AnalysisOptions", "Settings of one analysis (N, MPa, mm).")
       .def(py::init<>())
@@ -323,13 +348,14 @@ PYBIND11_MODULE(_core, m) {
            py::arg("faces"), py::arg("num_vertices"), py::arg("num_bones"), py::arg("dense"),
            py::arg("csr"), py::arg("options"))
       .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("skeleton"),
-           "Analyse vertices (V,3 mm) with a posed Skeleton.");
+           py::arg("progress") = nullptr,
+           "Analyse vertices (V,3 mm) with a posed Skeleton; progress: a Progress or None.");
 
   m.def(
       "correct",
       [](const DoubleArray& vertices, const Int32Array& faces, const Skeleton& s,
          const py::object& dense, const py::object& csr, const AnalysisOptions& o,
-         const CorrectionOptions& co) {
+         const CorrectionOptions& co, Progress* progress) {
         require_rows3(vertices, "vertices");
         require_rows3(faces, "faces");
         auto weights = make_weights(dense, csr, vertices.shape(0), s.num_bones());
@@ -338,7 +364,7 @@ PYBIND11_MODULE(_core, m) {
         CorrectionResult r;
         {
           py::gil_scoped_release release;
-          r = correct(mesh, s, *weights, o, co);
+          r = correct(mesh, s, *weights, o, co, progress);
         }
         py::dict d;
         d["bone_scale"] = to_numpy(std::move(r.bone_scale));
@@ -360,7 +386,7 @@ PYBIND11_MODULE(_core, m) {
         return d;
       },
       py::arg("vertices"), py::arg("faces"), py::arg("skeleton"), py::arg("dense"), py::arg("csr"),
-      py::arg("options"), py::arg("correction_options"),
+      py::arg("options"), py::arg("correction_options"), py::arg("progress") = nullptr,
       "Correction loop (paper §5); see osteon.correct.");
 
   m.def(

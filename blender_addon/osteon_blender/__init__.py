@@ -7,7 +7,7 @@ legacy add-on in Blender 3.4-4.1 (bl_info below).  Units: mm, N, MPa.
 
 import bpy
 
-from . import live, ops, overlay, ui
+from . import live, ops, overlay, prefs, ui
 from .ui import live_panel
 
 bl_info = {
@@ -22,7 +22,7 @@ bl_info = {
     "category": "Mesh",
 }
 
-_classes = ui.classes + ops.classes + live_panel.classes
+_classes = ui.classes + ops.classes + live_panel.classes + prefs.classes
 
 
 _atexit_hooked = False

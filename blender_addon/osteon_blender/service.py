@@ -78,13 +78,86 @@ def engine_skeleton(osteon, inp: Inputs):
         raise OsteonError(f"osteon rejected the skeleton of '{inp.arm.name}': {e}") from e
 
 
-def analyze_inputs(osteon, inp: Inputs, skeleton=None):
+def analyze_inputs(osteon, inp: Inputs, skeleton=None, progress=None):
+    """The engine's analysis of ``inp`` (safe to call from a worker thread: no bpy);
+    ``progress``: an ``osteon.Progress`` to follow or cancel it."""
     skeleton = skeleton if skeleton is not None else engine_skeleton(osteon, inp)
     try:
         return osteon.analyze(inp.vertices_mm, inp.faces, skeleton, inp.weights,
-                              keep_outlines=True, **inp.params)
+                              keep_outlines=True, progress=progress, **inp.params)
     except ValueError as e:
         raise OsteonError(f"osteon could not analyse '{inp.obj.name}': {e}") from e
+
+
+# --------------------------------------------------------------------------- jobs
+#
+# Analyze and Correct are written once, as generators of steps: the Blender part (read the
+# scene, write the results) runs in the generator on the main thread; each engine call is
+# yielded as a function of no arguments. run_steps() calls those at once (scripts, background
+# mode, batch); the interactive operators call them in a worker thread (the engine releases the
+# GIL) and resume the generator from a modal timer, so that Blender keeps drawing, shows the
+# progress and cancels on Esc. On a cancel or an error the runner throws the exception into the
+# generator, whose cleanup leaves the scene as it was.
+
+
+class Job:
+    """One run of a job: the current ``context`` (the runner sets it before every resume:
+    a context must not be kept across events), the engine's ``progress`` (an
+    ``osteon.Progress`` or None), ``max_sections`` (the guard's limit, 0 = none) and ``stage``
+    (what the engine is doing, for the status bar)."""
+
+    def __init__(self, context, progress=None, max_sections: int = 0,
+                 use_weight_cache: bool = False):
+        self.context = context
+        self.progress = progress
+        self.max_sections = int(max_sections)
+        self.use_weight_cache = use_weight_cache
+        self.stage = ""
+
+
+class TooManySections(OsteonError):
+    """The setting would make more sections than the guard allows (the message says how many
+    and why); raised before any work is done."""
+
+
+def check_sections(osteon, inp: Inputs, skeleton, max_sections: int) -> int:
+    """The number of sections the analysis of ``inp`` would make (``osteon.estimate_sections``,
+    exact, no cut); :class:`TooManySections` above ``max_sections`` (> 0)."""
+    from osteon.settings import section_guard
+
+    n = osteon.estimate_sections(skeleton, inp.params["interval"])
+    if max_sections > 0:
+        size = float(np.max(inp.vertices_mm.max(axis=0) - inp.vertices_mm.min(axis=0)))
+        msg = section_guard(n, inp.params["interval"], size, max_sections)
+        if msg:
+            raise TooManySections(msg)
+    return n
+
+
+def run_steps(steps):
+    """Runs a job's steps at once, in this thread; returns the job's result."""
+    try:
+        work = next(steps)
+        while True:
+            try:
+                value = work()
+            except BaseException as e:  # noqa: BLE001 -- handed to the job's cleanup
+                work = steps.throw(e)
+                continue
+            work = steps.send(value)
+    except StopIteration as stop:
+        return stop.value
+
+
+def analyze_steps(job: Job):
+    """Analyze as steps (see :class:`Job`): returns the report."""
+    osteon = core.import_engine()
+    inp = gather(job.context, job.use_weight_cache)
+    skeleton = engine_skeleton(osteon, inp)
+    check_sections(osteon, inp, skeleton, job.max_sections)
+    job.stage = "Analyze"
+    analysis = yield lambda: analyze_inputs(osteon, inp, skeleton, progress=job.progress)
+    return publish(job.context, inp, analysis)
 
 
 def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None) -> dict:
@@ -194,18 +267,22 @@ def _no_progress(_fraction: float) -> None:
     pass
 
 
-def run_analyze(context, use_weight_cache: bool = False, progress=_no_progress) -> dict:
-    osteon = core.import_engine()
-    inp = gather(context, use_weight_cache)
+def run_analyze(context, use_weight_cache: bool = False, progress=_no_progress,
+                max_sections: int = 0) -> dict:
+    """Analyze at once (scripts, background mode); ``max_sections`` > 0: refuse above it."""
     progress(0.4)
-    analysis = analyze_inputs(osteon, inp)
+    report = run_steps(analyze_steps(Job(context, max_sections=max_sections,
+                                         use_weight_cache=use_weight_cache)))
     progress(0.9)
-    return publish(context, inp, analysis)
+    return report
 
 
-def run_correct(context, progress=_no_progress) -> dict:
-    """engine correction -> pose-bone scales -> re-analysis of Blender's own result."""
+def correct_steps(job: Job):
+    """Correct as steps (see :class:`Job`): engine correction -> pose-bone scales ->
+    re-analysis of Blender's own result; returns the report. On any error or a cancel the pose
+    is put back as it was."""
     osteon = core.import_engine()
+    context = job.context
     s = context.scene.osteon
     # analyse from the user's own pose: undo a previous correction first (restored on error)
     obj, arm = bridge.find_target(context)
@@ -214,31 +291,47 @@ def run_correct(context, progress=_no_progress) -> dict:
     bridge.restore_pose(context, arm)
     try:
         inp = gather(context)
-        progress(0.2)
         skeleton = engine_skeleton(osteon, inp)
-        try:
-            # The bones' own X axes: a thin-direction scale must be one Blender's pose scale
-            # X or Z can reproduce; on a joint rig, also the local axis each bone scales
-            # across (its segment is not its Y axis).
-            fix = osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
-                                 bone_x_axes=inp.skeleton.x_axes,
-                                 bone_long_axes=inp.skeleton.long_axes, keep_outlines=True,
-                                 **core.engine_params(s, arm, inp.skeleton.names, correct=True))
-        except ValueError as e:
-            raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
+        check_sections(osteon, inp, skeleton, job.max_sections)
+        params = core.engine_params(s, arm, inp.skeleton.names, correct=True)
+
+        def engine_correct():
+            try:
+                # The bones' own X axes: a thin-direction scale must be one Blender's pose
+                # scale X or Z can reproduce; on a joint rig, also the local axis each bone
+                # scales across (its segment is not its Y axis).
+                return osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
+                                      bone_x_axes=inp.skeleton.x_axes,
+                                      bone_long_axes=inp.skeleton.long_axes, keep_outlines=True,
+                                      progress=job.progress, **params)
+            except ValueError as e:
+                raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
+
+        job.stage = "Correct"
+        fix = yield engine_correct
+        context = job.context
         scales = bridge.correction_pose_scales(inp.skeleton, fix.bone_scale_x,
                                                fix.bone_scale_z)
         bridge.apply_bone_scales(context, arm, scales)
-        progress(0.7)
         after_inp = gather(context, mm_per_unit=inp.mm_per_unit)
-        after = analyze_inputs(osteon, after_inp, skeleton=None)
-    except Exception:  # leave the pose as it was before this call
-        bridge.restore_pose(context, arm)
+        job.stage = "Correct: analysing the result"
+        after = yield lambda: analyze_inputs(osteon, after_inp, progress=job.progress)
+        context = job.context
+    except Exception:  # leave the pose as it was before this call (errors, cancel)
+        bridge.restore_pose(job.context, arm)
         if had_previous:
-            bridge.apply_bone_scales(context, arm, prev_ratios)
+            bridge.apply_bone_scales(job.context, arm, prev_ratios)
         raise
     report = publish(context, after_inp, after, correction=fix, first_analysis=fix.before)
     report["warnings"] = correction_warnings(context, obj, arm)
+    return report
+
+
+def run_correct(context, progress=_no_progress, max_sections: int = 0) -> dict:
+    """Correct at once (scripts, background mode); ``max_sections`` > 0: refuse above it."""
+    progress(0.2)
+    report = run_steps(correct_steps(Job(context, max_sections=max_sections)))
+    progress(0.9)
     return report
 
 

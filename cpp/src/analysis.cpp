@@ -70,34 +70,70 @@ Analyzer::~Analyzer() = default;
 
 const AnalysisOptions& Analyzer::options() const { return impl_->options; }
 
-AnalysisResult Analyzer::run(const double* vertices, const Skeleton& skeleton) {
-  return impl_->run(vertices, skeleton, nullptr);
+AnalysisResult Analyzer::run(const double* vertices, const Skeleton& skeleton, Progress* progress) {
+  return impl_->run(vertices, skeleton, nullptr, progress);
 }
 
-AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, const Box3* dirty) {
-  RunState run(vertices, sk, dirty);
-  check_inputs(run);
-  run.timer.lap("validate");
-  assign_vertex_bones(run);
-  run.timer.lap("vertex bones");
-  plan_sections(run);
-  mark_dirty(run);
-  reuse_last_run(run);
-  run.timer.lap("sections");
-  prepare_cuts(run);
-  run.timer.lap("reach+lines");
-  cut_local(run);
-  run.timer.lap("slicing phase 1");
-  cut_retries(run);
-  run.timer.lap("slicing");
-  find_junction_cores(run);
-  run.timer.lap("junctions");
-  AnalysisResult result = compute_loads(run);
-  run.timer.lap("moment arms");
-  compute_vertex_stress(run, result);
-  run.timer.lap("vertex stress");
-  remember_inputs(run);
-  return result;
+AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, const Box3* dirty,
+                                   Progress* progress) {
+  RunState run(vertices, sk, dirty, progress);
+  try {
+    if (progress != nullptr) {
+      progress->sections_done = 0;
+      progress->sections_total = 0;
+    }
+    run.check_cancel();
+    check_inputs(run);
+    run.timer.lap("validate");
+    assign_vertex_bones(run);
+    run.timer.lap("vertex bones");
+    plan_sections(run);
+    mark_dirty(run);
+    reuse_last_run(run);
+    if (progress != nullptr) {
+      std::int64_t kept = 0;  // sections this run does not cut again count as done
+      for (std::uint8_t d : run.section_dirty) kept += d == 0;
+      progress->sections_total = static_cast<std::int64_t>(specs.size());
+      progress->sections_done = kept;
+    }
+    run.timer.lap("sections");
+    run.check_cancel();
+    prepare_cuts(run);
+    run.timer.lap("reach+lines");
+    cut_local(run);
+    run.timer.lap("slicing phase 1");
+    cut_retries(run);
+    run.timer.lap("slicing");
+    run.check_cancel();
+    find_junction_cores(run);
+    run.timer.lap("junctions");
+    run.check_cancel();
+    AnalysisResult result = compute_loads(run);
+    run.timer.lap("moment arms");
+    run.check_cancel();
+    compute_vertex_stress(run, result);
+    run.timer.lap("vertex stress");
+    remember_inputs(run);
+    if (progress != nullptr) progress->runs_done.fetch_add(1);
+    return result;
+  } catch (...) {
+    forget_last_run();
+    throw;
+  }
+}
+
+void Analyzer::Impl::forget_last_run() {
+  specs.clear();
+  states.clear();
+  slab_params.clear();
+  job_bone.clear();
+  job_section.clear();
+  tree = LoadTree{};
+  last_vertices.clear();
+  last_heads.clear();
+  last_tails.clear();
+  last_parents.clear();
+  last_gap = -1.0;
 }
 
 void Analyzer::Impl::check_inputs(RunState& run) {
@@ -122,12 +158,12 @@ void Analyzer::Impl::check_inputs(RunState& run) {
 }
 
 AnalysisResult analyze(const MeshView& mesh, const Skeleton& skeleton, const BoneWeights* weights,
-                       const AnalysisOptions& options) {
+                       const AnalysisOptions& options, Progress* progress) {
   validate_mesh(mesh);
   validate_skeleton(skeleton);
   Analyzer analyzer(mesh.faces, mesh.num_faces, mesh.num_vertices, weights, skeleton.num_bones(),
                     options);
-  return analyzer.run(mesh.vertices, skeleton);
+  return analyzer.run(mesh.vertices, skeleton, progress);
 }
 
 }  // namespace osteon

@@ -160,6 +160,7 @@ void Analyzer::Impl::cut_local(RunState& run) {
   // Sections whose local cut is not provably right, and all joints, are queued for phase 2.
   detail::parallel_for(jobs, options.threads, [&](long job, int worker) {
     if (!run.job_dirty[job]) return;
+    run.check_cancel();
     const int first = job_section[job];
     const int b = job_bone[job];
     if (b < 0) {
@@ -171,21 +172,38 @@ void Analyzer::Impl::cut_local(RunState& run) {
     auto& segs = run.family_segments[worker];
     const CutRegion region{sk.heads[b], sk.direction(b), run.reach[b]};
     const bool local = options.local_cuts;
-    cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, local ? &region : nullptr,
-                      run.section_dirty.data() + first);
+    // The family is cut `chunk` planes at a time (the same planes, bit for bit): a long bone's
+    // segments never all sit in memory at once, and a cancel waits for one chunk's pass only.
+    // (At most 64 passes per bone: each pass costs O(n) bookkeeping besides its planes.)
+    const int chunk = std::max(512, (n + 63) / 64);
+    std::vector<std::uint8_t> wanted(n, 0);
     for (int k = 1; k <= n; ++k) {
       const int si = first + k - 1;
+      if ((k - 1) % chunk == 0) {
+        run.check_cancel();
+        for (int j = std::max(1, k - chunk); j < k; ++j) {
+          wanted[j - 1] = 0;
+          std::vector<CutSegment>().swap(segs[j - 1]);  // the last chunk's buffers
+        }
+        const int end = std::min(n, k + chunk - 1);
+        for (int j = k; j <= end; ++j) wanted[j - 1] = run.section_dirty[first + j - 1];
+        cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, local ? &region : nullptr,
+                          wanted.data());
+      }
       if (!run.section_dirty[si]) continue;
+      run.check_cancel();
       PlaneFrame frame = base;
       frame.origin = specs[si].point;
       if (!local) {
         states[si] = finish_whole(frame, segs[k - 1], run.gap, run.vertex_bone.data(), b, keep);
+        run.sections_done();
         continue;
       }
       const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
       const SectionGeometry geom = select_region(cut, nullptr);
       if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
         states[si] = finish(frame, geom, &region, keep);
+        run.sections_done();
         continue;
       }
       run.retry[si] = geom.found ? kWholePlane : kGrowFamily;
@@ -236,6 +254,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
                                                       loose.empty() ? nullptr : &loose_vertex);
           return;
         }
+        run.check_cancel();
         const int job = units[u > index_unit ? u - 1 : u];
         const int first = job_section[job];
         const int b = job_bone[job];
@@ -259,6 +278,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
               done = &previous;
               if (local_ok(run, cut, geom, inside)) {
                 states[first] = finish(frame, geom, &ball, keep);
+                run.sections_done();
                 return;
               }
               if (geom.found) break;  // found but not provably right: cut the whole plane
@@ -266,6 +286,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
           }
           cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
           states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, keep);
+          run.sections_done();
           return;
         }
         const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
@@ -294,10 +315,12 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             if (!wanted[k - 1]) continue;
             add_kept(k);
             if (retry[first + k - 1] != kGrowFamily) continue;
+            run.check_cancel();
             const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
             const SectionGeometry geom = select_region(cut, nullptr);
             if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
               states[first + k - 1] = finish(frame_of(k), geom, &wide, keep);
+              run.sections_done();
               wanted[k - 1] = 0;
             }
           }
@@ -306,9 +329,11 @@ void Analyzer::Impl::cut_retries(RunState& run) {
         cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, nullptr, wanted.data(), done);
         for (int k = 1; k <= n; ++k) {
           if (!wanted[k - 1]) continue;
+          run.check_cancel();
           add_kept(k);
           states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap,
                                                run.vertex_bone.data(), b, keep);
+          run.sections_done();
         }
       });
   if (run.timer.on) {

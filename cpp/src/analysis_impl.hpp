@@ -93,16 +93,27 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
 
 /// Working data of one run, handed from stage to stage (see Analyzer::Impl::run).
 struct RunState {
-  RunState(const double* vertices_in, const Skeleton& skeleton, const Box3* dirty_in)
-      : vertices(vertices_in), sk(skeleton), dirty(dirty_in) {}
+  RunState(const double* vertices_in, const Skeleton& skeleton, const Box3* dirty_in,
+           Progress* progress_in)
+      : vertices(vertices_in), sk(skeleton), dirty(dirty_in), progress(progress_in) {}
 
   const double* vertices;  // #V by 3 row-major, mm
   const Skeleton& sk;      // posed skeleton
   const Box3* dirty;       // partial run: only sections crossing this box are re-cut
+  Progress* progress;      // null: no progress, no cancel
   MeshView mesh;
   double diag = 0.0;  // bounding-box diagonal, mm
   double gap = 0.0;   // gap tolerance in use, mm
   StageTimer timer;
+
+  /// Throws Cancelled when the caller asked to stop (called between sections).
+  void check_cancel() const {
+    if (progress != nullptr) progress->check();
+  }
+  /// Counts n more sections whose cut is done.
+  void sections_done(std::int64_t n = 1) const {
+    if (progress != nullptr) progress->sections_done.fetch_add(n, std::memory_order_relaxed);
+  }
 
   // Vertex bones (assign_vertex_bones).
   std::vector<int> vertex_bone;  // V bone of each vertex
@@ -165,8 +176,13 @@ struct Analyzer::Impl {
   double last_gap = -1.0;
 
   /// Full or partial run: with `dirty` set, only sections whose plane crosses the box are re-cut
-  /// (the skeleton must be the one of the previous run). Calls the stages below in order.
-  AnalysisResult run(const double* vertices, const Skeleton& skeleton, const Box3* dirty);
+  /// (the skeleton must be the one of the previous run). Calls the stages below in order. With
+  /// `progress`, reports sections and stops with Cancelled when asked; any exception (a cancel,
+  /// bad input) makes the Impl forget its last run, so that no half-made plan is reused.
+  AnalysisResult run(const double* vertices, const Skeleton& skeleton, const Box3* dirty,
+                     Progress* progress = nullptr);
+  /// Forgets the last run (plan, sections, inputs): the next run is a full one.
+  void forget_last_run();
 
   // Stages of a run, in order (files listed at the top of this header).
   /// Checks the skeleton, options and vertices; sets the mesh view, size and gap tolerance.

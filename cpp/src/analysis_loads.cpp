@@ -38,6 +38,7 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   run.timer.lap("moment index");
   const MomentArmIndex& arms = *run.arms;
   detail::parallel_for((ns + 63) / 64, options.threads, [&](long chunk, int) {
+    run.check_cancel();
     const int end = std::min(ns, static_cast<int>(chunk + 1) * 64);
     for (int i = static_cast<int>(chunk) * 64; i < end; ++i) {
       const SectionSpec& spec = specs[i];
@@ -119,6 +120,7 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
     r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
     r.weak[i] = r.stress[i] > r.section_allowable[i];
   }
+  run.check_cancel();
   if (options.keep_outlines) {
     r.outline_section_start.reserve(ns + 1);
     r.outline_loop_start.push_back(0);

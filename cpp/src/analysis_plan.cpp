@@ -1,6 +1,8 @@
 // Stages 1-2 of a run: each vertex's bone, then the plan of sections (Analyzer::Impl).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -9,10 +11,15 @@
 namespace osteon {
 namespace {
 
-// Number of interior planes k*h strictly inside a bone of length L.
-int interior_count(double length, double interval) {
+// Number of interior planes k*h strictly inside a bone of length L (not limited).
+double interior_planes(double length, double interval) {
   const double n = std::ceil(length / interval * (1.0 - 1e-12)) - 1.0;
-  if (n <= 0) return 0;
+  return n > 0 ? n : 0.0;
+}
+
+// The same, for a plan: at most 10^6 on one bone.
+int interior_count(double length, double interval) {
+  const double n = interior_planes(length, interval);
   if (n > 1e6)
     throw std::invalid_argument("interval too small: more than 10^6 sections on one bone");
   return static_cast<int>(n);
@@ -27,7 +34,59 @@ struct Endpoint {
   Vec3 position;
 };
 
+// Bone ends (2 per bone: head, tail) clustered into joints: ends closer than 1e-6 of the
+// longest bone are one joint. Each joint lists its members (indices into `ends`).
+std::vector<std::vector<int>> cluster_joints(const Skeleton& sk, std::vector<Endpoint>& ends) {
+  const int nb = sk.num_bones();
+  double extent = 0.0;
+  for (int b = 0; b < nb; ++b) extent = std::max(extent, sk.length(b));
+  const double tol = 1e-6 * extent;
+  ends.clear();
+  for (int b = 0; b < nb; ++b) {
+    ends.push_back({b, false, sk.heads[b]});
+    ends.push_back({b, true, sk.tails[b]});
+  }
+  std::vector<std::vector<int>> joints;
+  std::vector<Vec3> joint_pos;
+  for (int e = 0; e < static_cast<int>(ends.size()); ++e) {
+    int found = -1;
+    for (int j = 0; j < static_cast<int>(joints.size()); ++j)
+      if ((joint_pos[j] - ends[e].position).norm() <= tol) {
+        found = j;
+        break;
+      }
+    if (found < 0) {
+      joints.push_back({e});
+      joint_pos.push_back(ends[e].position);
+    } else {
+      joints[found].push_back(e);
+    }
+  }
+  return joints;
+}
+
 }  // namespace
+
+std::int64_t count_sections(const Skeleton& sk, double interval) {
+  if (!(interval > 0) || !std::isfinite(interval))
+    throw std::invalid_argument("interval must be a positive finite length in mm");
+  double interior = 0.0;
+  for (int b = 0; b < sk.num_bones(); ++b) interior += interior_planes(sk.length(b), interval);
+  if (interior > 9e18) return std::numeric_limits<std::int64_t>::max();
+  std::int64_t n = static_cast<std::int64_t>(interior);
+  std::vector<Endpoint> ends;
+  // As plan_sections: a lone end is one section, a joint one per pair of different bones.
+  for (const auto& members : cluster_joints(sk, ends)) {
+    if (members.size() == 1) {
+      ++n;
+      continue;
+    }
+    for (std::size_t i = 0; i < members.size(); ++i)
+      for (std::size_t j = i + 1; j < members.size(); ++j)
+        n += ends[members[i]].bone != ends[members[j]].bone;
+  }
+  return n;
+}
 
 void Analyzer::Impl::assign_vertex_bones(RunState& run) {
   const MeshView& mesh = run.mesh;
@@ -102,26 +161,7 @@ void Analyzer::Impl::plan_sections(RunState& run) {
   for (int b = 0; b < nb; ++b) extent = std::max(extent, sk.length(b));
   const double tol = 1e-6 * extent;
   std::vector<Endpoint> ends;
-  for (int b = 0; b < nb; ++b) {
-    ends.push_back({b, false, sk.heads[b]});
-    ends.push_back({b, true, sk.tails[b]});
-  }
-  std::vector<std::vector<int>> joints;
-  std::vector<Vec3> joint_pos;
-  for (int e = 0; e < static_cast<int>(ends.size()); ++e) {
-    int found = -1;
-    for (int j = 0; j < static_cast<int>(joints.size()); ++j)
-      if ((joint_pos[j] - ends[e].position).norm() <= tol) {
-        found = j;
-        break;
-      }
-    if (found < 0) {
-      joints.push_back({e});
-      joint_pos.push_back(ends[e].position);
-    } else {
-      joints[found].push_back(e);
-    }
-  }
+  const std::vector<std::vector<int>> joints = cluster_joints(sk, ends);
   auto add_single = [&](int bone, bool tail, const Vec3& normal, std::int8_t kind) {
     SectionSpec spec;
     spec.bone = bone;

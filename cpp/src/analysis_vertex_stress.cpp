@@ -42,12 +42,14 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   r.vertex_stress.assign(num_vertices, 0.0);
   r.vertex_culled.assign(num_vertices, 0);
   r.vertex_bone = vertex_bone;
+  run.check_cancel();
   // Loose pieces (found with the moment-arm index) carry no load: their vertices stay at 0.
   r.loose_pieces = loose;
   const bool any_loose = !loose.empty();
   const Index block = 8192;
   detail::parallel_for(
       static_cast<long>((num_vertices + block - 1) / block), options.threads, [&](long chunk, int) {
+        run.check_cancel();
         const Index end = std::min(num_vertices, (chunk + 1) * block);
         for (Index v = chunk * block; v < end; ++v) {
           const int b = vertex_bone[v];

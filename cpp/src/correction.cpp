@@ -51,7 +51,8 @@ double enclosed_volume(const MeshView& mesh) {
 }
 
 CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWeights& weights,
-                         const AnalysisOptions& options, const CorrectionOptions& co) {
+                         const AnalysisOptions& options, const CorrectionOptions& co,
+                         Progress* progress) {
   validate_mesh(mesh);
   validate_skeleton(sk);
   if (!(co.max_scale >= 1.0) || !std::isfinite(co.max_scale))
@@ -94,7 +95,7 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
   CorrectionResult res;
   res.bone_scale.assign(nb, 1.0);
   res.vertices.assign(mesh.vertices, mesh.vertices + 3 * mesh.num_vertices);
-  res.before = impl.run(mesh.vertices, sk, nullptr);
+  res.before = impl.run(mesh.vertices, sk, nullptr, progress);
   AnalysisResult current = res.before;
   std::vector<std::uint8_t> unfixable(current.stress.size(), 0);
   std::vector<std::string> why(current.stress.size());
@@ -122,6 +123,7 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
       break;
     }
     if (round >= co.max_rounds) break;
+    if (progress != nullptr) progress->check();
     const MeshView current_mesh{res.vertices.data(), mesh.num_vertices, mesh.faces, mesh.num_faces};
     const int bone = domain_bone(current_mesh, weights, current, worst, options.interval);
     const double ratio =
@@ -176,7 +178,7 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     const double before_stress = current.stress[worst];
     res.vertices.swap(next);
     scales = trial;
-    current = dirty.empty() ? current : impl.run(res.vertices.data(), sk, &dirty);
+    current = dirty.empty() ? current : impl.run(res.vertices.data(), sk, &dirty, progress);
     res.rounds.push_back({bone, new_scale / old_scale, current.max_stress, axis});
     // No progress on this section: its domain is not this bone's alone (blended joint weights).
     if (!(current.stress[worst] < before_stress * 0.995)) {
@@ -191,7 +193,7 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
   for (int b = 0; b < nb; ++b)
     res.bone_scale[b] =
         scales.x[b] == scales.z[b] ? scales.x[b] : std::sqrt(scales.x[b] * scales.z[b]);
-  res.after = impl.run(res.vertices.data(), sk, nullptr);
+  res.after = impl.run(res.vertices.data(), sk, nullptr, progress);
   res.converged = true;
   for (std::size_t i = 0; i < res.after.weak.size(); ++i) {
     if (!res.after.weak[i]) continue;

@@ -145,6 +145,22 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
     groups_[g].lo = groups_[g].lo.cwiseMin(p);
     groups_[g].hi = groups_[g].hi.cwiseMax(p);
   }
+  // Each bone's tree of slab boxes (leaves m + j, parents i = (m + j) / 2, ...).
+  node_lo_.assign(2 * ngroups, Vec3::Constant(inf));
+  node_hi_.assign(2 * ngroups, Vec3::Constant(-inf));
+  for (int b = 0; b < nb; ++b) {
+    const Index first = group_offset_[b], m = group_offset_[b + 1] - first;
+    Vec3* lo = node_lo_.data() + 2 * first;
+    Vec3* hi = node_hi_.data() + 2 * first;
+    for (Index j = 0; j < m; ++j) {
+      lo[m + j] = groups_[first + j].lo;
+      hi[m + j] = groups_[first + j].hi;
+    }
+    for (Index i = m - 1; i >= 1; --i) {
+      lo[i] = lo[2 * i].cwiseMin(lo[2 * i + 1]);
+      hi[i] = hi[2 * i].cwiseMax(hi[2 * i + 1]);
+    }
+  }
   // Subtree boxes, leaves first (reverse breadth-first order).
   subtree_lo_.assign(nb, Vec3::Constant(inf));
   subtree_hi_.assign(nb, Vec3::Constant(-inf));
@@ -177,25 +193,32 @@ inline double farthest_corner2(const Vec3& c, const Vec3& lo, const Vec3& hi) {
 
 std::pair<double, Index> MomentArmIndex::farthest(int bone, int boundary, bool plus_side,
                                                   const Vec3& c) const {
-  // Best-first branch and bound: items are slabs (>= 0) or whole subtrees (-1 - bone).
-  using Item = std::pair<double, Index>;
+  // Best-first branch and bound. Items: node >= 1 of a bone's slab tree (a leaf: one slab), or
+  // node 0: the bone's whole downstream subtree (its slabs and its children's subtrees).
+  struct Item {
+    double ub;  // squared distance to the box's farthest corner, mm^2
+    int bone;
+    Index node;
+    bool operator<(const Item& o) const { return ub < o.ub; }
+  };
   std::priority_queue<Item> heap;
-  auto push_slab = [&](Index g) {
-    const double ub = farthest_corner2(c, groups_[g].lo, groups_[g].hi);
-    if (ub >= 0) heap.push({ub, g});
+  auto push_node = [&](int b, Index i) {
+    const Index at = 2 * group_offset_[b] + i;
+    const double ub = farthest_corner2(c, node_lo_[at], node_hi_[at]);
+    if (ub >= 0) heap.push({ub, b, i});
   };
   auto push_subtree = [&](int b) {
     const double ub = farthest_corner2(c, subtree_lo_[b], subtree_hi_[b]);
-    if (ub >= 0) heap.push({ub, -1 - static_cast<Index>(b)});
+    if (ub >= 0) heap.push({ub, b, 0});
   };
   const auto& params = slab_params_[bone];
   const double split = params[boundary];
-  const Index first = group_offset_[bone];
-  const Index slabs = group_offset_[bone + 1] - first;
-  if (plus_side) {
-    for (Index j = boundary + 1; j < slabs; ++j) push_slab(first + j);
-  } else {
-    for (Index j = 0; j <= boundary; ++j) push_slab(first + j);
+  const Index slabs = group_offset_[bone + 1] - group_offset_[bone];
+  // The downstream slabs [l, r) of this bone, as O(log n) disjoint tree nodes.
+  Index l = plus_side ? boundary + 1 : 0, r = plus_side ? slabs : boundary + 1;
+  for (l += slabs, r += slabs; l < r; l >>= 1, r >>= 1) {
+    if (l & 1) push_node(bone, l++);
+    if (r & 1) push_node(bone, --r);
   }
   for (const auto& [child, param] : tree_->children[bone]) {
     if (plus_side ? param >= split : param <= split) push_subtree(child);
@@ -203,26 +226,30 @@ std::pair<double, Index> MomentArmIndex::farthest(int bone, int boundary, bool p
   double best = -1.0;
   Index best_vertex = -1;
   while (!heap.empty()) {
-    const auto [ub, id] = heap.top();
+    const Item item = heap.top();
     heap.pop();
-    if (ub <= best) break;
-    if (id >= 0) {
-      const Group& g = groups_[id];
+    if (item.ub < best) break;  // (equal: it may hold a vertex of smaller index at the same d)
+    const int b = item.bone;
+    const Index m = group_offset_[b + 1] - group_offset_[b];
+    if (item.node == 0) {
+      push_node(b, 1);
+      for (const auto& [child, param] : tree_->children[b]) {
+        (void)param;
+        push_subtree(child);
+      }
+    } else if (item.node < m) {
+      push_node(b, 2 * item.node);
+      push_node(b, 2 * item.node + 1);
+    } else {
+      const Group& g = groups_[group_offset_[b] + item.node - m];
       const double* p = packed_xyz_.data() + 3 * g.begin;
       for (Index k = g.begin; k < g.end; ++k, p += 3) {
         const double dx = p[0] - c.x(), dy = p[1] - c.y(), dz = p[2] - c.z();
         const double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 > best) {
+        if (d2 > best || (d2 == best && packed_index_[k] < best_vertex)) {
           best = d2;
           best_vertex = packed_index_[k];
         }
-      }
-    } else {
-      const int b = static_cast<int>(-1 - id);
-      for (Index g = group_offset_[b]; g < group_offset_[b + 1]; ++g) push_slab(g);
-      for (const auto& [child, param] : tree_->children[b]) {
-        (void)param;
-        push_subtree(child);
       }
     }
   }

@@ -1,6 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
 #include <stdexcept>
+#include <vector>
 
 #include "osteon/loads.hpp"
 #include "osteon/skeleton.hpp"
@@ -60,4 +65,84 @@ TEST(Skeleton, ValidationNamesTheProblem) {
   s = tee();
   s.tails[1] = s.heads[1];
   EXPECT_THROW(validate_skeleton(s), std::invalid_argument);
+}
+
+TEST(MomentArmIndex, FarthestDownstreamPointMatchesBruteForce) {
+  // Many slabs per bone (the slab trees are deep and not powers of two): every section's
+  // farthest downstream point equals a scan of the downstream vertices (same distance; of
+  // vertices at the same distance the smallest index).
+  const Skeleton s = tee();
+  const std::vector<Index> per_bone;  // the held bone is the main root
+  const LoadTree tree = build_load_tree(s, -1, per_bone);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> xyz;
+  std::vector<int> vertex_bone;
+  for (int b = 0; b < s.num_bones(); ++b) {
+    const Vec3 d = s.direction(b);
+    for (int k = 0; k < 700; ++k) {
+      const double t = (0.5 * (u(rng) + 1.0)) * s.length(b);
+      const Vec3 p = s.heads[b] + t * d + Vec3(u(rng), u(rng), u(rng)) * 4.0;
+      xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+      vertex_bone.push_back(b);
+    }
+  }
+  // Two vertices at the same place: the smaller index must win the tie.
+  xyz.insert(xyz.end(), {xyz[0], xyz[1], xyz[2]});
+  vertex_bone.push_back(vertex_bone[0]);
+  const MeshView mesh{xyz.data(), static_cast<Index>(vertex_bone.size()), nullptr, 0};
+  std::vector<std::vector<double>> params(s.num_bones());
+  const int counts[] = {97, 250, 3};
+  for (int b = 0; b < s.num_bones(); ++b) {
+    const double h = s.length(b) / (counts[b] + 1);
+    params[b].push_back(0.0);
+    for (int k = 1; k <= counts[b]; ++k) params[b].push_back(k * h);
+    params[b].push_back(s.length(b));
+  }
+  const MomentArmIndex index(mesh, s, tree, vertex_bone, params);
+  std::function<void(int, std::vector<std::uint8_t>&)> mark_subtree =
+      [&](int b, std::vector<std::uint8_t>& in) {
+        in[b] = 1;
+        for (const auto& [child, param] : tree.children[b]) mark_subtree(child, in);
+      };
+  int checked = 0;
+  for (int b = 0; b < s.num_bones(); ++b) {
+    for (int i = 0; i < static_cast<int>(params[b].size()); ++i) {
+      for (const bool plus : {true, false}) {
+        const double split = params[b][i];
+        std::vector<std::uint8_t> whole(s.num_bones(), 0);
+        for (const auto& [child, param] : tree.children[b])
+          if (plus ? param >= split : param <= split) mark_subtree(child, whole);
+        const Vec3 c = s.heads[b] + split * s.direction(b) + Vec3(0.3, -0.2, 0.1);
+        double best = -1.0;
+        Index best_v = -1;
+        for (Index v = 0; v < mesh.num_vertices; ++v) {
+          const int vb = vertex_bone[v];
+          bool down = whole[vb] != 0;
+          if (vb == b) {
+            const double t = (mesh.vertex(v) - s.heads[b]).dot(s.direction(b));
+            const auto& p = params[b];
+            const long slab = std::upper_bound(p.begin(), p.end(), t) - p.begin();
+            down = plus ? slab > i : slab <= i;
+          }
+          if (!down) continue;
+          const double d2 = (mesh.vertex(v) - c).squaredNorm();
+          if (d2 > best) {
+            best = d2;
+            best_v = v;
+          }
+        }
+        const auto [arm, vertex] = index.farthest(b, i, plus, c);
+        if (best_v < 0) {
+          EXPECT_EQ(vertex, -1);
+          EXPECT_EQ(arm, 0.0);
+          continue;
+        }
+        EXPECT_EQ(arm, std::sqrt(best)) << "bone " << b << " boundary " << i;
+        EXPECT_EQ(vertex, best_v) << "bone " << b << " boundary " << i;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 600);
 }

@@ -22,14 +22,51 @@ __all__ = [
     "SECTION_KINDS",
     "Analysis",
     "Analyzer",
+    "Cancelled",
     "Correction",
+    "Progress",
     "Skeleton",
     "analyze",
     "correct",
+    "estimate_sections",
     "section_properties",
     "skin",
     "slice_section",
 ]
+
+#: Raised by :func:`analyze`, :meth:`Analyzer.run` and :func:`correct` when their
+#: :class:`Progress` was cancelled: no result (an :class:`Analyzer` then forgets its last run).
+Cancelled = _core.Cancelled
+
+
+class Progress(_core.Progress):
+    """Progress and cancel switch of a long run, shared with the engine's threads.
+
+    Pass it as ``progress=`` to :func:`analyze`, :meth:`Analyzer.run` or :func:`correct`, run
+    that in a worker thread (the engine releases the GIL), and from any other thread read
+    ``sections_done`` / ``sections_total`` (sections of the analysis under way whose cut is
+    done / that it plans; ``sections_total`` is 0 until planned), ``runs_done`` (analyses
+    finished: a correction runs one, then one per round, then a last one) and :attr:`fraction`,
+    or call :meth:`cancel`: the engine checks between sections and the run raises
+    :class:`Cancelled` (time to stop: one section's cut). :meth:`reset` clears it for reuse.
+    """
+
+    @property
+    def fraction(self) -> float:
+        """``sections_done / sections_total`` of the analysis under way, 0 before planning."""
+        total = self.sections_total
+        return min(1.0, self.sections_done / total) if total > 0 else 0.0
+
+    def __repr__(self) -> str:
+        state = ", cancelled" if self.cancelled else ""
+        return (f"Progress({self.sections_done}/{self.sections_total} sections, "
+                f"{self.runs_done} runs done{state})")
+
+
+def _progress(progress: Any) -> _core.Progress | None:
+    if progress is not None and not isinstance(progress, _core.Progress):
+        raise ValueError(f"progress must be an osteon.Progress or None, got {progress!r}")
+    return progress
 
 #: Names of the bits of ``Analysis.section_flags``.
 SECTION_FLAGS = {
@@ -637,8 +674,12 @@ class Analyzer:
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
                                     options)
 
-    def run(self, vertices: Any, skeleton: Skeleton | None = None) -> Analysis:
-        """Analyse ``vertices`` (V,3) mm with ``skeleton`` (default: the one given at creation)."""
+    def run(self, vertices: Any, skeleton: Skeleton | None = None, *,
+            progress: Progress | None = None) -> Analysis:
+        """Analyse ``vertices`` (V,3) mm with ``skeleton`` (default: the one given at creation).
+        ``progress``: a :class:`Progress` to follow or cancel the run from another thread
+        (raises :class:`Cancelled`)."""
+        progress = _progress(progress)
         sk = self._skeleton if skeleton is None else skeleton
         if not isinstance(sk, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -652,7 +693,7 @@ class Analyzer:
             raise ValueError(
                 f"vertices has {len(v)} rows, the analyzer was built for {self.num_vertices}"
             )
-        d = self._core.run(v, sk._engine())
+        d = self._core.run(v, sk._engine(), progress)
         return Analysis._from_core(d, skeleton=sk, allowable_stress=self.allowable_stress,
                                    force=self.force, interval=self.interval,
                                    build_direction=self.build_direction,
@@ -677,6 +718,7 @@ def analyze(
     layer_strength_ratio: float = 1.0,
     keep_outlines: bool = False,
     min_thickness: float | None = None,
+    progress: Progress | None = None,
     junctions: bool = True,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
@@ -694,8 +736,11 @@ def analyze(
     flagged ``too_thin`` (None: 0.8 mm, FDM; the material presets carry their own; 0 = no
     check); ``junctions`` (default True) counts only the core that continues through the plane
     where a section cuts a side branch's stub (flag ``junction``, docs/junctions.md); False
-    analyses whole cuts. Raises ValueError on bad input.
+    analyses whole cuts. ``progress``: a :class:`Progress` to follow the run from another
+    thread or cancel it (then :class:`Cancelled` is raised); :func:`estimate_sections` tells
+    the section count beforehand. Raises ValueError on bad input.
     """
+    progress = _progress(progress)
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
         raise ValueError("empty mesh: vertices has no rows")
@@ -705,7 +750,7 @@ def analyze(
                         build_direction=build_direction,
                         layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines,
                         min_thickness=min_thickness, junctions=junctions)
-    return analyzer.run(v)
+    return analyzer.run(v, progress=progress)
 
 
 def correct(
@@ -731,6 +776,7 @@ def correct(
     layer_strength_ratio: float = 1.0,
     keep_outlines: bool = False,
     min_thickness: float | None = None,
+    progress: Progress | None = None,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -753,7 +799,10 @@ def correct(
     ``layer_strength_ratio`` as in :func:`analyze`: the loop is driven by the stress ratio
     against each section's direction-dependent allowable. ``keep_outlines``: ``before``
     and ``after`` carry their sections' loops (:attr:`Analysis.section_loops`).
+    ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
+    round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
     """
+    progress = _progress(progress)
     if scaling not in ("uniform", "thin"):
         raise ValueError(f"scaling must be 'uniform' or 'thin', got {scaling!r}")
     if not (float(flat_aspect) >= 1.0):
@@ -784,7 +833,7 @@ def correct(
         from scipy import sparse
 
         nearest = analyze(v, f, skeleton, None, force=force, allowable_stress=allowable_stress,
-                          interval=interval, root=root).vertex_bone
+                          interval=interval, root=root, progress=progress).vertex_bone
         weights = sparse.csr_matrix(
             (np.ones(len(v)), (np.arange(len(v)), nearest)), shape=(len(v), skeleton.num_bones)
         )
@@ -798,7 +847,7 @@ def correct(
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"
     co.flat_aspect, co.bone_x_axes = float(flat_aspect), axes
     co.bone_long_axes = long_axes
-    d = _core.correct(v, f, skeleton._engine(), dense, csr, options, co)
+    d = _core.correct(v, f, skeleton._engine(), dense, csr, options, co, progress)
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
           "interval": interval, "build_direction": build_direction,
           "layer_strength_ratio": layer_strength_ratio,
@@ -806,6 +855,18 @@ def correct(
     d["before"] = Analysis._from_core(d["before"], **kw)
     d["after"] = Analysis._from_core(d["after"], **kw)
     return Correction(**d)
+
+
+def estimate_sections(skeleton: Skeleton, interval: float = 2.0) -> int:
+    """Number of sections :func:`analyze` makes for ``skeleton`` (mm) at ``interval`` mm,
+    computed from the bones alone (no mesh, no cut; microseconds): per bone ``ceil(L / h) - 1``
+    interior planes, one section per free bone end and one per pair of bones meeting at a joint.
+    Exact: it equals ``Analysis.num_sections`` of any mesh and held bone. Use it to catch a
+    setting that would make millions of sections (a model in metres taken as mm, a tiny
+    interval) before starting; :func:`osteon.settings.section_guard` words the warning."""
+    if not isinstance(skeleton, Skeleton):
+        raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
+    return int(_core.count_sections(skeleton._engine(), _positive(interval, "interval", "mm")))
 
 
 def _long_axes(value, n_bones: int):

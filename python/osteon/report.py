@@ -104,6 +104,19 @@ def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
     return rows
 
 
+def _finite_list(x) -> list:
+    """``finite`` over a whole (S,) or (S, k) array, as (nested) lists: one ``tolist``, then
+    ``None`` only where a value is not finite (the per-section loop stays light)."""
+    a = np.asarray(x, dtype=np.float64)
+    out = a.tolist()
+    for idx in np.argwhere(~np.isfinite(a)):
+        if a.ndim == 1:
+            out[idx[0]] = None
+        else:
+            out[idx[0]][idx[1]] = None
+    return out
+
+
 def section_rows(a, bone_names) -> list[dict]:
     """Every section of an ``osteon.Analysis``: bone, position (mm), area (mm²), modulus
     (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. At a ``junction``
@@ -119,34 +132,61 @@ def section_rows(a, bone_names) -> list[dict]:
     across = getattr(a, "across_layers", None)
     cut_area = getattr(a, "section_cut_area", None)
     cut_modulus = getattr(a, "section_cut_modulus", None)
+    none = [None] * n
+    bones = np.asarray(a.section_bone, dtype=np.int64).tolist()
+    cols = {
+        "param_mm": _finite_list(param) if param is not None else none,
+        "center_mm": _finite_list(a.section_center),
+        "normal": _finite_list(a.section_normal),
+        "area_mm2": _finite_list(a.section_area),
+        "modulus_mm3": _finite_list(a.section_modulus),
+        "cut_area_mm2": _finite_list(a.section_area if cut_area is None else cut_area),
+        "cut_modulus_mm3": _finite_list(a.section_modulus if cut_modulus is None
+                                        else cut_modulus),
+        "moment_arm_mm": _finite_list(a.moment_arm),
+        "moment_nmm": _finite_list(a.moment),
+        "stress_mpa": _finite_list(a.stress),
+        "allowable_mpa": _finite_list(allow) if allow is not None else none,
+        "stress_ratio": _finite_list(ratio) if ratio is not None else none,
+        "thickness_mm": _finite_list(a.section_thickness)
+        if hasattr(a, "section_thickness") else none,
+    }
+    culled = np.asarray(a.culled, dtype=bool).tolist()
+    weak = np.asarray(a.weak, dtype=bool).tolist()
+    limit = (none if across is None else
+             ["across layers" if x else "along layers"
+              for x in np.asarray(across, dtype=bool).tolist()])
+    # flags: most sections have none; names and reasons only where some bit is set
+    flagged = (np.flatnonzero(np.asarray(a.section_flags)) if hasattr(a, "flag_names")
+               else np.zeros(0, np.int64))
+    names = {int(i): a.flag_names(int(i)) for i in flagged}
+    reasons = ({int(i): a.flag_reasons(int(i)) for i in flagged}
+               if hasattr(a, "flag_reasons") else {})
     rows = []
     for i in range(n):
-        b = int(a.section_bone[i])
+        b = bones[i]
         rows.append({
             "index": i,
             "bone": bone_names[b],
             "bone_index": b,
-            "param_mm": finite(param[i]) if param is not None else None,
-            "center_mm": [finite(x) for x in a.section_center[i]],
-            "normal": [finite(x) for x in a.section_normal[i]],
-            "area_mm2": finite(a.section_area[i]),
-            "modulus_mm3": finite(a.section_modulus[i]),
-            "cut_area_mm2": finite((a.section_area if cut_area is None else cut_area)[i]),
-            "cut_modulus_mm3": finite((a.section_modulus if cut_modulus is None
-                                       else cut_modulus)[i]),
-            "moment_arm_mm": finite(a.moment_arm[i]),
-            "moment_nmm": finite(a.moment[i]),
-            "stress_mpa": finite(a.stress[i]),
-            "culled": bool(a.culled[i]),
-            "weak": bool(a.weak[i]),
-            "allowable_mpa": finite(allow[i]) if allow is not None else None,
-            "stress_ratio": finite(ratio[i]) if ratio is not None else None,
-            "limit": None if across is None else
-            ("across layers" if across[i] else "along layers"),
-            "thickness_mm": finite(a.section_thickness[i])
-            if hasattr(a, "section_thickness") else None,
-            "flags": a.flag_names(i) if hasattr(a, "flag_names") else [],
-            "reasons": a.flag_reasons(i) if hasattr(a, "flag_reasons") else [],
+            "param_mm": cols["param_mm"][i],
+            "center_mm": cols["center_mm"][i],
+            "normal": cols["normal"][i],
+            "area_mm2": cols["area_mm2"][i],
+            "modulus_mm3": cols["modulus_mm3"][i],
+            "cut_area_mm2": cols["cut_area_mm2"][i],
+            "cut_modulus_mm3": cols["cut_modulus_mm3"][i],
+            "moment_arm_mm": cols["moment_arm_mm"][i],
+            "moment_nmm": cols["moment_nmm"][i],
+            "stress_mpa": cols["stress_mpa"][i],
+            "culled": culled[i],
+            "weak": weak[i],
+            "allowable_mpa": cols["allowable_mpa"][i],
+            "stress_ratio": cols["stress_ratio"][i],
+            "limit": limit[i],
+            "thickness_mm": cols["thickness_mm"][i],
+            "flags": names.get(i, []),
+            "reasons": reasons.get(i, []),
         })
     return rows
 

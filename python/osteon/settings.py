@@ -162,3 +162,35 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
         kw.update(max_scale=float(settings.max_scale), max_rounds=int(settings.max_rounds),
                   scaling=str(settings.scaling).lower())
     return kw
+
+
+#: Sections above which the front ends ask before analysing (the Blender add-on's preference
+#: "Section limit", the CLI's ``--max-sections``): ~10 s of analysis on a typical model, and
+#: a sign that the print size is wrong (a model in metres read as mm).
+SECTION_LIMIT = 20_000
+
+
+def _length_text(mm: float) -> str:
+    """A length for a message: "120 mm", "2.45 m", "2.35 km"."""
+    if mm >= 1e6:
+        return f"{mm / 1e6:.3g} km"
+    if mm >= 1e3:
+        return f"{mm / 1e3:.3g} m"
+    return f"{mm:.3g} mm"
+
+
+def section_guard(sections: int, interval_mm: float, model_size_mm: float,
+                  limit: int = SECTION_LIMIT) -> str | None:
+    """``None`` when ``sections`` (from :func:`osteon.estimate_sections`) is within ``limit``,
+    else the warning the front ends show before starting, e.g. "2 623 469 sections at 2 mm on
+    a 2.45 km model: check the print size (limit 20 000)". ``model_size_mm``: the model's
+    largest printed dimension, mm."""
+    if int(sections) <= int(limit):
+        return None
+
+    def grouped(n: int) -> str:
+        return f"{int(n):,}".replace(",", " ")
+
+    return (f"{grouped(sections)} sections at {float(interval_mm):g} mm on a "
+            f"{_length_text(float(model_size_mm))} model: check the print size "
+            f"(limit {grouped(limit)})")

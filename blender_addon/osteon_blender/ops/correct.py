@@ -1,18 +1,21 @@
 import bpy
 
 from .. import service
-from ._base import OsteonOperator
+from ._base import OsteonJobOperator
 
 
-class OSTEON_OT_correct(OsteonOperator, bpy.types.Operator):
+class OSTEON_OT_correct(OsteonJobOperator, bpy.types.Operator):
     """Thicken weak bones: scale pose bones across their axis (length kept, children keep
-    shape and place) until no section exceeds the allowable stress (MPa); Reset undoes it"""
+    shape and place) until no section exceeds the allowable stress (MPa); Reset undoes it.
+    Shows its progress in the status bar; Esc cancels (the pose is left as it was)"""
 
     bl_idname = "osteon.correct"
     bl_label = "Correct"
 
-    def run(self, context):
-        report = service.run_correct(context, progress=self.progress)
+    def steps(self, job):
+        return service.correct_steps(job)
+
+    def finished(self, report: dict) -> str:
         c = report["correction"]
         scaled = ", ".join(f"{n} x{s:.2f}" for n, s in sorted(c["bone_scale"].items()))
         state = "converged" if c["converged"] else "NOT converged (see weak bones)"

@@ -8,6 +8,7 @@
 
 #include "osteon/layers.hpp"
 #include "osteon/mesh.hpp"
+#include "osteon/progress.hpp"
 #include "osteon/skeleton.hpp"
 #include "osteon/weights.hpp"
 
@@ -105,6 +106,15 @@ struct AnalysisResult {
 /// Throws std::invalid_argument when an option is out of range (force, stress, interval <= 0...).
 void validate_options(const AnalysisOptions& options, const Skeleton& skeleton);
 
+/// Number of sections an analysis of `skeleton` (mm) at `interval` (mm) plans, before any cut:
+/// per bone the interior planes k*interval strictly inside it (ceil(L / h) - 1), plus one section
+/// per free bone end and one per pair of bones meeting at a joint. Exactly the length of every
+/// per-section array of AnalysisResult (independent of the mesh and the held bone). Cheap
+/// (O(B^2) in the bones, no mesh): a front end can warn before a setting makes millions of
+/// sections. Counts beyond the engine's limit (10^6 on one bone) are returned, not thrown.
+/// Throws std::invalid_argument for a non-positive or non-finite interval.
+std::int64_t count_sections(const Skeleton& skeleton, double interval);
+
 /// Reusable analysis of one mesh topology (faces, weights and options fixed; vertices and
 /// skeleton pose may change between runs, as in live mode).
 class Analyzer {
@@ -119,8 +129,13 @@ class Analyzer {
   Analyzer(const Analyzer&) = delete;
   Analyzer& operator=(const Analyzer&) = delete;
 
-  /// Analyses vertices (#V by 3 row-major, mm) with the (posed) skeleton.
-  AnalysisResult run(const double* vertices, const Skeleton& skeleton);
+  /// Analyses vertices (#V by 3 row-major, mm) with the (posed) skeleton. With `progress`, its
+  /// counters follow the run (sections_total once planned, sections_done as cuts finish,
+  /// runs_done + 1 at the end) and Progress::cancel() from another thread stops the run between
+  /// sections with osteon::Cancelled: no result, and this Analyzer forgets its last run (the
+  /// next run is a full one, identical to a fresh Analyzer's).
+  AnalysisResult run(const double* vertices, const Skeleton& skeleton,
+                     Progress* progress = nullptr);
 
   /// Options in use.
   const AnalysisOptions& options() const;
@@ -133,8 +148,8 @@ class Analyzer {
   std::unique_ptr<Impl> impl_;
 };
 
-/// One-off analysis of a mesh (see Analyzer).
+/// One-off analysis of a mesh (see Analyzer; `progress` as in Analyzer::run).
 AnalysisResult analyze(const MeshView& mesh, const Skeleton& skeleton, const BoneWeights* weights,
-                       const AnalysisOptions& options);
+                       const AnalysisOptions& options, Progress* progress = nullptr);
 
 }  // namespace osteon

@@ -51,9 +51,13 @@ struct CorrectionResult {
   AnalysisResult before, after;
 };
 
-/// Runs the correction loop on the rest mesh with the given skinning weights.
+/// Runs the correction loop on the rest mesh (#V by 3 mm) with the given skinning weights. With
+/// `progress`: sections of the analysis under way and runs_done (the first analysis, one per
+/// round, the final one) follow the loop, and Progress::cancel() stops it with Cancelled (no
+/// result) between sections or rounds.
 CorrectionResult correct(const MeshView& mesh, const Skeleton& skeleton, const BoneWeights& weights,
-                         const AnalysisOptions& options, const CorrectionOptions& correction);
+                         const AnalysisOptions& options, const CorrectionOptions& correction,
+                         Progress* progress = nullptr);
 
 /// Signed volume enclosed by a closed triangle mesh, mm^3.
 double enclosed_volume(const MeshView& mesh);

@@ -28,7 +28,9 @@ LoadTree build_load_tree(const Skeleton& skeleton, int held_bone,
                          const std::vector<Index>& vertex_count_per_bone);
 
 /// Moment arms by best-first branch and bound over (bone, slab) point groups: the farthest
-/// downstream mesh point from a section centroid, exact.
+/// downstream mesh point from a section centroid, exact. Each bone's slabs sit under a binary
+/// tree of boxes, so one query visits O(log n) boxes of a bone with n slabs instead of n (the
+/// cost per section stays flat as the section count grows).
 class MomentArmIndex {
  public:
   /// vertex_bone: #V bone of each vertex; slab_params[b]: sorted section params along bone b (mm).
@@ -39,9 +41,10 @@ class MomentArmIndex {
                  const std::vector<std::vector<double>>& slab_params,
                  const std::vector<std::uint8_t>* skip = nullptr);
 
-  /// Farthest downstream vertex from `center` for a section of `bone` at slab boundary `boundary`
-  /// (index into slab_params[bone]); downstream is the far side (plus = beyond the param).
-  /// Returns (distance mm, vertex index or -1 when nothing is downstream).
+  /// Farthest downstream vertex from `center` (mm) for a section of `bone` at slab boundary
+  /// `boundary` (index into slab_params[bone]); downstream is the far side (plus = beyond the
+  /// param). Returns (distance mm, vertex index or -1 when nothing is downstream); of vertices at
+  /// the same distance, the smallest index.
   std::pair<double, Index> farthest(int bone, int boundary, bool plus_side,
                                     const Vec3& center) const;
 
@@ -54,6 +57,10 @@ class MomentArmIndex {
   std::vector<std::vector<double>> slab_params_;
   std::vector<Index> group_offset_;  // B+1: first group of each bone
   std::vector<Group> groups_;        // slabs of every bone
+  // Per bone b with m groups, a bottom-up binary tree over them: node i in [1, 2m) at
+  // node_lo_/node_hi_[2 * group_offset_[b] + i]; leaves m + j are group j, node i < m the box of
+  // nodes 2i and 2i+1.
+  std::vector<Vec3> node_lo_, node_hi_;
   std::vector<Vec3> subtree_lo_, subtree_hi_;
   std::vector<double> packed_xyz_;   // vertices grouped by (bone, slab), xyz interleaved, mm
   std::vector<Index> packed_index_;  // original vertex index of each packed vertex

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..settings import min_thickness_mm
+from ..settings import SECTION_LIMIT, min_thickness_mm
 from .settings import BatchSettings
 
 #: ``status`` values: analysed; not analysed because the model has no skeleton (and no automatic
@@ -200,6 +200,9 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
             flags.append(f"non-manifold edges:{nonmanifold}")
         engine = s.engine_kwargs(model.bone_names)
         positional = (model.vertices, model.faces, model.skeleton, model.weights)
+        n_sections = osteon.estimate_sections(model.skeleton, engine["interval"])
+        if n_sections > SECTION_LIMIT:  # a setting or scale that makes this model slow
+            flags.append(f"many sections:{n_sections}")
         t = time.perf_counter()
         fix = None
         if s.correct:

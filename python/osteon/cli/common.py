@@ -200,9 +200,27 @@ def check(settings: Settings, correct: bool = False) -> None:
 
 
 def engine_args(settings: Settings, model, correct: bool = False) -> tuple[tuple, dict]:
-    """The model and settings every command passes to the engine: (positional, keyword)."""
+    """The model and settings every command passes to the engine: (positional, keyword).
+    Warns on stderr when they would make more than ``SECTION_LIMIT`` sections."""
     positional = (model.vertices, model.faces, model.skeleton, model.weights)
-    return positional, _arguments(settings, model.bone_names, correct)
+    keyword = _arguments(settings, model.bone_names, correct)
+    warn_many_sections(model, keyword["interval"])
+    return positional, keyword
+
+
+def warn_many_sections(model, interval_mm: float) -> str | None:
+    """The section guard's warning (``osteon.settings.section_guard``) on stderr, if any."""
+    import numpy as np
+
+    import osteon
+    from osteon.settings import section_guard
+
+    v = np.asarray(model.vertices)
+    size = float(np.max(v.max(axis=0) - v.min(axis=0))) if len(v) else 0.0
+    msg = section_guard(osteon.estimate_sections(model.skeleton, interval_mm), interval_mm, size)
+    if msg:
+        print(f"osteon: warning: {msg}; this may take long (Ctrl+C stops it)", file=sys.stderr)
+    return msg
 
 
 def run_analysis(settings: Settings, model):
