@@ -245,7 +245,9 @@ void Analyzer::Impl::cut_retries(RunState& run) {
           // Loose pieces fall off the print: their vertices are no load point (full runs; the
           // correction's partial re-cuts move no piece apart, so they keep the last run's).
           if (!run.partial) {
-            loose = loose_pieces(mesh, run.vertex_bone, tree.held_bone);
+            // A gap under half the minimum printable thickness is fused by the printer.
+            loose =
+                loose_pieces(mesh, run.vertex_bone, tree.held_bone, 0.5 * options.min_thickness);
             loose_vertex.assign(num_vertices, 0);
             for (const auto& piece : loose)
               for (std::int32_t v : piece) loose_vertex[v] = 1;

@@ -731,12 +731,36 @@ bool inside_shell(const MeshView& mesh, const std::vector<std::int32_t>& faces, 
   return hits % 2 == 1;
 }
 
+// Squared distance (mm²) from p to the closed triangle (a, b, c): the closest point by its
+// Voronoi region (vertex, edge or face), as in Ericson's Real-Time Collision Detection, 5.1.5.
+double point_triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm();
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (ap - (d1 / (d1 - d3)) * ab).squaredNorm();
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (ap - (d2 / (d2 - d6)) * ac).squaredNorm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return (bp - ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b)).squaredNorm();
+  const double denom = 1.0 / (va + vb + vc);
+  return (ap - (vb * denom) * ab - (vc * denom) * ac).squaredNorm();
+}
+
 }  // namespace
 
 std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     const std::vector<int>& vertex_bone,
-                                                    int held_bone) {
+                                                    int held_bone, double contact_gap) {
   const Index nv = mesh.num_vertices, nf = mesh.num_faces;
+  const double gap = std::isfinite(contact_gap) ? std::max(0.0, contact_gap) : 0.0;
   std::vector<std::int32_t> parent(nv);
   for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
   auto join = [&](std::int32_t a, std::int32_t b) {
@@ -798,9 +822,54 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
     if (held_count[p] > held_count[held] ||
         (held_count[p] == held_count[held] && verts[p].size() > verts[held].size()))
       held = p;
-  auto overlap = [&](std::size_t a, std::size_t b) {
-    if ((lo[a].array() > hi[b].array()).any() || (lo[b].array() > hi[a].array()).any())
+  // Shells closer than the gap (a vertex of one within `gap` of a face of the other) touch for
+  // the printer. Only the parts inside the common box widened by the gap are visited; past a
+  // work cap they count as attached (doubt keeps a piece held).
+  auto within_gap = [&](std::size_t a, std::size_t b) {
+    if (gap <= 0) return false;
+    const Vec3 clo = (lo[a].cwiseMax(lo[b]).array() - gap).matrix();
+    const Vec3 chi = (hi[a].cwiseMin(hi[b]).array() + gap).matrix();
+    auto in_box = [&](const Vec3& p) {
+      return !((p.array() < clo.array()).any() || (p.array() > chi.array()).any());
+    };
+    auto near_vertices = [&](std::size_t piece) {
+      std::vector<std::int32_t> out;
+      for (std::int32_t v : verts[piece])
+        if (in_box(mesh.vertex(v))) out.push_back(v);
+      return out;
+    };
+    auto near_faces = [&](std::size_t piece) {
+      std::vector<std::int32_t> out;
+      const auto& fs = faces[piece];
+      for (std::size_t k = 0; k < fs.size(); k += 3) {
+        const Vec3 p = mesh.vertex(fs[k]), q = mesh.vertex(fs[k + 1]), r = mesh.vertex(fs[k + 2]);
+        const Vec3 l = p.cwiseMin(q).cwiseMin(r), h = p.cwiseMax(q).cwiseMax(r);
+        if (!((l.array() > chi.array()).any() || (h.array() < clo.array()).any()))
+          out.insert(out.end(), fs.begin() + k, fs.begin() + k + 3);
+      }
+      return out;
+    };
+    const double gap2 = gap * gap;
+    auto vertex_near_face = [&](const std::vector<std::int32_t>& vs,
+                                const std::vector<std::int32_t>& fs) {
+      if (static_cast<double>(vs.size()) * static_cast<double>(fs.size()) > 3e7) return true;
+      for (std::int32_t v : vs) {
+        const Vec3 p = mesh.vertex(v);
+        for (std::size_t k = 0; k < fs.size(); k += 3)
+          if (point_triangle_distance2(p, mesh.vertex(fs[k]), mesh.vertex(fs[k + 1]),
+                                       mesh.vertex(fs[k + 2])) <= gap2)
+            return true;
+      }
       return false;
+    };
+    return vertex_near_face(near_vertices(a), near_faces(b)) ||
+           vertex_near_face(near_vertices(b), near_faces(a));
+  };
+  auto overlap = [&](std::size_t a, std::size_t b) {
+    if ((lo[a].array() > hi[b].array() + gap).any() || (lo[b].array() > hi[a].array() + gap).any())
+      return false;
+    if ((lo[a].array() > hi[b].array()).any() || (lo[b].array() > hi[a].array()).any())
+      return within_gap(a, b);
     // Vertices of either piece (16 sampled of each) inside the other one.
     auto some_inside = [&](std::size_t from, std::size_t into) {
       if (faces[into].empty()) return false;
@@ -826,7 +895,7 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
         if (in_common(mesh.vertex(fs[k]), mesh.vertex(fs[k + 1]), mesh.vertex(fs[k + 2])))
           out.insert(out.end(), fs.begin() + k, fs.begin() + k + 3);
     }
-    if (fa.empty() || fb.empty()) return false;
+    if (fa.empty() || fb.empty()) return within_gap(a, b);
     if (static_cast<double>(fa.size()) * static_cast<double>(fb.size()) > 9e7) return true;
     auto edges_cross = [&](const std::vector<std::int32_t>& edges_of,
                            const std::vector<std::int32_t>& faces_of) {
@@ -845,7 +914,7 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
         }
       return false;
     };
-    return edges_cross(fa, fb) || edges_cross(fb, fa);
+    return edges_cross(fa, fb) || edges_cross(fb, fa) || within_gap(a, b);
   };
   std::vector<std::uint8_t> attached(np, 0);
   std::vector<std::size_t> queue{held};

@@ -271,3 +271,30 @@ def test_plate_through_a_body_is_attached():
     assert a.loose_pieces == []
     far = np.flatnonzero(_interior(a) & (a.section_param < 18))
     assert len(far) > 2 and np.all(np.abs(a.load_point[far, 1]) > 59)  # the plate's corners
+
+
+def test_a_gap_narrower_than_the_printer_resolves_is_attached():
+    # A 4 x 4 mm bar (x = 0..40 mm) and a capsule-like cap 0.3 mm beyond its end face. A printer
+    # fuses a gap narrower than half its minimum printable thickness: PLA's 0.8 mm gives 0.4 mm,
+    # so the cap is attached and loads the bar; at min_thickness 0.5 mm (gap 0.25 mm) it is a
+    # loose piece and the bar is loaded at its own corners.
+    bar = prism(rectangle(4, 4), 40)
+    cap = cylinder_along((40.3, 0, 0), (44.3, 0, 0), 1.5, n=16, stations=4)
+    v, f = merge(bar, cap)
+    force = 20.0
+    fused = osteon.analyze(v, f, _bone(40), interval=4, force=force, min_thickness=0.8)
+    apart = osteon.analyze(v, f, _bone(40), interval=4, force=force, min_thickness=0.5)
+    assert fused.loose_pieces == []
+    assert len(apart.loose_pieces) == 1
+    np.testing.assert_array_equal(np.sort(apart.loose_pieces[0]), np.arange(len(bar[0]), len(v)))
+    i = _interior(fused)
+    assert i.sum() > 5
+    # the moment arm is the distance from the section's centroid to the farthest cap vertex
+    # (computed here from the vertices), and beyond the bar's corners
+    c = fused.section_center[i]
+    cap_v = np.asarray(cap[0], dtype=float)
+    d_cap = np.linalg.norm(cap_v[None, :, :] - c[:, None, :], axis=2).max(axis=1)
+    np.testing.assert_allclose(fused.moment[i], force * d_cap, rtol=1e-9)
+    d_bar = np.sqrt((40 - c[:, 0]) ** 2 + (2 + np.abs(c[:, 1])) ** 2 + (2 + np.abs(c[:, 2])) ** 2)
+    np.testing.assert_allclose(apart.moment[i], force * d_bar, rtol=1e-9)
+    assert np.all(fused.moment[i] > apart.moment[i])

@@ -65,10 +65,12 @@ namespace osteon {
 /// other attached shells. The held piece is the shell with the most vertices of `held_bone`
 /// (vertex_bone, #V), else the largest. Two shells overlap when a vertex of one (16 sampled of
 /// each) lies inside the other (ray parity) or an edge of one crosses a face of the other (in
-/// the common part of their boxes; past ~1e8 edge-face pairs they count as attached). Returns
-/// the vertex indices of each loose piece.
+/// the common part of their boxes; past ~1e8 edge-face pairs they count as attached), or when
+/// they are closer than `contact_gap` mm (a vertex of either within that distance of a face of
+/// the other): a printer fuses a gap narrower than it can print. Returns the vertex indices of
+/// each loose piece.
 std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     const std::vector<int>& vertex_bone,
-                                                    int held_bone);
+                                                    int held_bone, double contact_gap = 0.0);
 
 }  // namespace osteon
