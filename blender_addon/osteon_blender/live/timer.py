@@ -146,8 +146,10 @@ def _on_frame(scene, depsgraph=None):
 
 @persistent
 def _on_load_post(*_args):
-    """A new file replaces the scene: end the session and drop the overlay data."""
+    """A new file replaces the scene: end the session, forget the old file's results (a scene
+    of the new file may have the same name) and drop the overlay data."""
     stop()
+    state.clear()
     overlay.clear()
     overlay.sync(getattr(bpy.context, "scene", None))
 
