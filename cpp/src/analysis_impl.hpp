@@ -14,6 +14,7 @@
 //   analysis_vertex_stress.cpp  Impl::compute_vertex_stress
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -37,6 +38,18 @@ struct Box3 {
     hi = hi.cwiseMax(p);
   }
   bool empty() const { return lo.x() > hi.x(); }
+  /// Does the slab |(x - point) . normal| <= half (mm; 0 = the plane itself) reach the box?
+  bool meets_slab(const Vec3& point, const Vec3& normal, double half) const {
+    double below = 1e300, above = -1e300;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(),
+                        (c & 4) ? hi.z() : lo.z());
+      const double s = (corner - point).dot(normal);
+      below = std::min(below, s);
+      above = std::max(above, s);
+    }
+    return below <= half && above >= -half;
+  }
 };
 
 /// Stage timer: OSTEON_PROFILE=1 prints the time of each stage of a run to stderr.

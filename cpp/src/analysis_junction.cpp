@@ -30,20 +30,6 @@ constexpr double kOpening = 0.3;    // trimmed pieces nowhere wider than 2 x thi
 constexpr double kMaterial = 0.95;  // the core is used when its area < this x the cut's
 constexpr double kContinues = 0.5;  // ... and >= this x the bone's median area
 
-// Does the slab |(x - point) . normal| <= half reach into the box?
-bool slab_meets_box(const Vec3& point, const Vec3& normal, double half, const Box3& box) {
-  if (box.empty()) return false;
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 corner((c & 1) ? box.hi.x() : box.lo.x(), (c & 2) ? box.hi.y() : box.lo.y(),
-                      (c & 4) ? box.hi.z() : box.lo.z());
-    const double s = (corner - point).dot(normal);
-    lo = std::min(lo, s);
-    hi = std::max(hi, s);
-  }
-  return lo <= half && hi >= -half;
-}
-
 // Back to the whole cut (a section that was a junction core but is no longer a candidate).
 void restore_whole(SectionState& st, bool keep) {
   if (!(st.flags & kFlagJunction)) return;
@@ -92,7 +78,8 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     // A check made with the same delta stays right unless the section was re-cut or a change
     // reaches its neighbour planes.
     const bool fresh = run.section_dirty[i] || run.all_changed || st.junction_delta != delta[b] ||
-                       slab_meets_box(specs[i].point, specs[i].normal, 1.5 * delta[b], run.changed);
+                       (!run.changed.empty() &&
+                        run.changed.meets_slab(specs[i].point, specs[i].normal, 1.5 * delta[b]));
     if (fresh) todo.push_back(i);
   }
   run.junction_checks = static_cast<long>(todo.size());

@@ -1,28 +1,11 @@
 // What a run may keep from the last one: partial re-analysis (the correction loop) and exact
 // reuse of unchanged sections (live mode) (Analyzer::Impl).
 #include <algorithm>
-#include <limits>
 #include <vector>
 
 #include "analysis_impl.hpp"
 
 namespace osteon {
-namespace {
-
-// Does the plane (point, normal) pass through the box?
-bool plane_crosses_box(const Vec3& point, const Vec3& normal, const Box3& box) {
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 corner((c & 1) ? box.hi.x() : box.lo.x(), (c & 2) ? box.hi.y() : box.lo.y(),
-                      (c & 4) ? box.hi.z() : box.lo.z());
-    const double s = (corner - point).dot(normal);
-    lo = std::min(lo, s);
-    hi = std::max(hi, s);
-  }
-  return lo <= 0.0 && hi >= 0.0;
-}
-
-}  // namespace
 
 void Analyzer::Impl::mark_dirty(RunState& run) {
   const Skeleton& sk = run.sk;
@@ -38,7 +21,7 @@ void Analyzer::Impl::mark_dirty(RunState& run) {
   const Vec3 center = 0.5 * (dirty.lo + dirty.hi), half = 0.5 * (dirty.hi - dirty.lo);
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const SectionState& st = states[i];
-    bool touched = plane_crosses_box(specs[i].point, specs[i].normal, dirty);
+    bool touched = dirty.meets_slab(specs[i].point, specs[i].normal, 0.0);
     if (touched && !st.whole_plane) {
       const int b = specs[i].bone;
       const CutRegion axis_line{sk.heads[b], sk.direction(b), 0.0};
@@ -93,7 +76,7 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
                 a.plus_side == b.plus_side && a.point == b.point && a.normal == b.normal &&
                 sk.heads[bone] == last_heads[bone] && sk.tails[bone] == last_tails[bone] &&
                 !(prev_states[i].whole_plane && run.gap != last_gap);  // gap closing applies there
-    if (same && any_moved && plane_crosses_box(a.point, a.normal, moved_box)) {
+    if (same && any_moved && moved_box.meets_slab(a.point, a.normal, 0.0)) {
       const SectionState& st = prev_states[i];
       const CutRegion axis_line{sk.heads[bone], sk.direction(bone), 0.0};
       same = !st.whole_plane && !st.region.meets_box(center, half) &&
