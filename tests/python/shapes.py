@@ -92,18 +92,36 @@ def revolve(xs, radii, n: int = 96):
     return orient_outward(v, np.array(faces, dtype=np.int32))
 
 
-def cylinder_along(start, end, radius: float, n: int = 48, stations: int = 24):
-    """Closed cylinder from `start` to `end` (3D points)."""
+def _revolve_along(start, end, xs_of_length, radii, n: int):
+    """`revolve` a profile along the segment `start` -> `end` (3D points): xs_of_length(L) gives
+    the profile's stations (mm along the axis from `start`), radii their radii."""
     start, end = np.asarray(start, float), np.asarray(end, float)
     axis = end - start
     length = np.linalg.norm(axis)
-    v, f = revolve(np.linspace(0, length, stations), np.full(stations, radius), n)
+    v, f = revolve(xs_of_length(length), radii, n)
     x = axis / length
     helper = np.array([0.0, 0.0, 1.0]) if abs(x[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
     y = np.cross(helper, x)
     y /= np.linalg.norm(y)
     z = np.cross(x, y)
     return start + v @ np.stack([x, y, z]), f
+
+
+def cylinder_along(start, end, radius: float, n: int = 48, stations: int = 24):
+    """Closed cylinder from `start` to `end` (3D points)."""
+    return _revolve_along(start, end, lambda length: np.linspace(0, length, stations),
+                          np.full(stations, radius), n)
+
+
+def capsule_along(start, end, r: float, n: int = 64, cap_stations: int = 12, stations: int = 24):
+    """Closed capsule (cylinder with hemispherical ends) of radius r from `start` to `end`."""
+    t = np.linspace(0, np.pi / 2, cap_stations, endpoint=False)[1:]
+    radii = np.concatenate([r * np.sin(t), np.full(stations, r), r * np.cos(t)])
+    return _revolve_along(
+        start, end,
+        lambda length: np.concatenate([-r * np.cos(t), np.linspace(0, length, stations),
+                                       length + r * np.sin(t)]),
+        radii, n)
 
 
 def merge(*meshes):

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import osteon
 import pytest
-from shapes import circle, cylinder_along, merge, prism, rectangle
+from shapes import capsule_along, circle, cylinder_along, merge, prism, rectangle
 
 
 def _bone(length, start=(0.0, 0.0, 0.0), direction=(1.0, 0.0, 0.0)):
@@ -200,25 +200,6 @@ def test_plate_thickness():
     np.testing.assert_allclose(a.section_thickness[_interior(a)], 0.6, rtol=1e-9)
 
 
-def _capsule(start, end, r, n=64, cap_stations=12, stations=24):
-    """Closed capsule (cylinder with hemispherical ends) of radius r from start to end."""
-    from shapes import revolve
-
-    start, end = np.asarray(start, float), np.asarray(end, float)
-    axis = end - start
-    length = np.linalg.norm(axis)
-    t = np.linspace(0, np.pi / 2, cap_stations, endpoint=False)[1:]
-    xs = np.concatenate([-r * np.cos(t), np.linspace(0, length, stations), length + r * np.sin(t)])
-    radii = np.concatenate([r * np.sin(t), np.full(stations, r), r * np.cos(t)])
-    v, f = revolve(xs, radii, n)
-    x = axis / length
-    helper = np.array([0.0, 0.0, 1.0]) if abs(x[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    y = np.cross(helper, x)
-    y /= np.linalg.norm(y)
-    z = np.cross(x, y)
-    return start + v @ np.stack([x, y, z]), f
-
-
 def _segment_distance(p, a, b):
     ab = b - a
     t = np.clip(((p - a) @ ab) / (ab @ ab), 0, 1)
@@ -233,7 +214,7 @@ def test_bent_knee_section_is_the_capsules_cut():
     # a sliver and never unreliable; the reference is an independent raster of the two ideal
     # capsules' cut.
     hip, knee, ankle, r = np.array([0, 0, 60.0]), np.array([15, 0, 30.0]), np.zeros(3), 5.0
-    v, f = merge(_capsule(hip, knee, r), _capsule(knee, ankle, r))
+    v, f = merge(capsule_along(hip, knee, r), capsule_along(knee, ankle, r))
     sk = osteon.Skeleton([hip], [ankle], [-1], ["leg"])
     a = osteon.analyze(v, f, sk, interval=5, min_thickness=0)
     i = np.flatnonzero(a.section_kind == 0)
