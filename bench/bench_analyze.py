@@ -14,7 +14,6 @@ ratio to NumPy's *fastest* run in the same process, the strict reading of the ta
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import sys
 import time
@@ -24,7 +23,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import osteon
-from models import load
+from models import load, model_cases
 
 
 def numpy_face_area(vertices: np.ndarray, faces: np.ndarray) -> float:
@@ -49,13 +48,7 @@ def median_interleaved(fns, repeat: int) -> list[float]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=9)
-    ap.add_argument("--quick", action="store_true", help="skip the 1M+ face model")
-    args = ap.parse_args(argv)
-    cases = [("rignet2982", 0), ("arm", 0), ("cow", 1), ("cow", 3)]
-    if args.quick:
-        cases = cases[:3]
+    args, cases = model_cases(__doc__.splitlines()[0], argv)
     print("| model | faces | bones | h (mm) | sections | osteon median (ms) | NumPy face-area median "
           "(ms) | ratio | NumPy fastest (ms) | ratio to fastest |")
     print("|---|---|---|---|---|---|---|---|---|---|")

@@ -10,7 +10,6 @@ of junction sections found.
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import sys
 import time
@@ -18,17 +17,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import osteon
-from models import load
+from models import load, model_cases
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=9)
-    ap.add_argument("--quick", action="store_true", help="skip the 1M+ face model")
-    args = ap.parse_args(argv)
-    cases = [("rignet2982", 0), ("arm", 0), ("cow", 1), ("cow", 3)]
-    if args.quick:
-        cases = cases[:3]
+    args, cases = model_cases(__doc__.splitlines()[0], argv)
     print("| model | faces | h (mm) | sections | junction sections | whole cuts median (ms) "
           "| junction cores median (ms) | ratio |")
     print("|---|---|---|---|---|---|---|---|")

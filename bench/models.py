@@ -3,6 +3,7 @@ midpoint-subdivided copies (weights interpolated) for the ~100k and 1M+ face siz
 
 from __future__ import annotations
 
+import argparse
 import os
 import statistics
 import time
@@ -73,3 +74,16 @@ def median_time(fn, repeat: int) -> float:
         fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
+
+
+#: the speed table's models: (name, Loop subdivisions); the last is the 1M+ face cow
+CASES = [("rignet2982", 0), ("arm", 0), ("cow", 1), ("cow", 3)]
+
+
+def model_cases(description: str, argv=None):
+    """The model benchmarks' common options (--repeat, --quick) -> (args, [(name, subdivisions)])."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--repeat", type=int, default=9)
+    ap.add_argument("--quick", action="store_true", help="skip the 1M+ face model")
+    args = ap.parse_args(argv)
+    return args, CASES[:3] if args.quick else list(CASES)
