@@ -1,12 +1,14 @@
 """This build of osteon against another build, in alternating child processes.
 
     python bench/compare_builds.py OTHER_PYTHONPATH [--rounds 7] [--model cow --subdivisions 1]
+        [--cpu] [--no-junctions]
 
 OTHER_PYTHONPATH is a directory holding another build's ``osteon`` package (its
 ``python/osteon`` directory with its compiled ``_core`` module inside). Two pybind11 builds
 cannot share one process (their types clash), so each round runs one child process per build,
 back to back (the order alternates), each timing 3 analyses after a warm-up; machine load then
-hits both builds alike (``--cpu``: one thread, process CPU time). Prints, per interval h, the median time (ms) of each build over all
+hits both builds alike (``--cpu``: one thread, process CPU time; ``--no-junctions``: this build
+runs with ``junctions=False``, for a baseline built before the junction stage existed). Prints, per interval h, the median time (ms) of each build over all
 rounds and the ratio this build / other build.
 """
 
@@ -33,24 +35,27 @@ import osteon
 from models import load
 v, f, sk, w = load({model!r}, subdivisions={sub})
 out = {{}}
+kw = {{"junctions": False}} if {no_junctions} and not os.environ.get("OSTEON_OTHER_BUILD") else {{}}
 for h in (2.0, 8.0):
-    osteon.analyze(v, f, sk, w, interval=h, threads={threads})
+    osteon.analyze(v, f, sk, w, interval=h, threads={threads}, **kw)
     ts = []
     for _ in range(3):
         t0 = {clock}()
-        osteon.analyze(v, f, sk, w, interval=h, threads={threads})
+        osteon.analyze(v, f, sk, w, interval=h, threads={threads}, **kw)
         ts.append({clock}() - t0)
     out[str(h)] = ts
 print(json.dumps({{"faces": len(f), "times": out, "file": osteon.__file__}}))
 """
 
 
-def run_child(pythonpath: str | None, model: str, sub: int, cpu: bool) -> dict:
+def run_child(pythonpath: str | None, model: str, sub: int, cpu: bool,
+              no_junctions: bool = False) -> dict:
     env = dict(os.environ)
     if pythonpath:
         env["OSTEON_OTHER_BUILD"] = pythonpath
     code = CHILD.format(here=str(HERE), model=model, sub=sub, threads=1 if cpu else 0,
-                        clock="time.process_time" if cpu else "time.perf_counter")
+                        clock="time.process_time" if cpu else "time.perf_counter",
+                        no_junctions=no_junctions)
     res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True)
     return json.loads(res.stdout.strip().splitlines()[-1])
@@ -64,6 +69,8 @@ def main(argv=None) -> int:
     ap.add_argument("--subdivisions", type=int, default=1)
     ap.add_argument("--cpu", action="store_true",
                     help="one thread, CPU time (steadier than wall time on a loaded machine)")
+    ap.add_argument("--no-junctions", action="store_true",
+                    help="this build without the junction stage (analyze(junctions=False))")
     args = ap.parse_args(argv)
     times = {"this": {}, "other": {}}
     faces = 0
@@ -72,7 +79,7 @@ def main(argv=None) -> int:
         if r % 2:
             order.reverse()
         for name, path in order:
-            out = run_child(path, args.model, args.subdivisions, args.cpu)
+            out = run_child(path, args.model, args.subdivisions, args.cpu, args.no_junctions)
             faces = out["faces"]
             if path and not out["file"].startswith(path):
                 raise SystemExit(f"the other build was not imported: {out['file']}")
