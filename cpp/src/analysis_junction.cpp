@@ -10,6 +10,9 @@
 // them is a little longer than the bone is wide) are cut and the section is trimmed to what both
 // neighbours' regions (widened a little) also cover: the core. Trimmed pieces that are nowhere
 // wider than 0.6 equivalent radii (a taper's rim, a tilted bone's crescent) stay in the core.
+// The bone's own sections inside the slab that are narrower than both neighbours (a neck) are
+// neighbours too. The core is used only where the trimmed material sticks out of it by at least
+// 1.25 core radii (a branch); a shallower swelling (a joint's flare, a bulge) is the bone's own.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -29,6 +32,40 @@ constexpr double kMargin = 0.05;        // neighbour regions widened by this x t
 constexpr double kOpening = 0.3;    // trimmed pieces nowhere wider than 2 x this x radius go back
 constexpr double kMaterial = 0.95;  // the core is used when its area < this x the cut's
 constexpr double kContinues = 0.5;  // ... and >= this x the bone's median area
+constexpr double kReach = 1.25;     // ... and the cut reaches >= this x the core's radius beyond it
+
+// Area of a region (outer boundary minus its holes), mm^2.
+double region_area(const SectionPolygon& p) {
+  double a = std::abs(signed_area(p.outer));
+  for (const auto& h : p.holes) a -= std::abs(signed_area(h));
+  return a;
+}
+
+// Squared distance from q to the segment a-b, mm^2.
+double segment_distance2(const Vec2& q, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((q - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (q - (a + t * ab)).squaredNorm();
+}
+
+// True when some vertex of `cut`'s outer boundary lies farther than `reach` (mm) from every
+// boundary loop of `core` (core is a part of cut, so its vertices outside the core are the
+// trimmed material): the trimmed material sticks out of the core at least that far.
+bool reaches_beyond(const SectionPolygon& cut, const SectionPolygon& core, double reach) {
+  const double r2 = reach * reach;
+  auto near_loop = [&](const Vec2& q, const std::vector<Vec2>& loop) {
+    for (std::size_t k = 0, n = loop.size(); k < n; ++k)
+      if (segment_distance2(q, loop[k], loop[(k + 1) % n]) < r2) return true;
+    return false;
+  };
+  for (const Vec2& q : cut.outer) {
+    bool near = near_loop(q, core.outer);
+    for (std::size_t h = 0; !near && h < core.holes.size(); ++h) near = near_loop(q, core.holes[h]);
+    if (!near) return true;
+  }
+  return false;
+}
 
 // Back to the whole cut (a section that was a junction core but is no longer a candidate).
 void restore_whole(SectionState& st, bool keep) {
@@ -144,14 +181,34 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     }
     // Material continues through the plane only if there is material on both sides.
     if (sides < 2 || neighbours.empty()) return;
+    // A neck between the section and a neighbour plane: the bone's own sections strictly inside
+    // the slab that are smaller than every neighbour region are neighbours too (the core is what
+    // passes through the whole slab, so it passes through the neck).
+    double neck = median[b];
+    if (count > 0 && i >= first && i < first + count) {
+      double smallest = std::numeric_limits<double>::infinity();
+      for (const SectionPolygon* p : neighbours) smallest = std::min(smallest, region_area(*p));
+      for (int k = 1; k * options.interval < delta[b]; ++k)
+        for (const int j : {i - k, i + k})
+          if (j >= first && j < first + count && usable(j) && states[j].cut_area < smallest) {
+            neighbours.push_back(&states[j].cut);
+            neck = std::min(neck, states[j].cut_area);
+          }
+    }
     const SectionGeometry core = junction_core(st.cut, neighbours, kMargin / kDelta * delta[b],
                                                kOpening / kDelta * delta[b]);
     if (!core.found) return;
     const SectionProperties props = section_properties(core.polygon);
     if (!props.valid || !(props.area < kMaterial * st.cut_area)) return;
-    // A core far smaller than the bone's typical section is not the bone's member passing
-    // through (the planes landed in other parts: a bend, a flare, a bone end): whole cut kept.
-    if (props.area < kContinues * median[b]) return;
+    // A core far smaller than the bone's typical section (or than the neck it passes through) is
+    // not the bone's member passing through (the planes landed in other parts: a bend, a flare,
+    // a bone end): whole cut kept.
+    if (props.area < kContinues * neck) return;
+    // A side branch sticks out of the member: the trimmed material must reach at least
+    // kReach x the core's equivalent radius beyond the core. Shallower material (a joint's flare,
+    // a taper, a bulge) is the bone's own: by Saint-Venant a feature of depth t is engaged within
+    // about t of the plane, inside the slab, so the whole cut carries the load.
+    if (!reaches_beyond(st.cut, core.polygon, kReach * std::sqrt(props.area / M_PI))) return;
     if (keep) st.cut_loops = st.loops;
     if (set_section_region(st, st.frame, core.polygon, keep)) st.flags |= kFlagJunction;
   });

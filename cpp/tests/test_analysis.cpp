@@ -266,3 +266,31 @@ TEST(Analysis, JunctionCountsOnlyTheBarThroughAStub) {
     EXPECT_EQ(plain.section_area[i], plain.section_cut_area[i]);
   }
 }
+
+TEST(Analysis, JunctionLeavesAShallowBulgeWhole) {
+  // The bar of the test above with a knob of the same radius that sticks out only 2 mm beyond
+  // the bar (top at z = 5): the planes through it are candidates (cut > 1.5 x the bar's area),
+  // but the trimmed material reaches less than 1.25 core radii (3.75 mm) out of the core: a
+  // bulge, the bone's own. Every section equals the whole-cut analysis (junctions off).
+  const double r = 3;
+  OwnedMesh m = prism(regular_polygon(r, 64), 40, 41);
+  const OwnedMesh knob = prism(regular_polygon(r, 64), 5, 6);
+  const std::int32_t base = static_cast<std::int32_t>(m.v.size() / 3);
+  for (std::size_t i = 0; i < knob.v.size(); i += 3) {  // (x, y, z) -> (20 + y, z, x)
+    m.v.push_back(20 + knob.v[i + 1]);
+    m.v.push_back(knob.v[i + 2]);
+    m.v.push_back(knob.v[i]);
+  }
+  for (std::int32_t f : knob.f) m.f.push_back(base + f);
+  AnalysisOptions o;
+  const AnalysisResult a = analyze(m.view(), bar(40), nullptr, o);
+  o.junctions = false;
+  const AnalysisResult whole = analyze(m.view(), bar(40), nullptr, o);
+  int candidates = 0;
+  for (std::size_t i = 0; i < a.section_modulus.size(); ++i) {
+    EXPECT_FALSE(a.section_flags[i] & kFlagJunction) << a.section_param[i];
+    EXPECT_EQ(a.section_modulus[i], whole.section_modulus[i]) << a.section_param[i];
+    if (a.section_kind[i] == kInterior && a.section_cut_area[i] > 1.5 * M_PI * r * r) ++candidates;
+  }
+  EXPECT_GE(candidates, 1);
+}

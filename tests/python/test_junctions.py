@@ -7,7 +7,7 @@ import json
 import numpy as np
 import osteon
 import pytest
-from shapes import cylinder_along, merge
+from shapes import cylinder_along, merge, revolve
 
 R = 3.0
 W_ROUND = np.pi * R**3 / 4  # mm³
@@ -126,3 +126,60 @@ def test_correction_thickens_the_bar_where_the_junction_core_is_weak():
     assert c.converged and not c.after.weak.any()
     after_j = c.after.junction
     assert after_j.sum() == 3 and (c.after.stress[after_j] <= allow).all()
+
+
+def bar_with_knob(height):
+    """The round bar (r = 3 mm along x) with a stub of the same radius along z at x = 20 whose
+    top is at z = ``height`` mm: it sticks out ``height - 3`` mm beyond the bar."""
+    bar = cylinder_along([0, 0, 0], [40, 0, 0], R, n=64, stations=41)
+    knob = cylinder_along([20, 0, 0], [20, 0, height], R, n=64, stations=10)
+    return merge(bar, knob), osteon.Skeleton([[0, 0, 0]], [[40, 0, 0]], [-1])
+
+
+@pytest.mark.parametrize("height, branch", [(5.0, False), (5.5, False), (8.0, True), (9.0, True)])
+def test_a_shallow_bulge_is_the_bones_own_a_branch_is_trimmed(height, branch):
+    # The rule (docs/junctions.md): the core is used only where the trimmed material sticks out
+    # of it by at least 1.25 core radii (3.75 mm for the bar, r = 3): a knob reaching 2 or 2.5 mm
+    # beyond the bar is a bulge (whole cut), one reaching 5 or 6 mm is a branch (core = bar).
+    (v, f), sk = bar_with_knob(height)
+    a = osteon.analyze(v, f, sk, interval=2.0)
+    whole = osteon.analyze(v, f, sk, interval=2.0, junctions=False)
+    x = a.section_param
+    through = (a.section_kind == 0) & (np.abs(x - 20) < R)  # x = 18, 20, 22
+    assert through.sum() == 3
+    # the plane through the knob's axis is a candidate either way (cut > 1.5 x the bar's area)
+    mid = through & (np.abs(x - 20) < 0.5)
+    assert (a.section_cut_area[mid] > 1.5 * np.pi * R**2).all()
+    if branch:
+        assert a.junction[mid].all()
+        np.testing.assert_allclose(a.section_modulus[through & a.junction], W_ROUND, rtol=0.10)
+    else:
+        # a bulge: nothing trimmed, the whole cut (the same numbers as junctions=False)
+        assert not a.junction.any()
+        np.testing.assert_array_equal(a.section_modulus, whole.section_modulus)
+        np.testing.assert_array_equal(a.section_area, whole.section_area)
+        assert (a.section_modulus[mid] > 1.3 * W_ROUND).all()
+
+
+def test_a_neck_inside_the_slab_bounds_the_core():
+    # The bar (r = 3 mm) necks down to r = 2.4 mm for x = 22.5..23.5, and a thin stub (r = 2)
+    # grows out at x = 19. With interval 1 mm the neighbours of the section at x = 20 are at
+    # x = 16 and 24 (delta = 1.25 x 3 mm, m = 4): both plain bar. The neck at x = 23 lies
+    # inside the slab and is narrower than both, so the material that passes through the whole
+    # slab is the neck (widened by the 0.05 r margin): W = pi (2.4 + 0.15)^3 / 4, not the bar's.
+    necked = revolve([0, 22.4, 22.5, 23.5, 23.6, 40], [R, R, 2.4, 2.4, R, R], n=96)
+    stub = cylinder_along([19, 0, 0], [19, 0, 9], 2.0, n=64, stations=10)
+    sk = osteon.Skeleton([[0, 0, 0]], [[40, 0, 0]], [-1])
+    a = osteon.analyze(*merge(necked, stub), sk, interval=1.0)
+    x = a.section_param
+    i20 = int(np.flatnonzero((a.section_kind == 0) & (np.abs(x - 20) < 0.25))[0])
+    i18 = int(np.flatnonzero((a.section_kind == 0) & (np.abs(x - 18) < 0.25))[0])
+    assert a.junction[i20] and a.junction[i18]
+    w_neck = np.pi * (2.4 + 0.05 * R) ** 3 / 4
+    assert a.section_modulus[i20] == pytest.approx(w_neck, rel=0.05)
+    # x = 18: its slab (14.25 .. 21.75) holds no neck: the core is the bar
+    assert a.section_modulus[i18] == pytest.approx(W_ROUND, rel=0.10)
+    # the neck's own section is not a candidate (smaller than the bar): its W is the neck's
+    i23 = int(np.flatnonzero((a.section_kind == 0) & (np.abs(x - 23) < 0.25))[0])
+    assert not a.junction[i23]
+    assert a.section_modulus[i23] == pytest.approx(np.pi * 2.4**3 / 4, rel=0.02)

@@ -27,6 +27,11 @@ def pick_sections(
     ``junctions=True`` picks only ``junction`` sections (no other flag; docs/junctions.md),
     with r from the core's area, to check the core against FEM read on the same plane; their
     dicts also carry ``junction`` and ``osteon_cut_stress`` (the stress with the whole cut).
+    Junction sections sit near joints, where the downstream part may fold back: they are also
+    required to have the load point at least ``slenderness`` × r off the plane (along the
+    normal), so that the section is a beam section between the support and the load, not the
+    plane through the load's point of application (Saint-Venant: the FEM σ there is the local
+    stress under the load).
     """
     a = analysis
     heads, tails = np.asarray(heads, float), np.asarray(tails, float)
@@ -42,6 +47,9 @@ def pick_sections(
         t = np.einsum("ij,ij->i", np.asarray(a.section_center) - heads[bone], u)
     interval = float(getattr(a, "interval", 2.0))
     arm = np.asarray(a.moment_arm, float)
+    # the load point's distance from the section plane, mm
+    axial = np.einsum("ij,ij->i", np.asarray(a.load_point, float) - np.asarray(a.section_center, float),
+                      np.asarray(a.section_normal, float))
     base = np.isfinite(stress) & np.isfinite(r)
     kind = getattr(a, "section_kind", None)
     if kind is not None:
@@ -66,6 +74,8 @@ def pick_sections(
     out, count, taken = [], {}, set()
     for tier, (k_end, k_arm) in enumerate(tiers):
         ok = base & (end >= np.maximum(k_end * r, 0.5 * interval)) & (arm >= k_arm * r)
+        if junctions:
+            ok &= np.abs(axial) >= k_arm * r
         idx = np.nonzero(ok)[0]
         idx = idx[np.argsort(-stress[idx])]
         for i in idx:
