@@ -153,3 +153,16 @@ def test_validate_fem_cli_on_arm(tmp_path, capsys):
     assert s["fem_stress_mpa"] > 0
     assert png.is_file() and (tmp_path / "v_fem.png").is_file()
     assert "median |error|" in capsys.readouterr().out
+
+
+def test_crop_with_no_room_for_the_clamp_fails_that_section_only():
+    # A section 5 mm from the bar's end (r = 5.05 mm from its 80 mm² area): the clamp planes
+    # at 4, 5 and 3.2 r upstream lie outside the model. That section is reported failed with
+    # the reason (no gmsh run); it does not stop the check with a solver error.
+    V, Fc = _bar()
+    sec = {"index": 7, "bone": 0, "center": [5.0, 0, 0], "normal": [1.0, 0, 0],
+           "load_point": [L, 0, 0], "osteon_stress": 1.0, "area": B * H}
+    rep = fem.cross_check(V, Fc, [sec], force=F, mode="crop")
+    assert rep.sections == []
+    (failed,) = rep.failed
+    assert failed["index"] == 7 and "no room for the clamp" in failed["reason"]

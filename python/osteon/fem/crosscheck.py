@@ -296,6 +296,10 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
         # then the original triangles
         for cd in (clamp_distance, 1.25 * clamp_distance, 0.8 * clamp_distance):
             origin = c - cd * r * n
+            if not np.any((V - origin) @ n < 0):
+                errors.append(f"the model ends within {cd:g} r upstream of the section: no room "
+                              "for the clamp")
+                continue
             try:
                 Vc, Fc = crop_mesh(V, F, origin, n, c)
             except ValueError as e:
@@ -339,6 +343,10 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
         rep.nodes += len(nodes)
         rep.elements += len(tets)
         fixed = np.nonzero((nodes - origin) @ n <= 1e-6 * r + 1e-9)[0]
+        if len(fixed) < 3:
+            rep.failed.append({"index": int(sec.get("index", k)), "bone": int(sec.get("bone", -1)),
+                               "reason": f"the clamp cap at {cd:g} r holds {len(fixed)} nodes"})
+            continue
         cases = _unit_cases(nodes, tets, lp, 0.75 * h)
         if progress:
             progress(f"section {k + 1}/{len(sections)}: solving {len(nodes)} nodes")
