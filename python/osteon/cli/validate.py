@@ -49,8 +49,9 @@ def cmd_validate(args, out):
                                           tiers=tiers, junctions=junctions)
             if not secs_list:
                 raise ValueError(
-                    "no section suitable for the FEM common.check (all near joints, the "
-                    "held region or too stubby)"
+                    "no section suitable for the FEM check (all near joints, the held region, "
+                    "too stubby" + (", or no junction section with its load point >= 2 r off "
+                    "the plane)" if junctions else ")")
                 )
             t = time.perf_counter()
             fem_rep = fem.cross_check(
