@@ -14,7 +14,10 @@ namespace {
 
 // The bone whose skinning domain holds a section: the largest weight sum over the vertices in a
 // thin slab around the section plane, near its centre (paper §5: the domain of the weakest
-// section).
+// section). A junction section (docs/junctions.md) is its own bone's core, the member that
+// continues along the bone through the plane; the vertices around it belong mostly to the stub
+// or the body it grows from, which scaling would thicken without touching the core: its own bone
+// is the domain when any vertex there carries weight on it.
 int domain_bone(const MeshView& mesh, const BoneWeights& w, const AnalysisResult& a, int section,
                 double interval) {
   const Vec3 c = a.section_center[section];
@@ -33,7 +36,10 @@ int domain_bone(const MeshView& mesh, const BoneWeights& w, const AnalysisResult
       any = true;
     }
   }
-  if (!any) return a.section_bone[section];
+  const int own = a.section_bone[section];
+  if (!any) return own;
+  if ((a.section_flags[section] & kFlagJunction) && own >= 0 && own < w.num_bones && sum[own] > 0)
+    return own;
   return static_cast<int>(std::max_element(sum.begin(), sum.end()) - sum.begin());
 }
 

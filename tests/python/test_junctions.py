@@ -183,3 +183,31 @@ def test_a_neck_inside_the_slab_bounds_the_core():
     i23 = int(np.flatnonzero((a.section_kind == 0) & (np.abs(x - 23) < 0.25))[0])
     assert not a.junction[i23]
     assert a.section_modulus[i23] == pytest.approx(np.pi * 2.4**3 / 4, rel=0.02)
+
+
+def test_correction_scales_the_junction_sections_own_bone_not_the_stubs():
+    # The body + bar of the correction test above, the stub with a bone of its own (bone 2,
+    # along z) and dense (bound to its nearest bone): around the bar's sections through the stub
+    # most vertices are the stub's, so their weight-based domain is the stub's bone, which does
+    # not thicken the core. A junction section's domain is its own bone (the core is the bar):
+    # the correction scales bone 1 by at least the cube root of the stress ratio (W ∝ scale³)
+    # and leaves the stub's bone alone.
+    body = cylinder_along([0, 0, 0], [17, 0, 0], 4.5, n=48, stations=18)
+    bar = cylinder_along([16, 0, 0], [40, 0, 0], R, n=48, stations=25)
+    stub = cylinder_along([20, 0, 0], [20, 0, 9], R, n=192, stations=19)
+    v, f = merge(body, bar, stub)
+    sk = osteon.Skeleton([[0, 0, 0], [16, 0, 0], [20, 0, 0]],
+                         [[16, 0, 0], [40, 0, 0], [20, 0, 9]], [-1, 0, 1])
+    a = osteon.analyze(v, f, sk, interval=2.0)
+    j = a.junction & (a.section_bone == 1)
+    assert j.sum() == 3
+    core = a.stress[j].max()
+    others = np.nanmax(a.stress[~j])
+    assert core > 1.1 * others
+    allow = 0.5 * (core + others)
+    c = osteon.correct(v, f, sk, None, allowable_stress=allow, interval=2.0)
+    assert c.before.weak[j].any()
+    assert c.converged, c.reason
+    assert c.bone_scale[2] == 1.0
+    assert c.bone_scale[1] >= 0.99 * np.cbrt(core / (0.99 * allow))
+    assert not c.after.weak.any()
