@@ -205,6 +205,7 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
   std::vector<Seg> segs;
   segs.reserve(m);
   std::vector<Chain> chains;
+  chains.reserve(4 * loops.size() + 16);
   for (std::size_t l = 0; l < loops.size(); ++l) {
     const auto& loop = *loops[l];
     const std::size_t n = loop.size();
@@ -217,7 +218,7 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
     for (std::size_t i = 0; i < n; ++i) {
       const Vec2& a = loop[i];
       const Vec2& b = loop[i + 1 == n ? 0 : i + 1];
-      const int s = b.x() > a.x() ? 1 : (b.x() < a.x() ? -1 : 0);
+      const int s = static_cast<int>(b.x() > a.x()) - static_cast<int>(b.x() < a.x());
       if (i == 0 || (s != 0 && dir != 0 && s != dir)) {
         if (i > 0) close();
         chains.push_back({static_cast<std::uint32_t>(segs.size()), 0, Box2{}});
