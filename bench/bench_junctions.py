@@ -2,7 +2,7 @@
 (the default) vs ``junctions=False`` (whole cuts, the analysis before issue 16), run
 interleaved in the same process.
 
-    python bench/bench_junctions.py [--repeat 9] [--quick]
+    python bench/bench_junctions.py [--repeat 9] [--quick] [--cpu]
 
 Prints per model and interval h the median times, their ratio (target <= 1.10) and the number
 of junction sections found.
@@ -21,7 +21,9 @@ from models import load, model_cases
 
 
 def main(argv=None) -> int:
-    args, cases = model_cases(__doc__.splitlines()[0], argv)
+    args, cases = model_cases(__doc__.splitlines()[0], argv, cpu_option=True)
+    clock = time.process_time if args.cpu else time.perf_counter
+    threads = 1 if args.cpu else 0
     print("| model | faces | h (mm) | sections | junction sections | whole cuts median (ms) "
           "| junction cores median (ms) | ratio |")
     print("|---|---|---|---|---|---|---|---|")
@@ -29,15 +31,16 @@ def main(argv=None) -> int:
         v, f, sk, w = load(name, subdivisions=subdivisions)
         for h in (2.0, 8.0):
             def run(junctions, v=v, f=f, sk=sk, w=w, h=h):
-                return osteon.analyze(v, f, sk, w, interval=h, junctions=junctions)
+                return osteon.analyze(v, f, sk, w, interval=h, junctions=junctions,
+                                      threads=threads)
 
             a = run(True)
             times = {False: [], True: []}
             for _ in range(args.repeat):
                 for j in (False, True):
-                    t0 = time.perf_counter()
+                    t0 = clock()
                     run(j)
-                    times[j].append(time.perf_counter() - t0)
+                    times[j].append(clock() - t0)
             off, on = (1000 * statistics.median(times[k]) for k in (False, True))
             print(f"| {name} | {len(f)} | {h:g} | {a.num_sections} | {int(a.junction.sum())} "
                   f"| {off:.1f} | {on:.1f} | {on / off:.3f} |")

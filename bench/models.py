@@ -80,10 +80,14 @@ def median_time(fn, repeat: int) -> float:
 CASES = [("rignet2982", 0), ("arm", 0), ("cow", 1), ("cow", 3)]
 
 
-def model_cases(description: str, argv=None):
-    """The model benchmarks' common options (--repeat, --quick) -> (args, [(name, subdivisions)])."""
+def model_cases(description: str, argv=None, cpu_option: bool = False):
+    """The model benchmarks' common options (--repeat, --quick, with ``cpu_option`` --cpu) ->
+    (args, [(name, subdivisions)])."""
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--repeat", type=int, default=9)
     ap.add_argument("--quick", action="store_true", help="skip the 1M+ face model")
+    if cpu_option:
+        ap.add_argument("--cpu", action="store_true",
+                        help="one thread, process CPU time (steadier on a loaded machine)")
     args = ap.parse_args(argv)
     return args, CASES[:3] if args.quick else list(CASES)
