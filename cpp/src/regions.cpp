@@ -690,7 +690,14 @@ double hull_width(const std::vector<Vec2>& hull, Vec2& edge_a, Vec2& edge_b) {
       far = next;
       height = ahead;
     }
-    const double len = (b - a).norm();
+    // Edges whose height over the width found so far is clearly larger cannot give the minimum:
+    // no square root or division for them (squares compared with a 1e-9 relative margin, far
+    // above rounding, where none of the factors can overflow or underflow).
+    const double len2 = (b - a).squaredNorm();
+    if (best >= 1e-50 && best <= 1e50 && len2 >= 1e-100 && len2 <= 1e100 && height >= 0 &&
+        height * height >= best * best * len2 * (1 + 1e-9))
+      continue;
+    const double len = std::sqrt(len2);
     if (len > 0 && height / len < best) {
       best = height / len;
       edge_a = a;
@@ -713,9 +720,16 @@ double minimum_width(const std::vector<Vec2>& pts) {
     const double len = (b - a).norm();
     const Box2 box = box_of(pts);
     const double eps = 1e-12 * (box.hi - box.lo).norm();
+    // Heights clearly inside [-eps, width + eps] (a 1e-9 relative margin, far above rounding,
+    // where no product can underflow or overflow) need no division.
+    const bool quick = len >= 1e-100 && len <= 1e100 && eps >= 1e-200 && width + eps <= 1e100;
+    const double lo = quick ? -eps * len * (1 - 1e-9) : 0.0;
+    const double hi = quick ? (width + eps) * len * (1 - 1e-9) : -1.0;
     bool inside = true;
     for (const Vec2& p : pts) {
-      const double h = cross2(a, b, p) / len;
+      const double c = cross2(a, b, p);
+      if (c >= lo && c <= hi) continue;
+      const double h = c / len;
       if (h < -eps || h > width + eps) {
         inside = false;
         break;
@@ -843,18 +857,22 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
   const double gap = std::isfinite(contact_gap) ? std::max(0.0, contact_gap) : 0.0;
   std::vector<std::int32_t> parent(nv);
   for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
+  // A set's root is its smallest vertex (the larger root always joins the smaller one).
   Index roots = nv;  // each join of two sets leaves one root fewer
-  auto join = [&](std::int32_t a, std::int32_t b) {
-    a = find_root(parent, a);
-    b = find_root(parent, b);
-    if (a == b) return;
-    parent[std::max(a, b)] = std::min(a, b);
+  auto join_roots = [&](std::int32_t a, std::int32_t b) {
+    if (a == b) return a;
     --roots;
+    if (a > b) std::swap(a, b);
+    parent[b] = a;
+    return a;
+  };
+  auto join = [&](std::int32_t a, std::int32_t b) {
+    join_roots(find_root(parent, a), find_root(parent, b));
   };
   for (Index f = 0; f < nf; ++f) {
     const std::int32_t* t = mesh.faces + 3 * f;
-    join(t[0], t[1]);
-    join(t[0], t[2]);
+    const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
+    join_roots(r, find_root(parent, t[2]));
   }
   if (roots <= 1) return {};
   // Shells touching at exactly the same position (unwelded meshes) are one piece.
