@@ -771,14 +771,40 @@ double loop_distance(const std::vector<Vec2>& a, const std::vector<Vec2>& b, dou
     for (std::uint32_t i : points) from_box.add(from[i]);
     const std::vector<std::uint32_t> edges = near(to, from_box, std::sqrt(best));
     const std::size_t n = to.size();
+    // The edges in groups of 16 with their boxes: a group farther from the point than the
+    // nearest edge so far (plus a margin far above the rounding of the distances, ~1e-15 of the
+    // coordinates) holds no nearer edge, so skipping it leaves the minimum as it is.
+    constexpr std::size_t kGroup = 16;
+    std::vector<Box2> groups((edges.size() + kGroup - 1) / kGroup);
+    for (std::size_t k = 0; k < edges.size(); ++k) {
+      groups[k / kGroup].add(to[edges[k]]);
+      groups[k / kGroup].add(to[edges[k] + 1 == n ? 0 : edges[k] + 1]);
+    }
+    double size = 0.0;  // largest coordinate magnitude involved
+    for (const Box2& box : {to_box, from_box})
+      size = std::max({size, std::abs(box.lo.x()), std::abs(box.lo.y()), std::abs(box.hi.x()),
+                       std::abs(box.hi.y())});
+    const bool prune = size > 1e-100 && size < 1e100;
+    const double margin = 1e-12 * size;
     for (std::uint32_t i : points) {
       const Vec2& q = from[i];
-      for (std::uint32_t e : edges) {
-        const Vec2& p0 = to[e];
-        const Vec2 d = to[e + 1 == n ? 0 : e + 1] - p0;
-        const double len2 = d.squaredNorm();
-        const double t = len2 > 0 ? std::clamp((q - p0).dot(d) / len2, 0.0, 1.0) : 0.0;
-        best = std::min(best, (p0 + t * d - q).squaredNorm());
+      for (std::size_t g = 0; g < groups.size(); ++g) {
+        if (prune) {
+          const Box2& box = groups[g];
+          const double dx = std::max({box.lo.x() - q.x(), 0.0, q.x() - box.hi.x()});
+          const double dy = std::max({box.lo.y() - q.y(), 0.0, q.y() - box.hi.y()});
+          const double reach = std::sqrt(best) + margin;
+          if (dx * dx + dy * dy > reach * reach) continue;
+        }
+        const std::size_t end = std::min(edges.size(), (g + 1) * kGroup);
+        for (std::size_t k = g * kGroup; k < end; ++k) {
+          const std::uint32_t e = edges[k];
+          const Vec2& p0 = to[e];
+          const Vec2 d = to[e + 1 == n ? 0 : e + 1] - p0;
+          const double len2 = d.squaredNorm();
+          const double t = len2 > 0 ? std::clamp((q - p0).dot(d) / len2, 0.0, 1.0) : 0.0;
+          best = std::min(best, (p0 + t * d - q).squaredNorm());
+        }
       }
     }
   };
