@@ -56,8 +56,10 @@ struct Box2 {
   Vec2 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   Vec2 hi{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
   void add(const Vec2& p) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
+    lo.x() = std::min(lo.x(), p.x());
+    lo.y() = std::min(lo.y(), p.y());
+    hi.x() = std::max(hi.x(), p.x());
+    hi.y() = std::max(hi.y(), p.y());
   }
   bool contains(const Vec2& p) const {
     return p.x() >= lo.x() && p.x() <= hi.x() && p.y() >= lo.y() && p.y() <= hi.y();
@@ -166,28 +168,23 @@ bool owned(const CutSegment& s, const BoneDomain& d) {
 
 // True when any two segments of the given loops (not two neighbours of one loop) cross, touch
 // or come within rounding distance of each other; then only a polygon clipper can say what the
-// non-zero winding of the loops is. Segments are bucketed in a uniform grid over the loops' box
-// (about one per cell), so the test costs about the number of segments. Degenerate (zero-length)
-// segments and loops of fewer than three points count as touching.
+// non-zero winding of the loops is. Degenerate (zero-length) segments and loops of fewer than
+// three points count as touching. Each loop is split into x-monotone chains (runs of segments
+// going the same way in x); only chains whose boxes meet are compared, by a merge along x that
+// visits exactly the segment pairs whose x-ranges meet, so smooth loops cost about their number
+// of segments.
 bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
-  struct Seg {
-    Vec2 a, b;
-    std::uint32_t loop, index, size;
-  };
-  std::vector<Seg> segs;
   Box2 all;
-  for (std::size_t l = 0; l < loops.size(); ++l) {
-    const auto& loop = *loops[l];
-    const std::size_t n = loop.size();
+  std::size_t m = 0;
+  for (const auto* loop : loops) {
+    const std::size_t n = loop->size();
     if (n < 3) return true;
     for (std::size_t i = 0; i < n; ++i) {
-      const Vec2& a = loop[i];
-      const Vec2& b = loop[i + 1 == n ? 0 : i + 1];
-      if (a == b) return true;
-      segs.push_back({a, b, static_cast<std::uint32_t>(l), static_cast<std::uint32_t>(i),
-                      static_cast<std::uint32_t>(n)});
+      const Vec2& a = (*loop)[i];
+      if (a == (*loop)[i + 1 == n ? 0 : i + 1]) return true;
       all.add(a);
     }
+    m += n;
   }
   const Vec2 size = all.hi - all.lo;
   const double extent = std::max(size.x(), size.y());
@@ -195,51 +192,99 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
   // Orientation values below this (mm^2) are treated as zero: near-touching counts as touching.
   const double eps = 1e-12 * extent * extent;
   const double margin = 1e-9 * extent;
-  const std::size_t m = segs.size();
-  const int cells = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(m))), 1, 1024);
-  const double cell = extent / cells * (1 + 1e-9);
-  auto cell_of = [&](double x, double lo) {
-    return std::clamp(static_cast<int>((x - lo) / cell), 0, cells - 1);
+  // Segment i of a loop joins its points i and i + 1. A chain is a run of a loop's segments
+  // whose x never decreases, or never increases (then stored backwards): in storage order both
+  // ends of the segments' x-ranges never decrease.
+  struct Seg {
+    double xlo, xhi, ylo, yhi;
+    Vec2 a, b;
+    std::uint32_t loop, index;
   };
-  std::vector<std::uint32_t> count(static_cast<std::size_t>(cells) * cells + 1, 0);
-  auto for_cells = [&](const Seg& s, auto&& fn) {
-    const int x0 = cell_of(std::min(s.a.x(), s.b.x()) - margin, all.lo.x());
-    const int x1 = cell_of(std::max(s.a.x(), s.b.x()) + margin, all.lo.x());
-    const int y0 = cell_of(std::min(s.a.y(), s.b.y()) - margin, all.lo.y());
-    const int y1 = cell_of(std::max(s.a.y(), s.b.y()) + margin, all.lo.y());
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) fn(static_cast<std::size_t>(y) * cells + x);
+  struct Chain {
+    std::uint32_t begin, end;  // its segments in `segs`
+    Box2 box;
   };
-  for (const Seg& s : segs) for_cells(s, [&](std::size_t c) { ++count[c + 1]; });
-  for (std::size_t c = 0; c + 1 < count.size(); ++c) count[c + 1] += count[c];
-  std::vector<std::uint32_t> bucket(count.back()), fill(count.begin(), count.end() - 1);
-  for (std::size_t k = 0; k < m; ++k)
-    for_cells(segs[k], [&](std::size_t c) { bucket[fill[c]++] = static_cast<std::uint32_t>(k); });
+  std::vector<Seg> segs;
+  segs.reserve(m);
+  std::vector<Chain> chains;
+  chains.reserve(4 * loops.size() + 16);
+  for (std::size_t l = 0; l < loops.size(); ++l) {
+    const auto& loop = *loops[l];
+    const std::size_t n = loop.size();
+    int dir = 0;
+    auto close = [&]() {
+      Chain& c = chains.back();
+      c.end = static_cast<std::uint32_t>(segs.size());
+      if (dir < 0) std::reverse(segs.begin() + c.begin, segs.end());
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2& a = loop[i];
+      const Vec2& b = loop[i + 1 == n ? 0 : i + 1];
+      const int s = static_cast<int>(b.x() > a.x()) - static_cast<int>(b.x() < a.x());
+      if (i == 0 || (s != 0 && dir != 0 && s != dir)) {
+        if (i > 0) close();
+        chains.push_back({static_cast<std::uint32_t>(segs.size()), 0, Box2{}});
+        dir = 0;
+      }
+      if (s != 0) dir = s;
+      chains.back().box.add(a);
+      chains.back().box.add(b);
+      segs.push_back({std::min(a.x(), b.x()), std::max(a.x(), b.x()), std::min(a.y(), b.y()),
+                      std::max(a.y(), b.y()), a, b, static_cast<std::uint32_t>(l),
+                      static_cast<std::uint32_t>(i)});
+    }
+    close();
+  }
   auto orient = [&](const Vec2& o, const Vec2& a, const Vec2& b) {
     const double c = (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
     return c > eps ? 1 : (c < -eps ? -1 : 0);
   };
+  // Two segments meet: their boxes come within the margin and neither has both ends strictly on
+  // one side of the other (neighbours of one loop share their common point: not tested).
   auto meet = [&](const Seg& s, const Seg& t) {
-    if (std::min(s.a.x(), s.b.x()) > std::max(t.a.x(), t.b.x()) + margin ||
-        std::min(t.a.x(), t.b.x()) > std::max(s.a.x(), s.b.x()) + margin ||
-        std::min(s.a.y(), s.b.y()) > std::max(t.a.y(), t.b.y()) + margin ||
-        std::min(t.a.y(), t.b.y()) > std::max(s.a.y(), s.b.y()) + margin)
+    if (s.ylo > t.yhi + margin || t.ylo > s.yhi + margin || s.xlo > t.xhi + margin ||
+        t.xlo > s.xhi + margin)
       return false;
+    if (s.loop == t.loop) {
+      const std::uint32_t d = s.index > t.index ? s.index - t.index : t.index - s.index;
+      if (d == 1 || d + 1 == loops[s.loop]->size()) return false;
+    }
     const int d1 = orient(t.a, t.b, s.a), d2 = orient(t.a, t.b, s.b);
     const int d3 = orient(s.a, s.b, t.a), d4 = orient(s.a, s.b, t.b);
     return d1 * d2 <= 0 && d3 * d4 <= 0;
   };
-  for (std::size_t c = 0; c + 1 < count.size(); ++c)
-    for (std::uint32_t i = count[c]; i < count[c + 1]; ++i)
-      for (std::uint32_t j = i + 1; j < count[c + 1]; ++j) {
-        const Seg& s = segs[bucket[i]];
-        const Seg& t = segs[bucket[j]];
-        if (s.loop == t.loop) {
-          const std::uint32_t d = s.index > t.index ? s.index - t.index : t.index - s.index;
-          if (d == 1 || d + 1 == s.size) continue;  // neighbours share their common point
-        }
-        if (meet(s, t)) return true;
-      }
+  // Every pair of segments of two chains whose x-ranges meet within the margin: for each
+  // segment of p, those of q form one run [j0, j1) that only moves forward.
+  auto chains_meet = [&](const Chain& p, const Chain& q) {
+    std::uint32_t j0 = q.begin, j1 = q.begin;
+    for (std::uint32_t k = p.begin; k < p.end; ++k) {
+      const Seg& s = segs[k];
+      while (j0 < q.end && s.xlo > segs[j0].xhi + margin) ++j0;
+      while (j1 < q.end && !(segs[j1].xlo > s.xhi + margin)) ++j1;
+      for (std::uint32_t j = j0; j < j1; ++j)
+        if (meet(s, segs[j])) return true;
+    }
+    return false;
+  };
+  // Chain pairs whose boxes meet within the margin, by a sweep over the chains sorted by x.
+  std::vector<std::uint32_t> order(chains.size());
+  for (std::uint32_t c = 0; c < order.size(); ++c) order[c] = c;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return chains[a].box.lo.x() < chains[b].box.lo.x();
+  });
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const Chain& p = chains[order[i]];
+    // Within a chain, segment k + 1 is k's neighbour, and the later ones lie beyond it in x.
+    for (std::uint32_t k = p.begin; k < p.end; ++k)
+      for (std::uint32_t j = k + 2; j < p.end && !(segs[j].xlo > segs[k].xhi + margin); ++j)
+        if (meet(segs[k], segs[j])) return true;
+    for (std::size_t j = i + 1; j < order.size(); ++j) {
+      const Chain& q = chains[order[j]];
+      if (q.box.lo.x() > p.box.hi.x() + margin) break;
+      if (p.box.lo.y() > q.box.hi.y() + margin || q.box.lo.y() > p.box.hi.y() + margin) continue;
+      if (chains_meet(p, q)) return true;
+    }
+  }
   return false;
 }
 
@@ -606,10 +651,20 @@ std::vector<Vec2> hull_of_simple(const std::vector<Vec2>& loop) {
   top = bot + 3;  // index of the last element
   for (std::size_t i = i2 + 1; i < n; ++i) {
     const Vec2& p = loop[i];
-    if (cross2(d[bot], d[bot + 1], p) > 0 && cross2(d[top - 1], d[top], p) > 0) continue;
-    while (top - bot >= 2 && cross2(d[top - 1], d[top], p) <= 0) --top;
+    // Turns at both ends of the deque (the pops and the push at the top never touch d[bot],
+    // d[bot + 1]: at least one point stays between them and the top).
+    double at_bot = cross2(d[bot], d[bot + 1], p);
+    double at_top = cross2(d[top - 1], d[top], p);
+    if (at_bot > 0 && at_top > 0) continue;
+    while (top - bot >= 2 && at_top <= 0) {
+      --top;
+      if (top - bot >= 2) at_top = cross2(d[top - 1], d[top], p);
+    }
     d[++top] = p;
-    while (top - bot >= 2 && cross2(d[bot], d[bot + 1], p) <= 0) ++bot;
+    while (top - bot >= 2 && at_bot <= 0) {
+      ++bot;
+      if (top - bot >= 2) at_bot = cross2(d[bot], d[bot + 1], p);
+    }
     d[--bot] = p;
   }
   return std::vector<Vec2>(d.begin() + bot, d.begin() + top);
@@ -624,14 +679,27 @@ double hull_width(const std::vector<Vec2>& hull, Vec2& edge_a, Vec2& edge_b) {
   std::size_t far = 1;
   for (std::size_t e = 0; e < h; ++e) {
     const Vec2& a = hull[e];
-    const Vec2& b = hull[(e + 1) % h];
-    if (far == e) far = (e + 1) % h;
-    for (std::size_t steps = 0;
-         steps < h && cross2(a, b, hull[(far + 1) % h]) >= cross2(a, b, hull[far]); ++steps)
-      far = (far + 1) % h;
-    const double len = (b - a).norm();
-    if (len > 0 && cross2(a, b, hull[far]) / len < best) {
-      best = cross2(a, b, hull[far]) / len;
+    const Vec2& b = hull[e + 1 == h ? 0 : e + 1];
+    if (far == e) far = e + 1 == h ? 0 : e + 1;
+    // The antipodal vertex only moves forward while the height over (a, b) does not drop.
+    double height = cross2(a, b, hull[far]);
+    for (std::size_t steps = 0; steps < h; ++steps) {
+      const std::size_t next = far + 1 == h ? 0 : far + 1;
+      const double ahead = cross2(a, b, hull[next]);
+      if (!(ahead >= height)) break;
+      far = next;
+      height = ahead;
+    }
+    // Edges whose height over the width found so far is clearly larger cannot give the minimum:
+    // no square root or division for them (squares compared with a 1e-9 relative margin, far
+    // above rounding, where none of the factors can overflow or underflow).
+    const double len2 = (b - a).squaredNorm();
+    if (best >= 1e-50 && best <= 1e50 && len2 >= 1e-100 && len2 <= 1e100 && height >= 0 &&
+        height * height >= best * best * len2 * (1 + 1e-9))
+      continue;
+    const double len = std::sqrt(len2);
+    if (len > 0 && height / len < best) {
+      best = height / len;
       edge_a = a;
       edge_b = b;
     }
@@ -652,9 +720,16 @@ double minimum_width(const std::vector<Vec2>& pts) {
     const double len = (b - a).norm();
     const Box2 box = box_of(pts);
     const double eps = 1e-12 * (box.hi - box.lo).norm();
+    // Heights clearly inside [-eps, width + eps] (a 1e-9 relative margin, far above rounding,
+    // where no product can underflow or overflow) need no division.
+    const bool quick = len >= 1e-100 && len <= 1e100 && eps >= 1e-200 && width + eps <= 1e100;
+    const double lo = quick ? -eps * len * (1 - 1e-9) : 0.0;
+    const double hi = quick ? (width + eps) * len * (1 - 1e-9) : -1.0;
     bool inside = true;
     for (const Vec2& p : pts) {
-      const double h = cross2(a, b, p) / len;
+      const double c = cross2(a, b, p);
+      if (c >= lo && c <= hi) continue;
+      const double h = c / len;
       if (h < -eps || h > width + eps) {
         inside = false;
         break;
@@ -696,14 +771,40 @@ double loop_distance(const std::vector<Vec2>& a, const std::vector<Vec2>& b, dou
     for (std::uint32_t i : points) from_box.add(from[i]);
     const std::vector<std::uint32_t> edges = near(to, from_box, std::sqrt(best));
     const std::size_t n = to.size();
+    // The edges in groups of 16 with their boxes: a group farther from the point than the
+    // nearest edge so far (plus a margin far above the rounding of the distances, ~1e-15 of the
+    // coordinates) holds no nearer edge, so skipping it leaves the minimum as it is.
+    constexpr std::size_t kGroup = 16;
+    std::vector<Box2> groups((edges.size() + kGroup - 1) / kGroup);
+    for (std::size_t k = 0; k < edges.size(); ++k) {
+      groups[k / kGroup].add(to[edges[k]]);
+      groups[k / kGroup].add(to[edges[k] + 1 == n ? 0 : edges[k] + 1]);
+    }
+    double size = 0.0;  // largest coordinate magnitude involved
+    for (const Box2& box : {to_box, from_box})
+      size = std::max({size, std::abs(box.lo.x()), std::abs(box.lo.y()), std::abs(box.hi.x()),
+                       std::abs(box.hi.y())});
+    const bool prune = size > 1e-100 && size < 1e100;
+    const double margin = 1e-12 * size;
     for (std::uint32_t i : points) {
       const Vec2& q = from[i];
-      for (std::uint32_t e : edges) {
-        const Vec2& p0 = to[e];
-        const Vec2 d = to[e + 1 == n ? 0 : e + 1] - p0;
-        const double len2 = d.squaredNorm();
-        const double t = len2 > 0 ? std::clamp((q - p0).dot(d) / len2, 0.0, 1.0) : 0.0;
-        best = std::min(best, (p0 + t * d - q).squaredNorm());
+      for (std::size_t g = 0; g < groups.size(); ++g) {
+        if (prune) {
+          const Box2& box = groups[g];
+          const double dx = std::max({box.lo.x() - q.x(), 0.0, q.x() - box.hi.x()});
+          const double dy = std::max({box.lo.y() - q.y(), 0.0, q.y() - box.hi.y()});
+          const double reach = std::sqrt(best) + margin;
+          if (dx * dx + dy * dy > reach * reach) continue;
+        }
+        const std::size_t end = std::min(edges.size(), (g + 1) * kGroup);
+        for (std::size_t k = g * kGroup; k < end; ++k) {
+          const std::uint32_t e = edges[k];
+          const Vec2& p0 = to[e];
+          const Vec2 d = to[e + 1 == n ? 0 : e + 1] - p0;
+          const double len2 = d.squaredNorm();
+          const double t = len2 > 0 ? std::clamp((q - p0).dot(d) / len2, 0.0, 1.0) : 0.0;
+          best = std::min(best, (p0 + t * d - q).squaredNorm());
+        }
       }
     }
   };
@@ -782,21 +883,24 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
   const double gap = std::isfinite(contact_gap) ? std::max(0.0, contact_gap) : 0.0;
   std::vector<std::int32_t> parent(nv);
   for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
+  // A set's root is its smallest vertex (the larger root always joins the smaller one).
+  Index roots = nv;  // each join of two sets leaves one root fewer
+  auto join_roots = [&](std::int32_t a, std::int32_t b) {
+    if (a == b) return a;
+    --roots;
+    if (a > b) std::swap(a, b);
+    parent[b] = a;
+    return a;
+  };
   auto join = [&](std::int32_t a, std::int32_t b) {
-    a = find_root(parent, a);
-    b = find_root(parent, b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    join_roots(find_root(parent, a), find_root(parent, b));
   };
   for (Index f = 0; f < nf; ++f) {
-    join(mesh.faces[3 * f], mesh.faces[3 * f + 1]);
-    join(mesh.faces[3 * f], mesh.faces[3 * f + 2]);
+    const std::int32_t* t = mesh.faces + 3 * f;
+    const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
+    join_roots(r, find_root(parent, t[2]));
   }
-  auto count_roots = [&]() {
-    Index roots = 0;
-    for (Index v = 0; v < nv; ++v) roots += find_root(parent, static_cast<std::int32_t>(v)) == v;
-    return roots;
-  };
-  if (count_roots() <= 1) return {};
+  if (roots <= 1) return {};
   // Shells touching at exactly the same position (unwelded meshes) are one piece.
   std::vector<std::int32_t> order(nv);
   for (Index v = 0; v < nv; ++v) order[v] = static_cast<std::int32_t>(v);

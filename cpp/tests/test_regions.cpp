@@ -316,6 +316,49 @@ TEST(Regions, NestedLoopsGiveClippersUnion) {
   }
 }
 
+TEST(Regions, LoopsThatCrossOrTouchGiveClippersUnion) {
+  // Loops whose boxes meet but that cross or touch each other (or themselves) must not take the
+  // shortcut for nested loops: their material is Clipper2's union, larger than the loop around
+  // the bone point alone. The cases stress the crossing test's split of loops into runs that go
+  // one way in x: vertical edges, a saw-tooth with a turn at every point, a shared edge, a
+  // crossing that is only a touch at one vertex, a loop that crosses itself.
+  const auto circle = regular_polygon(5, 64);
+  const auto rect = [](double x0, double y0, double x1, double y1) {
+    return std::vector<Vec2>{{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+  };
+  std::vector<Vec2> saw;  // a saw-tooth band from x = 3 to x = 9, crossing the circle at x = 5
+  for (int k = 0; k <= 24; ++k) saw.emplace_back(3 + 0.25 * k, (k % 2 ? 0.6 : 0.2));
+  saw.emplace_back(9, -0.5);
+  saw.emplace_back(3, -0.5);
+  saw = reversed(saw);  // counter-clockwise: material (clockwise would be a hole)
+  // A point of the circle's boundary: a triangle with a vertex exactly on it, reaching out.
+  const Vec2 on = circle[3];
+  const std::vector<std::vector<std::vector<Vec2>>> cases = {
+      {circle, rect(4, -1, 8, 1)},                               // a box through the boundary
+      {circle, saw},                                             // a saw-tooth through it
+      {rect(-1, -1, 1, 1), rect(1, -1, 3, 1)},                   // two squares sharing an edge
+      {rect(-1, -1, 1, 1), rect(1, 0.5, 3, 1.5)},                // ... part of an edge
+      {circle, {on, on + Vec2(3, -1), on + Vec2(3, 1)}},         // a vertex on its boundary
+      {circle, {{4, -2}, {8, 2}, {8, -2}, {4, 2}}},              // a bow-tie through it
+      {rect(-2, -2, 2, 2), {{2, -1}, {4, -1}, {4, 1}, {2, 1}}},  // touching along x = 2
+  };
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    PlaneCut cut;
+    cut.loops = cases[c];
+    const SectionGeometry geom = select_region(cut);
+    ASSERT_TRUE(geom.found) << c;
+    const SectionProperties got = section_properties(geom.polygon);
+    const SectionProperties want = clipper_region(cut.loops);
+    ASSERT_TRUE(want.valid) << c;
+    if (c == 4)  // a touch at one vertex joins no material: the circle stays a piece of its own
+      EXPECT_NEAR(want.area, polygon_area(circle), 1e-9 * want.area);
+    else  // the union is larger than the loop around the bone point
+      EXPECT_GT(want.area, polygon_area(cut.loops[0]) + 0.1) << c;
+    EXPECT_NEAR(got.area, want.area, 1e-9 * want.area) << c;
+    EXPECT_NEAR(got.modulus, want.modulus, 1e-9 * want.modulus) << c;
+  }
+}
+
 TEST(Regions, ThicknessOfAHollowWall) {
   // A 64-gon tube r 5 / r 4: parallel edges cos(pi/64) apart (the wall, ~1 mm), not the
   // outer diameter; an off-centre hole: its thinnest side.
