@@ -188,7 +188,11 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     if (!family) {
       double extent = 0.0;
       for (const Vec2& q : st.cut.outer) extent = std::max(extent, q.norm());
-      for (int side = 0; side < 2; ++side) {
+      // The side towards the bone's nearer end first: where one side has no material of its
+      // own it is usually that one, and the other plane need not be cut.
+      const bool far_first = count > 0 && 2 * (i - first) >= count;
+      for (int k = 0; k < 2; ++k) {
+        const int side = far_first ? 1 - k : k;
         PlaneFrame frame = st.frame;
         frame.origin += (side == 0 ? -delta[b] : delta[b]) * frame.normal;
         const CutRegion ball{frame.origin, Vec3::Zero(), 3.0 * extent + delta[b]};
@@ -203,6 +207,8 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
           ++sides;
         } else if (!geom.found && !cut.open_chains.empty() && (geom.flags & kFlagOpen)) {
           ++sides;  // clipped around the bone point: a far larger member, covering the section
+        } else {
+          return;  // a side without material of its own: nothing continues through the plane
         }
       }
     }

@@ -38,8 +38,9 @@ SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain = nu
 /// The junction core of a section (SPEC §3, docs/junctions.md): the part of `section` that
 /// continues through the plane, i.e. that the regions `neighbours` (the regions around the bone
 /// point on parallel planes a short distance before and after, in the same plane coordinates,
-/// mm) also contain. Each neighbour is widened by `margin_mm` (Clipper2 InflatePaths, round
-/// joins) so that facet wobble does not trim a plain tube; of the material trimmed off, only the
+/// mm) also contain. What the neighbours cover in common is widened by `margin_mm` (their
+/// outlines thinned to within a quarter of it first; Clipper2 InflatePaths, round joins) so that
+/// facet wobble does not trim a plain tube; of the material trimmed off, only the
 /// pieces wider than 2 * opening_mm somewhere (their erosion by opening_mm is not empty: stubs)
 /// are left out, whole; thin pieces (the rim of a taper, a tilted bone's crescent) stay. Returns
 /// the region of the core around the plane origin (the bone point), or found = false when the
