@@ -36,6 +36,7 @@ sys.path.insert(0, str(ROOT / "blender_addon"))
 sys.path.insert(0, str(ROOT / "scripts"))
 
 import bpy
+from blender_window import view3d
 
 
 def _args():
@@ -53,19 +54,8 @@ ARGS = _args()
 print("bench_gui_cancel: start", flush=True)
 
 
-def _view3d():
-    win = bpy.context.window_manager.windows[0]
-    for area in win.screen.areas:
-        if area.type == "VIEW_3D":
-            region = next(r for r in area.regions if r.type == "WINDOW")
-            return win, area, region
-    area = win.screen.areas[0]
-    area.type = "VIEW_3D"
-    return win, area, next(r for r in area.regions if r.type == "WINDOW")
-
-
 def _invoke(**kw):
-    win, area, region = _view3d()
+    win, area, region, _ui = view3d(make=True)
     with bpy.context.temp_override(window=win, area=area, region=region):
         return bpy.ops.osteon.analyze("INVOKE_DEFAULT", **kw)
 

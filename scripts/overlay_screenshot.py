@@ -30,6 +30,7 @@ for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
 
 import make_sample_rig
 import osteon_blender
+from blender_window import view3d
 from osteon_blender import live, overlay
 
 argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
@@ -40,15 +41,6 @@ OUT = os.path.abspath(args.out)
 state = {"step": 0, "ok": False}
 
 
-def view3d():
-    win = bpy.context.window_manager.windows[0]
-    for area in win.screen.areas:
-        if area.type == "VIEW_3D":
-            region = next(r for r in area.regions if r.type == "WINDOW")
-            return win, area, region
-    raise RuntimeError("no 3D viewport")
-
-
 def setup():
     if not hasattr(bpy.types.Scene, "osteon"):
         osteon_blender.register()
@@ -57,7 +49,7 @@ def setup():
         obj, arm = make_sample_rig.build()
     arm.pose.bones["forearm.L"].scale = (0.75, 1.0, 0.75)
     bpy.context.view_layer.update()
-    win, area, region = view3d()
+    win, area, region, _ui = view3d()
     space = area.spaces.active
     space.shading.type = "SOLID"
     space.shading.color_type = "VERTEX"
@@ -116,7 +108,7 @@ def tick():
         state["ok"] = state["ok"] and done
         return 1.0                      # let the new outlines be drawn
     if state["step"] == 4:
-        win, area, _region = view3d()
+        win, area, _region, _ui = view3d()
         os.makedirs(os.path.dirname(OUT), exist_ok=True)
         with bpy.context.temp_override(window=win, area=area):
             bpy.ops.screen.screenshot(filepath=OUT)

@@ -46,6 +46,7 @@ for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
 import make_sample_rig
 import osteon_blender
 import ui_fit
+from blender_window import view3d
 
 argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
 ap = argparse.ArgumentParser()
@@ -56,15 +57,6 @@ OUT = os.path.abspath(args.out)
 VERDICT_STARTS = ("all within the limit", "not analysed", "1 bone over the limit")
 REPORT: dict = {"steps": [], "failures": []}
 TAB_OSTEON_FROM_TOP_PX = 161  # the middle of the 4th tab, px at scale 1 (3.4, factory settings)
-
-
-def view3d():
-    win = bpy.context.window_manager.windows[0]
-    for area in win.screen.areas:
-        if area.type == "VIEW_3D":
-            regions = {r.type: r for r in area.regions}
-            return win, area, regions["WINDOW"], regions["UI"]
-    raise RuntimeError("no 3D viewport")
 
 
 def fail(msg: str) -> None:
