@@ -156,6 +156,7 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
   const int workers = detail::worker_count(options.threads, static_cast<long>(todo.size()));
   std::vector<std::vector<CutSegment>> scratch(workers);
   detail::parallel_for(static_cast<long>(todo.size()), options.threads, [&](long t, int worker) {
+    run.check_cancel();  // Esc reaches a run that is checking many candidates, too
     const int i = todo[t];
     SectionState& st = states[i];
     const int b = specs[i].bone;
