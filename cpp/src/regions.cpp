@@ -255,10 +255,21 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
   };
   // Every pair of segments of two chains whose x-ranges meet within the margin: for each
   // segment of p, those of q form one run [j0, j1) that only moves forward.
+  // Both runs start by binary search at the first segment that reaches the other chain's box in
+  // x (a short chain against a long one would otherwise walk the long one from its start).
+  auto first_reaching = [&](const Chain& c, double x) {
+    return static_cast<std::uint32_t>(
+        std::partition_point(segs.begin() + c.begin, segs.begin() + c.end,
+                             [&](const Seg& t) { return x > t.xhi + margin; }) -
+        segs.begin());
+  };
   auto chains_meet = [&](const Chain& p, const Chain& q) {
-    std::uint32_t j0 = q.begin, j1 = q.begin;
-    for (std::uint32_t k = p.begin; k < p.end; ++k) {
+    const std::uint32_t k0 = first_reaching(p, q.box.lo.x());
+    if (k0 == p.end) return false;
+    std::uint32_t j0 = first_reaching(q, segs[k0].xlo), j1 = j0;
+    for (std::uint32_t k = k0; k < p.end; ++k) {
       const Seg& s = segs[k];
+      if (s.xlo > q.box.hi.x() + margin) break;  // this and later segments lie beyond q
       while (j0 < q.end && s.xlo > segs[j0].xhi + margin) ++j0;
       while (j1 < q.end && !(segs[j1].xlo > s.xhi + margin)) ++j1;
       for (std::uint32_t j = j0; j < j1; ++j)

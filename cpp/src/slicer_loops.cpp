@@ -65,6 +65,21 @@ std::pair<std::uint64_t, std::uint64_t> segment_key(const CutSegment& s) {
                                : std::make_pair(s.edge[1], s.edge[0]);
 }
 
+// Scratch reused per thread (a run assembles thousands of cuts).
+struct LoopScratch {
+  EdgeTable table;
+  std::vector<std::int32_t> partner;
+  std::vector<std::uint8_t> used;
+};
+
+// This thread's scratch, reached through a call the compiler cannot see into: in a shared library
+// GCC re-derives a thread_local's address (a __tls_get_addr call) at each use in a loop, which
+// cost ~4 % of a whole analysis here.
+[[gnu::noinline]] LoopScratch& loop_scratch() {
+  thread_local LoopScratch scratch;
+  return scratch;
+}
+
 }  // namespace
 
 PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_tolerance) {
@@ -76,8 +91,9 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   // still non-manifold after that is flagged.
   const std::vector<CutSegment>* source = &input;
   std::vector<CutSegment> deduplicated;
-  thread_local EdgeTable table;
-  thread_local std::vector<std::int32_t> partner;
+  LoopScratch& scratch = loop_scratch();
+  EdgeTable& table = scratch.table;
+  std::vector<std::int32_t>& partner = scratch.partner;
   for (int attempt = 0; attempt < 2; ++attempt) {
     const std::vector<CutSegment>& segs = *source;
     const std::size_t count = segs.size();
@@ -108,7 +124,7 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   }
   const std::vector<CutSegment>& segments = *source;
   const std::size_t m = segments.size();
-  thread_local std::vector<std::uint8_t> used;
+  std::vector<std::uint8_t>& used = scratch.used;
   used.assign(m, 0);
   std::vector<Vec2> forward, backward;
   for (std::size_t s0 = 0; s0 < m; ++s0) {
