@@ -55,6 +55,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     ap.add_argument("--max-rounds", type=int)
     ap.add_argument("--scaling", choices=[m[0] for m in core.SCALING_MODES],
                     help="THIN (flat parts across their thickness only) or UNIFORM (both axes)")
+    ap.add_argument("--no-junction-cores", dest="junction_cores", action="store_false",
+                    help="whole cuts: do not trim a side branch's stub from the sections that "
+                    "cut it (faster; docs/junctions.md)")
     ap.add_argument("--auto-skeleton", action="store_true",
                     help="rig an unrigged mesh first (Make skeleton: osteon.auto_skeleton, "
                     "needs pygel3d); the largest unrigged mesh unless --object")
@@ -109,6 +112,8 @@ def apply_settings(s, a: argparse.Namespace) -> None:
         s.scaling = a.scaling
     if a.held_bone is not None:
         s.held_bone = a.held_bone
+    if not a.junction_cores:
+        s.junction_cores = False
 
 
 # --------------------------------------------------------------------------- render

@@ -181,7 +181,8 @@ def _preset_exact(s, ratio: float) -> float:
 
 def settings_of(s) -> Settings:
     """``scene.osteon`` as the wheel's :class:`osteon.settings.Settings` (the build direction
-    from the "Print direction" setting, the layer ratio from "Layer strength")."""
+    from the "Print direction" setting, the layer ratio from "Layer strength", ``junctions``
+    from "Junction cores")."""
     from . import printdir
 
     return Settings(
@@ -191,7 +192,8 @@ def settings_of(s) -> Settings:
         strength_mpa=float(s.strength_mpa), safety_factor=float(s.safety_factor),
         held_bone=s.held_bone or None, size_mode=s.size_mode,
         print_size_mm=float(s.print_size_mm), max_scale=float(s.max_scale),
-        max_rounds=int(s.max_rounds), scaling=str(s.scaling))
+        max_rounds=int(s.max_rounds), scaling=str(s.scaling),
+        junctions=bool(getattr(s, "junction_cores", True)))
 
 
 def engine_params(s, arm, bone_names, correct: bool = False) -> dict:

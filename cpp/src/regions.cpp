@@ -754,7 +754,9 @@ double minimum_width(const std::vector<Vec2>& pts) {
 
 // Smallest distance (mm) between two closed loops that do not cross (the nearest vertex of one
 // to an edge of the other, both ways), or `bound` when they are no nearer than that. Only the
-// parts of each loop within `bound` of the other's box are visited.
+// edges of each loop that come within `bound` of the other's box are visited: an edge counts
+// when its own box reaches the other's box widened by the bound, so a long edge whose ends are
+// both far but whose middle passes close is visited too.
 double loop_distance(const std::vector<Vec2>& a, const std::vector<Vec2>& b, double bound) {
   double best = bound * bound;
   // A first bound from a few vertices of `a` to every vertex of `b` keeps the visited parts small.
@@ -762,16 +764,20 @@ double loop_distance(const std::vector<Vec2>& a, const std::vector<Vec2>& b, dou
   for (std::size_t i = 0; i < a.size(); i += step)
     for (const Vec2& q : b) best = std::min(best, (a[i] - q).squaredNorm());
   auto near = [](const std::vector<Vec2>& loop, const Box2& box, double d) {
-    // Indices i of edges (i, i + 1) with an end within d of the box.
+    // Indices i of edges (i, i + 1) that may come within d of the box: the edge's own box meets
+    // the box widened by d (conservative: every edge within d is among them, and every vertex
+    // within d is the first end of one of them).
     std::vector<std::uint32_t> out;
     const std::size_t n = loop.size();
-    auto close = [&](const Vec2& p) {
-      return p.x() >= box.lo.x() - d && p.x() <= box.hi.x() + d && p.y() >= box.lo.y() - d &&
-             p.y() <= box.hi.y() + d;
-    };
-    for (std::size_t i = 0; i < n; ++i)
-      if (close(loop[i]) || close(loop[i + 1 == n ? 0 : i + 1]))
+    const double x0 = box.lo.x() - d, x1 = box.hi.x() + d;
+    const double y0 = box.lo.y() - d, y1 = box.hi.y() + d;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2& p = loop[i];
+      const Vec2& q = loop[i + 1 == n ? 0 : i + 1];
+      if (std::max(p.x(), q.x()) >= x0 && std::min(p.x(), q.x()) <= x1 &&
+          std::max(p.y(), q.y()) >= y0 && std::min(p.y(), q.y()) <= y1)
         out.push_back(static_cast<std::uint32_t>(i));
+    }
     return out;
   };
   auto one_way = [&](const std::vector<Vec2>& from, const std::vector<Vec2>& to) {

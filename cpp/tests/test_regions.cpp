@@ -375,6 +375,32 @@ TEST(Regions, ThicknessOfAHollowWall) {
   EXPECT_NEAR(region_thickness(SectionPolygon{outer, {h1, h2}}), 0.3, 1e-12);
 }
 
+TEST(Regions, ThicknessOfAWallAlongALongEdge) {
+  // A hole (a 16-gon of radius 1 mm, a vertex at its top) centred at (0, 17) under the top edge
+  // y = 20 of an outer loop with few vertices: the wall is 20 - 17 - 1 = 2 mm, found on the
+  // middle of an edge whose two ends are far from the hole. A square with corners at +-20 mm,
+  // and a 200 x 40 mm rectangle whose corners are farther from the hole (99 mm) than its width
+  // (40 mm, the first bound on the thickness): no end of any of its edges is near the hole.
+  const auto hole = moved(reversed(regular_polygon(1, 16)), Vec2(0, 17));
+  for (const double half_width : {20.0, 100.0}) {
+    const auto outer = rectangle(2 * half_width, 40);
+    EXPECT_NEAR(region_thickness(SectionPolygon{outer, {hole}}), 2.0, 1e-12) << half_width;
+  }
+  // The hole turned by half a step: its top edge (the apothem cos(pi/16) above its centre)
+  // faces the outer edge, 3 - cos(pi/16) mm away; and one off-centre near the bottom edge.
+  std::vector<Vec2> half_step;
+  for (const Vec2& p : reversed(regular_polygon(1, 16))) {
+    const double t = M_PI / 16;
+    half_step.emplace_back(std::cos(t) * p.x() - std::sin(t) * p.y(),
+                           std::sin(t) * p.x() + std::cos(t) * p.y());
+  }
+  const auto outer = rectangle(200, 40);
+  EXPECT_NEAR(region_thickness(SectionPolygon{outer, {moved(half_step, Vec2(30, 17))}}),
+              3 - std::cos(M_PI / 16), 1e-12);
+  EXPECT_NEAR(region_thickness(SectionPolygon{outer, {moved(half_step, Vec2(-40, -18.5))}}),
+              1.5 - std::cos(M_PI / 16), 1e-12);
+}
+
 TEST(Regions, ThicknessOfALoopThatCrossesItself) {
   // A bow-tie ordering of a 4 x 3 rectangle's corners: the linear-time hull of a simple polygon
   // does not apply; the width is still the hull's, 3.

@@ -777,6 +777,7 @@ def correct(
     keep_outlines: bool = False,
     min_thickness: float | None = None,
     progress: Progress | None = None,
+    junctions: bool = True,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -799,6 +800,8 @@ def correct(
     ``layer_strength_ratio`` as in :func:`analyze`: the loop is driven by the stress ratio
     against each section's direction-dependent allowable. ``keep_outlines``: ``before``
     and ``after`` carry their sections' loops (:attr:`Analysis.section_loops`).
+    ``junctions`` as in :func:`analyze`: True (default) drives the loop by the junction cores
+    (the stub of a side branch not counted, docs/junctions.md), False by the whole cuts.
     ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
     round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
     """
@@ -833,7 +836,8 @@ def correct(
         from scipy import sparse
 
         nearest = analyze(v, f, skeleton, None, force=force, allowable_stress=allowable_stress,
-                          interval=interval, root=root, progress=progress).vertex_bone
+                          interval=interval, root=root, progress=progress,
+                          junctions=junctions).vertex_bone
         weights = sparse.csr_matrix(
             (np.ones(len(v)), (np.arange(len(v)), nearest)), shape=(len(v), skeleton.num_bones)
         )
@@ -842,6 +846,7 @@ def correct(
                        gap_tolerance, threads, build_direction, layer_strength_ratio)
     options.keep_outlines = bool(keep_outlines)
     options.min_thickness = _min_thickness(min_thickness)
+    options.junctions = bool(junctions)
     co = _core.CorrectionOptions()
     co.max_scale, co.max_rounds = float(max_scale), max_rounds
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"

@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
+import numpy as np
+
 from . import materials
 from .report import allowable_stress
 
@@ -27,7 +29,9 @@ class Settings:
     ``max_rounds``, ``scaling``: the correction's limits and mode ("thin"/"uniform");
     ``build_direction`` (3,) the FDM build direction in the model's frame and
     ``layer_strength_ratio`` layer / in-plane strength (1.0 isotropic, ``None`` = the material
-    preset's; docs/printing.md).
+    preset's; docs/printing.md); ``junctions`` (default True): where a section cuts a side
+    branch's stub, count only the core that continues through the plane (flag ``junction``,
+    docs/junctions.md); False analyses whole cuts (faster, no junction stage).
     """
 
     force_n: float
@@ -43,6 +47,7 @@ class Settings:
     scaling: str = "thin"
     build_direction: tuple = (0.0, 0.0, 1.0)
     layer_strength_ratio: float | None = 1.0
+    junctions: bool = True
 
     def layer_ratio(self) -> float:
         """Layer / in-plane strength used: the given one; ``None``: the material preset's (1.0
@@ -79,6 +84,7 @@ class Settings:
         d["scaling"] = str(self.scaling).upper()
         d["build_direction"] = [float(x) for x in self.build_direction]
         d["layer_strength_ratio"] = self.layer_ratio()
+        d["junctions"] = _switch(self.junctions, "junctions")
         return d
 
 
@@ -101,6 +107,14 @@ def _positive(value, what: str, unit: str) -> float:
     if not (v > 0.0 and math.isfinite(v)):
         raise ValueError(f"{what} must be a positive number of {unit}, got {value}")
     return v
+
+
+def _switch(value, what: str) -> bool:
+    """A yes/no setting: True/False (or 1/0); ``ValueError`` naming it otherwise (a string
+    such as "false" is not taken for True)."""
+    if isinstance(value, (bool, np.bool_)) or (isinstance(value, int) and value in (0, 1)):
+        return bool(value)
+    raise ValueError(f"{what} must be True or False, got {value!r}")
 
 
 def _direction(value) -> list[float]:
@@ -141,7 +155,8 @@ def min_thickness_mm(settings: Settings) -> float:
 
 def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> dict:
     """The keyword arguments of ``osteon.analyze`` / ``Analyzer`` (``force``,
-    ``allowable_stress``, ``interval``, ``root``), plus ``max_scale``, ``max_rounds``,
+    ``allowable_stress``, ``interval``, ``root``, ``build_direction``,
+    ``layer_strength_ratio``, ``min_thickness``, ``junctions``), plus ``max_scale``, ``max_rounds``,
     ``scaling`` with ``correct=True`` for ``osteon.correct``. Raises ``ValueError`` naming the
     bad setting."""
     kw = {
@@ -153,6 +168,7 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
         "layer_strength_ratio": _positive(settings.layer_ratio(), "layer strength ratio",
                                           "(layer / in-plane strength)"),
         "min_thickness": min_thickness_mm(settings),
+        "junctions": _switch(settings.junctions, "junctions"),
     }
     if correct:
         if not (float(settings.max_scale) >= 1.0):

@@ -211,3 +211,134 @@ def test_correction_scales_the_junction_sections_own_bone_not_the_stubs():
     assert c.bone_scale[2] == 1.0
     assert c.bone_scale[1] >= 0.99 * np.cbrt(core / (0.99 * allow))
     assert not c.after.weak.any()
+
+
+# --------------------------------------------------------------------------- the switch
+# ``Settings.junctions`` (osteon.settings): the one mapping the CLI, batch runs and the add-on
+# share; ``--no-junction-cores`` on the command line.
+
+
+def test_settings_junctions_reach_the_engine_arguments():
+    from osteon.batch.settings import BatchSettings
+    from osteon.settings import Settings, engine_arguments
+
+    on = Settings(force_n=20.0, interval_mm=2.0)
+    off = Settings(force_n=20.0, interval_mm=2.0, junctions=False)
+    assert on.junctions is True
+    assert engine_arguments(on, [])["junctions"] is True
+    assert engine_arguments(off, [])["junctions"] is False
+    assert engine_arguments(off, [], correct=True)["junctions"] is False
+    assert on.as_dict()["junctions"] is True and off.as_dict()["junctions"] is False
+    assert np.bool_(False) is not False  # a NumPy bool is taken as what it says
+    kw = engine_arguments(Settings(force_n=20.0, interval_mm=2.0, junctions=np.bool_(False)), [])
+    assert kw["junctions"] is False
+    batch = BatchSettings.from_any({"junctions": False, "correct": True})
+    assert batch.engine_kwargs([])["junctions"] is False
+    assert batch.as_dict()["settings"]["junctions"] is False
+    # every key engine_arguments gives is a keyword of analyze / Analyzer / correct
+    import inspect
+
+    for fn, correct in ((osteon.analyze, False), (osteon.Analyzer, False),
+                        (osteon.correct, True)):
+        params = inspect.signature(fn).parameters
+        assert set(engine_arguments(off, [], correct=correct)) <= set(params), fn
+
+
+@pytest.mark.parametrize("value", ["false", "no", None, 2, 0.5])
+def test_settings_junctions_must_be_a_yes_or_no(value):
+    from osteon.settings import Settings, engine_arguments
+
+    with pytest.raises(ValueError, match="junctions must be True or False"):
+        engine_arguments(Settings(force_n=20.0, interval_mm=2.0, junctions=value), [])
+
+
+def _write_rig(tmp_path, meshes, heads, tails, parents):
+    """OBJ + TGF of merged meshes and a skeleton (mm), for the command line."""
+    from osteon.io import write_mesh
+    from osteon.io.libigl import write_tgf
+
+    obj, tgf = tmp_path / "rig.obj", tmp_path / "rig.tgf"
+    write_mesh(obj, *merge(*meshes))
+    joints = np.concatenate([heads, tails])
+    b = len(heads)
+    pairs = [[i, b + i] for i in range(b)]
+    for i, p in enumerate(parents):  # a child's head is its parent's tail
+        if p >= 0:
+            pairs[i][0] = b + p
+    write_tgf(tgf, joints, pairs)
+    return obj, tgf
+
+
+def test_cli_no_junction_cores_analyses_whole_cuts(tmp_path):
+    from osteon.cli import main
+
+    bar, stub, _sk = tbar()
+    obj, tgf = _write_rig(tmp_path, (bar, stub), [[0, 0, 0]], [[40, 0, 0]], [-1])
+    reports = {}
+    for name, extra in (("on", []), ("off", ["--no-junction-cores"])):
+        js = tmp_path / f"{name}.json"
+        # the bar is 40 mm long along x: --height-mm 40 --axis x keeps the model's mm
+        assert main(["analyze", str(obj), "--skeleton", str(tgf), "--height-mm", "40",
+                     "--axis", "x", "--interval", "2", "-q", "--json", str(js), *extra]) == 0
+        reports[name] = json.loads(js.read_text())
+    on, off = reports["on"], reports["off"]
+    assert on["settings"]["junctions"] is True and off["settings"]["junctions"] is False
+    through = [r["index"] for r in on["section_table"] if "junction" in r["flags"]]
+    assert len(through) == 3 and on["junction_sections"] == through
+    for k in through:  # on: the core, the bar's W = π r³ / 4
+        assert on["section_table"][k]["modulus_mm3"] == pytest.approx(W_ROUND, rel=0.10)
+    # off: no section carries the flag, and the stub's sections count the whole cut
+    assert off["junction_sections"] == []
+    assert not any("junction" in r["flags"] for r in off["section_table"])
+    assert len(off["section_table"]) == len(on["section_table"])
+    for k in through:
+        row = off["section_table"][k]
+        assert row["modulus_mm3"] == pytest.approx(on["section_table"][k]["cut_modulus_mm3"],
+                                                   rel=1e-12)
+        assert row["modulus_mm3"] > 1.6 * W_ROUND
+        # σ = M / W on the whole cut's W (the arm from its own centroid): lower than the core's
+        assert row["stress_mpa"] == pytest.approx(row["moment_nmm"] / row["modulus_mm3"])
+        assert row["stress_mpa"] < 0.7 * on["section_table"][k]["stress_mpa"]
+
+
+def test_cli_correct_and_batch_take_the_switch(tmp_path):
+    # The body + bar + stub of the correction test: with the allowable between the junction
+    # core's stress and every other one, only the cores are weak. On, Correct thickens the bar;
+    # with --no-junction-cores nothing is weak (the stub counted) and no bone is scaled.
+    from osteon.cli import main
+
+    body = cylinder_along([0, 0, 0], [17, 0, 0], 4.5, n=48, stations=18)
+    bar = cylinder_along([16, 0, 0], [40, 0, 0], R, n=48, stations=25)
+    stub = cylinder_along([20, 0, 0], [20, 0, 9], R, n=48, stations=10)
+    heads, tails = [[0, 0, 0], [16, 0, 0]], [[16, 0, 0], [40, 0, 0]]
+    v, f = merge(body, bar, stub)
+    sk = osteon.Skeleton(heads, tails, [-1, 0])
+    a = osteon.analyze(v, f, sk, interval=2.0)
+    j = a.junction
+    core = a.stress[j].max()
+    others = max(np.nanmax(a.stress[~j]), np.nanmax(a.moment / a.section_cut_modulus))
+    assert core > 1.1 * others
+    allow = 0.5 * (core + others)
+    obj, tgf = _write_rig(tmp_path, (body, bar, stub), heads, tails, [-1, 0])
+    # rig.tgf is rig.obj's sidecar (the batch finds it; analyze / correct are told)
+    common = ["--height-mm", "40", "--axis", "x", "--interval", "2",
+              "--strength-mpa", repr(float(allow)), "--safety-factor", "1", "-q"]
+    scales = {}
+    for name, extra in (("on", []), ("off", ["--no-junction-cores"])):
+        js = tmp_path / f"correct-{name}.json"
+        assert main(["correct", str(obj), "--skeleton", str(tgf), *common, "--out", str(tmp_path / f"{name}.obj"),
+                     "--json", str(js), *extra]) == 0
+        rep = json.loads(js.read_text())
+        assert rep["settings"]["junctions"] is (name == "on")
+        scales[name] = rep["bone_scale"]
+    assert scales["on"][0] == 1.0 and scales["on"][1] >= 0.99 * np.cbrt(core / (0.99 * allow))
+    assert scales["off"] == [1.0, 1.0]
+    # batch: the same switch (on: the three cores are weak; off: none)
+    for name, extra in (("on", []), ("off", ["--no-junction-cores"])):
+        out = tmp_path / f"batch-{name}"
+        assert main(["batch", str(obj), "--out", str(out), *common, "--no-png", "-j", "1",
+                     *extra]) == 0
+        (rep_path,) = out.rglob("*.json")
+        rep = json.loads(rep_path.read_text())
+        assert rep["settings"]["junctions"] is (name == "on")
+        assert len(rep["junction_sections"]) == rep["weak_sections"] == (3 if name == "on" else 0)

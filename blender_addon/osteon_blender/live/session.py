@@ -127,7 +127,7 @@ def _settings_key(scene) -> tuple:
     s = scene.osteon
     return (float(s.strength_mpa), float(s.safety_factor), float(s.force_n), s.size_mode,
             float(s.print_size_mm), float(s.interval_mm), s.held_bone,
-            float(scene.unit_settings.scale_length))
+            float(scene.unit_settings.scale_length), bool(s.junction_cores))
 
 
 def _objects(sess: Session):
@@ -165,7 +165,8 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
     sig = (co, matrix, sk.heads, sk.tails, settings)
     last = sess.last_sig
     key = bridge.topology_key(obj) + (tuple(sk.names), tuple(int(p) for p in sk.parents),
-                                       float(s.force_n), allowable, float(s.interval_mm), root)
+                                       float(s.force_n), allowable, float(s.interval_mm), root,
+                                       params["junctions"])
     rebuild = sess.analyzer is None or key != sess.analyzer_key or sess.weights_stale
     if (not force and not rebuild and last is not None and last[4] == settings
             and np.array_equal(last[0], co) and np.array_equal(last[1], matrix)

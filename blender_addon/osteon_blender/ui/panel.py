@@ -193,7 +193,8 @@ class OSTEON_PT_material(_Sub, bpy.types.Panel):
 
 
 class OSTEON_PT_load(_Sub, bpy.types.Panel):
-    """The force (N), the printed size (mm), the section interval (mm), the held bone"""
+    """The force (N), the printed size (mm), the section interval (mm), junction cores, the
+    held bone"""
 
     bl_label = "Load"
 
@@ -203,6 +204,7 @@ class OSTEON_PT_load(_Sub, bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(s, "force_n")
         col.prop(s, "interval_mm")
+        col.prop(s, "junction_cores")
         col = layout.column(align=True)
         col.prop(s, "size_mode", text="")
         if s.size_mode != "UNITS":

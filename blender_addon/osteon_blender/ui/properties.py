@@ -73,6 +73,11 @@ class OsteonSettings(bpy.types.PropertyGroup):
     interval_mm: FloatProperty(name="Interval (mm)", default=2.0, min=0.01, precision=2,
                                soft_max=20.0, description="Distance between sections along a "
                                "bone, mm of the printed object")
+    junction_cores: BoolProperty(
+        name="Junction cores", default=True,
+        description="Where a section cuts the stub of a side branch, count only the core that "
+        "continues through it (the stub carries almost no load; docs/junctions.md). Off: whole "
+        "cuts, faster, but a stub then counts as carrying load")
     held_bone: StringProperty(name="Held bone", default="", description="Bone where the object "
                               "is held (empty = the root bone)")
     max_scale: FloatProperty(name="Max scale", default=3.0, min=1.0, soft_max=10.0, precision=2,

@@ -20,7 +20,7 @@ examples:
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
-    from ..cli.parser import MATERIALS
+    from ..cli.parser import MATERIALS, add_junction_switch
 
     p = sub.add_parser(
         "batch",
@@ -55,6 +55,7 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
                    help="build (layer stacking) direction in each model's frame (default +Z)")
     p.add_argument("--layer-ratio", type=float, metavar="R",
                    help="layer / in-plane strength (default: the material preset's)")
+    add_junction_switch(p)
     p.add_argument("--correct", action="store_true",
                    help="also thicken weak bones and write each corrected mesh")
     p.add_argument("--max-scale", type=float, default=3.0, metavar="S",

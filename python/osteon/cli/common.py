@@ -37,6 +37,7 @@ def settings_from_args(args) -> Settings:
         scaling=getattr(args, "scaling", None) or _default_scaling(),
         build_direction=_build_direction(getattr(args, "build_direction", "0,0,1")),
         layer_strength_ratio=getattr(args, "layer_ratio", None),  # None: the material preset's
+        junctions=getattr(args, "junction_cores", True),  # --no-junction-cores
     )
 
 

@@ -121,6 +121,19 @@ def _add_common(p: argparse.ArgumentParser):
     o.add_argument("-q", "--quiet", action="store_true", help="no table, no progress bars")
 
 
+def add_junction_switch(p) -> None:
+    """``--no-junction-cores`` (``Settings.junctions``) on a command or an option group."""
+    p.add_argument(
+        "--no-junction-cores",
+        dest="junction_cores",
+        action="store_false",
+        help="analyse whole cuts: skip the junction stage, which counts only the core that "
+        "continues through the plane where a section cuts a side branch's stub "
+        "(docs/junctions.md). Faster on models with many side branches, but a stub is then "
+        "counted as carrying load (lower, unsafe stress there)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="osteon",
@@ -138,6 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
         "bones under a force on each branch, held at the root.",
     )
     _add_common(pa)
+    add_junction_switch(pa)
     po = pa.add_argument_group("best print orientation (docs/printing.md)")
     po.add_argument(
         "--orient",
@@ -170,6 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(their length kept) and write the corrected mesh in mm.",
     )
     _add_common(pc)
+    add_junction_switch(pc)
     pc.add_argument(
         "--out",
         metavar="FILE",
