@@ -103,3 +103,24 @@ def test_live_rebuilds_its_analyzer_when_junction_cores_change(tbar):
     bpy.context.view_layer.update()
     live.update_now()
     assert sess.last_result.analysis.junction.sum() == 3
+
+
+def test_live_follows_the_print_direction(tbar):
+    """Every engine setting reaches the live Analyzer, not only the ones once listed: with layers
+    at half strength, turning the bar (along x) from lying in the layers (print +Z) to standing
+    across them (print +X) halves the allowable stress of its sections (Tsai-Hill at θ = 0,
+    docs/printing.md), as a fresh analysis with that direction gives."""
+    s = bpy.context.scene.osteon
+    s.layer_strength_ratio = 0.5
+    live.start(bpy.context)
+    sess = live.session()
+    bar = sess.last_result.analysis.section_bone == 0
+    before = sess.last_result.analysis.section_allowable[bar]
+    s.print_direction = "AXIS"
+    s.print_axis = "+X"
+    bpy.context.view_layer.update()  # the depsgraph handler notes the change
+    assert sess.dirty
+    live.update_now()
+    a = sess.last_result.analysis
+    after = a.section_allowable[a.section_bone == 0]
+    np.testing.assert_allclose(after, 0.5 * before, rtol=1e-9)

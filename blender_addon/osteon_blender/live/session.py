@@ -5,6 +5,7 @@ Units: mm, N, MPa."""
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -124,10 +125,22 @@ def is_live(scene=None) -> bool:
 
 
 def _settings_key(scene) -> tuple:
+    """Everything of ``scene.osteon`` that changes the analysis (the wheel's Settings, so a new
+    setting is covered without listing it here) and the scene's unit scale."""
     s = scene.osteon
-    return (float(s.strength_mpa), float(s.safety_factor), float(s.force_n), s.size_mode,
-            float(s.print_size_mm), float(s.interval_mm), s.held_bone,
-            float(scene.unit_settings.scale_length), bool(s.junction_cores))
+    try:
+        settings = core.settings_of(s)
+        settings = dataclasses.replace(
+            settings, build_direction=tuple(float(x) for x in settings.build_direction))
+    except (OsteonError, ValueError, TypeError) as e:  # read_inputs reports it to the user
+        settings = str(e)
+    return (settings, float(scene.unit_settings.scale_length))
+
+
+def _params_key(params: dict) -> tuple:
+    """The engine arguments as a comparable key (the live Analyzer is built with all of them)."""
+    return tuple(sorted((k, tuple(float(x) for x in v) if isinstance(v, (list, tuple, np.ndarray))
+                         else v) for k, v in params.items()))
 
 
 def _objects(sess: Session):
@@ -158,15 +171,13 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
     s = scene.osteon
     sk = bridge.skeleton_arrays(arm)
     params = core.engine_params(s, arm, sk.names)
-    allowable, root = params["allowable_stress"], params["root"]
     co, matrix = bridge.evaluated_positions_into(obj, depsgraph)
     settings = _settings_key(scene)
     want = _want_outlines(scene)
     sig = (co, matrix, sk.heads, sk.tails, settings)
     last = sess.last_sig
     key = bridge.topology_key(obj) + (tuple(sk.names), tuple(int(p) for p in sk.parents),
-                                       float(s.force_n), allowable, float(s.interval_mm), root,
-                                       params["junctions"])
+                                       _params_key(params))
     rebuild = sess.analyzer is None or key != sess.analyzer_key or sess.weights_stale
     if (not force and not rebuild and last is not None and last[4] == settings
             and np.array_equal(last[0], co) and np.array_equal(last[1], matrix)
