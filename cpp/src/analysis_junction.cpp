@@ -34,6 +34,10 @@ constexpr double kOpening = 0.3;    // trimmed pieces nowhere wider than 2 x thi
 constexpr double kMaterial = 0.95;  // the core is used when its area < this x the cut's
 constexpr double kContinues = 0.5;  // ... and >= this x the bone's median area
 constexpr double kReach = 1.25;     // ... and the cut reaches >= this x the core's radius beyond it
+// The branch test asked early, of a region inside the core, at this x its reach: a "no" there is
+// a "no" for the core (see find_junction_cores); the 10 % cover the branch test's thinning
+// (1 % of the reach, of either region's loops) many times over.
+constexpr double kSureNo = 0.9;
 
 // Area of a region (outer boundary minus its holes), mm^2.
 double region_area(const SectionPolygon& p) {
@@ -229,8 +233,17 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
             neck = std::min(neck, states[j].cut_area);
           }
     }
+    // The branch test (below) first on a region inside the core (`inner`, before the costly
+    // widening and trimming): the core holds it, so the core's area is no smaller and each vertex
+    // of the cut is no farther from the core than from it. When no vertex of the cut reaches
+    // 0.9 x inner's own radius beyond it, none reaches the core's radius beyond the core: the
+    // section would fail the branch test, and is left whole now. (A limb's top running inside
+    // the body: the cut is the body, nearly all of it core.)
+    auto may_branch = [&](const SectionPolygon& inner) {
+      return reaches_beyond(st.cut, inner, kSureNo * kReach * std::sqrt(region_area(inner) / M_PI));
+    };
     const SectionGeometry core = junction_core(st.cut, neighbours, kMargin / kDelta * delta[b],
-                                               kOpening / kDelta * delta[b]);
+                                               kOpening / kDelta * delta[b], may_branch);
     if (!core.found) return;
     const SectionProperties props = section_properties(core.polygon);
     if (!props.valid || !(props.area < kMaterial * st.cut_area)) return;

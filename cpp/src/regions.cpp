@@ -551,7 +551,8 @@ Paths64 offset(const Paths64& paths, double delta) {
 
 SectionGeometry junction_core(const SectionPolygon& section,
                               const std::vector<const SectionPolygon*>& neighbours,
-                              double margin_mm, double opening_mm) {
+                              double margin_mm, double opening_mm,
+                              const std::function<bool(const SectionPolygon& inner)>& worth) {
   using Clipper2Lib::FillRule;
   SectionGeometry geom;
   std::vector<std::vector<Vec2>> all{section.outer};
@@ -577,6 +578,18 @@ SectionGeometry junction_core(const SectionPolygon& section,
     if (margin_mm > 0) region = Clipper2Lib::SimplifyPaths(region, 0.25 * margin_mm * s.scale);
     covered =
         k == 0 ? std::move(region) : Clipper2Lib::Intersect(covered, region, FillRule::NonZero);
+  }
+  // What the core is sure to hold (the section and the common part before widening, around the
+  // origin): a caller may stop here when that already fails its test.
+  if (worth && !covered.empty()) {
+    PolyTree64 inner;
+    Clipper2Lib::Clipper64 clipper;
+    clipper.AddSubject(whole);
+    clipper.AddClip(covered);
+    clipper.Execute(Clipper2Lib::ClipType::Intersection, FillRule::NonZero, inner);
+    bool hollow = false;
+    const PolyPath64* outer = locate(inner, s.to(Vec2::Zero()), hollow);
+    if (outer != nullptr && !hollow && !worth(polygon_of(*outer, s))) return geom;
   }
   if (margin_mm > 0) covered = offset(covered, margin_mm * s.scale);
   core = Clipper2Lib::Intersect(core, covered, FillRule::NonZero);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "osteon/section.hpp"
@@ -45,9 +46,18 @@ SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain = nu
 /// are left out, whole; thin pieces (the rim of a taper, a tilted bone's crescent) stay. Returns
 /// the region of the core around the plane origin (the bone point), or found = false when the
 /// origin is not in the core (then the caller keeps the whole section).
+///
+/// `worth`, when given, is asked first with a region the core is sure to contain, before the
+/// costly part (the widening, the trimmed pieces): the region around the origin of what the
+/// section and the neighbours' thinned outlines have in common, not widened (the core holds it:
+/// the widening and the thin pieces only add). Returning false ends the call with found = false
+/// (a caller whose test of the core the region already fails: the core is larger, its
+/// distances to the section's vertices no larger). Not asked when the origin lies in no such
+/// region or in one of its holes.
 SectionGeometry junction_core(const SectionPolygon& section,
                               const std::vector<const SectionPolygon*>& neighbours,
-                              double margin_mm, double opening_mm);
+                              double margin_mm, double opening_mm,
+                              const std::function<bool(const SectionPolygon& inner)>& worth = {});
 
 /// Thickness of a region (mm), the width a printer has to lay down there: the smallest of its
 /// minimum width (the smallest distance between two parallel lines enclosing the outer boundary,
