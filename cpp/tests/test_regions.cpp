@@ -459,3 +459,74 @@ TEST(Regions, JunctionCoreLeavesOutAStubKeepsTapersAndTilts) {
   for (Vec2& q : far.outer) q.y() += 7;
   EXPECT_FALSE(junction_core(whole[0], {&far, &far}, 0.15, 0.9).found);
 }
+
+TEST(Regions, JunctionCoreAsksFirstWithARegionTheCoreHolds) {
+  // The early answer of the junction stage (docs/junctions.md, Cost) rests on the region handed
+  // to `worth` lying inside the core: the section and the neighbours' common part, not widened.
+  const auto bar = regular_polygon(3, 64);
+  std::vector<Vec2> stub = {{-3, 0}, {3, 0}, {3, 9}, {-3, 9}};
+  const SectionPolygon t_cut = material_regions({bar, stub})[0];
+  SectionPolygon round, smaller, larger, left, right, body, body_low, body_high;
+  round.outer = bar;
+  smaller.outer = regular_polygon(2.6, 64);
+  larger.outer = regular_polygon(3.4, 64);
+  left.outer = bar;
+  right.outer = bar;
+  for (Vec2& q : left.outer) q.x() -= 0.5;
+  for (Vec2& q : right.outer) q.x() += 0.5;
+  // A limb's top inside a body: the cut is the body (40 x 24, the bone point off its centre),
+  // the neighbour planes see it a little narrower and shifted.
+  auto box = [](double w, double h, double dx, double dy) {
+    std::vector<Vec2> r = rectangle(w, h);
+    for (Vec2& q : r) q += Vec2(dx, dy);
+    return r;
+  };
+  body.outer = box(40, 24, 12, 3);
+  body_low.outer = box(38, 23, 11.5, 3);
+  body_high.outer = box(39, 22, 12.5, 3.5);
+  struct Case {
+    const SectionPolygon* section;
+    std::vector<const SectionPolygon*> neighbours;
+    // The section and the neighbours' common part (by hand), up to the neighbours' thinning
+    // to within 0.25 x the margin: at most that band along the perimeter.
+    double inner_area;
+    double thinning;
+  };
+  const std::vector<Case> cases = {
+      {&t_cut, {&round, &round}, section_properties(round).area, 2 * M_PI * 3 * 0.25 * 0.15},
+      {&round, {&smaller, &larger}, section_properties(smaller).area, 2 * M_PI * 2.6 * 0.25 * 0.15},
+      {&round, {&left, &right}, -1.0, 0.0},
+      {&body, {&body_low, &body_high}, 37.5 * 22, 1e-9},  // x in [-7, 30.5], y in [-7.5, 14.5]
+  };
+  for (const Case& c : cases) {
+    const SectionGeometry plain = junction_core(*c.section, c.neighbours, 0.15, 0.9);
+    ASSERT_TRUE(plain.found);
+    SectionPolygon inner;
+    int asked = 0;
+    const SectionGeometry core =
+        junction_core(*c.section, c.neighbours, 0.15, 0.9, [&](const SectionPolygon& p) {
+          inner = p;
+          ++asked;
+          return true;
+        });
+    EXPECT_EQ(asked, 1);
+    ASSERT_TRUE(core.found);
+    // Asking changes nothing.
+    EXPECT_EQ(core.polygon.outer, plain.polygon.outer);
+    const double core_area = section_properties(core.polygon).area;
+    const double inner_area = section_properties(inner).area;
+    if (c.inner_area > 0) {
+      EXPECT_LE(inner_area, c.inner_area + 1e-9 * c.inner_area);
+      EXPECT_GE(inner_area, c.inner_area - c.thinning);
+    }
+    // Inside the core: the union of the two is the core.
+    EXPECT_LE(inner_area, core_area + 1e-9 * core_area);
+    const auto both = material_regions({core.polygon.outer, inner.outer});
+    ASSERT_EQ(both.size(), 1u);
+    EXPECT_NEAR(section_properties(both[0]).area, core_area, 1e-6 * core_area);
+    // A "no" ends the call: no core.
+    EXPECT_FALSE(junction_core(*c.section, c.neighbours, 0.15, 0.9, [](const SectionPolygon&) {
+                   return false;
+                 }).found);
+  }
+}
