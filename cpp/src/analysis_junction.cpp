@@ -131,6 +131,23 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     median[b] = a[a.size() / 2];
     delta[b] = kDelta * std::sqrt(median[b] / M_PI);
   }
+  // Along a bone, the family's own sections m intervals away serve as the neighbours when m * h
+  // is within [0.75, 1.5] delta: already cut, and in the same plane coordinates (u, v are shared
+  // and the origins lie on the bone's axis). Otherwise (m = 0 here) the two planes are cut.
+  struct Family {
+    int first, count, m;
+  };
+  auto family_of = [&](int i, double d) {
+    const int job = specs[i].job;
+    Family fam{job_section[job],
+               job_bone[job] >= 0 ? static_cast<int>(slab_params[specs[i].bone].size()) - 2 : 0,
+               std::max(1, static_cast<int>(std::lround(d / options.interval)))};
+    const double reach = fam.m * options.interval;
+    if (!(fam.count > 0 && reach >= 0.75 * d && reach <= 1.5 * d && i - fam.m >= fam.first &&
+          i + fam.m < fam.first + fam.count))
+      fam.m = 0;
+    return fam;
+  };
   std::vector<int> todo;
   for (int i = 0; i < ns; ++i) {
     SectionState& st = states[i];
@@ -144,10 +161,19 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
       continue;
     }
     // A check made with the same delta stays right unless the section was re-cut or a change
-    // reaches its neighbour planes.
-    const bool fresh = run.section_dirty[i] || run.all_changed || st.junction_delta != delta[b] ||
-                       (!run.changed.empty() &&
-                        run.changed.meets_slab(specs[i].point, specs[i].normal, 1.5 * delta[b]));
+    // reaches its neighbour planes. Where the bone's own sections serve as the neighbours (and
+    // necks), those are the planes: the check reads nothing but their cuts, and stays right
+    // unless one of them was re-cut.
+    bool fresh = run.section_dirty[i] || run.all_changed || st.junction_delta != delta[b];
+    if (!fresh && !run.changed.empty()) {
+      const Family fam = family_of(i, delta[b]);
+      if (fam.m > 0) {
+        for (int j = i - fam.m; !fresh && j <= i + fam.m; ++j)
+          fresh = j >= fam.first && j < fam.first + fam.count && run.section_dirty[j];
+      } else {
+        fresh = run.changed.meets_slab(specs[i].point, specs[i].normal, 1.5 * delta[b]);
+      }
+    }
     if (fresh) todo.push_back(i);
   }
   run.junction_checks = static_cast<long>(todo.size());
@@ -170,17 +196,11 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     // region of its own there (past a free end, bone outside the mesh, open cut) is left out.
     SectionPolygon regions[2];
     std::vector<const SectionPolygon*> neighbours;
-    // Along a bone, the family's own sections m intervals away serve when m * h is within
-    // [0.75, 1.5] delta: already cut, and in the same plane coordinates (u, v are shared and
-    // the origins lie on the bone's axis). Otherwise the two planes are cut.
-    const int job = specs[i].job;
-    const int first = job_section[job];
-    const int count = job_bone[job] >= 0 ? static_cast<int>(slab_params[b].size()) - 2 : 0;
-    const int m = std::max(1, static_cast<int>(std::lround(delta[b] / options.interval)));
-    const double reach = m * options.interval;
+    // The family's own sections m intervals away, or the two planes cut (see family_of).
+    const Family fam = family_of(i, delta[b]);
+    const int first = fam.first, count = fam.count, m = fam.m;
     auto usable = [&](int j) { return neighbour_ok[j] != 0; };
-    const bool family = count > 0 && reach >= 0.75 * delta[b] && reach <= 1.5 * delta[b] &&
-                        i - m >= first && i + m < first + count;
+    const bool family = m > 0;
     if (family) {
       if (!usable(i - m) || !usable(i + m)) return;  // a side without material of its own
       neighbours.push_back(&states[i - m].cut);
