@@ -547,6 +547,44 @@ Paths64 offset(const Paths64& paths, double delta) {
                                    Clipper2Lib::EndType::Polygon, 2.0, 0.01 * std::abs(delta));
 }
 
+// True when the region (an outer path and its holes, Clipper2 units) holds the disc of radius
+// `radius` around its outer boundary's centroid: one cheap witness that the region is wider
+// than 2 * radius (its erosion by less than radius is not empty). False says nothing.
+bool holds_centroid_disc(const Paths64& region, double radius) {
+  const Path64& outer = region.front();
+  const std::size_t n = outer.size();
+  if (n < 3) return false;
+  double a = 0.0, cx = 0.0, cy = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double x0 = outer[k].x, y0 = outer[k].y;
+    const double x1 = outer[(k + 1) % n].x, y1 = outer[(k + 1) % n].y;
+    const double c = x0 * y1 - x1 * y0;
+    a += c;
+    cx += (x0 + x1) * c;
+    cy += (y0 + y1) * c;
+  }
+  if (a == 0.0) return false;
+  const Vec2 q(cx / (3.0 * a), cy / (3.0 * a));
+  const Point64 qi(static_cast<std::int64_t>(std::llround(q.x())),
+                   static_cast<std::int64_t>(std::llround(q.y())));
+  if (Clipper2Lib::PointInPolygon(qi, outer) != PointInPolygonResult::IsInside) return false;
+  for (std::size_t h = 1; h < region.size(); ++h)
+    if (Clipper2Lib::PointInPolygon(qi, region[h]) != PointInPolygonResult::IsOutside) return false;
+  const double r2 = radius * radius;
+  for (const Path64& path : region) {
+    for (std::size_t k = 0, m = path.size(); k < m; ++k) {
+      const Vec2 p0(static_cast<double>(path[k].x), static_cast<double>(path[k].y));
+      const Vec2 p1(static_cast<double>(path[(k + 1) % m].x),
+                    static_cast<double>(path[(k + 1) % m].y));
+      const Vec2 d = p1 - p0;
+      const double len2 = d.squaredNorm();
+      const double t = len2 > 0 ? std::clamp((q - p0).dot(d) / len2, 0.0, 1.0) : 0.0;
+      if ((q - (p0 + t * d)).squaredNorm() <= r2) return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 SectionGeometry junction_core(const SectionPolygon& section,
@@ -613,8 +651,11 @@ SectionGeometry junction_core(const SectionPolygon& section,
     // area and is at least 2 * opening wide in every direction.
     bool thin = opening > 0 && std::abs(Clipper2Lib::Area(paths)) < M_PI * opening * opening;
     // Otherwise its erosion, on its outline thinned to within 5 % of `opening` (a stub's
-    // outline has hundreds of facets; the answer moves by no more than that).
-    if (!thin && opening > 0)
+    // outline has hundreds of facets; the answer moves by no more than that) -- unless a disc
+    // of 1.1 x opening around its centroid fits in it (a stub usually: then it is no narrower
+    // than 2.2 x opening anywhere across that disc, and the eroded, thinned outline keeps the
+    // centroid, 1.1 - 0.05 - 0.01 (the arcs' error) x opening clear of it).
+    if (!thin && opening > 0 && !holds_centroid_disc(paths, 1.1 * opening))
       thin = minimum_width(s.from(piece->Polygon())) * s.scale < 2.0 * opening ||
              offset(Clipper2Lib::SimplifyPaths(paths, 0.05 * opening), -opening).empty();
     if (thin) core.insert(core.end(), paths.begin(), paths.end());
