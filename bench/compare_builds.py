@@ -1,7 +1,7 @@
 """This build of osteon against another build, in alternating child processes.
 
     python bench/compare_builds.py OTHER_PYTHONPATH [--rounds 7] [--model cow --subdivisions 1]
-        [--cpu] [--no-junctions]
+        [--cpu] [--no-junctions] [--instructions]
 
 OTHER_PYTHONPATH is a directory holding another build's ``osteon`` package (its
 ``python/osteon`` directory with its compiled ``_core`` module inside). Two pybind11 builds
@@ -10,6 +10,12 @@ back to back (the order alternates), each timing 3 analyses after a warm-up; mac
 hits both builds alike (``--cpu``: one thread, process CPU time; ``--no-junctions``: this build
 runs with ``junctions=False``, for a baseline built before the junction stage existed). Prints, per interval h, the median time (ms) of each build over all
 rounds and the ratio this build / other build.
+
+``--instructions``: instead of times, the machine instructions the engine executes for one
+analysis (its ``Analyzer`` construction and run, counted by valgrind's callgrind; needs
+``valgrind``, e.g. ``apt-get install valgrind``). Exact and repeatable to the instruction,
+whatever the machine's load: the figure to compare on a noisy machine (the VM has no hardware
+counters for ``perf stat``). One analysis per h in its own child process per build.
 """
 
 from __future__ import annotations
@@ -61,6 +67,44 @@ def run_child(pythonpath: str | None, model: str, sub: int, cpu: bool,
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+INSTRUCTIONS_CHILD = """
+import os, sys
+if os.environ.get("OSTEON_OTHER_BUILD"):
+    sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
+    sys.path.insert(0, os.environ["OSTEON_OTHER_BUILD"])
+sys.path.insert(0, {here!r})
+import osteon
+from models import load
+v, f, sk, w = load({model!r}, subdivisions={sub})
+kw = {{"junctions": False}} if {no_junctions} and not os.environ.get("OSTEON_OTHER_BUILD") else {{}}
+osteon.analyze(v, f, sk, w, interval={h}, threads=1, **kw)
+print(len(f), osteon.__file__)
+"""
+
+
+def count_instructions(pythonpath: str | None, model: str, sub: int, h: float,
+                       no_junctions: bool) -> tuple[int, int, str]:
+    """(instructions in the engine's Analyzer construction + run, faces, osteon's file)."""
+    import tempfile
+
+    env = dict(os.environ)
+    if pythonpath:
+        env["OSTEON_OTHER_BUILD"] = pythonpath
+    code = INSTRUCTIONS_CHILD.format(here=str(HERE), model=model, sub=sub, h=float(h),
+                                     no_junctions=no_junctions)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "callgrind.out")
+        res = subprocess.run(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+             "--toggle-collect=osteon::Analyzer::Analyzer*",
+             "--toggle-collect=osteon::Analyzer::Impl::run*", sys.executable, "-c", code],
+            env=env, capture_output=True, text=True, check=True)
+        with open(out) as fh:
+            total = next(int(line.split()[1]) for line in fh if line.startswith("totals:"))
+    faces, file = res.stdout.strip().splitlines()[-1].split(" ", 1)
+    return total, int(faces), file
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("other", help="PYTHONPATH entry holding the other build's osteon package")
@@ -71,7 +115,23 @@ def main(argv=None) -> int:
                     help="one thread, CPU time (steadier than wall time on a loaded machine)")
     ap.add_argument("--no-junctions", action="store_true",
                     help="this build without the junction stage (analyze(junctions=False))")
+    ap.add_argument("--instructions", action="store_true",
+                    help="count the engine's instructions (callgrind) instead of timing")
     args = ap.parse_args(argv)
+    if args.instructions:
+        print("| model | faces | h (mm) | this build (M instructions) | other build "
+              "(M instructions) | ratio |")
+        print("|---|---|---|---|---|---|")
+        for h in (2.0, 8.0):
+            a, faces, _ = count_instructions(None, args.model, args.subdivisions, h,
+                                             args.no_junctions)
+            b, _, file = count_instructions(args.other, args.model, args.subdivisions, h,
+                                            args.no_junctions)
+            if not file.startswith(args.other):
+                raise SystemExit(f"the other build was not imported: {file}")
+            print(f"| {args.model} x{4 ** args.subdivisions} | {faces} | {h:g} | {a / 1e6:.1f} | "
+                  f"{b / 1e6:.1f} | {a / b:.3f} |")
+        return 0
     times = {"this": {}, "other": {}}
     faces = 0
     for r in range(args.rounds):

@@ -140,8 +140,20 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
   return nullptr;
 }
 
+// The regions whose thickness an analysis deferred (AnalysisOptions::defer_thickness).
+struct PendingThickness {
+  AnalysisResult holder;  // only section_thickness and thickness_pending are used
+};
+
 py::dict result_to_dict(AnalysisResult&& r) {
   py::dict d;
+  if (r.thickness_pending.empty()) {
+    d["thickness_pending"] = py::none();
+  } else {
+    PendingThickness p;
+    p.holder.thickness_pending = std::move(r.thickness_pending);
+    d["thickness_pending"] = py::cast(std::move(p));
+  }
   d["section_bone"] = to_numpy(std::move(r.section_bone));
   d["section_kind"] = to_numpy(std::move(r.section_kind));
   d["section_param"] = to_numpy(std::move(r.section_param));
@@ -281,6 +293,26 @@ PYBIND11_MODULE(_core, m) {
       py::arg("skeleton"), py::arg("interval"),
       "Exact number of sections an analysis plans at interval (mm), before any cut.");
 
+  py::class_<PendingThickness>(m, "_PendingThickness",
+                               "Regions whose thickness an analysis left for later (mm).")
+      .def(
+          "fill",
+          [](PendingThickness& p, const DoubleArray& thickness) {
+            auto& h = p.holder;
+            h.section_thickness.assign(thickness.data(), thickness.data() + thickness.size());
+            if (h.thickness_pending.size() > h.section_thickness.size())
+              throw py::value_error("thickness array shorter than the sections");
+            {
+              py::gil_scoped_release release;
+              std::vector<std::shared_ptr<const SectionPolygon>> keep = h.thickness_pending;
+              complete_section_thickness(h);
+              h.thickness_pending = std::move(keep);  // a second fill gives the same
+            }
+            return to_numpy(std::vector<double>(h.section_thickness));
+          },
+          py::arg("thickness"),
+          "A copy of `thickness` (S,) mm with every deferred section's thickness filled in.");
+
   py::class_<AnalysisOptions>(m, "AnalysisOptions", "Settings of one analysis (N, MPa, mm).")
       .def(py::init<>())
       .def_readwrite("force", &AnalysisOptions::force, "N")
@@ -292,6 +324,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("local_cuts", &AnalysisOptions::local_cuts)
       .def_readwrite("reuse_sections", &AnalysisOptions::reuse_sections)
       .def_readwrite("keep_outlines", &AnalysisOptions::keep_outlines)
+      .def_readwrite("defer_thickness", &AnalysisOptions::defer_thickness)
       .def_readwrite("junctions", &AnalysisOptions::junctions)
       .def_readwrite("min_thickness", &AnalysisOptions::min_thickness,
                      "mm; thinner sections are flagged too_thin (0 = no check)")

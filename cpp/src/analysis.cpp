@@ -6,6 +6,7 @@
 #include <string>
 
 #include "analysis_impl.hpp"
+#include "osteon/regions.hpp"
 
 namespace osteon {
 
@@ -24,6 +25,13 @@ void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
   if (std::isnan(o.gap_tolerance)) throw std::invalid_argument("gap_tolerance must not be NaN");
   if (!(o.min_thickness >= 0) || !std::isfinite(o.min_thickness))
     throw std::invalid_argument("min_thickness must be a finite length >= 0 mm");
+}
+
+void complete_section_thickness(AnalysisResult& result) {
+  auto& pending = result.thickness_pending;
+  for (std::size_t i = 0; i < pending.size() && i < result.section_thickness.size(); ++i)
+    if (pending[i]) result.section_thickness[i] = region_thickness(*pending[i]);
+  pending.clear();
 }
 
 Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertices,

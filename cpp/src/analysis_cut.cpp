@@ -98,7 +98,10 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
   st.thin_axis = (thin.x() * frame.u + thin.y() * frame.v).normalized();
   const double lo = std::max(eig.eigenvalues()(0), 0.0), hi = eig.eigenvalues()(1);
   st.aspect = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
-  st.thickness = region_thickness(polygon);
+  // Thickness costs a convex hull per section; only a too_thin check or a reader needs it.
+  st.thickness = std::numeric_limits<double>::quiet_NaN();
+  st.thickness_bound = region_thickness_lower_bound(props.area, lo);
+  st.analysed = std::make_shared<const SectionPolygon>(polygon);
   st.loops.clear();
   if (keep) {
     auto to_world = [&](const std::vector<Vec2>& loop) {
@@ -110,6 +113,11 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
     for (const auto& hole : polygon.holes) st.loops.push_back(to_world(hole));
   }
   return true;
+}
+
+double section_thickness_at(SectionState& st) {
+  if (std::isnan(st.thickness) && st.analysed) st.thickness = region_thickness(*st.analysed);
+  return st.thickness;
 }
 
 void Analyzer::Impl::prepare_cuts(RunState& run) {

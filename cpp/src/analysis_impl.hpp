@@ -87,7 +87,9 @@ struct SectionState {
   Vec3 center = Vec3::Zero();
   Vec3 thin_axis = Vec3::Zero();  // unit, in the plane: the direction across the thinnest width
   double aspect = 1.0;            // width / thickness
-  double thickness = 0.0;         // minimum width of the region, mm
+  double thickness = 0.0;         // minimum width of the region, mm (NaN: not computed yet)
+  double thickness_bound = 0.0;   // a lower bound of its minimum width (hull), mm
+  std::shared_ptr<const SectionPolygon> analysed;  // the region analysed (its thickness, later)
   std::vector<std::vector<Vec3>> loops;  // keep_outlines: outer boundary, then holes, 3D mm
   // The whole cut (before a junction core replaced it): frame, region, area and modulus.
   PlaneFrame frame;           // plane frame of `cut` (origin = bone point)
@@ -100,9 +102,13 @@ struct SectionState {
 
 /// Sets a found section's properties (area, W, centroid, thin axis, aspect, thickness and, with
 /// `keep`, its 3D loops) from a region in `frame`'s plane coordinates; false (nothing changed)
-/// when the region is degenerate.
+/// when the region is degenerate. The thickness is left NaN (the region and a lower bound of
+/// its thickness are kept): section_thickness_at computes it when it is needed.
 bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
                         bool keep);
+
+/// The section's thickness (mm), computed from its kept region on first need.
+double section_thickness_at(SectionState& st);
 
 /// Working data of one run, handed from stage to stage (see Analyzer::Impl::run).
 struct RunState {

@@ -1,9 +1,11 @@
 // Stage 4 of a run: the load of every section (paper §4.4) and its stress (Analyzer::Impl).
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <vector>
 
 #include "analysis_impl.hpp"
+#include "osteon/regions.hpp"
 #include "parallel.hpp"
 
 namespace osteon {
@@ -42,7 +44,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
     const int end = std::min(ns, static_cast<int>(chunk + 1) * 64);
     for (int i = static_cast<int>(chunk) * 64; i < end; ++i) {
       const SectionSpec& spec = specs[i];
-      const SectionState& st = states[i];
+      SectionState& st = states[i];
+      if (st.found && !options.defer_thickness) section_thickness_at(st);
       r.section_bone[i] = spec.bone;
       r.section_kind[i] = spec.kind;
       r.section_param[i] = slab_params[spec.bone][spec.boundary];
@@ -99,10 +102,31 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
         r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
         continue;
       }
-      if (options.min_thickness > 0 && states[i].thickness < options.min_thickness)
+      // The exact thickness only for a section that is too thin (the check mostly decides
+      // from a lower bound of the width and a search of the walls within the minimum).
+      SectionState& st = states[i];
+      const bool thin =
+          std::isnan(st.thickness)
+              ? st.analysed &&
+                    region_thinner_than(*st.analysed, options.min_thickness, st.thickness_bound)
+              : st.thickness < options.min_thickness;
+      if (thin) {
+        r.section_thickness[i] = section_thickness_at(st);
         flags |= kFlagTooThin;
+      }
       r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
       usable[i] = !(flags & kFlagTooThin);
+    }
+  }
+  // Thickness not needed so far: the regions, for complete_section_thickness().
+  if (options.defer_thickness) {
+    for (int i = 0; i < ns; ++i) {
+      const SectionState& st = states[i];
+      if (!st.found || !st.analysed || !std::isnan(st.thickness) ||
+          (r.section_flags[i] & kFlagUnreliable))
+        continue;
+      if (r.thickness_pending.empty()) r.thickness_pending.resize(ns);
+      r.thickness_pending[i] = st.analysed;
     }
   }
   for (int i = 0; i < ns; ++i) {

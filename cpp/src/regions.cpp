@@ -886,6 +886,29 @@ double loop_distance(const std::vector<Vec2>& a, const std::vector<Vec2>& b, dou
 
 }  // namespace
 
+double region_thickness_lower_bound(double area_mm2, double smaller_second_moment_mm4) {
+  if (!(area_mm2 > 0) || !(smaller_second_moment_mm4 > 0)) return 0.0;
+  const double bound = 2.0 * std::sqrt(smaller_second_moment_mm4 / area_mm2);
+  return std::isfinite(bound) ? bound : 0.0;
+}
+
+bool region_thinner_than(const SectionPolygon& polygon, double limit_mm, double width_bound_mm) {
+  if (!(limit_mm > 0)) return false;
+  if (!(width_bound_mm >= limit_mm) && minimum_width(polygon.outer) < limit_mm) return true;
+  // loop_distance returns its bound (as the root of its square) when nothing is nearer.
+  const double none = std::sqrt(limit_mm * limit_mm);
+  const auto& holes = polygon.holes;
+  for (std::size_t h = 0; h < holes.size(); ++h) {
+    if (holes[h].size() < 3) continue;
+    if (loop_distance(holes[h], polygon.outer, limit_mm) < std::min(limit_mm, none)) return true;
+    for (std::size_t k = h + 1; k < holes.size(); ++k)
+      if (holes[k].size() >= 3 &&
+          loop_distance(holes[h], holes[k], limit_mm) < std::min(limit_mm, none))
+        return true;
+  }
+  return false;
+}
+
 double region_thickness(const SectionPolygon& polygon) {
   double thickness = minimum_width(polygon.outer);
   // The thinnest wall around each hole: its distance to the outer boundary and other holes.

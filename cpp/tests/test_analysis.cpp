@@ -294,3 +294,33 @@ TEST(Analysis, JunctionLeavesAShallowBulgeWhole) {
   }
   EXPECT_GE(candidates, 1);
 }
+
+TEST(Analysis, DeferredThicknessIsFilledInAsComputedAtOnce) {
+  // A 6 x 0.5 mm plate bar (too thin for min_thickness 0.8) and a 6 x 2 mm one: deferred, the
+  // too_thin check computes only the plate's thickness; the 2 mm bar's waits in the pending list
+  // until complete_section_thickness, which gives what the eager run gives (its thickness, 2 mm).
+  for (const double t : {0.5, 2.0}) {
+    const auto m = prism(rectangle(6, t), 90, 31);
+    AnalysisOptions o;
+    o.interval = 3;
+    const AnalysisResult eager = analyze(m.view(), bar(90), nullptr, o);
+    o.defer_thickness = true;
+    AnalysisResult lazy = analyze(m.view(), bar(90), nullptr, o);
+    EXPECT_EQ(lazy.section_flags, eager.section_flags);
+    int pending = 0;
+    for (std::size_t i = 0; i < lazy.section_thickness.size(); ++i) {
+      const bool waits = !lazy.thickness_pending.empty() && lazy.thickness_pending[i];
+      pending += waits;
+      EXPECT_EQ(std::isnan(lazy.section_thickness[i]),
+                waits || std::isnan(eager.section_thickness[i]));
+    }
+    EXPECT_EQ(pending > 0, t > o.min_thickness) << t;
+    complete_section_thickness(lazy);
+    EXPECT_TRUE(lazy.thickness_pending.empty());
+    for (std::size_t i = 0; i < lazy.section_thickness.size(); ++i) {
+      if (std::isnan(eager.section_thickness[i])) continue;
+      EXPECT_EQ(lazy.section_thickness[i], eager.section_thickness[i]) << i;
+      if (eager.section_kind[i] == kInterior) EXPECT_NEAR(eager.section_thickness[i], t, 1e-9);
+    }
+  }
+}

@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "osteon/analysis.hpp"
@@ -399,6 +401,52 @@ TEST(Regions, ThicknessOfAWallAlongALongEdge) {
               3 - std::cos(M_PI / 16), 1e-12);
   EXPECT_NEAR(region_thickness(SectionPolygon{outer, {moved(half_step, Vec2(-40, -18.5))}}),
               1.5 - std::cos(M_PI / 16), 1e-12);
+}
+
+TEST(Regions, ThicknessLowerBoundAndThresholdAgreeWithTheThickness) {
+  // The bound 2 sqrt(I_min / A) in closed form: a disc of radius r has I = pi r^4 / 4, A = pi r^2,
+  // so r (half its width); a b x t plate t / sqrt(3).
+  EXPECT_NEAR(region_thickness_lower_bound(M_PI * 25, M_PI * 625 / 4), 5.0, 1e-12);
+  EXPECT_NEAR(region_thickness_lower_bound(30 * 0.4, 30 * std::pow(0.4, 3) / 12),
+              0.4 / std::sqrt(3.0), 1e-12);
+  EXPECT_EQ(region_thickness_lower_bound(0.0, 1.0), 0.0);
+  // Random star polygons with and without holes: the bound never exceeds the minimum width, and
+  // region_thinner_than(limit) is exactly region_thickness < limit at limits around it.
+  std::uint64_t seed = 12345;
+  auto uniform = [&]() {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(seed >> 11) / 9007199254740992.0;
+  };
+  int thin_cases = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int n = 3 + static_cast<int>(uniform() * 60);
+    const double stretch = 0.05 + 2.0 * uniform();
+    std::vector<Vec2> outer;
+    for (int k = 0; k < n; ++k) {
+      const double t = 2 * M_PI * (k + 0.8 * uniform()) / n;
+      const double r = 4.0 + 2.0 * uniform();
+      outer.emplace_back(r * std::cos(t), stretch * r * std::sin(t));
+    }
+    SectionPolygon poly{outer, {}};
+    if (trial % 2 == 1 && stretch > 0.5) {  // a hole near the middle: a wall of random thickness
+      const double hr = 0.5 + 2.5 * uniform() * stretch;
+      poly.holes.push_back(moved(reversed(regular_polygon(std::min(hr, 3.0 * stretch), 24)),
+                                 Vec2(0.5 * (uniform() - 0.5), 0.5 * stretch * (uniform() - 0.5))));
+    }
+    const SectionProperties props = section_properties(poly);
+    if (!props.valid) continue;
+    const Eigen::SelfAdjointEigenSolver<Mat2> eig(props.second_moment);
+    const double bound = region_thickness_lower_bound(props.area, eig.eigenvalues()(0));
+    const double width = region_thickness(SectionPolygon{outer, {}});
+    EXPECT_LE(bound, width * (1 + 1e-12)) << trial;
+    const double thickness = region_thickness(poly);
+    for (const double f : {0.5, 0.9, 0.999, 1.001, 1.1, 2.0}) {
+      const double limit = f * thickness;
+      EXPECT_EQ(region_thinner_than(poly, limit, bound), thickness < limit) << trial << " " << f;
+      thin_cases += thickness < limit;
+    }
+  }
+  EXPECT_GT(thin_cases, 600);  // both answers were exercised
 }
 
 TEST(Regions, ThicknessOfALoopThatCrossesItself) {

@@ -331,6 +331,9 @@ def _options(force: float, allowable_stress: float, interval: float, held_bone: 
     o.force, o.allowable_stress, o.interval = force, allowable_stress, interval
     o.held_bone, o.threads = held_bone, threads
     o.gap_tolerance = -1.0 if gap_tolerance is None else float(gap_tolerance)
+    # Thickness only where the too_thin check needs it; Analysis.section_thickness computes the
+    # rest on first read (a convex hull per section: ~7 % of an analysis nobody may read).
+    o.defer_thickness = True
     return o
 
 
@@ -347,7 +350,8 @@ class Analysis:
     bool (W > safe modulus: safe for sure), ``weak`` (S,) bool (stress > allowable),
     ``section_flags`` (S,) bit mask (see ``SECTION_FLAGS``), ``section_thickness`` (S,) mm: the
     region's minimum width (narrowest distance between two parallel lines enclosing it; a solid
-    round section's diameter, a plate's thickness). Skipped sections (flag ``empty``,
+    round section's diameter, a plate's thickness; computed on first read, except where the
+    ``too_thin`` check needed it). Skipped sections (flag ``empty``,
     ``degenerate`` or ``unreliable``) have NaN modulus and stress and are never weak or culled;
     ``too_thin`` sections (thinner than ``min_thickness`` mm) keep their stress but are never
     weak, culled, the maximum or corrected. ``loose_pieces``: list of (n,) vertex index arrays,
@@ -395,6 +399,8 @@ class Analysis:
     build_direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
     layer_strength_ratio: float = 1.0
     min_thickness: float = DEFAULT_MIN_THICKNESS
+    #: the engine's regions whose thickness is not computed yet (section_thickness fills them)
+    thickness_pending: Any = field(default=None, repr=False, compare=False)
 
     outline_points: np.ndarray | None = None
     outline_loop_start: np.ndarray | None = None
@@ -559,12 +565,35 @@ class Analysis:
             "layer_strength_ratio": float(self.layer_strength_ratio),
         }
 
+    def __getstate__(self) -> dict:
+        self.section_thickness  # noqa: B018 -- fills the deferred thickness (regions don't pickle)
+        return dict(self.__dict__)
+
     def __repr__(self) -> str:
         return (
             f"Analysis({self.num_sections} sections, max_stress={self.max_stress:.3g} MPa, "
             f"allowable={self.allowable_stress:.3g} MPa, weak={int(self.weak.sum())}, "
             f"culled={int(self.culled.sum())})"
         )
+
+
+def _thickness(self: Analysis) -> np.ndarray:
+    pending = self.__dict__.get("thickness_pending")
+    if pending is not None:
+        self.__dict__["_section_thickness"] = pending.fill(self.__dict__["_section_thickness"])
+        self.__dict__["thickness_pending"] = None
+    return self.__dict__["_section_thickness"]
+
+
+def _set_thickness(self: Analysis, value: np.ndarray) -> None:
+    self.__dict__["_section_thickness"] = value
+
+
+# A property over the dataclass field: the deferred sections' thickness (mm) is computed on the
+# first read, in one call into the engine.
+Analysis.section_thickness = property(  # type: ignore[assignment]
+    _thickness, _set_thickness,
+    doc="(S,) mm: each section's thickness (regions.hpp); NaN for skipped sections.")
 
 
 @dataclass

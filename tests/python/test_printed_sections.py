@@ -279,3 +279,28 @@ def test_a_gap_narrower_than_the_printer_resolves_is_attached():
     d_bar = np.sqrt((40 - c[:, 0]) ** 2 + (2 + np.abs(c[:, 1])) ** 2 + (2 + np.abs(c[:, 2])) ** 2)
     np.testing.assert_allclose(apart.moment[i], force * d_bar, rtol=1e-9)
     assert np.all(fused.moment[i] > apart.moment[i])
+
+
+def test_thickness_is_computed_on_first_read_and_survives_pickling():
+    """The engine defers the thickness of sections whose too_thin check a lower bound decides;
+    Analysis.section_thickness computes them on first read: the same numbers (a tube's wall, a
+    plate's thickness, a 64-gon's width across flats), too_thin exactly where thickness < the
+    minimum, and a pickled Analysis carries them."""
+    import pickle
+
+    tube = prism(circle(5, 64), 40, hole=circle(4, 64))
+    for mesh, expect, minimum in ((prism(circle(5, 64), 40), 10 * np.cos(np.pi / 64), 0.8),
+                                  (prism(rectangle(30, 0.6), 40), 0.6, 0.8),
+                                  (tube, np.cos(np.pi / 64), 0.9),
+                                  (tube, np.cos(np.pi / 64), 1.1)):
+        a = osteon.analyze(*mesh, _bone(40), interval=4, min_thickness=minimum)
+        i = _interior(a)
+        thin = (a.section_flags & osteon.SECTION_FLAGS["too_thin"]) != 0
+        # only too-thin sections were computed at once; the others wait for the first read
+        assert (a.thickness_pending is None) == bool(thin[a.valid].all())
+        b = pickle.loads(pickle.dumps(a))
+        for r in (a, b):
+            assert r.thickness_pending is None or r is a
+            np.testing.assert_allclose(r.section_thickness[i], expect, rtol=1e-9)
+            np.testing.assert_array_equal(thin[a.valid], r.section_thickness[a.valid] < minimum)
+        assert a.thickness_pending is None  # read once: filled in, the regions released

@@ -9,6 +9,7 @@
 #include "osteon/layers.hpp"
 #include "osteon/mesh.hpp"
 #include "osteon/progress.hpp"
+#include "osteon/section.hpp"
 #include "osteon/skeleton.hpp"
 #include "osteon/weights.hpp"
 
@@ -34,6 +35,11 @@ struct AnalysisOptions {
   Vec3 build_direction = Vec3(0, 0, 1);
   double layer_strength_ratio = 1.0;  ///< layer / in-plane strength; allowable_stress is in-plane
   double min_thickness = 0.8;         ///< thinner sections (mm) are flagged too_thin; 0 = no check
+  /// Compute section_thickness only where the too_thin check needs it (a cheap lower bound
+  /// decides the rest); the others are NaN, their regions left in
+  /// AnalysisResult::thickness_pending for complete_section_thickness(). Python reads them on
+  /// first use of Analysis.section_thickness.
+  bool defer_thickness = false;
 };
 
 /// Where a section sits on its bone.
@@ -58,6 +64,9 @@ struct AnalysisResult {
       section_thin_axis;               ///< S unit in-plane direction the section is thinnest across
   std::vector<double> section_aspect;  ///< S width / thickness (sqrt of J's eigenvalue ratio)
   std::vector<double> section_thickness;  ///< S region thickness, mm (regions.hpp; NaN: skipped)
+  /// S with AnalysisOptions::defer_thickness: the region of each section whose thickness was
+  /// not computed (null elsewhere); complete_section_thickness() fills them in. Empty otherwise.
+  std::vector<std::shared_ptr<const SectionPolygon>> thickness_pending;
   /// S area (mm^2) and modulus W (mm^3) of the whole cut around the bone point; they differ from
   /// section_area / section_modulus only at a junction (kFlagJunction), where those are the
   /// core's (the material that continues through the plane, docs/junctions.md). 0 / NaN: skipped.
@@ -102,6 +111,10 @@ struct AnalysisResult {
   /// vertex_stress 0 (it carries no load); sections along its bones are still cut.
   std::vector<std::vector<std::int32_t>> loose_pieces;
 };
+
+/// Computes the thickness (mm, regions.hpp) of every section left in result.thickness_pending
+/// (AnalysisOptions::defer_thickness) into result.section_thickness and empties the list.
+void complete_section_thickness(AnalysisResult& result);
 
 /// Throws std::invalid_argument when an option is out of range (force, stress, interval <= 0...).
 void validate_options(const AnalysisOptions& options, const Skeleton& skeleton);

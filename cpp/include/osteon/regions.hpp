@@ -67,6 +67,19 @@ SectionGeometry junction_core(const SectionPolygon& section,
 /// points.
 double region_thickness(const SectionPolygon& polygon);
 
+/// A lower bound (mm) of a region's minimum width (the convex hull part of region_thickness;
+/// the walls around holes are not bounded), from its area (mm^2) and its smaller principal
+/// second moment about the centroid (mm^4): 2 sqrt(I_min / A). Across the hull's narrowest
+/// direction the region lies in a strip that wide, and an area spread over a strip of width t
+/// has a second moment about its centroid of at most A t^2 / 4 (all of it at the two edges).
+/// Half the diameter for a disc, t / sqrt(3) for a plate. 0 when degenerate.
+double region_thickness_lower_bound(double area_mm2, double smaller_second_moment_mm4);
+
+/// region_thickness(polygon) < limit_mm, decided without computing the thickness where it can:
+/// `width_bound_mm` (region_thickness_lower_bound) at or above the limit skips the hull, and
+/// the walls around holes are searched only within the limit (cheap when they are thick).
+bool region_thinner_than(const SectionPolygon& polygon, double limit_mm, double width_bound_mm);
+
 }  // namespace osteon
 
 namespace osteon {
