@@ -36,6 +36,8 @@ def main(argv) -> int:
     ap.add_argument("--repeat", type=int, default=15)
     ap.add_argument("--levels", type=int, default=3, help="Catmull-Clark levels of the rig")
     ap.add_argument("--cuts", type=int, default=2, help="extra edge cuts (3 + 2: ~107k vertices)")
+    ap.add_argument("--no-junction-cores", action="store_true",
+                    help="the add-on's 'Junction cores' off (whole cuts, docs/junctions.md)")
     args = ap.parse_args(argv)
     import osteon
 
@@ -43,6 +45,7 @@ def main(argv) -> int:
         osteon_blender.register()
     obj, arm = make_sample_rig.build(levels=args.levels, cuts=args.cuts)
     bpy.context.view_layer.objects.active = obj
+    bpy.context.scene.osteon.junction_cores = not args.no_junction_cores
     nv = len(obj.data.vertices)
     live.start(bpy.context)
     sess = live.session()

@@ -254,8 +254,9 @@ void Analyzer::Impl::cut_retries(RunState& run) {
           // correction's partial re-cuts move no piece apart, so they keep the last run's).
           if (!run.partial) {
             // A gap under half the minimum printable thickness is fused by the printer.
-            loose =
-                loose_pieces(mesh, run.vertex_bone, tree.held_bone, 0.5 * options.min_thickness);
+            loose = face_shells == 1 ? std::vector<std::vector<std::int32_t>>{}
+                                     : loose_pieces(mesh, run.vertex_bone, tree.held_bone,
+                                                    0.5 * options.min_thickness, &face_shells);
             loose_vertex.assign(num_vertices, 0);
             for (const auto& piece : loose)
               for (std::int32_t v : piece) loose_vertex[v] = 1;

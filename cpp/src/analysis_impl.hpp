@@ -171,6 +171,9 @@ struct RunState {
 
 struct Analyzer::Impl {
   AnalysisOptions options;
+  // Shells of the faces' connectivity (fixed for an Analyzer; 0: not counted yet). One shell has
+  // no loose piece whatever the vertices do: later runs (live mode) skip the search.
+  Index face_shells = 0;
   std::vector<std::int32_t> faces;
   Index num_vertices = 0;
   int num_bones = 0;

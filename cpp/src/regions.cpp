@@ -972,7 +972,8 @@ double point_triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, con
 
 std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     const std::vector<int>& vertex_bone,
-                                                    int held_bone, double contact_gap) {
+                                                    int held_bone, double contact_gap,
+                                                    Index* face_shells) {
   const Index nv = mesh.num_vertices, nf = mesh.num_faces;
   const double gap = std::isfinite(contact_gap) ? std::max(0.0, contact_gap) : 0.0;
   std::vector<std::int32_t> parent(nv);
@@ -994,18 +995,43 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
     const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
     join_roots(r, find_root(parent, t[2]));
   }
+  if (face_shells != nullptr) *face_shells = roots;
   if (roots <= 1) return {};
-  // Shells touching at exactly the same position (unwelded meshes) are one piece.
-  std::vector<std::int32_t> order(nv);
-  for (Index v = 0; v < nv; ++v) order[v] = static_cast<std::int32_t>(v);
+  // Shells touching at exactly the same position (unwelded meshes) are one piece. Positions
+  // shared within one shell change nothing, so only the vertices outside the largest shell are
+  // sorted; each vertex of the largest shell inside their box looks its position up among them
+  // (a figurine with a small separate part: no sort of the whole mesh on every live run).
+  std::vector<Index> shell_size(nv, 0);
+  for (Index v = 0; v < nv; ++v) ++shell_size[find_root(parent, static_cast<std::int32_t>(v))];
+  const auto largest = static_cast<std::int32_t>(
+      std::max_element(shell_size.begin(), shell_size.end()) - shell_size.begin());
+  std::vector<std::uint8_t> in_largest(nv);
+  std::vector<std::int32_t> order;
+  Vec3 others_lo = Vec3::Constant(std::numeric_limits<double>::infinity()),
+       others_hi = -others_lo;
+  for (Index v = 0; v < nv; ++v) {
+    in_largest[v] = find_root(parent, static_cast<std::int32_t>(v)) == largest;
+    if (in_largest[v]) continue;
+    order.push_back(static_cast<std::int32_t>(v));
+    others_lo = others_lo.cwiseMin(mesh.vertex(v));
+    others_hi = others_hi.cwiseMax(mesh.vertex(v));
+  }
   auto less = [&](std::int32_t a, std::int32_t b) {
     const double* p = mesh.vertices + 3 * static_cast<Index>(a);
     const double* q = mesh.vertices + 3 * static_cast<Index>(b);
     return std::lexicographical_compare(p, p + 3, q, q + 3);
   };
   std::sort(order.begin(), order.end(), less);
-  for (Index k = 1; k < nv; ++k)
+  for (std::size_t k = 1; k < order.size(); ++k)
     if (!less(order[k - 1], order[k])) join(order[k - 1], order[k]);
+  for (Index v = 0; v < nv; ++v) {
+    if (!in_largest[v]) continue;
+    const Vec3 p = mesh.vertex(v);
+    if ((p.array() < others_lo.array()).any() || (p.array() > others_hi.array()).any()) continue;
+    const auto u = static_cast<std::int32_t>(v);
+    const auto it = std::lower_bound(order.begin(), order.end(), u, less);
+    if (it != order.end() && !less(u, *it)) join(u, *it);
+  }
   // Pieces: vertices, faces and boxes.
   std::vector<std::int32_t> piece_of(nv, -1), root_piece(nv, -1);
   std::vector<std::vector<std::int32_t>> verts;

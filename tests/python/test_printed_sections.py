@@ -304,3 +304,23 @@ def test_thickness_is_computed_on_first_read_and_survives_pickling():
             np.testing.assert_allclose(r.section_thickness[i], expect, rtol=1e-9)
             np.testing.assert_array_equal(thin[a.valid], r.section_thickness[a.valid] < minimum)
         assert a.thickness_pending is None  # read once: filled in, the regions released
+
+
+def test_shells_sharing_positions_are_one_piece():
+    """An unwelded seam joins two shells: a bar split at x = 12 mm into two face sets whose seam
+    vertices are separate copies at the same positions is one piece (the big part's seam finds
+    the small part's copies among the other shells' sorted positions); the same small part moved
+    30 mm aside shares no position and is listed loose, with exactly its vertices."""
+    v, f = prism(rectangle(4, 4), 40, stations=21)
+    small = v[f].mean(axis=1)[:, 0] < 12
+    used = np.unique(f[small])
+    copy = {int(k): len(v) + i for i, k in enumerate(used)}
+    f2 = f.copy()
+    f2[small] = np.vectorize(copy.get)(f[small])
+    v2 = np.vstack([v, v[used]])
+    assert osteon.analyze(v2, f2, _bone(40), interval=4).loose_pieces == []
+    apart = v2.copy()
+    apart[len(v):, 1] += 30.0
+    b = osteon.analyze(apart, f2, _bone(40), interval=4)
+    assert len(b.loose_pieces) == 1
+    np.testing.assert_array_equal(np.sort(b.loose_pieces[0]), np.arange(len(v), len(v2)))

@@ -92,9 +92,12 @@ namespace osteon {
 /// the common part of their boxes; past ~1e8 edge-face pairs they count as attached), or when
 /// they are closer than `contact_gap` mm (a vertex of either within that distance of a face of
 /// the other): a printer fuses a gap narrower than it can print. Returns the vertex indices of
-/// each loose piece.
+/// each loose piece. `face_shells`, when given, receives the number of shells the faces alone
+/// make (shared vertex indices; positions not used): 1 means no loose piece whatever the
+/// vertices' positions, which a caller with fixed faces (Analyzer) may keep.
 std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     const std::vector<int>& vertex_bone,
-                                                    int held_bone, double contact_gap = 0.0);
+                                                    int held_bone, double contact_gap = 0.0,
+                                                    Index* face_shells = nullptr);
 
 }  // namespace osteon
