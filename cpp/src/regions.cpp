@@ -1007,8 +1007,7 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
       std::max_element(shell_size.begin(), shell_size.end()) - shell_size.begin());
   std::vector<std::uint8_t> in_largest(nv);
   std::vector<std::int32_t> order;
-  Vec3 others_lo = Vec3::Constant(std::numeric_limits<double>::infinity()),
-       others_hi = -others_lo;
+  Vec3 others_lo = Vec3::Constant(std::numeric_limits<double>::infinity()), others_hi = -others_lo;
   for (Index v = 0; v < nv; ++v) {
     in_largest[v] = find_root(parent, static_cast<std::int32_t>(v)) == largest;
     if (in_largest[v]) continue;
