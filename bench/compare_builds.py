@@ -30,8 +30,9 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 
-CHILD = """
-import json, os, sys, time
+# Both children: the other build imported instead of this one, the model, the keywords.
+PREAMBLE = """
+import os, sys
 if os.environ.get("OSTEON_OTHER_BUILD"):
     # An editable install's import redirect would win over PYTHONPATH: drop it.
     sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
@@ -40,8 +41,12 @@ sys.path.insert(0, {here!r})
 import osteon
 from models import load
 v, f, sk, w = load({model!r}, subdivisions={sub})
-out = {{}}
 kw = {{"junctions": False}} if {no_junctions} and not os.environ.get("OSTEON_OTHER_BUILD") else {{}}
+"""
+
+CHILD = PREAMBLE + """
+import json, time
+out = {{}}
 for h in (2.0, 8.0):
     osteon.analyze(v, f, sk, w, interval=h, threads={threads}, **kw)
     ts = []
@@ -67,16 +72,7 @@ def run_child(pythonpath: str | None, model: str, sub: int, cpu: bool,
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-INSTRUCTIONS_CHILD = """
-import os, sys
-if os.environ.get("OSTEON_OTHER_BUILD"):
-    sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
-    sys.path.insert(0, os.environ["OSTEON_OTHER_BUILD"])
-sys.path.insert(0, {here!r})
-import osteon
-from models import load
-v, f, sk, w = load({model!r}, subdivisions={sub})
-kw = {{"junctions": False}} if {no_junctions} and not os.environ.get("OSTEON_OTHER_BUILD") else {{}}
+INSTRUCTIONS_CHILD = PREAMBLE + """
 osteon.analyze(v, f, sk, w, interval={h}, threads=1, **kw)
 print(len(f), osteon.__file__)
 """

@@ -98,6 +98,28 @@ def activate(obj):
     vl.objects.active = obj
 
 
+def one_bone_rig(name, vertices, faces, bone, head, tail):
+    """A mesh object `name` (from_pydata) bound whole to an armature "rig" of one bone `bone`
+    (head, tail in Blender units) by a vertex group and an Armature modifier; the mesh active."""
+    me = bpy.data.meshes.new(name)
+    me.from_pydata(vertices, [], faces)
+    me.update()
+    obj = bpy.data.objects.new(name, me)
+    bpy.context.scene.collection.objects.link(obj)
+    ad = bpy.data.armatures.new("rig")
+    arm = bpy.data.objects.new("rig", ad)
+    bpy.context.scene.collection.objects.link(arm)
+    activate(arm)
+    bpy.ops.object.mode_set(mode="EDIT")
+    b = ad.edit_bones.new(bone)
+    b.head, b.tail = head, tail
+    bpy.ops.object.mode_set(mode="OBJECT")
+    obj.vertex_groups.new(name=bone).add(list(range(len(vertices))), 1.0, "REPLACE")
+    obj.modifiers.new("Armature", "ARMATURE").object = arm
+    activate(obj)
+    return obj, arm
+
+
 def run_op(op, capfd) -> tuple[set, str]:
     """Call an operator; return (result set, the report text Blender printed)."""
     capfd.readouterr()

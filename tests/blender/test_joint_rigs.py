@@ -6,7 +6,7 @@ import os
 import bpy
 import numpy as np
 import pytest
-from conftest import DATA, activate, import_rignet
+from conftest import DATA, activate, import_rignet, one_bone_rig
 from osteon_blender import bridge, core
 from osteon_blender import service as common
 from osteon_blender.ui import doubt_ui
@@ -20,25 +20,7 @@ def _open_cube(addon):
     v = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
     # faces of the cube without x = +1 and x = -1
     faces = [(0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
-    me = bpy.data.meshes.new("open_cube")
-    me.from_pydata(v, [], faces)
-    me.update()
-    obj = bpy.data.objects.new("open_cube", me)
-    bpy.context.scene.collection.objects.link(obj)
-    ad = bpy.data.armatures.new("rig")
-    arm = bpy.data.objects.new("rig", ad)
-    bpy.context.scene.collection.objects.link(arm)
-    activate(arm)
-    bpy.ops.object.mode_set(mode="EDIT")
-    b = ad.edit_bones.new("bone")
-    b.head, b.tail = (0, 0, -1), (0, 0, 1)
-    bpy.ops.object.mode_set(mode="OBJECT")
-    vg = obj.vertex_groups.new(name="bone")
-    vg.add(list(range(8)), 1.0, "REPLACE")
-    mod = obj.modifiers.new("Armature", "ARMATURE")
-    mod.object = arm
-    activate(obj)
-    return obj, arm
+    return one_bone_rig("open_cube", v, faces, "bone", (0, 0, -1), (0, 0, 1))
 
 
 def test_open_cube_shows_skipped_sections_and_no_all_clear(addon, engine):

@@ -8,7 +8,7 @@ import json
 import bpy
 import numpy as np
 import pytest
-from conftest import activate, empty_scene
+from conftest import empty_scene, one_bone_rig
 from osteon_blender import batch, live, state
 from test_draw import _closed_cylinder
 
@@ -25,22 +25,7 @@ def tbar(addon):
     stub = _closed_cylinder([20, 0, 0], [20, 0, 9], R, stations=10)
     v = np.concatenate([bar[0], stub[0]])
     f = np.concatenate([bar[1], stub[1] + len(bar[0])])
-    me = bpy.data.meshes.new("tbar")
-    me.from_pydata(v.tolist(), [], f.tolist())
-    me.update()
-    obj = bpy.data.objects.new("tbar", me)
-    bpy.context.scene.collection.objects.link(obj)
-    ad = bpy.data.armatures.new("rig")
-    arm = bpy.data.objects.new("rig", ad)
-    bpy.context.scene.collection.objects.link(arm)
-    activate(arm)
-    bpy.ops.object.mode_set(mode="EDIT")
-    b = ad.edit_bones.new("bar")
-    b.head, b.tail = (0, 0, 0), (40, 0, 0)
-    bpy.ops.object.mode_set(mode="OBJECT")
-    obj.vertex_groups.new(name="bar").add(list(range(len(v))), 1.0, "REPLACE")
-    obj.modifiers.new("Armature", "ARMATURE").object = arm
-    activate(obj)
+    obj, arm = one_bone_rig("tbar", v.tolist(), f.tolist(), "bar", (0, 0, 0), (40, 0, 0))
     s = bpy.context.scene.osteon
     s.size_mode, s.print_size_mm, s.interval_mm = "LARGEST", 40.0, 2.0
     yield obj, arm
