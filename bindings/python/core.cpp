@@ -142,7 +142,7 @@ std::unique_ptr<BoneWeights> make_weights(const py::object& dense, const py::obj
 
 // The regions whose thickness an analysis deferred (AnalysisOptions::defer_thickness).
 struct PendingThickness {
-  AnalysisResult holder;  // only section_thickness and thickness_pending are used
+  std::vector<std::shared_ptr<const SectionPolygon>> regions;  // S, null: computed already
 };
 
 py::dict result_to_dict(AnalysisResult&& r) {
@@ -150,9 +150,7 @@ py::dict result_to_dict(AnalysisResult&& r) {
   if (r.thickness_pending.empty()) {
     d["thickness_pending"] = py::none();
   } else {
-    PendingThickness p;
-    p.holder.thickness_pending = std::move(r.thickness_pending);
-    d["thickness_pending"] = py::cast(std::move(p));
+    d["thickness_pending"] = py::cast(PendingThickness{std::move(r.thickness_pending)});
   }
   d["section_bone"] = to_numpy(std::move(r.section_bone));
   d["section_kind"] = to_numpy(std::move(r.section_kind));
@@ -297,18 +295,15 @@ PYBIND11_MODULE(_core, m) {
                                "Regions whose thickness an analysis left for later (mm).")
       .def(
           "fill",
-          [](PendingThickness& p, const DoubleArray& thickness) {
-            auto& h = p.holder;
-            h.section_thickness.assign(thickness.data(), thickness.data() + thickness.size());
-            if (h.thickness_pending.size() > h.section_thickness.size())
+          [](const PendingThickness& p, const DoubleArray& thickness) {
+            std::vector<double> out(thickness.data(), thickness.data() + thickness.size());
+            if (p.regions.size() > out.size())
               throw py::value_error("thickness array shorter than the sections");
             {
               py::gil_scoped_release release;
-              std::vector<std::shared_ptr<const SectionPolygon>> keep = h.thickness_pending;
-              complete_section_thickness(h);
-              h.thickness_pending = std::move(keep);  // a second fill gives the same
+              fill_section_thickness(p.regions, out);
             }
-            return to_numpy(std::vector<double>(h.section_thickness));
+            return to_numpy(std::move(out));
           },
           py::arg("thickness"),
           "A copy of `thickness` (S,) mm with every deferred section's thickness filled in.");

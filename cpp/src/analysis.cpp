@@ -27,11 +27,15 @@ void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
     throw std::invalid_argument("min_thickness must be a finite length >= 0 mm");
 }
 
+void fill_section_thickness(const std::vector<std::shared_ptr<const SectionPolygon>>& pending,
+                            std::vector<double>& thickness) {
+  for (std::size_t i = 0; i < pending.size() && i < thickness.size(); ++i)
+    if (pending[i]) thickness[i] = region_thickness(*pending[i]);
+}
+
 void complete_section_thickness(AnalysisResult& result) {
-  auto& pending = result.thickness_pending;
-  for (std::size_t i = 0; i < pending.size() && i < result.section_thickness.size(); ++i)
-    if (pending[i]) result.section_thickness[i] = region_thickness(*pending[i]);
-  pending.clear();
+  fill_section_thickness(result.thickness_pending, result.section_thickness);
+  result.thickness_pending.clear();
 }
 
 Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertices,

@@ -892,34 +892,33 @@ double region_thickness_lower_bound(double area_mm2, double smaller_second_momen
   return std::isfinite(bound) ? bound : 0.0;
 }
 
+namespace {
+
+// The thinnest wall around the region's holes (mm): each hole's distance to the outer boundary
+// and to the other holes, or `bound` when none is thinner (only parts within it are searched).
+double thinnest_wall(const SectionPolygon& polygon, double bound) {
+  const auto& holes = polygon.holes;
+  for (std::size_t h = 0; h < holes.size(); ++h) {
+    if (holes[h].size() < 3) continue;
+    bound = loop_distance(holes[h], polygon.outer, bound);
+    for (std::size_t k = h + 1; k < holes.size(); ++k)
+      if (holes[k].size() >= 3) bound = loop_distance(holes[h], holes[k], bound);
+  }
+  return bound;
+}
+
+}  // namespace
+
 bool region_thinner_than(const SectionPolygon& polygon, double limit_mm, double width_bound_mm) {
   if (!(limit_mm > 0)) return false;
   if (!(width_bound_mm >= limit_mm) && minimum_width(polygon.outer) < limit_mm) return true;
-  // loop_distance returns its bound (as the root of its square) when nothing is nearer.
-  const double none = std::sqrt(limit_mm * limit_mm);
-  const auto& holes = polygon.holes;
-  for (std::size_t h = 0; h < holes.size(); ++h) {
-    if (holes[h].size() < 3) continue;
-    if (loop_distance(holes[h], polygon.outer, limit_mm) < std::min(limit_mm, none)) return true;
-    for (std::size_t k = h + 1; k < holes.size(); ++k)
-      if (holes[k].size() >= 3 &&
-          loop_distance(holes[h], holes[k], limit_mm) < std::min(limit_mm, none))
-        return true;
-  }
-  return false;
+  // With nothing nearer, loop_distance gives back sqrt(limit^2), which is the limit exactly
+  // (a correctly rounded root of a rounded square), so only a thinner wall is below it.
+  return thinnest_wall(polygon, limit_mm) < limit_mm;
 }
 
 double region_thickness(const SectionPolygon& polygon) {
-  double thickness = minimum_width(polygon.outer);
-  // The thinnest wall around each hole: its distance to the outer boundary and other holes.
-  const auto& holes = polygon.holes;
-  for (std::size_t h = 0; h < holes.size(); ++h) {
-    if (holes[h].size() < 3) continue;
-    thickness = loop_distance(holes[h], polygon.outer, thickness);
-    for (std::size_t k = h + 1; k < holes.size(); ++k)
-      if (holes[k].size() >= 3) thickness = loop_distance(holes[h], holes[k], thickness);
-  }
-  return thickness;
+  return thinnest_wall(polygon, minimum_width(polygon.outer));
 }
 
 }  // namespace osteon

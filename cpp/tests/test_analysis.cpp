@@ -320,7 +320,9 @@ TEST(Analysis, DeferredThicknessIsFilledInAsComputedAtOnce) {
     for (std::size_t i = 0; i < lazy.section_thickness.size(); ++i) {
       if (std::isnan(eager.section_thickness[i])) continue;
       EXPECT_EQ(lazy.section_thickness[i], eager.section_thickness[i]) << i;
-      if (eager.section_kind[i] == kInterior) EXPECT_NEAR(eager.section_thickness[i], t, 1e-9);
+      if (eager.section_kind[i] == kInterior) {
+        EXPECT_NEAR(eager.section_thickness[i], t, 1e-9);
+      }
     }
   }
 }

@@ -304,6 +304,15 @@ def _min_thickness(value: Any) -> float:
     return t
 
 
+def _switch(value: Any, name: str) -> bool:
+    """A yes/no argument: True/False (a NumPy bool, or 1/0); ``ValueError`` naming it otherwise
+    (a string such as "false" is not taken for True)."""
+    if isinstance(value, (bool, np.bool_)) or (isinstance(value, (int, np.integer))
+                                                and value in (0, 1)):
+        return bool(value)
+    raise ValueError(f"{name} must be True or False, got {value!r}")
+
+
 def _held_bone(root: int | str | None, skeleton: Skeleton) -> int:
     if root is None:
         return -1
@@ -699,7 +708,7 @@ class Analyzer:
         options.local_cuts = bool(local_cuts)
         options.keep_outlines = bool(keep_outlines)
         options.min_thickness = self.min_thickness
-        options.junctions = bool(junctions)
+        options.junctions = _switch(junctions, "junctions")
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
                                     options)
 
@@ -875,7 +884,7 @@ def correct(
                        gap_tolerance, threads, build_direction, layer_strength_ratio)
     options.keep_outlines = bool(keep_outlines)
     options.min_thickness = _min_thickness(min_thickness)
-    options.junctions = bool(junctions)
+    options.junctions = _switch(junctions, "junctions")
     co = _core.CorrectionOptions()
     co.max_scale, co.max_rounds = float(max_scale), max_rounds
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"

@@ -10,9 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-import numpy as np
-
 from . import materials
+from ._api import _switch
 from .report import allowable_stress
 
 
@@ -107,14 +106,6 @@ def _positive(value, what: str, unit: str) -> float:
     if not (v > 0.0 and math.isfinite(v)):
         raise ValueError(f"{what} must be a positive number of {unit}, got {value}")
     return v
-
-
-def _switch(value, what: str) -> bool:
-    """A yes/no setting: True/False (or 1/0); ``ValueError`` naming it otherwise (a string
-    such as "false" is not taken for True)."""
-    if isinstance(value, (bool, np.bool_)) or (isinstance(value, int) and value in (0, 1)):
-        return bool(value)
-    raise ValueError(f"{what} must be True or False, got {value!r}")
 
 
 def _direction(value) -> list[float]:

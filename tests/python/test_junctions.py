@@ -229,7 +229,6 @@ def test_settings_junctions_reach_the_engine_arguments():
     assert engine_arguments(off, [])["junctions"] is False
     assert engine_arguments(off, [], correct=True)["junctions"] is False
     assert on.as_dict()["junctions"] is True and off.as_dict()["junctions"] is False
-    assert np.bool_(False) is not False  # a NumPy bool is taken as what it says
     kw = engine_arguments(Settings(force_n=20.0, interval_mm=2.0, junctions=np.bool_(False)), [])
     assert kw["junctions"] is False
     batch = BatchSettings.from_any({"junctions": False, "correct": True})
@@ -250,6 +249,16 @@ def test_settings_junctions_must_be_a_yes_or_no(value):
 
     with pytest.raises(ValueError, match="junctions must be True or False"):
         engine_arguments(Settings(force_n=20.0, interval_mm=2.0, junctions=value), [])
+
+
+@pytest.mark.parametrize("value", ["false", None, 2])
+def test_analyze_junctions_must_be_a_yes_or_no(value):
+    bar, stub, sk = tbar()
+    v, f = merge(bar, stub)
+    with pytest.raises(ValueError, match="junctions must be True or False"):
+        osteon.analyze(v, f, sk, junctions=value)
+    with pytest.raises(ValueError, match="junctions must be True or False"):
+        osteon.correct(v, f, sk, None, junctions=value)
 
 
 def _write_rig(tmp_path, meshes, heads, tails, parents):

@@ -112,7 +112,12 @@ struct AnalysisResult {
   std::vector<std::vector<std::int32_t>> loose_pieces;
 };
 
-/// Computes the thickness (mm, regions.hpp) of every section left in result.thickness_pending
+/// Writes the thickness (mm, regions.hpp) of every region in `pending` (S, null: none) into
+/// `thickness` (S,); the regions stay (a second call writes the same).
+void fill_section_thickness(const std::vector<std::shared_ptr<const SectionPolygon>>& pending,
+                            std::vector<double>& thickness);
+
+/// Computes the thickness of every section left in result.thickness_pending
 /// (AnalysisOptions::defer_thickness) into result.section_thickness and empties the list.
 void complete_section_thickness(AnalysisResult& result);
 
