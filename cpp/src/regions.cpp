@@ -548,26 +548,12 @@ Paths64 offset(const Paths64& paths, double delta) {
 }
 
 // True when the region (an outer path and its holes, Clipper2 units) holds the disc of radius
-// `radius` around its outer boundary's centroid: one cheap witness that the region is wider
-// than 2 * radius (its erosion by less than radius is not empty). False says nothing.
-bool holds_centroid_disc(const Paths64& region, double radius) {
-  const Path64& outer = region.front();
-  const std::size_t n = outer.size();
-  if (n < 3) return false;
-  double a = 0.0, cx = 0.0, cy = 0.0;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double x0 = outer[k].x, y0 = outer[k].y;
-    const double x1 = outer[(k + 1) % n].x, y1 = outer[(k + 1) % n].y;
-    const double c = x0 * y1 - x1 * y0;
-    a += c;
-    cx += (x0 + x1) * c;
-    cy += (y0 + y1) * c;
-  }
-  if (a == 0.0) return false;
-  const Vec2 q(cx / (3.0 * a), cy / (3.0 * a));
+// `radius` around q: q inside the outer path, in no hole, and no edge nearer than `radius`.
+bool holds_disc(const Paths64& region, const Vec2& q, double radius) {
   const Point64 qi(static_cast<std::int64_t>(std::llround(q.x())),
                    static_cast<std::int64_t>(std::llround(q.y())));
-  if (Clipper2Lib::PointInPolygon(qi, outer) != PointInPolygonResult::IsInside) return false;
+  if (Clipper2Lib::PointInPolygon(qi, region.front()) != PointInPolygonResult::IsInside)
+    return false;
   for (std::size_t h = 1; h < region.size(); ++h)
     if (Clipper2Lib::PointInPolygon(qi, region[h]) != PointInPolygonResult::IsOutside) return false;
   const double r2 = radius * radius;
@@ -585,6 +571,114 @@ bool holds_centroid_disc(const Paths64& region, double radius) {
   return true;
 }
 
+// True when the region (an outer path and its holes, Clipper2 units) holds the disc of radius
+// `radius` around its outer boundary's centroid: one cheap witness that the region is wider
+// than 2 * radius (its erosion by less than radius is not empty). False says nothing.
+bool holds_centroid_disc(const Paths64& region, double radius) {
+  const Path64& outer = region.front();
+  const std::size_t n = outer.size();
+  if (n < 3) return false;
+  double a = 0.0, cx = 0.0, cy = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double x0 = outer[k].x, y0 = outer[k].y;
+    const double x1 = outer[(k + 1) % n].x, y1 = outer[(k + 1) % n].y;
+    const double c = x0 * y1 - x1 * y0;
+    a += c;
+    cx += (x0 + x1) * c;
+    cy += (y0 + y1) * c;
+  }
+  if (a == 0.0) return false;
+  return holds_disc(region, Vec2(cx / (3.0 * a), cy / (3.0 * a)), radius);
+}
+
+// Winding number of a closed path around q (q on none of its edges), exact.
+int winding_number(const Path64& path, const Point64& q) {
+  int w = 0;
+  for (std::size_t k = 0, n = path.size(); k < n; ++k) {
+    const Point64& a = path[k];
+    const Point64& b = path[k + 1 == n ? 0 : k + 1];
+    const __int128 c = static_cast<__int128>(b.x - a.x) * (q.y - a.y) -
+                       static_cast<__int128>(b.y - a.y) * (q.x - a.x);
+    if (a.y <= q.y) {
+      if (b.y > q.y && c > 0) ++w;
+    } else if (b.y <= q.y && c < 0) {
+      --w;
+    }
+  }
+  return w;
+}
+
+Path64 rect_path(const Clipper2Lib::Rect64& r, bool positive) {
+  Path64 path{{r.left, r.top}, {r.right, r.top}, {r.right, r.bottom}, {r.left, r.bottom}};
+  if (!positive) std::reverse(path.begin(), path.end());
+  return path;
+}
+
+// The closed paths with everything outside the rectangle r replaced by a path along r's boundary
+// that winds around r the same way: an edge that meets r (its box does) is kept with its own
+// ends; a vertex both of whose edges miss r is clamped onto r's boundary (runs along one side
+// merged); a loop that misses r altogether becomes r's outline, as often as it winds around r.
+// An edge that misses r lies in one open half-plane beside r, and so does its clamped image, and
+// every edge in between: points inside r keep their winding numbers. The region inside r, its
+// boundary there and every intersection Clipper2 computes there (from the same edge ends) are
+// those of the paths themselves; the cost of what follows is that of the part near r.
+Paths64 clamp_to_rect(const Paths64& paths, const Clipper2Lib::Rect64& r) {
+  Paths64 out;
+  out.reserve(paths.size());
+  auto meets = [&](const Point64& a, const Point64& b) {
+    return std::max(a.x, b.x) >= r.left && std::min(a.x, b.x) <= r.right &&
+           std::max(a.y, b.y) >= r.top && std::min(a.y, b.y) <= r.bottom;
+  };
+  auto on_one_side = [&](const Point64& a, const Point64& b, const Point64& c) {
+    return (a.x == b.x && b.x == c.x && (a.x == r.left || a.x == r.right)) ||
+           (a.y == b.y && b.y == c.y && (a.y == r.top || a.y == r.bottom));
+  };
+  std::vector<char> moved;
+  for (const Path64& path : paths) {
+    const std::size_t n = path.size();
+    std::size_t first = n;
+    for (std::size_t k = 0; k < n && first == n; ++k)
+      if (meets(path[k], path[k + 1 == n ? 0 : k + 1])) first = k;
+    if (first == n) {
+      const int w = n < 3 ? 0 : winding_number(path, r.MidPoint());
+      for (int k = 0; k < std::abs(w); ++k) out.push_back(rect_path(r, w > 0));
+      continue;
+    }
+    Path64 loop;
+    loop.reserve(n);
+    moved.clear();
+    bool before = meets(path[(first + n - 1) % n], path[first]);
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::size_t k = (first + j) % n;
+      const bool after = meets(path[k], path[(k + 1) % n]);
+      if (before || after) {
+        loop.push_back(path[k]);
+        moved.push_back(0);
+      } else {
+        const Point64 c(std::clamp(path[k].x, r.left, r.right),
+                        std::clamp(path[k].y, r.top, r.bottom));
+        if (!(moved.back() && loop.back() == c)) {
+          while (loop.size() >= 2 && moved.back() && moved[moved.size() - 2] &&
+                 on_one_side(loop[loop.size() - 2], loop.back(), c)) {
+            loop.pop_back();
+            moved.pop_back();
+          }
+          loop.push_back(c);
+          moved.push_back(1);
+        }
+      }
+      before = after;
+    }
+    out.push_back(std::move(loop));
+  }
+  return out;
+}
+
+// Clipper2 rectangle grown by d on every side.
+Clipper2Lib::Rect64 grown(const Clipper2Lib::Rect64& r, std::int64_t d) {
+  return {r.left - d, r.top - d, r.right + d, r.bottom + d};
+}
+
 }  // namespace
 
 SectionGeometry junction_core(const SectionPolygon& section,
@@ -592,6 +686,7 @@ SectionGeometry junction_core(const SectionPolygon& section,
                               double margin_mm, double opening_mm,
                               const std::function<bool(const SectionPolygon& inner)>& worth) {
   using Clipper2Lib::FillRule;
+  using Clipper2Lib::Rect64;
   SectionGeometry geom;
   std::vector<std::vector<Vec2>> all{section.outer};
   all.insert(all.end(), section.holes.begin(), section.holes.end());
@@ -601,11 +696,10 @@ SectionGeometry junction_core(const SectionPolygon& section,
   }
   const Scaler s(all);
   const Paths64 whole = paths_of(section, s);
-  Paths64 core = whole;
   // Only the neighbours' material near the section matters: clipped to its box (+ margin).
-  const Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(whole);
+  const Rect64 box = Clipper2Lib::GetBounds(whole);
   const std::int64_t pad = static_cast<std::int64_t>(2.0 * margin_mm * s.scale) + 1;
-  const Clipper2Lib::Rect64 near(box.left - pad, box.top - pad, box.right + pad, box.bottom + pad);
+  const Rect64 near(box.left - pad, box.top - pad, box.right + pad, box.bottom + pad);
   // What both neighbours cover, widened by the margin. Their facets are first thinned to within a
   // quarter of the margin (Clipper2 SimplifyPaths: a few dozen vertices instead of hundreds), and
   // the common part is widened once (the offset's cost is in the self-crossings of every facet's
@@ -617,36 +711,50 @@ SectionGeometry junction_core(const SectionPolygon& section,
     covered =
         k == 0 ? std::move(region) : Clipper2Lib::Intersect(covered, region, FillRule::NonZero);
   }
+  const Point64 origin = s.to(Vec2::Zero());
+  const double opening = opening_mm * s.scale;
+  // The core lies inside the common part's box grown by the margin (`inside`); the section is
+  // worked on near it only: inside `band`, that box (and the origin) grown by 2.4 x the opening
+  // (room for the discs that tell a trimmed stub, below), with everything farther out replaced by
+  // a path along the rectangle (clamp_to_rect: nothing inside changes).
+  Rect64 inside, band;
+  Paths64 part = whole;
+  bool local = !covered.empty();
+  if (local) {
+    inside = grown(Clipper2Lib::GetBounds(covered),
+                   static_cast<std::int64_t>(std::ceil(1.02 * margin_mm * s.scale)) + 2);
+    band = inside;
+    band.left = std::min(band.left, origin.x);
+    band.right = std::max(band.right, origin.x);
+    band.top = std::min(band.top, origin.y);
+    band.bottom = std::max(band.bottom, origin.y);
+    band = grown(band, opening > 0 ? static_cast<std::int64_t>(std::ceil(2.4 * opening)) + 8 : 2);
+    part = clamp_to_rect(whole, grown(band, 2));
+  }
   // What the core is sure to hold (the section and the common part before widening, around the
   // origin): a caller may stop here when that already fails its test.
   if (worth && !covered.empty()) {
     PolyTree64 inner;
     Clipper2Lib::Clipper64 clipper;
-    clipper.AddSubject(whole);
+    clipper.AddSubject(part);
     clipper.AddClip(covered);
     clipper.Execute(Clipper2Lib::ClipType::Intersection, FillRule::NonZero, inner);
     bool hollow = false;
-    const PolyPath64* outer = locate(inner, s.to(Vec2::Zero()), hollow);
+    const PolyPath64* outer = locate(inner, origin, hollow);
     if (outer != nullptr && !hollow && !worth(polygon_of(*outer, s))) return geom;
   }
   if (margin_mm > 0) covered = offset(covered, margin_mm * s.scale);
-  core = Clipper2Lib::Intersect(core, covered, FillRule::NonZero);
+  if (local && !covered.empty()) {
+    const Rect64 b = Clipper2Lib::GetBounds(covered);
+    local = b.left > inside.left && b.right < inside.right && b.top > inside.top &&
+            b.bottom < inside.bottom;
+  }
+  if (!local) part = whole;
+  Paths64 core = Clipper2Lib::Intersect(part, covered, FillRule::NonZero);
   // The trimmed-off material, piece by piece: a piece is a stub (left out whole) only when it is
   // wider than 2 * opening somewhere (its erosion by `opening` is not empty); a thin piece (the
   // rim of a taper, a tilted bone's crescent) goes back into the core.
-  PolyTree64 trimmed;
-  {
-    Clipper2Lib::Clipper64 clipper;
-    clipper.AddSubject(whole);
-    clipper.AddClip(core);
-    clipper.Execute(Clipper2Lib::ClipType::Difference, FillRule::NonZero, trimmed);
-  }
-  std::vector<const PolyPath64*> pieces;
-  collect_outers(trimmed, pieces);
-  const double opening = opening_mm * s.scale;
-  for (const PolyPath64* piece : pieces) {
-    Paths64 paths{piece->Polygon()};
-    for (const auto& hole : *piece) paths.push_back(hole->Polygon());
+  auto thin = [&](const Paths64& paths) {
     // Cheap answers first: a piece holding a disc of radius `opening` has at least the disc's
     // area and is at least 2 * opening wide in every direction.
     bool thin = opening > 0 && std::abs(Clipper2Lib::Area(paths)) < M_PI * opening * opening;
@@ -656,17 +764,89 @@ SectionGeometry junction_core(const SectionPolygon& section,
     // than 2.2 x opening anywhere across that disc, and the eroded, thinned outline keeps the
     // centroid, 1.1 - 0.05 - 0.01 (the arcs' error) x opening clear of it).
     if (!thin && opening > 0 && !holds_centroid_disc(paths, 1.1 * opening))
-      thin = minimum_width(s.from(piece->Polygon())) * s.scale < 2.0 * opening ||
+      thin = minimum_width(s.from(paths.front())) * s.scale < 2.0 * opening ||
              offset(Clipper2Lib::SimplifyPaths(paths, 0.05 * opening), -opening).empty();
-    if (thin) core.insert(core.end(), paths.begin(), paths.end());
+    return thin;
+  };
+  Paths64 merged = core;
+  // With no opening every trimmed piece is a stub: none goes back.
+  bool whole_pieces = !local;
+  if (local && opening > 0) {
+    // The trimmed material inside `band`: a piece clear of the band's edge is a whole piece of
+    // what the section loses; a piece reaching the edge is part of one, which is a stub when the
+    // part already holds a disc of 1.1 x opening (see above: the thinned erosion keeps its
+    // centre). Else the pieces are taken from the whole section.
+    Paths64 clip = core;
+    Rect64 all_box = Clipper2Lib::GetBounds(part);
+    all_box.left = std::min(all_box.left, band.left);
+    all_box.right = std::max(all_box.right, band.right);
+    all_box.top = std::min(all_box.top, band.top);
+    all_box.bottom = std::max(all_box.bottom, band.bottom);
+    clip.push_back(rect_path(grown(all_box, 4), true));
+    clip.push_back(rect_path(band, false));
+    PolyTree64 trimmed;
+    Clipper2Lib::Clipper64 clipper;
+    clipper.AddSubject(part);
+    clipper.AddClip(clip);
+    clipper.Execute(Clipper2Lib::ClipType::Difference, FillRule::NonZero, trimmed);
+    std::vector<const PolyPath64*> pieces;
+    collect_outers(trimmed, pieces);
+    const std::int64_t half = (band.right - band.left) / 2, mid_x = band.left + half;
+    const std::int64_t mid_y = band.top + (band.bottom - band.top) / 2;
+    const double inset = std::ceil(1.2 * opening) + 4.0, disc = 1.1 * opening + 4.0;
+    const Vec2 lo(static_cast<double>(band.left) + inset, static_cast<double>(band.top) + inset);
+    const Vec2 hi(static_cast<double>(band.right) - inset,
+                  static_cast<double>(band.bottom) - inset);
+    const Vec2 probes[8] = {{lo.x(), lo.y()},
+                            {hi.x(), lo.y()},
+                            {hi.x(), hi.y()},
+                            {lo.x(), hi.y()},
+                            {static_cast<double>(mid_x), lo.y()},
+                            {hi.x(), static_cast<double>(mid_y)},
+                            {static_cast<double>(mid_x), hi.y()},
+                            {lo.x(), static_cast<double>(mid_y)}};
+    for (const PolyPath64* piece : pieces) {
+      Paths64 paths{piece->Polygon()};
+      for (const auto& hole : *piece) paths.push_back(hole->Polygon());
+      const Rect64 b = Clipper2Lib::GetBounds(paths.front());
+      const bool edge = b.left <= band.left + 2 || b.right >= band.right - 2 ||
+                        b.top <= band.top + 2 || b.bottom >= band.bottom - 2;
+      if (!edge) {
+        if (thin(paths)) merged.insert(merged.end(), paths.begin(), paths.end());
+        continue;
+      }
+      bool stub = holds_centroid_disc(paths, disc);
+      for (int k = 0; !stub && k < 8; ++k) stub = holds_disc(paths, probes[k], disc);
+      if (!stub) {
+        whole_pieces = true;
+        break;
+      }
+    }
+    if (whole_pieces) merged = core;
+  }
+  if (whole_pieces) {
+    PolyTree64 trimmed;
+    {
+      Clipper2Lib::Clipper64 clipper;
+      clipper.AddSubject(whole);
+      clipper.AddClip(core);
+      clipper.Execute(Clipper2Lib::ClipType::Difference, FillRule::NonZero, trimmed);
+    }
+    std::vector<const PolyPath64*> pieces;
+    collect_outers(trimmed, pieces);
+    for (const PolyPath64* piece : pieces) {
+      Paths64 paths{piece->Polygon()};
+      for (const auto& hole : *piece) paths.push_back(hole->Polygon());
+      if (thin(paths)) merged.insert(merged.end(), paths.begin(), paths.end());
+    }
   }
   // The core and the thin pieces merged (one union, straight into the tree).
   PolyTree64 tree;
   Clipper2Lib::Clipper64 clipper;
-  clipper.AddSubject(core);
+  clipper.AddSubject(merged);
   clipper.Execute(Clipper2Lib::ClipType::Union, FillRule::NonZero, tree);
   bool hollow = false;
-  if (const PolyPath64* outer = locate(tree, s.to(Vec2::Zero()), hollow)) {
+  if (const PolyPath64* outer = locate(tree, origin, hollow)) {
     if (hollow) geom.flags |= kFlagHollow;
     geom.polygon = polygon_of(*outer, s);
     geom.found = true;
