@@ -17,12 +17,14 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "analysis_impl.hpp"
 #include "clipper2/clipper.h"
 #include "osteon/regions.hpp"
 #include "parallel.hpp"
+#include "simplify_path.hpp"
 
 namespace osteon {
 namespace {
@@ -73,25 +75,30 @@ bool reaches_beyond(const SectionPolygon& cut, const SectionPolygon& core, doubl
   }
   // Otherwise every vertex against the core's loops, thinned to within 1 % of `reach` (Clipper2
   // SimplifyPath: a few dozen segments instead of hundreds; the distances move by no more).
-  std::vector<std::vector<Vec2>> loops;
+  std::vector<std::pair<Vec2, Vec2>> segments;
   auto add = [&](const std::vector<Vec2>& loop) {
     Clipper2Lib::PathD path;
     path.reserve(loop.size());
     for (const Vec2& p : loop) path.emplace_back(p.x(), p.y());
-    path = Clipper2Lib::SimplifyPath(path, 0.01 * reach);
-    std::vector<Vec2> out;
-    out.reserve(path.size());
-    for (const auto& p : path) out.emplace_back(p.x, p.y);
-    if (!out.empty()) loops.push_back(std::move(out));
+    path = detail::simplify_closed(path, 0.01 * reach);
+    for (std::size_t k = 0, n = path.size(); k < n; ++k) {
+      const auto& a = path[k];
+      const auto& b = path[k + 1 == n ? 0 : k + 1];
+      segments.emplace_back(Vec2(a.x, a.y), Vec2(b.x, b.y));
+    }
   };
   add(core.outer);
   for (const auto& hole : core.holes) add(hole);
+  // Consecutive vertices of the cut are usually near the same segment: the search for a near one
+  // starts at the last one found (the answer is whether there is one).
+  const std::size_t m = segments.size();
+  std::size_t last = 0;
   for (const Vec2& q : cut.outer) {
     bool near = false;
-    for (std::size_t l = 0; !near && l < loops.size(); ++l) {
-      const std::vector<Vec2>& loop = loops[l];
-      for (std::size_t k = 0, n = loop.size(); !near && k < n; ++k)
-        near = segment_distance2(q, loop[k], loop[k + 1 == n ? 0 : k + 1]) < r2;
+    for (std::size_t j = 0; !near && j < m; ++j) {
+      const std::size_t k = last + j < m ? last + j : last + j - m;
+      near = segment_distance2(q, segments[k].first, segments[k].second) < r2;
+      if (near) last = k;
     }
     if (!near) return true;
   }

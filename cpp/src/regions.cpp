@@ -10,6 +10,7 @@
 
 #include "clipper2/clipper.h"
 #include "line_triangle.hpp"
+#include "simplify_path.hpp"
 
 namespace osteon {
 namespace {
@@ -37,10 +38,15 @@ struct Scaler {
       inv = std::ldexp(1.0, e - 40);
     }
   }
-  Point64 to(const Vec2& p) const {
-    return Point64(static_cast<std::int64_t>(std::llround(p.x() * scale)),
-                   static_cast<std::int64_t>(std::llround(p.y() * scale)));
+  // std::llround (halves away from zero), without the library call for |x| < 2^52: x minus its
+  // truncation is exact there.
+  static std::int64_t round(double x) {
+    if (!(std::abs(x) < 4503599627370496.0)) return static_cast<std::int64_t>(std::llround(x));
+    const auto i = static_cast<std::int64_t>(x);
+    const double f = x - static_cast<double>(i);
+    return f >= 0.5 ? i + 1 : (f <= -0.5 ? i - 1 : i);
   }
+  Point64 to(const Vec2& p) const { return Point64(round(p.x() * scale), round(p.y() * scale)); }
   Vec2 from(const Point64& q) const {
     return Vec2(static_cast<double>(q.x) * inv, static_cast<double>(q.y) * inv);
   }
@@ -597,11 +603,11 @@ int winding_number(const Path64& path, const Point64& q) {
   for (std::size_t k = 0, n = path.size(); k < n; ++k) {
     const Point64& a = path[k];
     const Point64& b = path[k + 1 == n ? 0 : k + 1];
-    const __int128 c = static_cast<__int128>(b.x - a.x) * (q.y - a.y) -
-                       static_cast<__int128>(b.y - a.y) * (q.x - a.x);
+    if ((a.y <= q.y) == (b.y <= q.y)) continue;  // not crossing the horizontal line through q
+    const int c = Clipper2Lib::CrossProductSign(a, b, q);
     if (a.y <= q.y) {
-      if (b.y > q.y && c > 0) ++w;
-    } else if (b.y <= q.y && c < 0) {
+      if (c > 0) ++w;
+    } else if (c < 0) {
       --w;
     }
   }
@@ -679,6 +685,205 @@ Clipper2Lib::Rect64 grown(const Clipper2Lib::Rect64& r, std::int64_t d) {
   return {r.left - d, r.top - d, r.right + d, r.bottom + d};
 }
 
+// The Chebyshev distance max(|u|, |v|) from (0, 0) to the segment a-b: the largest t for which the
+// square |u|, |v| <= t misses it. Convex and piecewise linear along the segment, so its least value
+// is at an end, a kink (u = 0 or v = 0) or where |u| = |v|.
+double chebyshev_to_segment(double ax, double ay, double bx, double by) {
+  double best =
+      std::min(std::max(std::abs(ax), std::abs(ay)), std::max(std::abs(bx), std::abs(by)));
+  const double dx = bx - ax, dy = by - ay;
+  auto at = [&](double t) {
+    if (t > 0 && t < 1)
+      best = std::min(best, std::max(std::abs(ax + t * dx), std::abs(ay + t * dy)));
+  };
+  if (dx != 0) at(-ax / dx);
+  if (dy != 0) at(-ay / dy);
+  if (dx != dy) at((ay - ax) / (dx - dy));
+  if (dx != -dy) at(-(ax + ay) / (dx + dy));
+  return best;
+}
+
+// Sign of (a - o) x (b - o), exact (Clipper2's CrossProductSign).
+int cross(const Point64& o, const Point64& a, const Point64& b) {
+  return Clipper2Lib::CrossProductSign(o, a, b);
+}
+
+// True when the segment a-b meets the closed rectangle r (exact).
+bool segment_meets_rect(const Point64& a, const Point64& b, const Clipper2Lib::Rect64& r) {
+  if (std::max(a.x, b.x) < r.left || std::min(a.x, b.x) > r.right || std::max(a.y, b.y) < r.top ||
+      std::min(a.y, b.y) > r.bottom)
+    return false;
+  const Point64 corners[4] = {
+      {r.left, r.top}, {r.right, r.top}, {r.right, r.bottom}, {r.left, r.bottom}};
+  bool below = false, above = false;
+  for (const Point64& c : corners) {
+    const int side = cross(a, b, c);
+    below = below || side <= 0;
+    above = above || side >= 0;
+  }
+  return below && above;
+}
+
+// True when the segments a-b and c-d meet (touching counts; exact).
+bool segments_meet(const Point64& a, const Point64& b, const Point64& c, const Point64& d) {
+  if (std::max(a.x, b.x) < std::min(c.x, d.x) || std::max(c.x, d.x) < std::min(a.x, b.x) ||
+      std::max(a.y, b.y) < std::min(c.y, d.y) || std::max(c.y, d.y) < std::min(a.y, b.y))
+    return false;
+  const int d1 = cross(a, b, c), d2 = cross(a, b, d), d3 = cross(c, d, a), d4 = cross(c, d, b);
+  return !((d1 > 0 && d2 > 0) || (d1 < 0 && d2 < 0) || (d3 > 0 && d4 > 0) || (d3 < 0 && d4 < 0));
+}
+
+// A rectangle (axis-parallel, Clipper2 units) inside every one of the non-zero regions, 2 units
+// clear of every edge, and joined to `origin` inside them all (it holds the origin, or a segment
+// from its centre to the origin, or to a corner of the origin's own such rectangle, crosses no
+// edge): a region that the part the regions have in common around the origin holds. Centred on
+// the origin, the first region's centroid or the common box's centre, with the common box's
+// proportions, as large as the edges allow (one pass over them), then checked exactly. False when
+// none is found.
+bool rect_inside(const std::vector<const Paths64*>& regions, const Point64& origin,
+                 Clipper2Lib::Rect64& out) {
+  Clipper2Lib::Rect64 common = Clipper2Lib::GetBounds(*regions.front());
+  for (const Paths64* region : regions) {
+    const Clipper2Lib::Rect64 r = Clipper2Lib::GetBounds(*region);
+    common =
+        Clipper2Lib::Rect64(std::max(common.left, r.left), std::max(common.top, r.top),
+                            std::min(common.right, r.right), std::min(common.bottom, r.bottom));
+  }
+  const double hx = 0.5 * static_cast<double>(common.right - common.left);
+  const double hy = 0.5 * static_cast<double>(common.bottom - common.top);
+  if (!(hx > 8 && hy > 8)) return false;
+  constexpr int kCentres = 3;
+  Point64 centres[kCentres] = {origin, origin, common.MidPoint()};
+  {
+    double area = 0.0, cx = 0.0, cy = 0.0;
+    for (const Path64& path : *regions.front()) {
+      for (std::size_t i = 0, n = path.size(); i < n; ++i) {
+        const double x0 = path[i].x, y0 = path[i].y;
+        const double x1 = path[i + 1 == n ? 0 : i + 1].x, y1 = path[i + 1 == n ? 0 : i + 1].y;
+        const double c = x0 * y1 - x1 * y0;
+        area += c;
+        cx += (x0 + x1) * c;
+        cy += (y0 + y1) * c;
+      }
+    }
+    if (area != 0.0)
+      centres[1] = Point64(static_cast<std::int64_t>(std::llround(cx / (3.0 * area))),
+                           static_cast<std::int64_t>(std::llround(cy / (3.0 * area))));
+  }
+  // t[c]: the largest scale of the box (hx, hy) around centre c that no edge enters; an edge's
+  // box gives a lower bound first (most edges are far).
+  double t[kCentres];
+  std::fill(t, t + kCentres, std::numeric_limits<double>::infinity());
+  const double ix = 1.0 / hx, iy = 1.0 / hy;
+  double cx[kCentres], cy[kCentres];
+  for (int c = 0; c < kCentres; ++c) {
+    cx[c] = static_cast<double>(centres[c].x);
+    cy[c] = static_cast<double>(centres[c].y);
+  }
+  for (const Paths64* region : regions) {
+    for (const Path64& path : *region) {
+      for (std::size_t k = 0, n = path.size(); k < n; ++k) {
+        const Point64& p = path[k];
+        const Point64& q = path[k + 1 == n ? 0 : k + 1];
+        const double px = static_cast<double>(p.x), py = static_cast<double>(p.y);
+        const double qx = static_cast<double>(q.x), qy = static_cast<double>(q.y);
+        const double x0 = std::min(px, qx), x1 = std::max(px, qx);
+        const double y0 = std::min(py, qy), y1 = std::max(py, qy);
+        for (int c = 0; c < kCentres; ++c) {
+          const double gx = std::max({x0 - cx[c], cx[c] - x1, 0.0}) * ix;
+          const double gy = std::max({y0 - cy[c], cy[c] - y1, 0.0}) * iy;
+          if (std::max(gx, gy) >= t[c]) continue;
+          t[c] = std::min(t[c], chebyshev_to_segment((px - cx[c]) * ix, (py - cy[c]) * iy,
+                                                     (qx - cx[c]) * ix, (qy - cy[c]) * iy));
+        }
+      }
+    }
+  }
+  // Checked exactly in one pass: the centre c inside every region, no edge meeting the rectangle
+  // grown by 2, and (unless `joined`) none meeting the segment from c to `to`.
+  auto inside = [&](const Clipper2Lib::Rect64& r, const Point64& c, bool joined,
+                    const Point64& to) {
+    const Clipper2Lib::Rect64 clear = grown(r, 2);
+    for (const Paths64* region : regions) {
+      int w = 0;
+      for (const Path64& path : *region) {
+        for (std::size_t k = 0, n = path.size(); k < n; ++k) {
+          const Point64& p = path[k];
+          const Point64& q = path[k + 1 == n ? 0 : k + 1];
+          if (segment_meets_rect(p, q, clear) || (!joined && segments_meet(p, q, c, to)))
+            return false;
+          if ((p.y <= c.y) == (q.y <= c.y)) continue;
+          const int side = cross(p, q, c);
+          if (p.y <= c.y) {
+            if (side > 0) ++w;
+          } else if (side < 0) {
+            --w;
+          }
+        }
+      }
+      if (w == 0) return false;
+    }
+    return true;
+  };
+  auto rect_at = [&](int c, Clipper2Lib::Rect64& r) {
+    const double f = 0.999 * t[c];
+    const auto dx = static_cast<std::int64_t>(f * hx) - 4;
+    const auto dy = static_cast<std::int64_t>(f * hy) - 4;
+    r = Clipper2Lib::Rect64(centres[c].x - dx, centres[c].y - dy, centres[c].x + dx,
+                            centres[c].y + dy);
+    return dx > 0 && dy > 0;
+  };
+  int order[kCentres] = {0, 1, 2};
+  std::sort(order, order + kCentres, [&](int i, int j) { return t[i] > t[j]; });
+  int r0_state = -1;  // the origin's own rectangle: unknown, absent, found
+  Clipper2Lib::Rect64 r0;
+  auto has_r0 = [&]() {
+    if (r0_state < 0) r0_state = rect_at(0, r0) && inside(r0, origin, true, origin) ? 1 : 0;
+    return r0_state == 1;
+  };
+  for (const int pick : order) {
+    Clipper2Lib::Rect64 r;
+    if (!rect_at(pick, r)) break;
+    if (pick == 0) {
+      if (!has_r0()) continue;
+      out = r0;
+      return true;
+    }
+    const Point64 c = centres[pick];
+    // Joined to the origin directly, or else through the origin's rectangle (a segment to one of
+    // its corners).
+    const bool holds = r.Contains(origin);
+    if (inside(r, c, holds, origin)) {
+      out = r;
+      return true;
+    }
+    if (holds || !has_r0()) continue;
+    const Point64 corners[4] = {
+        {r0.left, r0.top}, {r0.right, r0.top}, {r0.right, r0.bottom}, {r0.left, r0.bottom}};
+    bool ok = r.Intersects(r0) && inside(r, c, true, c);
+    for (int k = 0; !ok && k < 4; ++k) ok = inside(r, c, false, corners[k]);
+    if (ok) {
+      out = r;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Clipper2's Intersect(a, b) (non-zero), with the operand whose box is the larger clamped to the
+// other's box first (clamp_to_rect: nothing inside changes, and the intersection lies inside).
+Paths64 intersect_near(const Paths64& a, const Paths64& b) {
+  using Clipper2Lib::FillRule;
+  if (a.empty() || b.empty()) return Clipper2Lib::Intersect(a, b, FillRule::NonZero);
+  const Clipper2Lib::Rect64 ra = Clipper2Lib::GetBounds(a), rb = Clipper2Lib::GetBounds(b);
+  auto size = [](const Clipper2Lib::Rect64& r) {
+    return static_cast<double>(r.right - r.left) * static_cast<double>(r.bottom - r.top);
+  };
+  if (size(ra) > size(rb))
+    return Clipper2Lib::Intersect(clamp_to_rect(a, grown(rb, 2)), b, FillRule::NonZero);
+  return Clipper2Lib::Intersect(a, clamp_to_rect(b, grown(ra, 2)), FillRule::NonZero);
+}
+
 }  // namespace
 
 SectionGeometry junction_core(const SectionPolygon& section,
@@ -704,14 +909,29 @@ SectionGeometry junction_core(const SectionPolygon& section,
   // quarter of the margin (Clipper2 SimplifyPaths: a few dozen vertices instead of hundreds), and
   // the common part is widened once (the offset's cost is in the self-crossings of every facet's
   // raw offset): the widening still exceeds 3/4 of the margin everywhere.
-  Paths64 covered;
+  std::vector<Paths64> regions(neighbours.size());
   for (std::size_t k = 0; k < neighbours.size(); ++k) {
-    Paths64 region = Clipper2Lib::RectClip(near, paths_of(*neighbours[k], s));
-    if (margin_mm > 0) region = Clipper2Lib::SimplifyPaths(region, 0.25 * margin_mm * s.scale);
-    covered =
-        k == 0 ? std::move(region) : Clipper2Lib::Intersect(covered, region, FillRule::NonZero);
+    regions[k] = Clipper2Lib::RectClip(near, paths_of(*neighbours[k], s));
+    if (margin_mm > 0) regions[k] = detail::simplify_closed(regions[k], 0.25 * margin_mm * s.scale);
   }
   const Point64 origin = s.to(Vec2::Zero());
+  // A region the core is sure to hold, first a rectangle inside the section and every (thinned)
+  // neighbour, joined to the origin (one pass over the edges, no intersection): on a section that
+  // is nearly all core it already fails the caller's test.
+  if (worth && !regions.empty()) {
+    std::vector<const Paths64*> all_regions{&whole};
+    for (const Paths64& region : regions) all_regions.push_back(&region);
+    Rect64 r;
+    if (rect_inside(all_regions, origin, r)) {
+      SectionPolygon rect;
+      rect.outer = {s.from(Point64(r.left, r.top)), s.from(Point64(r.right, r.top)),
+                    s.from(Point64(r.right, r.bottom)), s.from(Point64(r.left, r.bottom))};
+      if (!worth(rect)) return geom;
+    }
+  }
+  Paths64 covered;
+  for (std::size_t k = 0; k < regions.size(); ++k)
+    covered = k == 0 ? std::move(regions[k]) : intersect_near(covered, regions[k]);
   const double opening = opening_mm * s.scale;
   // The core lies inside the common part's box grown by the margin (`inside`); the section is
   // worked on near it only: inside `band`, that box (and the origin) grown by 2.4 x the opening
@@ -765,7 +985,7 @@ SectionGeometry junction_core(const SectionPolygon& section,
     // centroid, 1.1 - 0.05 - 0.01 (the arcs' error) x opening clear of it).
     if (!thin && opening > 0 && !holds_centroid_disc(paths, 1.1 * opening))
       thin = minimum_width(s.from(paths.front())) * s.scale < 2.0 * opening ||
-             offset(Clipper2Lib::SimplifyPaths(paths, 0.05 * opening), -opening).empty();
+             offset(detail::simplify_closed(paths, 0.05 * opening), -opening).empty();
     return thin;
   };
   Paths64 merged = core;

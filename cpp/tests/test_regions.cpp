@@ -4,12 +4,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
+#include "clipper2/clipper.h"
 #include "osteon/analysis.hpp"
 #include "osteon/regions.hpp"
 #include "osteon/section.hpp"
 #include "osteon/slicer.hpp"
+#include "simplify_path.hpp"
 #include "test_helpers.hpp"
 
 using namespace osteon;
@@ -549,32 +552,110 @@ TEST(Regions, JunctionCoreAsksFirstWithARegionTheCoreHolds) {
   for (const Case& c : cases) {
     const SectionGeometry plain = junction_core(*c.section, c.neighbours, 0.15, 0.9);
     ASSERT_TRUE(plain.found);
-    SectionPolygon inner;
-    int asked = 0;
+    // Asked first, perhaps, with a rectangle inside the section and the neighbours, then with
+    // their common part.
+    std::vector<SectionPolygon> asked;
     const SectionGeometry core =
         junction_core(*c.section, c.neighbours, 0.15, 0.9, [&](const SectionPolygon& p) {
-          inner = p;
-          ++asked;
+          asked.push_back(p);
           return true;
         });
-    EXPECT_EQ(asked, 1);
+    ASSERT_GE(asked.size(), 1u);
+    ASSERT_LE(asked.size(), 2u);
+    if (asked.size() == 2) {
+      EXPECT_EQ(asked.front().outer.size(), 4u);
+    }
     ASSERT_TRUE(core.found);
     // Asking changes nothing.
     EXPECT_EQ(core.polygon.outer, plain.polygon.outer);
     const double core_area = section_properties(core.polygon).area;
+    const SectionPolygon& inner = asked.back();
     const double inner_area = section_properties(inner).area;
     if (c.inner_area > 0) {
       EXPECT_LE(inner_area, c.inner_area + 1e-9 * c.inner_area);
       EXPECT_GE(inner_area, c.inner_area - c.thinning);
     }
-    // Inside the core: the union of the two is the core.
-    EXPECT_LE(inner_area, core_area + 1e-9 * core_area);
-    const auto both = material_regions({core.polygon.outer, inner.outer});
-    ASSERT_EQ(both.size(), 1u);
-    EXPECT_NEAR(section_properties(both[0]).area, core_area, 1e-6 * core_area);
+    // Inside the core: the union of each with the core is the core.
+    for (const SectionPolygon& region : asked) {
+      const double area = section_properties(region).area;
+      EXPECT_LE(area, core_area + 1e-9 * core_area);
+      const auto both = material_regions({core.polygon.outer, region.outer});
+      ASSERT_EQ(both.size(), 1u);
+      EXPECT_NEAR(section_properties(both[0]).area, core_area, 1e-6 * core_area);
+    }
     // A "no" ends the call: no core.
     EXPECT_FALSE(junction_core(*c.section, c.neighbours, 0.15, 0.9, [](const SectionPolygon&) {
                    return false;
                  }).found);
+  }
+}
+
+TEST(Regions, JunctionCoreJudgesPiecesNearTheCoreAsOnTheWholeSection) {
+  // junction_core works on the section near the neighbours' common part (a 20 x 20 square here,
+  // margin 0.5, opening 3: the box grown by about 2.4 x 3); a trimmed piece that leaves that box
+  // is judged there only when it holds a disc of 1.1 x the opening, else on the whole section.
+  // Each answer is the one of the whole section, by hand.
+  SectionPolygon square;
+  square.outer = rectangle(20, 20);
+  auto with = [&](std::vector<std::vector<Vec2>> parts) {
+    parts.push_back(square.outer);
+    const std::vector<SectionPolygon> regions = material_regions(parts);
+    EXPECT_EQ(regions.size(), 1u);
+    return regions.front();
+  };
+  auto core_area = [&](const SectionPolygon& section) {
+    const SectionGeometry core = junction_core(section, {&square, &square}, 0.5, 3.0);
+    EXPECT_TRUE(core.found);
+    return section_properties(core.polygon).area;
+  };
+  const std::vector<Vec2> neck = {{9, -1}, {60, -1}, {60, 1}, {9, 1}};  // 2 wide: thin
+  const std::vector<Vec2> blob = {{30, -15}, {60, -15}, {60, 15}, {30, 15}};
+  const std::vector<Vec2> slab = {{9, -8}, {60, -8}, {60, 8}, {9, 8}};  // 16 wide: a stub
+  // A neck, thin near the square, ending in a wide blob far out: one stub, left out whole (the
+  // square and the neck's root within the margin stay).
+  EXPECT_NEAR(core_area(with({{{9, -1}, {30, -1}, {30, 1}, {9, 1}}, blob})), 400 + 0.5 * 2, 1e-6);
+  // The neck alone, thin all along: back into the core.
+  EXPECT_NEAR(core_area(with({neck})), 400 + 51 * 2 - 2, 1e-6);
+  // A wide stub: left out, from the part near the square alone.
+  EXPECT_NEAR(core_area(with({slab})), 400 + 0.5 * 16, 1e-6);
+  // A thin spike well inside the box and the wide stub: the spike stays, the stub goes.
+  const std::vector<Vec2> spike = {{-1, 9}, {1, 9}, {1, 14}, {-1, 14}};
+  EXPECT_NEAR(core_area(with({spike, slab})), 400 + 2 * 4 + 0.5 * 16, 1e-6);
+}
+
+TEST(Regions, SimplifyClosedIsClippersSimplifyPath) {
+  // detail::simplify_closed (the junction stage's thinning) removes the vertices Clipper2's
+  // SimplifyPath removes, in the same order: the same path, point for point. Noisy circles with
+  // runs of collinear and repeated points, integer and double coordinates, several tolerances.
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 400; ++trial) {
+    const int n = 4 + static_cast<int>(rng() % 500);
+    const double radius = 1000.0 * (1.0 + 99.0 * unit(rng)), noise = radius * 0.02 * unit(rng);
+    Clipper2Lib::Path64 path;
+    Clipper2Lib::PathD path_d;
+    for (int k = 0; k < n; ++k) {
+      const double t = 2 * M_PI * k / n;
+      const double r = radius + noise * (unit(rng) - 0.5);
+      const Clipper2Lib::Point64 p(static_cast<std::int64_t>(r * std::cos(t)),
+                                   static_cast<std::int64_t>(r * std::sin(t)));
+      path.push_back(p);
+      if (rng() % 7 == 0) path.push_back(p);     // repeated
+      if (rng() % 9 == 0 && path.size() >= 2) {  // collinear
+        const auto& a = path[path.size() - 2];
+        path.push_back({2 * p.x - a.x, 2 * p.y - a.y});
+      }
+      path_d.emplace_back(r * std::cos(t), r * std::sin(t));
+    }
+    for (const double eps : {0.5, 3.0, 0.002 * radius, 0.02 * radius, 0.3 * radius}) {
+      EXPECT_EQ(osteon::detail::simplify_closed(path, eps), Clipper2Lib::SimplifyPath(path, eps));
+      const Clipper2Lib::PathD mine = osteon::detail::simplify_closed(path_d, eps);
+      const Clipper2Lib::PathD theirs = Clipper2Lib::SimplifyPath(path_d, eps);
+      ASSERT_EQ(mine.size(), theirs.size());
+      for (std::size_t k = 0; k < mine.size(); ++k) {
+        EXPECT_EQ(mine[k].x, theirs[k].x);
+        EXPECT_EQ(mine[k].y, theirs[k].y);
+      }
+    }
   }
 }
