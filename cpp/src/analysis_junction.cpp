@@ -269,8 +269,21 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     auto may_branch = [&](const SectionPolygon& inner) {
       return reaches_beyond(st.cut, inner, kSureNo * kReach * std::sqrt(region_area(inner) / M_PI));
     };
+    // No region inside a box of area A reaches farther than 0.9 x 1.25 x sqrt(A / pi): when a
+    // vertex of the cut lies farther than that from the box, may_branch says yes for every one
+    // (its first pass, against the region's box, which lies inside) and is not asked.
+    auto may_fail = [&](const Vec2& lo, const Vec2& hi) {
+      const double area = (hi.x() - lo.x()) * (hi.y() - lo.y()) * (1 + 1e-9);
+      const double reach = kSureNo * kReach * std::sqrt(area / M_PI);
+      for (const Vec2& q : st.cut.outer) {
+        const double dx = std::max({lo.x() - q.x(), 0.0, q.x() - hi.x()});
+        const double dy = std::max({lo.y() - q.y(), 0.0, q.y() - hi.y()});
+        if (dx * dx + dy * dy > reach * reach) return false;
+      }
+      return true;
+    };
     const SectionGeometry core = junction_core(st.cut, neighbours, kMargin / kDelta * delta[b],
-                                               kOpening / kDelta * delta[b], may_branch);
+                                               kOpening / kDelta * delta[b], may_branch, may_fail);
     if (!core.found) return;
     const SectionProperties props = section_properties(core.polygon);
     if (!props.valid || !(props.area < kMaterial * st.cut_area)) return;

@@ -886,10 +886,11 @@ Paths64 intersect_near(const Paths64& a, const Paths64& b) {
 
 }  // namespace
 
-SectionGeometry junction_core(const SectionPolygon& section,
-                              const std::vector<const SectionPolygon*>& neighbours,
-                              double margin_mm, double opening_mm,
-                              const std::function<bool(const SectionPolygon& inner)>& worth) {
+SectionGeometry junction_core(
+    const SectionPolygon& section, const std::vector<const SectionPolygon*>& neighbours,
+    double margin_mm, double opening_mm,
+    const std::function<bool(const SectionPolygon& inner)>& worth,
+    const std::function<bool(const Vec2& lo_mm, const Vec2& hi_mm)>& may_fail) {
   using Clipper2Lib::FillRule;
   using Clipper2Lib::Rect64;
   SectionGeometry geom;
@@ -918,7 +919,20 @@ SectionGeometry junction_core(const SectionPolygon& section,
   // A region the core is sure to hold, first a rectangle inside the section and every (thinned)
   // neighbour, joined to the origin (one pass over the edges, no intersection): on a section that
   // is nearly all core it already fails the caller's test.
-  if (worth && !regions.empty()) {
+  // Neither is asked when `may_fail` says no region inside their common box can fail the test.
+  bool ask = worth && !regions.empty();
+  if (ask && may_fail) {
+    Rect64 b = Clipper2Lib::GetBounds(whole);
+    for (const Paths64& region : regions) {
+      const Rect64 r = Clipper2Lib::GetBounds(region);
+      b = Rect64(std::max(b.left, r.left), std::max(b.top, r.top), std::min(b.right, r.right),
+                 std::min(b.bottom, r.bottom));
+    }
+    b = grown(b, 2);  // Clipper2's intersections round to the nearest unit
+    ask = b.right > b.left && b.bottom > b.top &&
+          may_fail(s.from(Point64(b.left, b.top)), s.from(Point64(b.right, b.bottom)));
+  }
+  if (ask) {
     std::vector<const Paths64*> all_regions{&whole};
     for (const Paths64& region : regions) all_regions.push_back(&region);
     Rect64 r;
@@ -953,7 +967,7 @@ SectionGeometry junction_core(const SectionPolygon& section,
   }
   // What the core is sure to hold (the section and the common part before widening, around the
   // origin): a caller may stop here when that already fails its test.
-  if (worth && !covered.empty()) {
+  if (ask && !covered.empty()) {
     PolyTree64 inner;
     Clipper2Lib::Clipper64 clipper;
     clipper.AddSubject(part);

@@ -583,6 +583,22 @@ TEST(Regions, JunctionCoreAsksFirstWithARegionTheCoreHolds) {
       ASSERT_EQ(both.size(), 1u);
       EXPECT_NEAR(section_properties(both[0]).area, core_area, 1e-6 * core_area);
     }
+    // `may_fail` is handed a box holding every region asked; its "no" skips the asking.
+    Vec2 lo, hi;
+    int boxes = 0;
+    const SectionGeometry boxed = junction_core(
+        *c.section, c.neighbours, 0.15, 0.9, [](const SectionPolygon&) { return false; },
+        [&](const Vec2& l, const Vec2& h) {
+          lo = l;
+          hi = h;
+          ++boxes;
+          return false;
+        });
+    EXPECT_EQ(boxes, 1);
+    EXPECT_EQ(boxed.polygon.outer, plain.polygon.outer);
+    for (const SectionPolygon& region : asked)
+      for (const Vec2& q : region.outer)
+        EXPECT_TRUE(q.x() >= lo.x() && q.x() <= hi.x() && q.y() >= lo.y() && q.y() <= hi.y());
     // A "no" ends the call: no core.
     EXPECT_FALSE(junction_core(*c.section, c.neighbours, 0.15, 0.9, [](const SectionPolygon&) {
                    return false;

@@ -47,17 +47,29 @@ SectionGeometry select_region(const PlaneCut& cut, const BoneDomain* domain = nu
 /// the region of the core around the plane origin (the bone point), or found = false when the
 /// origin is not in the core (then the caller keeps the whole section).
 ///
-/// `worth`, when given, is asked first with a region the core is sure to contain, before the
-/// costly part (the widening, the trimmed pieces): the region around the origin of what the
-/// section and the neighbours' thinned outlines have in common, not widened (the core holds it:
-/// the widening and the thin pieces only add). Returning false ends the call with found = false
-/// (a caller whose test of the core the region already fails: the core is larger, its
-/// distances to the section's vertices no larger). Not asked when the origin lies in no such
-/// region or in one of its holes.
-SectionGeometry junction_core(const SectionPolygon& section,
-                              const std::vector<const SectionPolygon*>& neighbours,
-                              double margin_mm, double opening_mm,
-                              const std::function<bool(const SectionPolygon& inner)>& worth = {});
+/// `worth`, when given, is asked with regions the core is sure to contain, before the costly part
+/// (the widening, the trimmed pieces): first, when one is found, a rectangle inside the section and
+/// every thinned neighbour, joined to the origin inside them (found and checked in passes over
+/// the edges, no intersection); then the region around the origin of what the section and the
+/// neighbours' thinned outlines have in common, not widened (the core holds both: the widening
+/// and the thin pieces only add). Returning false ends the call with found = false (a caller
+/// whose test of the core the region already fails: the core is larger, its distances to the
+/// section's vertices no larger). The second is not asked when the origin lies in no such region
+/// or in one of its holes.
+///
+/// `may_fail`, when given, is asked before both with a box (mm, lower and upper corners) that holds
+/// every region `worth` would be asked with: false says `worth` would return true for any region
+/// inside it, and `worth` is not asked at all.
+///
+/// The work is done near the neighbours' common part: the section is clamped to a rectangle
+/// around it (inside, nothing changes), and a trimmed piece reaching that rectangle's edge is
+/// judged there only when it already holds a disc of 1.1 * opening_mm (a stub), else on the
+/// whole section; the answer is the same as on the whole section (docs/junctions.md, Cost).
+SectionGeometry junction_core(
+    const SectionPolygon& section, const std::vector<const SectionPolygon*>& neighbours,
+    double margin_mm, double opening_mm,
+    const std::function<bool(const SectionPolygon& inner)>& worth = {},
+    const std::function<bool(const Vec2& lo_mm, const Vec2& hi_mm)>& may_fail = {});
 
 /// Thickness of a region (mm), the width a printer has to lay down there: the smallest of its
 /// minimum width (the smallest distance between two parallel lines enclosing the outer boundary,
