@@ -153,7 +153,8 @@ TEST(Slicer, TightBoundsCutTheSameSegmentsInTheSameOrder) {
   std::size_t segments = 0;
   for (int pass = 0; pass < 2; ++pass)  // the first pass computes the boxes, the second reads
     for (std::size_t k = 0; k < planes.size(); ++k) {
-      for (const CutRegion* region : {static_cast<const CutRegion*>(nullptr), &balls[k]}) {
+      const CutRegion* regions[2] = {nullptr, &balls[k]};
+      for (const CutRegion* region : regions) {
         std::vector<CutSegment> a, b;
         cut_mesh(m.view(), planes[k], a, &loose, region);
         cut_mesh(m.view(), planes[k], b, &tight, region);
