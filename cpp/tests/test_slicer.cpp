@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <thread>
 #include <utility>
 
 #include "osteon/section.hpp"
@@ -169,6 +170,23 @@ TEST(Slicer, TightBoundsCutTheSameSegmentsInTheSameOrder) {
       EXPECT_TRUE(same(a, b)) << "grown, plane " << k;
     }
   EXPECT_GT(segments, 10000u);
+  // Cuts on several threads at once, on a grid whose boxes no cut has computed yet (a cell is
+  // bounded by whichever cut gets there first; the others cut it face by face meanwhile).
+  FaceGrid shared;
+  shared.build(m.view());
+  shared.enable_tight_bounds();
+  std::vector<std::vector<CutSegment>> expected(planes.size()), got(planes.size());
+  for (std::size_t k = 0; k < planes.size(); ++k)
+    cut_mesh(m.view(), planes[k], expected[k], &loose, &balls[k]);
+  std::vector<std::thread> workers;
+  for (int w = 0; w < 4; ++w)
+    workers.emplace_back([&, w]() {
+      for (std::size_t k = w; k < planes.size(); k += 4)
+        cut_mesh(m.view(), planes[k], got[k], &shared, &balls[k]);
+    });
+  for (auto& t : workers) t.join();
+  for (std::size_t k = 0; k < planes.size(); ++k)
+    EXPECT_TRUE(same(expected[k], got[k])) << "threads, plane " << k;
   // A new build turns them off.
   tight.build(m.view());
   EXPECT_FALSE(tight.tight_bounds());
