@@ -244,6 +244,9 @@ void Analyzer::Impl::cut_retries(RunState& run) {
     if (any) units.push_back(static_cast<int>(job));
   }
   std::stable_partition(units.begin(), units.end(), [&](int job) { return job_bone[job] >= 0; });
+  // Joints' and whole planes' cuts skip the cells and runs of faces whose triangles' own box the
+  // plane misses (FaceGrid::enable_tight_bounds: the same segments, in the same order).
+  if (!units.empty() && run.grid.num_cells() > 0) run.grid.enable_tight_bounds();
   // The loose pieces and the moment-arm index (stage 4) need no section: they are one more
   // unit, third in line, so that it fills a core while the other cuts.
   const long index_unit = std::min<long>(2, static_cast<long>(units.size()));

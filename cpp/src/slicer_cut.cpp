@@ -60,6 +60,25 @@ PlaneFrame PlaneFrame::make(const Vec3& origin, const Vec3& normal) {
 
 namespace {
 
+// Calls cell_fn(c) for each cell meeting a slab (and the region, and not near `exclude`), in the
+// grid's order.
+template <class Fn>
+void for_cells_in_slab(const FaceGrid& grid, const Vec3& n, double lo, double hi,
+                       const CutRegion* region, const CutRegion* exclude, Fn&& cell_fn) {
+  for (Index k = 0; k < grid.num_blocks(); ++k) {
+    if (!grid.block_meets(k, n, lo, hi, region)) continue;
+    // A cell was visited by the `exclude` cut when both its block and itself are near `exclude`
+    // (the two tests are not nested: a cell's bounding sphere may stick out of its block's).
+    const bool block_excluded = exclude != nullptr && grid.block_near(k, *exclude);
+    if (block_excluded && grid.block_within(k, *exclude)) continue;
+    for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+      if (!grid.meets(c, n, lo, hi, region)) continue;
+      if (block_excluded && grid.near(c, *exclude)) continue;
+      cell_fn(c);
+    }
+  }
+}
+
 // Visits the triangles (vertex index triples) of the cells meeting a slab (and the region, and
 // not near `exclude`), or all triangles.
 template <class Fn>
@@ -69,19 +88,10 @@ void for_faces_in_slab(const MeshView& mesh, const FaceGrid* grid, const Vec3& n
     for (Index f = 0; f < mesh.num_faces; ++f) fn(mesh.faces + 3 * f);
     return;
   }
-  for (Index k = 0; k < grid->num_blocks(); ++k) {
-    if (!grid->block_meets(k, n, lo, hi, region)) continue;
-    // A cell was visited by the `exclude` cut when both its block and itself are near `exclude`
-    // (the two tests are not nested: a cell's bounding sphere may stick out of its block's).
-    const bool block_excluded = exclude != nullptr && grid->block_near(k, *exclude);
-    if (block_excluded && grid->block_within(k, *exclude)) continue;
-    for (Index c = grid->block_begin(k); c < grid->block_end(k); ++c) {
-      if (!grid->meets(c, n, lo, hi, region)) continue;
-      if (block_excluded && grid->near(c, *exclude)) continue;
-      const std::int32_t* t = grid->faces() + 3 * grid->begin(c);
-      for (Index f = grid->begin(c); f < grid->end(c); ++f, t += 3) fn(t);
-    }
-  }
+  for_cells_in_slab(*grid, n, lo, hi, region, exclude, [&](Index c) {
+    const std::int32_t* t = grid->faces() + 3 * grid->begin(c);
+    for (Index f = grid->begin(c); f < grid->end(c); ++f, t += 3) fn(t);
+  });
 }
 
 }  // namespace
@@ -90,20 +100,48 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
               const FaceGrid* grid, const CutRegion* region, const CutRegion* exclude) {
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
-  for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude,
-                    [&](const std::int32_t* f) {
-                      double height[3];
-                      bool above[3];
-                      for (int k = 0; k < 3; ++k) {
-                        const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
-                        height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
-                        above[k] = height[k] >= 0.0;
-                      }
-                      if (above[0] == above[1] && above[1] == above[2]) return;
-                      CutSegment seg;
-                      emit_segment(mesh, plane, f, above, height, seg);
-                      out.push_back(seg);
-                    });
+  auto cut_face = [&](const std::int32_t* f) {
+    double height[3];
+    bool above[3];
+    for (int k = 0; k < 3; ++k) {
+      const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
+      height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
+      above[k] = height[k] >= 0.0;
+    }
+    if (above[0] == above[1] && above[1] == above[2]) return;
+    CutSegment seg;
+    emit_segment(mesh, plane, f, above, height, seg);
+    out.push_back(seg);
+  };
+  if (grid == nullptr || !grid->tight_bounds()) {
+    for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude, cut_face);
+    return;
+  }
+  // The same cells, but a cell or a run of its faces whose tight box the plane misses is skipped
+  // with one test: none of its faces would give a segment (FaceGrid::enable_tight_bounds).
+  const double ax = std::abs(nx), ay = std::abs(ny), az = std::abs(nz);
+  auto misses = [&](const Vec3& center, const Vec3& half) {
+    const double mid = nx * center.x() + ny * center.y() + nz * center.z();
+    const double r = ax * half.x() + ay * half.y() + az * half.z();
+    return mid + r < offset || mid - r > offset;
+  };
+  const std::int32_t* faces = grid->faces();
+  constexpr Index kGroup = FaceGrid::kGroup;
+  for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, [&](Index c) {
+    FaceGrid::TightBoxes boxes;
+    const Index begin = grid->begin(c), end = grid->end(c);
+    const FaceGrid::Tight state = grid->tight_boxes(c, boxes);
+    if (state == FaceGrid::Tight::kBusy) {
+      for (Index f = begin; f < end; ++f) cut_face(faces + 3 * f);
+      return;
+    }
+    if (state == FaceGrid::Tight::kMine) grid->bound_cell(c, mesh, boxes);
+    if (misses(boxes.cell[0], boxes.cell[1])) return;
+    for (Index f = begin, g = 0; f < end; f += kGroup, ++g) {
+      if (misses(boxes.group_center[g], boxes.group_half[g])) continue;
+      for (Index k = f, stop = std::min(end, f + kGroup); k < stop; ++k) cut_face(faces + 3 * k);
+    }
+  });
 }
 
 void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spacing, int count,

@@ -24,6 +24,8 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   // never rounded out of it (the plane tests compute n.center +- |n|.half).
   const double slack = 64 * std::numeric_limits<double>::epsilon() *
                        std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+  slack_ = slack;
+  tight_.reset();
   // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
   // sample) so that a non-empty cell holds about faces_per_cell triangles.
   const Index step = std::max<Index>(1, nf / 2048);
@@ -152,6 +154,68 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   }
   start_.push_back(nf);
   block_start_.push_back(static_cast<Index>(center_.size()));
+}
+
+void FaceGrid::enable_tight_bounds() {
+  if (tight_) return;
+  auto t = std::make_unique<TightData>();
+  const Index cells = num_cells();
+  t->group_start.resize(cells + 1);
+  t->group_start[0] = 0;
+  for (Index c = 0; c < cells; ++c)
+    t->group_start[c + 1] = t->group_start[c] + (end(c) - begin(c) + kGroup - 1) / kGroup;
+  t->cell_box.resize(2 * cells);
+  t->group_center.resize(t->group_start[cells]);
+  t->group_half.resize(t->group_start[cells]);
+  t->state = std::make_unique<std::atomic<std::uint8_t>[]>(cells);
+  for (Index c = 0; c < cells; ++c) t->state[c].store(0, std::memory_order_relaxed);
+  tight_ = std::move(t);
+}
+
+FaceGrid::Tight FaceGrid::tight_boxes(Index c, TightBoxes& boxes) const {
+  TightData& t = *tight_;
+  boxes.cell = &t.cell_box[2 * c];
+  boxes.group_center = t.group_center.data() + t.group_start[c];
+  boxes.group_half = t.group_half.data() + t.group_start[c];
+  std::atomic<std::uint8_t>& state = t.state[c];
+  if (state.load(std::memory_order_acquire) == 2) return Tight::kReady;
+  std::uint8_t none = 0;
+  return state.compare_exchange_strong(none, 1, std::memory_order_acq_rel) ? Tight::kMine
+                                                                           : Tight::kBusy;
+}
+
+void FaceGrid::bound_cell(Index c, const MeshView& mesh, const TightBoxes& boxes) const {
+  // x and y as a pair (one SIMD min and max per vertex where Eigen vectorizes), z alone.
+  using Pair = Eigen::Array2d;
+  const double inf = std::numeric_limits<double>::infinity();
+  Pair cell_lo = Pair::Constant(inf), cell_hi = Pair::Constant(-inf);
+  double cell_zlo = inf, cell_zhi = -inf;
+  const Pair slack = Pair::Constant(slack_);
+  const double* x = mesh.vertices;
+  Index g = 0;
+  for (Index f = begin(c), e = end(c); f < e; f += kGroup, ++g) {
+    Pair lo = Pair::Constant(inf), hi = Pair::Constant(-inf);
+    double zlo = inf, zhi = -inf;
+    for (Index k = 3 * f, stop = 3 * std::min(e, f + kGroup); k < stop; ++k) {
+      const double* p = x + 3 * static_cast<Index>(faces_[k]);
+      const Pair xy = Eigen::Map<const Pair>(p);
+      lo = lo.min(xy);
+      hi = hi.max(xy);
+      zlo = std::min(zlo, p[2]);
+      zhi = std::max(zhi, p[2]);
+    }
+    const Pair mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo) + slack;
+    boxes.group_center[g] = Vec3(mid.x(), mid.y(), 0.5 * (zlo + zhi));
+    boxes.group_half[g] = Vec3(half.x(), half.y(), 0.5 * (zhi - zlo) + slack_);
+    cell_lo = cell_lo.min(lo);
+    cell_hi = cell_hi.max(hi);
+    cell_zlo = std::min(cell_zlo, zlo);
+    cell_zhi = std::max(cell_zhi, zhi);
+  }
+  const Pair mid = 0.5 * (cell_lo + cell_hi), half = 0.5 * (cell_hi - cell_lo) + slack;
+  boxes.cell[0] = Vec3(mid.x(), mid.y(), 0.5 * (cell_zlo + cell_zhi));
+  boxes.cell[1] = Vec3(half.x(), half.y(), 0.5 * (cell_zhi - cell_zlo) + slack_);
+  tight_->state[c].store(2, std::memory_order_release);
 }
 
 std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,

@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <thread>
 #include <utility>
 
 #include "osteon/section.hpp"
@@ -98,6 +100,96 @@ TEST(Slicer, GrownCutsAddExactlyTheTrianglesLeftOut) {
     part[k].insert(part[k].end(), step[k].begin(), step[k].end());
     EXPECT_EQ(cut_keys(part[k]), cut_keys(all[k])) << k;
   }
+}
+
+TEST(Slicer, TightBoundsCutTheSameSegmentsInTheSameOrder) {
+  // A wide prism, turned so that its faces and the planes are oblique to the grid, cut by planes
+  // of random directions, by planes through rings of its vertices (heights exactly 0: such a
+  // vertex counts as above, and a box that rounds it out would lose a segment) and inside
+  // balls, with and without tight bounds: the same segments, bit for bit, in the same order, on
+  // the cut that computes a cell's boxes and on the later ones that read them.
+  auto m = prism(regular_polygon(40, 240), 60, 61);
+  const Eigen::Matrix3d turn =
+      (Eigen::AngleAxisd(0.4, Vec3::UnitZ()) * Eigen::AngleAxisd(0.7, Vec3(1, 1, 0).normalized()))
+          .toRotationMatrix();
+  for (std::size_t i = 0; i < m.v.size(); i += 3) {
+    const Vec3 p = turn * Vec3(m.v[i], m.v[i + 1], m.v[i + 2]) + Vec3(100.25, -3.5, 7.0);
+    for (int k = 0; k < 3; ++k) m.v[i + k] = p[k];
+  }
+  FaceGrid loose, tight;
+  loose.build(m.view());
+  tight.build(m.view());
+  tight.enable_tight_bounds();
+  ASSERT_TRUE(tight.tight_bounds());
+  ASSERT_FALSE(loose.tight_bounds());
+  std::vector<PlaneFrame> planes;
+  std::vector<CutRegion> balls;
+  std::uint64_t state = 12345;
+  auto uniform = [&]() {  // deterministic, in [-1, 1)
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 4503599627370496.0 - 1.0;
+  };
+  const Vec3 axis = turn * Vec3::UnitX();
+  for (int k = 0; k < 40; ++k) {
+    const Vec3 origin =
+        turn * Vec3(30 + 30 * uniform(), 20 * uniform(), 20 * uniform()) + Vec3(100.25, -3.5, 7.0);
+    const Vec3 normal = k % 2 == 0 ? Vec3(uniform(), uniform(), uniform()) : axis;
+    planes.push_back(PlaneFrame::make(origin, normal.norm() > 0.1 ? normal : Vec3::UnitX()));
+    balls.push_back({origin, Vec3::Zero(), 5 + 40 * (uniform() + 1)});
+  }
+  for (int s = 0; s < 61; s += 6) {  // through ring s of the prism's vertices
+    const Vec3 origin(m.v[3 * 240 * s], m.v[3 * 240 * s + 1], m.v[3 * 240 * s + 2]);
+    planes.push_back(PlaneFrame::make(origin, axis));
+    balls.push_back({origin, Vec3::Zero(), 30.0});
+  }
+  auto same = [](const std::vector<CutSegment>& a, const std::vector<CutSegment>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      for (int e = 0; e < 2; ++e)
+        if (a[i].edge[e] != b[i].edge[e] || a[i].point[e].x() != b[i].point[e].x() ||
+            a[i].point[e].y() != b[i].point[e].y())
+          return false;
+    return true;
+  };
+  std::size_t segments = 0;
+  for (int pass = 0; pass < 2; ++pass)  // the first pass computes the boxes, the second reads
+    for (std::size_t k = 0; k < planes.size(); ++k) {
+      const CutRegion* regions[2] = {nullptr, &balls[k]};
+      for (const CutRegion* region : regions) {
+        std::vector<CutSegment> a, b;
+        cut_mesh(m.view(), planes[k], a, &loose, region);
+        cut_mesh(m.view(), planes[k], b, &tight, region);
+        EXPECT_TRUE(same(a, b)) << "plane " << k << " pass " << pass;
+        segments += a.size();
+      }
+      // A grown cut (the ring beyond a smaller ball) too.
+      const CutRegion inner{balls[k].point, Vec3::Zero(), 0.5 * balls[k].radius};
+      std::vector<CutSegment> a, b;
+      cut_mesh(m.view(), planes[k], a, &loose, &balls[k], &inner);
+      cut_mesh(m.view(), planes[k], b, &tight, &balls[k], &inner);
+      EXPECT_TRUE(same(a, b)) << "grown, plane " << k;
+    }
+  EXPECT_GT(segments, 10000u);
+  // Cuts on several threads at once, on a grid whose boxes no cut has computed yet (a cell is
+  // bounded by whichever cut gets there first; the others cut it face by face meanwhile).
+  FaceGrid shared;
+  shared.build(m.view());
+  shared.enable_tight_bounds();
+  std::vector<std::vector<CutSegment>> expected(planes.size()), got(planes.size());
+  for (std::size_t k = 0; k < planes.size(); ++k)
+    cut_mesh(m.view(), planes[k], expected[k], &loose, &balls[k]);
+  std::vector<std::thread> workers;
+  for (int w = 0; w < 4; ++w)
+    workers.emplace_back([&, w]() {
+      for (std::size_t k = w; k < planes.size(); k += 4)
+        cut_mesh(m.view(), planes[k], got[k], &shared, &balls[k]);
+    });
+  for (auto& t : workers) t.join();
+  for (std::size_t k = 0; k < planes.size(); ++k)
+    EXPECT_TRUE(same(expected[k], got[k])) << "threads, plane " << k;
+  // A new build turns them off.
+  tight.build(m.view());
+  EXPECT_FALSE(tight.tight_bounds());
 }
 
 namespace {

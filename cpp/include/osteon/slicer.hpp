@@ -4,7 +4,9 @@
 // (select_section, slice_section).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "osteon/mesh.hpp"
@@ -130,7 +132,46 @@ class FaceGrid {
     return region == nullptr || region->meets_box(block_center_[k], block_half_[k]);
   }
 
+  /// Tight bounds (for cut_mesh): a cell's box above holds its triangles with room to spare (the
+  /// grid box widened by the farthest overhang), so a plane meets many cells whose triangles it
+  /// does not cross. With tight bounds on, the first cut that visits a cell also records the
+  /// bounding box of its triangles' vertices, and of each run of kGroup consecutive faces of the
+  /// cell (widened by the same few ulps as the cell boxes), and every cut skips a cell or a run
+  /// whose tight box the plane misses: none of its faces would give a segment, so the segments and
+  /// their order are those of the face-by-face visit (which cells are visited, by the slab and the
+  /// regions, does not change). Safe with concurrent cuts; the boxes are those of the mesh the grid
+  /// was built from (as every cut assumes). Off until enable_tight_bounds(); build() turns them
+  /// off.
+  static constexpr Index kGroup = 4;
+  /// Turns tight bounds on (allocation only: nothing is computed until a cut visits a cell).
+  void enable_tight_bounds();
+  /// True when enable_tight_bounds() ran after the last build().
+  bool tight_bounds() const { return tight_ != nullptr; }
+  /// Cell c's tight boxes (tight bounds on): `cell` (center, half extents) and its groups' (cell
+  /// c's faces begin(c) + kGroup * j .. : group j; group_center[j], group_half[j]), mm.
+  struct TightBoxes {
+    Vec3* cell = nullptr;  // [2]: center, half extents
+    Vec3* group_center = nullptr;
+    Vec3* group_half = nullptr;
+  };
+  /// kReady: cell c's boxes are there (read them); kMine: the caller is the first to visit c and
+  /// must compute them (bound_cell); kBusy: another thread is computing them (visit the faces
+  /// one by one).
+  enum class Tight { kReady, kMine, kBusy };
+  Tight tight_boxes(Index c, TightBoxes& boxes) const;
+  /// Writes cell c's boxes (from `mesh`, the grid's mesh) and makes them visible to every cut;
+  /// only the thread that got kMine for c.
+  void bound_cell(Index c, const MeshView& mesh, const TightBoxes& boxes) const;
+
  private:
+  // Lazily computed tight boxes (see enable_tight_bounds).
+  struct TightData {
+    std::vector<Index> group_start;  // cell c's groups: group_start[c] .. group_start[c + 1]
+    std::vector<Vec3> cell_box, group_center, group_half;  // cell_box: 2 per cell
+    std::unique_ptr<std::atomic<std::uint8_t>[]> state;    // per cell: 0 none, 1 busy, 2 ready
+  };
+  std::unique_ptr<TightData> tight_;
+  double slack_ = 0.0;  // mm: how far every box is widened (a few ulps of the coordinates)
   std::vector<Vec3> center_, half_;
   std::vector<Index> start_;
   std::vector<std::int32_t> faces_;
