@@ -884,6 +884,25 @@ Paths64 intersect_near(const Paths64& a, const Paths64& b) {
   return Clipper2Lib::Intersect(a, clamp_to_rect(b, grown(ra, 2)), FillRule::NonZero);
 }
 
+// The pieces of subject minus clip (non-zero), each its outer path followed by its holes.
+std::vector<Paths64> difference_pieces(const Paths64& subject, const Paths64& clip) {
+  PolyTree64 tree;
+  Clipper2Lib::Clipper64 clipper;
+  clipper.AddSubject(subject);
+  clipper.AddClip(clip);
+  clipper.Execute(Clipper2Lib::ClipType::Difference, Clipper2Lib::FillRule::NonZero, tree);
+  std::vector<const PolyPath64*> outers;
+  collect_outers(tree, outers);
+  std::vector<Paths64> pieces;
+  pieces.reserve(outers.size());
+  for (const PolyPath64* outer : outers) {
+    Paths64 paths{outer->Polygon()};
+    for (const auto& hole : *outer) paths.push_back(hole->Polygon());
+    pieces.push_back(std::move(paths));
+  }
+  return pieces;
+}
+
 }  // namespace
 
 SectionGeometry junction_core(
@@ -1018,13 +1037,7 @@ SectionGeometry junction_core(
     all_box.bottom = std::max(all_box.bottom, band.bottom);
     clip.push_back(rect_path(grown(all_box, 4), true));
     clip.push_back(rect_path(band, false));
-    PolyTree64 trimmed;
-    Clipper2Lib::Clipper64 clipper;
-    clipper.AddSubject(part);
-    clipper.AddClip(clip);
-    clipper.Execute(Clipper2Lib::ClipType::Difference, FillRule::NonZero, trimmed);
-    std::vector<const PolyPath64*> pieces;
-    collect_outers(trimmed, pieces);
+    const std::vector<Paths64> pieces = difference_pieces(part, clip);
     const std::int64_t half = (band.right - band.left) / 2, mid_x = band.left + half;
     const std::int64_t mid_y = band.top + (band.bottom - band.top) / 2;
     const double inset = std::ceil(1.2 * opening) + 4.0, disc = 1.1 * opening + 4.0;
@@ -1039,9 +1052,7 @@ SectionGeometry junction_core(
                             {hi.x(), static_cast<double>(mid_y)},
                             {static_cast<double>(mid_x), hi.y()},
                             {lo.x(), static_cast<double>(mid_y)}};
-    for (const PolyPath64* piece : pieces) {
-      Paths64 paths{piece->Polygon()};
-      for (const auto& hole : *piece) paths.push_back(hole->Polygon());
+    for (const Paths64& paths : pieces) {
       const Rect64 b = Clipper2Lib::GetBounds(paths.front());
       const bool edge = b.left <= band.left + 2 || b.right >= band.right - 2 ||
                         b.top <= band.top + 2 || b.bottom >= band.bottom - 2;
@@ -1059,20 +1070,8 @@ SectionGeometry junction_core(
     if (whole_pieces) merged = core;
   }
   if (whole_pieces) {
-    PolyTree64 trimmed;
-    {
-      Clipper2Lib::Clipper64 clipper;
-      clipper.AddSubject(whole);
-      clipper.AddClip(core);
-      clipper.Execute(Clipper2Lib::ClipType::Difference, FillRule::NonZero, trimmed);
-    }
-    std::vector<const PolyPath64*> pieces;
-    collect_outers(trimmed, pieces);
-    for (const PolyPath64* piece : pieces) {
-      Paths64 paths{piece->Polygon()};
-      for (const auto& hole : *piece) paths.push_back(hole->Polygon());
+    for (const Paths64& paths : difference_pieces(whole, core))
       if (thin(paths)) merged.insert(merged.end(), paths.begin(), paths.end());
-    }
   }
   // The core and the thin pieces merged (one union, straight into the tree).
   PolyTree64 tree;
