@@ -10,9 +10,9 @@ the spread core would give next to the FEM peak on the same plane (the FEM numbe
 ``osteon validate --fem --junctions`` readings of docs/validation.md).
 
 Not part of the tests and not used by osteon. Needs ``pip install shapely`` and the shared
-models (``../shared/data``); the junction rig's real stubs are added with ``--rig DIR`` (the
-output of ``python scripts/make_junction_rig.py DIR``). Run:
-``python scripts/study_limb_root_spread.py [--rig DIR] [K ...]``
+models (``../shared/data`` beside the clone, or ``--data DIR``); the junction rig's real stubs are
+added with ``--rig DIR`` (the output of ``python scripts/make_junction_rig.py DIR``). Run:
+``python scripts/study_limb_root_spread.py [--data DIR] [--rig DIR] [K ...]``
 """
 
 from __future__ import annotations
@@ -111,15 +111,23 @@ def spread_core(a, s, k):
     return around_origin(core)
 
 
-def main(spreads, rig=None):
+def main(spreads, rig=None, data=DATA):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
     import osteon
     from osteon.cli import common
     from osteon.cli.parser import build_parser
 
+    data = Path(data)
+    if not (data / "SOURCES.md").is_file():
+        raise SystemExit(f"study_limb_root_spread: the shared models are not at {data} "
+                         "(give their folder with --data DIR)")
+    try:
+        import shapely  # noqa: F401
+    except ImportError:
+        raise SystemExit("study_limb_root_spread: needs shapely (pip install shapely)") from None
     print("| model | section | FEM (MPa) | " + " | ".join(f"K = {k:g}" for k in spreads) + " |")
     print("|---|---|---|" + "---|" * len(spreads))
-    cases = {k: ([str(DATA / x) if x.endswith((".obj", ".tgf", ".txt")) else x for x in argv],
+    cases = {k: ([str(data / x) if x.endswith((".obj", ".tgf", ".txt")) else x for x in argv],
                  sections) for k, (argv, sections) in CASES.items()}
     if rig is not None:
         cases["junction rig (real stubs: the spine through the hip bar)"] = (
@@ -143,10 +151,12 @@ def main(spreads, rig=None):
 
 
 if __name__ == "__main__":
-    argv = sys.argv[1:]
-    rig_dir = None
-    if "--rig" in argv:
-        at = argv.index("--rig")
-        rig_dir = argv[at + 1]
-        del argv[at:at + 2]
-    main([float(x) for x in argv] or [0.0, 0.5, 1.0], rig_dir)
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("spreads", nargs="*", type=float, metavar="K",
+                        help="spread per slice, x h (default: 0 0.5 1)")
+    parser.add_argument("--data", default=DATA, help="the shared models' folder (data/)")
+    parser.add_argument("--rig", help="folder of make_junction_rig.py's output")
+    ns = parser.parse_args()
+    main(ns.spreads or [0.0, 0.5, 1.0], ns.rig, ns.data)

@@ -56,6 +56,18 @@ double segment_distance2(const Vec2& q, const Vec2& a, const Vec2& b) {
   return (q - (a + t * ab)).squaredNorm();
 }
 
+// True when some vertex of `cut`'s outer boundary lies farther than `reach` (mm) from the box
+// [lo, hi] (mm).
+bool reaches_beyond_box(const SectionPolygon& cut, const Vec2& lo, const Vec2& hi, double reach) {
+  const double r2 = reach * reach;
+  for (const Vec2& q : cut.outer) {
+    const double dx = std::max({lo.x() - q.x(), 0.0, q.x() - hi.x()});
+    const double dy = std::max({lo.y() - q.y(), 0.0, q.y() - hi.y()});
+    if (dx * dx + dy * dy > r2) return true;
+  }
+  return false;
+}
+
 // True when some vertex of `cut`'s outer boundary lies farther than `reach` (mm) from every
 // boundary loop of `core` (core is a part of cut, so its vertices outside the core are the
 // trimmed material): the trimmed material sticks out of the core at least that far.
@@ -68,11 +80,7 @@ bool reaches_beyond(const SectionPolygon& cut, const SectionPolygon& core, doubl
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  for (const Vec2& q : cut.outer) {
-    const double dx = std::max({lo.x() - q.x(), 0.0, q.x() - hi.x()});
-    const double dy = std::max({lo.y() - q.y(), 0.0, q.y() - hi.y()});
-    if (dx * dx + dy * dy > r2) return true;
-  }
+  if (reaches_beyond_box(cut, lo, hi, reach)) return true;
   // Otherwise every vertex against the core's loops, thinned to within 1 % of `reach` (Clipper2
   // SimplifyPath: a few dozen segments instead of hundreds; the distances move by no more).
   std::vector<std::pair<Vec2, Vec2>> segments;
@@ -277,13 +285,7 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     // (its first pass, against the region's box, which lies inside) and is not asked.
     auto may_fail = [&](const Vec2& lo, const Vec2& hi) {
       const double area = (hi.x() - lo.x()) * (hi.y() - lo.y()) * (1 + 1e-9);
-      const double reach = kSureNo * kReach * std::sqrt(area / M_PI);
-      for (const Vec2& q : st.cut.outer) {
-        const double dx = std::max({lo.x() - q.x(), 0.0, q.x() - hi.x()});
-        const double dy = std::max({lo.y() - q.y(), 0.0, q.y() - hi.y()});
-        if (dx * dx + dy * dy > reach * reach) return false;
-      }
-      return true;
+      return !reaches_beyond_box(st.cut, lo, hi, kSureNo * kReach * std::sqrt(area / M_PI));
     };
     const SectionGeometry core = junction_core(st.cut, neighbours, kMargin / kDelta * delta[b],
                                                kOpening / kDelta * delta[b], may_branch, may_fail);

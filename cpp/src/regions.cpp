@@ -553,6 +553,19 @@ Paths64 offset(const Paths64& paths, double delta) {
                                    Clipper2Lib::EndType::Polygon, 2.0, 0.01 * std::abs(delta));
 }
 
+// Adds a closed path's shoelace sums (Clipper2 units): a += 2 x signed area, cx and cy += 6 x
+// area x centroid coordinate (centroid = (cx, cy) / (3 a) over the paths summed).
+void add_centroid_sums(const Path64& path, double& a, double& cx, double& cy) {
+  for (std::size_t k = 0, n = path.size(); k < n; ++k) {
+    const double x0 = path[k].x, y0 = path[k].y;
+    const double x1 = path[k + 1 == n ? 0 : k + 1].x, y1 = path[k + 1 == n ? 0 : k + 1].y;
+    const double c = x0 * y1 - x1 * y0;
+    a += c;
+    cx += (x0 + x1) * c;
+    cy += (y0 + y1) * c;
+  }
+}
+
 // True when the region (an outer path and its holes, Clipper2 units) holds the disc of radius
 // `radius` around q: q inside the outer path, in no hole, and no edge nearer than `radius`.
 bool holds_disc(const Paths64& region, const Vec2& q, double radius) {
@@ -581,36 +594,27 @@ bool holds_disc(const Paths64& region, const Vec2& q, double radius) {
 // `radius` around its outer boundary's centroid: one cheap witness that the region is wider
 // than 2 * radius (its erosion by less than radius is not empty). False says nothing.
 bool holds_centroid_disc(const Paths64& region, double radius) {
-  const Path64& outer = region.front();
-  const std::size_t n = outer.size();
-  if (n < 3) return false;
+  if (region.front().size() < 3) return false;
   double a = 0.0, cx = 0.0, cy = 0.0;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double x0 = outer[k].x, y0 = outer[k].y;
-    const double x1 = outer[(k + 1) % n].x, y1 = outer[(k + 1) % n].y;
-    const double c = x0 * y1 - x1 * y0;
-    a += c;
-    cx += (x0 + x1) * c;
-    cy += (y0 + y1) * c;
-  }
+  add_centroid_sums(region.front(), a, cx, cy);
   if (a == 0.0) return false;
   return holds_disc(region, Vec2(cx / (3.0 * a), cy / (3.0 * a)), radius);
+}
+
+// What the edge a-b adds to the winding number around q (q on no edge): +1 crossing the
+// horizontal line through q upwards with q on its left, -1 downwards with q on its right (exact).
+int winding_step(const Point64& a, const Point64& b, const Point64& q) {
+  if ((a.y <= q.y) == (b.y <= q.y)) return 0;
+  const int c = Clipper2Lib::CrossProductSign(a, b, q);
+  if (a.y <= q.y) return c > 0 ? 1 : 0;
+  return c < 0 ? -1 : 0;
 }
 
 // Winding number of a closed path around q (q on none of its edges), exact.
 int winding_number(const Path64& path, const Point64& q) {
   int w = 0;
-  for (std::size_t k = 0, n = path.size(); k < n; ++k) {
-    const Point64& a = path[k];
-    const Point64& b = path[k + 1 == n ? 0 : k + 1];
-    if ((a.y <= q.y) == (b.y <= q.y)) continue;  // not crossing the horizontal line through q
-    const int c = Clipper2Lib::CrossProductSign(a, b, q);
-    if (a.y <= q.y) {
-      if (c > 0) ++w;
-    } else if (c < 0) {
-      --w;
-    }
-  }
+  for (std::size_t k = 0, n = path.size(); k < n; ++k)
+    w += winding_step(path[k], path[k + 1 == n ? 0 : k + 1], q);
   return w;
 }
 
@@ -756,16 +760,7 @@ bool rect_inside(const std::vector<const Paths64*>& regions, const Point64& orig
   Point64 centres[kCentres] = {origin, origin, common.MidPoint()};
   {
     double area = 0.0, cx = 0.0, cy = 0.0;
-    for (const Path64& path : *regions.front()) {
-      for (std::size_t i = 0, n = path.size(); i < n; ++i) {
-        const double x0 = path[i].x, y0 = path[i].y;
-        const double x1 = path[i + 1 == n ? 0 : i + 1].x, y1 = path[i + 1 == n ? 0 : i + 1].y;
-        const double c = x0 * y1 - x1 * y0;
-        area += c;
-        cx += (x0 + x1) * c;
-        cy += (y0 + y1) * c;
-      }
-    }
+    for (const Path64& path : *regions.front()) add_centroid_sums(path, area, cx, cy);
     if (area != 0.0)
       centres[1] = Point64(static_cast<std::int64_t>(std::llround(cx / (3.0 * area))),
                            static_cast<std::int64_t>(std::llround(cy / (3.0 * area))));
@@ -812,13 +807,7 @@ bool rect_inside(const std::vector<const Paths64*>& regions, const Point64& orig
           const Point64& q = path[k + 1 == n ? 0 : k + 1];
           if (segment_meets_rect(p, q, clear) || (!joined && segments_meet(p, q, c, to)))
             return false;
-          if ((p.y <= c.y) == (q.y <= c.y)) continue;
-          const int side = cross(p, q, c);
-          if (p.y <= c.y) {
-            if (side > 0) ++w;
-          } else if (side < 0) {
-            --w;
-          }
+          w += winding_step(p, q, c);
         }
       }
       if (w == 0) return false;
