@@ -2,6 +2,7 @@
 // (see osteon/slicer.hpp).
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 #include "osteon/slicer.hpp"
@@ -157,46 +158,82 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
     while (last >= first && !wanted[last - 1]) --last;
     if (first > last) return;
   }
-  // Height and bucket of every vertex, once: the bucket is the number of planes at or below the
-  // vertex (clamped to 0..count), so a triangle crosses plane k exactly when its vertices'
-  // buckets straddle k, and most triangles are rejected with three integer loads.
+  // Height and bucket of each vertex (with a grid: of each entry of the visited cells, a
+  // vertex shared by cells once per cell; without: of every vertex): the bucket is the number of
+  // planes at or below the vertex (clamped to 0..count), so a triangle crosses plane k exactly
+  // when its vertices' buckets straddle k, and most triangles are rejected with three integer
+  // loads. The same formula either way, so the same bits.
   thread_local std::vector<double> height;
   thread_local std::vector<std::int32_t> bucket;
-  const Index nv = mesh.num_vertices;
-  height.resize(nv);
-  bucket.resize(nv);
+  const Index size = grid != nullptr ? grid->num_entries() : mesh.num_vertices;
+  if (static_cast<Index>(height.size()) < size) {
+    height.resize(size);
+    bucket.resize(size);
+  }
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
   const double inv = 1.0 / spacing;
   const double top = static_cast<double>(count);
-  const double* x = mesh.vertices;
-  for (Index v = 0; v < nv; ++v) {
-    const double t = x[3 * v] * nx + x[3 * v + 1] * ny + x[3 * v + 2] * nz - offset;
-    height[v] = t;
-    // Clamped first, so truncation is floor (and vectorizes, unlike std::floor without SSE4.1).
-    const double q = t * inv;
-    bucket[v] = static_cast<std::int32_t>(q < 0.0 ? 0.0 : (q > top ? top : q));
+  double* __restrict ht = height.data();
+  std::int32_t* __restrict bk = bucket.data();
+  // Heights and buckets of vertices begin .. end; returns the lowest and highest bucket.
+  auto heights = [&](const double* __restrict x, const double* __restrict y,
+                     const double* __restrict z, Index begin, Index end, auto stride) {
+    std::int32_t low = count, high = 0;
+    for (Index v = begin; v < end; ++v) {
+      const double t = x[stride * v] * nx + y[stride * v] * ny + z[stride * v] * nz - offset;
+      ht[v] = t;
+      // Clamped first, so truncation is floor (and vectorizes, unlike std::floor without SSE4.1).
+      const double q = t * inv;
+      const auto b = static_cast<std::int32_t>(q < 0.0 ? 0.0 : (q > top ? top : q));
+      bk[v] = b;
+      low = std::min(low, b);
+      high = std::max(high, b);
+    }
+    return std::make_pair(low, high);
+  };
+  // True when no triangle whose buckets lie in low .. high crosses a plane first .. last.
+  auto misses = [&](std::int32_t low, std::int32_t high) {
+    return std::max(low, first - 1) >= std::min(high, last);
+  };
+  // Face f (mesh vertex indices) whose corners' heights are ht[e[0..2]].
+  auto cut_face = [&](const std::int32_t* f, const std::int32_t* e) {
+    const std::int32_t b[3] = {bk[e[0]], bk[e[1]], bk[e[2]]};
+    if (b[0] == b[1] && b[1] == b[2]) return;  // most faces: between two planes
+    const std::int32_t lo = std::max(std::min({b[0], b[1], b[2]}), first - 1);
+    const std::int32_t hi = std::min(std::max({b[0], b[1], b[2]}), last);
+    for (std::int32_t k = lo + 1; k <= hi; ++k) {
+      if (wanted != nullptr && !wanted[k - 1]) continue;
+      const double c = k * spacing;
+      bool above[3];
+      double h[3];
+      for (int j = 0; j < 3; ++j) {
+        above[j] = b[j] >= k;
+        h[j] = ht[e[j]] - c;
+      }
+      CutSegment seg;
+      emit_segment(mesh, plane, f, above, h, seg);
+      out[k - 1].push_back(seg);
+    }
+  };
+  if (grid == nullptr) {
+    const double* x = mesh.vertices;
+    heights(x, x + 1, x + 2, 0, mesh.num_vertices, std::integral_constant<Index, 3>());
+    for (Index f = 0; f < mesh.num_faces; ++f) cut_face(mesh.faces + 3 * f, mesh.faces + 3 * f);
+    return;
   }
-  const std::int32_t* bk = bucket.data();
-  const double* ht = height.data();
-  for_faces_in_slab(mesh, grid, plane.normal, offset + first * spacing, offset + last * spacing,
-                    region, exclude, [&](const std::int32_t* f) {
-                      const std::int32_t b[3] = {bk[f[0]], bk[f[1]], bk[f[2]]};
-                      const std::int32_t lo = std::max(std::min({b[0], b[1], b[2]}), first - 1);
-                      const std::int32_t hi = std::min(std::max({b[0], b[1], b[2]}), last);
-                      for (std::int32_t k = lo + 1; k <= hi; ++k) {
-                        if (wanted != nullptr && !wanted[k - 1]) continue;
-                        const double c = k * spacing;
-                        bool above[3];
-                        double h[3];
-                        for (int j = 0; j < 3; ++j) {
-                          above[j] = b[j] >= k;
-                          h[j] = ht[f[j]] - c;
-                        }
-                        CutSegment seg;
-                        emit_segment(mesh, plane, f, above, h, seg);
-                        out[k - 1].push_back(seg);
-                      }
+  // Only the visited cells' vertices, from the grid's contiguous copies (vectorized).
+  const double *gx = grid->entry_x(), *gy = grid->entry_y(), *gz = grid->entry_z();
+  const std::int32_t* faces = grid->faces();
+  const std::int32_t* entries = grid->face_entries();
+  for_cells_in_slab(*grid, plane.normal, offset + first * spacing, offset + last * spacing, region,
+                    exclude, [&](Index c) {
+                      const auto [low, high] =
+                          heights(gx, gy, gz, grid->vertex_begin(c), grid->vertex_end(c),
+                                  std::integral_constant<Index, 1>());
+                      if (misses(low, high)) return;  // the cell lies between two planes
+                      for (Index k = 3 * grid->begin(c), stop = 3 * grid->end(c); k < stop; k += 3)
+                        cut_face(faces + k, entries + k);
                     });
 }
 
