@@ -54,9 +54,10 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   const Eigen::Array3i bdims = dims / kBlock;
   // Cell ids ordered block by block so that a block's cells are contiguous.
   auto cell_id = [&](const Vec3& c) {
-    int x[3];
+    unsigned x[3];  // clamped to >= 0, so unsigned: / and % by kBlock are a shift and a mask
     for (int k = 0; k < 3; ++k)
-      x[k] = std::clamp(static_cast<int>((c[k] - lo[k]) * inv[k]), 0, dims[k] - 1);
+      x[k] = static_cast<unsigned>(
+          std::clamp(static_cast<int>((c[k] - lo[k]) * inv[k]), 0, dims[k] - 1));
     const Index block =
         (Index(x[0] / kBlock) * bdims[1] + x[1] / kBlock) * bdims[2] + x[2] / kBlock;
     const Index inner = ((x[0] % kBlock) * kBlock + x[1] % kBlock) * kBlock + x[2] % kBlock;
