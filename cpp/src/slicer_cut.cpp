@@ -101,18 +101,21 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
               const FaceGrid* grid, const CutRegion* region, const CutRegion* exclude) {
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
-  auto cut_face = [&](const std::int32_t* f) {
-    double height[3];
-    bool above[3];
-    for (int k = 0; k < 3; ++k) {
-      const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
-      height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
-      above[k] = height[k] >= 0.0;
-    }
+  // Face f given its corners' heights.
+  auto cut_face_at = [&](const std::int32_t* f, double height[3]) {
+    const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
     if (above[0] == above[1] && above[1] == above[2]) return;
     CutSegment seg;
     emit_segment(mesh, plane, f, above, height, seg);
     out.push_back(seg);
+  };
+  auto cut_face = [&](const std::int32_t* f) {
+    double height[3];
+    for (int k = 0; k < 3; ++k) {
+      const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
+      height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
+    }
+    cut_face_at(f, height);
   };
   if (grid == nullptr || !grid->tight_bounds()) {
     for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude, cut_face);
@@ -128,6 +131,12 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
   };
   const std::int32_t* faces = grid->faces();
   constexpr Index kGroup = FaceGrid::kGroup;
+  // The heights of a cell's vertices (entries), computed in one vectorized pass when the plane
+  // meets one of its runs of faces (the same formula as cut_face, so the same bits).
+  const double *gx = grid->entry_x(), *gy = grid->entry_y(), *gz = grid->entry_z();
+  const std::int32_t* entries = grid->face_entries();
+  thread_local std::vector<double> cell_heights;
+  std::vector<double>& heights = cell_heights;
   for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, [&](Index c) {
     FaceGrid::TightBoxes boxes;
     const Index begin = grid->begin(c), end = grid->end(c);
@@ -138,9 +147,22 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
     }
     if (state == FaceGrid::Tight::kMine) grid->bound_cell(c, mesh, boxes);
     if (misses(boxes.cell[0], boxes.cell[1])) return;
+    const Index vb = grid->vertex_begin(c), nv = grid->vertex_end(c) - vb;
+    bool have_heights = false;
     for (Index f = begin, g = 0; f < end; f += kGroup, ++g) {
       if (misses(boxes.group_center[g], boxes.group_half[g])) continue;
-      for (Index k = f, stop = std::min(end, f + kGroup); k < stop; ++k) cut_face(faces + 3 * k);
+      if (!have_heights) {
+        if (static_cast<Index>(heights.size()) < nv) heights.resize(nv);
+        double* __restrict h = heights.data();
+        const double* __restrict x = gx + vb, * __restrict y = gy + vb, * __restrict z = gz + vb;
+        for (Index v = 0; v < nv; ++v) h[v] = x[v] * nx + y[v] * ny + z[v] * nz - offset;
+        have_heights = true;
+      }
+      for (Index k = 3 * f, stop = 3 * std::min(end, f + kGroup); k < stop; k += 3) {
+        const std::int32_t* e = entries + k;
+        double height[3] = {heights[e[0] - vb], heights[e[1] - vb], heights[e[2] - vb]};
+        cut_face_at(faces + k, height);
+      }
     }
   });
 }
