@@ -107,7 +107,9 @@ class FaceGrid {
   Index vertex_end(Index c) const { return vstart_[c + 1]; }
   /// Number of entries (#entries; between #V used and 3 #F).
   Index num_entries() const { return vstart_.empty() ? 0 : vstart_.back(); }
+  /// Mesh vertex index of each entry (#entries).
   const std::int32_t* entry_vertex() const { return entry_vertex_.get(); }
+  /// x, y, z coordinate of each entry (#entries each), mm.
   const double* entry_x() const { return entry_x_.get(); }
   const double* entry_y() const { return entry_y_.get(); }
   const double* entry_z() const { return entry_z_.get(); }
