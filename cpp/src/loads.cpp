@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <queue>
 #include <stdexcept>
 #include <string>
@@ -124,8 +125,9 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
   const Index ngroups = group_offset_[nb];
   // Each vertex's group and its pseudo-angle in [0, 4] around the bone axis (a monotone
   // function of the angle in the bone's frame u, v: no atan).
-  std::vector<Index> vertex_group(mesh.num_vertices);
-  std::vector<double> vertex_angle(mesh.num_vertices);
+  // (Scratch arrays left uninitialised: every kept vertex's entry is written before it is read.)
+  const std::unique_ptr<Index[]> vertex_group(new Index[mesh.num_vertices]);
+  const std::unique_ptr<double[]> vertex_angle(new double[mesh.num_vertices]);
   std::vector<Index> group_count(ngroups, 0);
   std::vector<Vec3> axis(nb), frame_u(nb), frame_v(nb);
   for (int b = 0; b < nb; ++b) {
@@ -174,8 +176,8 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
     buckets_[g].lo = Vec3::Constant(inf);
     buckets_[g].hi = Vec3::Constant(-inf);
   }
-  packed_xyz_.resize(3 * kept);
-  packed_index_.resize(kept);
+  packed_xyz_.assign(3 * kept, 0.0);
+  packed_index_.assign(kept, 0);
   std::vector<Index> fill(count.begin(), count.end() - 1);
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     if (skipped(v)) continue;
