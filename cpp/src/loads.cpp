@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "sorted_index.hpp"
+
 namespace osteon {
 
 LoadTree build_load_tree(const Skeleton& s, int held_bone,
@@ -94,23 +96,6 @@ LoadTree build_load_tree(const Skeleton& s, int held_bone,
   return tree;
 }
 
-namespace {
-// std::upper_bound(p, t) - p.begin() for sorted p: a guess from p's ends (the params are about
-// evenly spaced), then a walk to the first p[j] > t (the same index: it is unique).
-Index slab_of(const std::vector<double>& p, double t) {
-  const Index n = static_cast<Index>(p.size());
-  if (n == 0 || t < p[0]) return 0;
-  if (!(t >= p[0])) return std::upper_bound(p.begin(), p.end(), t) - p.begin();  // NaN
-  if (t >= p[n - 1]) return n;
-  // p[0] <= t < p[n - 1]: the answer lies in [1, n - 1].
-  Index j = static_cast<Index>((t - p[0]) / (p[n - 1] - p[0]) * static_cast<double>(n - 1));
-  j = std::clamp<Index>(j, 1, n - 1);
-  while (p[j - 1] > t) --j;
-  while (p[j] <= t) ++j;
-  return j;
-}
-}  // namespace
-
 MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const LoadTree& tree,
                                const std::vector<int>& vertex_bone,
                                const std::vector<std::vector<double>>& slab_params,
@@ -140,7 +125,8 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
     if (skipped(v)) continue;
     const int b = vertex_bone[v];
     const Vec3 d = mesh.vertex(v) - s.heads[b];
-    const Index g = group_offset_[b] + slab_of(slab_params_[b], d.dot(axis[b]));
+    const Index g =
+        group_offset_[b] + static_cast<Index>(detail::upper_index(slab_params_[b], d.dot(axis[b])));
     vertex_group[v] = g;
     ++group_count[g];
     const double du = d.dot(frame_u[b]), dv = d.dot(frame_v[b]);

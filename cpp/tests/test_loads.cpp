@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <vector>
 
 #include "osteon/loads.hpp"
 #include "osteon/skeleton.hpp"
+#include "sorted_index.hpp"
 
 using namespace osteon;
 
@@ -232,4 +234,33 @@ TEST(MomentArmIndex, BucketsKeepTiesAndSkippedVerticesLikeAScan) {
     }
   }
   EXPECT_GT(checked, 100);
+}
+
+TEST(SortedIndex, UpperIndexIsUpperBound) {
+  // Evenly and unevenly spaced values, repeated values, queries on, between and beyond them,
+  // and NaN: the same index as std::upper_bound.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = trial % 13;
+    std::vector<double> p;
+    for (int k = 0; k < n; ++k) {
+      const double step = trial % 3 == 0 ? 2.0 : (trial % 3 == 1 ? u(rng) * 5.0 : 0.0);
+      p.push_back(p.empty() ? u(rng) * 10.0 - 5.0 : p.back() + (u(rng) < 0.2 ? 0.0 : step));
+    }
+    std::vector<double> queries = {-1e300, 1e300, -std::numeric_limits<double>::infinity(),
+                                   std::numeric_limits<double>::infinity(),
+                                   std::numeric_limits<double>::quiet_NaN()};
+    for (const double v : p)
+      queries.insert(queries.end(), {v, std::nextafter(v, -1e9), std::nextafter(v, 1e9)});
+    for (int k = 0; k < 20; ++k) queries.push_back(u(rng) * 40.0 - 10.0);
+    for (const double t : queries) {
+      const auto expected =
+          static_cast<std::size_t>(std::upper_bound(p.begin(), p.end(), t) - p.begin());
+      EXPECT_EQ(detail::upper_index(p, t), expected) << "n " << n << " t " << t;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 5000);
 }
