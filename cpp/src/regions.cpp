@@ -1396,6 +1396,9 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
   };
   for (Index f = 0; f < nf; ++f) {
     const std::int32_t* t = mesh.faces + 3 * f;
+    // Most faces join nothing new: their vertices already point at one root.
+    const std::int32_t p0 = parent[t[0]];
+    if (parent[t[1]] == p0 && parent[t[2]] == p0 && parent[p0] == p0) continue;
     const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
     join_roots(r, find_root(parent, t[2]));
   }
