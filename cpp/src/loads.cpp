@@ -96,6 +96,22 @@ LoadTree build_load_tree(const Skeleton& s, int held_bone,
   return tree;
 }
 
+namespace {
+// A bottom-up tree of boxes over m leaves (each with .lo, .hi): node i in [1, 2m) at lo/hi[i],
+// leaves m + j, node i < m the box of nodes 2i and 2i+1.
+template <class Leaf>
+void box_tree(const Leaf* leaves, Index m, Vec3* lo, Vec3* hi) {
+  for (Index j = 0; j < m; ++j) {
+    lo[m + j] = leaves[j].lo;
+    hi[m + j] = leaves[j].hi;
+  }
+  for (Index i = m - 1; i >= 1; --i) {
+    lo[i] = lo[2 * i].cwiseMin(lo[2 * i + 1]);
+    hi[i] = hi[2 * i].cwiseMax(hi[2 * i + 1]);
+  }
+}
+}  // namespace
+
 MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const LoadTree& tree,
                                const std::vector<int>& vertex_bone,
                                const std::vector<std::vector<double>>& slab_params,
@@ -186,14 +202,7 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
     const Index first = bucket_offset_[g], k = bucket_offset_[g + 1] - first;
     Vec3* lo = bucket_lo_.data() + 2 * first;
     Vec3* hi = bucket_hi_.data() + 2 * first;
-    for (Index j = 0; j < k; ++j) {
-      lo[k + j] = buckets_[first + j].lo;
-      hi[k + j] = buckets_[first + j].hi;
-    }
-    for (Index i = k - 1; i >= 1; --i) {
-      lo[i] = lo[2 * i].cwiseMin(lo[2 * i + 1]);
-      hi[i] = hi[2 * i].cwiseMax(hi[2 * i + 1]);
-    }
+    box_tree(buckets_.data() + first, k, lo, hi);
     groups_[g].begin = buckets_[first].begin;
     groups_[g].end = buckets_[first + k - 1].end;
     groups_[g].lo = lo[1];
@@ -204,16 +213,7 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
   node_hi_.assign(2 * ngroups, Vec3::Constant(-inf));
   for (int b = 0; b < nb; ++b) {
     const Index first = group_offset_[b], m = group_offset_[b + 1] - first;
-    Vec3* lo = node_lo_.data() + 2 * first;
-    Vec3* hi = node_hi_.data() + 2 * first;
-    for (Index j = 0; j < m; ++j) {
-      lo[m + j] = groups_[first + j].lo;
-      hi[m + j] = groups_[first + j].hi;
-    }
-    for (Index i = m - 1; i >= 1; --i) {
-      lo[i] = lo[2 * i].cwiseMin(lo[2 * i + 1]);
-      hi[i] = hi[2 * i].cwiseMax(hi[2 * i + 1]);
-    }
+    box_tree(groups_.data() + first, m, node_lo_.data() + 2 * first, node_hi_.data() + 2 * first);
   }
   // Subtree boxes, leaves first (reverse breadth-first order).
   subtree_lo_.assign(nb, Vec3::Constant(inf));

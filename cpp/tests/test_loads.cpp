@@ -22,6 +22,45 @@ Skeleton tee() {
   s.parents = {-1, 0, 0};
   return s;
 }
+
+// The farthest downstream vertex from c for the section of bone b at boundary i, by a scan of
+// every vertex (largest squared distance, of those the smallest index; -1 when none), `skip`d
+// vertices left out.
+std::pair<double, Index> scan_farthest(const MeshView& mesh, const Skeleton& s,
+                                       const LoadTree& tree, const std::vector<int>& vertex_bone,
+                                       const std::vector<std::vector<double>>& params, int b, int i,
+                                       bool plus, const Vec3& c,
+                                       const std::vector<std::uint8_t>* skip = nullptr) {
+  std::function<void(int, std::vector<std::uint8_t>&)> mark_subtree =
+      [&](int bone, std::vector<std::uint8_t>& in) {
+        in[bone] = 1;
+        for (const auto& [child, param] : tree.children[bone]) mark_subtree(child, in);
+      };
+  const double split = params[b][i];
+  std::vector<std::uint8_t> whole(s.num_bones(), 0);
+  for (const auto& [child, param] : tree.children[b])
+    if (plus ? param >= split : param <= split) mark_subtree(child, whole);
+  double best = -1.0;
+  Index best_v = -1;
+  for (Index v = 0; v < mesh.num_vertices; ++v) {
+    if (skip != nullptr && (*skip)[v]) continue;
+    const int vb = vertex_bone[v];
+    bool down = whole[vb] != 0;
+    if (vb == b) {
+      const double t = (mesh.vertex(v) - s.heads[b]).dot(s.direction(b));
+      const auto& p = params[b];
+      const long slab = std::upper_bound(p.begin(), p.end(), t) - p.begin();
+      down = plus ? slab > i : slab <= i;
+    }
+    if (!down) continue;
+    const double d2 = (mesh.vertex(v) - c).squaredNorm();
+    if (d2 > best) {
+      best = d2;
+      best_v = v;
+    }
+  }
+  return {best, best_v};
+}
 }  // namespace
 
 TEST(LoadTree, ChildrenAttachWhereTheirHeadProjects) {
@@ -102,38 +141,13 @@ TEST(MomentArmIndex, FarthestDownstreamPointMatchesBruteForce) {
     params[b].push_back(s.length(b));
   }
   const MomentArmIndex index(mesh, s, tree, vertex_bone, params);
-  std::function<void(int, std::vector<std::uint8_t>&)> mark_subtree =
-      [&](int b, std::vector<std::uint8_t>& in) {
-        in[b] = 1;
-        for (const auto& [child, param] : tree.children[b]) mark_subtree(child, in);
-      };
   int checked = 0;
   for (int b = 0; b < s.num_bones(); ++b) {
     for (int i = 0; i < static_cast<int>(params[b].size()); ++i) {
       for (const bool plus : {true, false}) {
-        const double split = params[b][i];
-        std::vector<std::uint8_t> whole(s.num_bones(), 0);
-        for (const auto& [child, param] : tree.children[b])
-          if (plus ? param >= split : param <= split) mark_subtree(child, whole);
-        const Vec3 c = s.heads[b] + split * s.direction(b) + Vec3(0.3, -0.2, 0.1);
-        double best = -1.0;
-        Index best_v = -1;
-        for (Index v = 0; v < mesh.num_vertices; ++v) {
-          const int vb = vertex_bone[v];
-          bool down = whole[vb] != 0;
-          if (vb == b) {
-            const double t = (mesh.vertex(v) - s.heads[b]).dot(s.direction(b));
-            const auto& p = params[b];
-            const long slab = std::upper_bound(p.begin(), p.end(), t) - p.begin();
-            down = plus ? slab > i : slab <= i;
-          }
-          if (!down) continue;
-          const double d2 = (mesh.vertex(v) - c).squaredNorm();
-          if (d2 > best) {
-            best = d2;
-            best_v = v;
-          }
-        }
+        const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + Vec3(0.3, -0.2, 0.1);
+        const auto [best, best_v] =
+            scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c);
         const auto [arm, vertex] = index.farthest(b, i, plus, c);
         if (best_v < 0) {
           EXPECT_EQ(vertex, -1);
@@ -181,45 +195,20 @@ TEST(MomentArmIndex, BucketsKeepTiesAndSkippedVerticesLikeAScan) {
   const MeshView mesh{xyz.data(), nv, nullptr, 0};
   std::vector<std::uint8_t> skip(nv, 0);
   for (Index v = 0; v < nv; v += 7) skip[v] = 1;
-  std::function<void(int, std::vector<std::uint8_t>&)> mark_subtree =
-      [&](int b, std::vector<std::uint8_t>& in) {
-        in[b] = 1;
-        for (const auto& [child, param] : tree.children[b]) mark_subtree(child, in);
-      };
   int checked = 0;
   for (const bool use_skip : {false, true}) {
-    const MomentArmIndex index(mesh, s, tree, vertex_bone, params, use_skip ? &skip : nullptr);
+    const std::vector<std::uint8_t>* skipped = use_skip ? &skip : nullptr;
+    const MomentArmIndex index(mesh, s, tree, vertex_bone, params, skipped);
     for (int b = 0; b < s.num_bones(); ++b) {
       for (int i = 0; i < static_cast<int>(params[b].size()); ++i) {
         for (const bool plus : {true, false}) {
           for (int c_kind = 0; c_kind < 3; ++c_kind) {
-            const double split = params[b][i];
-            std::vector<std::uint8_t> whole(s.num_bones(), 0);
-            for (const auto& [child, param] : tree.children[b])
-              if (plus ? param >= split : param <= split) mark_subtree(child, whole);
             // On the axis (ties everywhere), off it by integers, off it by fractions.
             const Vec3 off =
                 c_kind == 0 ? Vec3::Zero() : (c_kind == 1 ? Vec3(1, 2, -1) : Vec3(0.3, -0.2, 0.1));
-            const Vec3 c = s.heads[b] + split * s.direction(b) + off;
-            double best = -1.0;
-            Index best_v = -1;
-            for (Index v = 0; v < nv; ++v) {
-              if (use_skip && skip[v]) continue;
-              const int vb = vertex_bone[v];
-              bool down = whole[vb] != 0;
-              if (vb == b) {
-                const double t = (mesh.vertex(v) - s.heads[b]).dot(s.direction(b));
-                const auto& p = params[b];
-                const long slab = std::upper_bound(p.begin(), p.end(), t) - p.begin();
-                down = plus ? slab > i : slab <= i;
-              }
-              if (!down) continue;
-              const double d2 = (mesh.vertex(v) - c).squaredNorm();
-              if (d2 > best) {
-                best = d2;
-                best_v = v;
-              }
-            }
+            const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + off;
+            const auto [best, best_v] =
+                scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c, skipped);
             const auto [arm, vertex] = index.farthest(b, i, plus, c);
             if (best_v < 0) {
               EXPECT_EQ(vertex, -1);
