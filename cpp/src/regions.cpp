@@ -7,6 +7,9 @@
 #include <cstdlib>
 #include <limits>
 #include <utility>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "clipper2/clipper.h"
 #include "line_triangle.hpp"
@@ -77,7 +80,20 @@ struct Box2 {
 
 Box2 box_of(const std::vector<Vec2>& pts) {
   Box2 b;
+#if defined(__SSE2__)
+  // Both coordinates at once: minpd(q, lo) is q < lo ? q : lo per lane, i.e. std::min(lo, q)
+  // (NaN and equal zeros included), maxpd(q, hi) likewise std::max(hi, q): the same box as add().
+  __m128d lo = _mm_loadu_pd(b.lo.data()), hi = _mm_loadu_pd(b.hi.data());
+  for (const Vec2& p : pts) {
+    const __m128d q = _mm_loadu_pd(p.data());
+    lo = _mm_min_pd(q, lo);
+    hi = _mm_max_pd(q, hi);
+  }
+  _mm_storeu_pd(b.lo.data(), lo);
+  _mm_storeu_pd(b.hi.data(), hi);
+#else
   for (const Vec2& p : pts) b.add(p);
+#endif
   return b;
 }
 
