@@ -6,6 +6,7 @@
 
 #include "analysis_impl.hpp"
 #include "parallel.hpp"
+#include "sorted_index.hpp"
 
 namespace osteon {
 
@@ -56,7 +57,7 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
           const auto& p = sp[b];
           if (p.empty() || (any_loose && loose_vertex[v])) continue;
           const double t = (mesh.vertex(v) - sk.heads[b]).dot(run.axis[b]);
-          const std::size_t j = std::upper_bound(p.begin(), p.end(), t) - p.begin();
+          const std::size_t j = detail::upper_index(p, t);
           if (j == 0) {
             r.vertex_stress[v] = ss[b][0];
             r.vertex_culled[v] = sc[b][0];

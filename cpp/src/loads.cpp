@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <queue>
 #include <stdexcept>
 #include <string>
+
+#include "sorted_index.hpp"
 
 namespace osteon {
 
@@ -93,6 +96,22 @@ LoadTree build_load_tree(const Skeleton& s, int held_bone,
   return tree;
 }
 
+namespace {
+// A bottom-up tree of boxes over m leaves (each with .lo, .hi): node i in [1, 2m) at lo/hi[i],
+// leaves m + j, node i < m the box of nodes 2i and 2i+1.
+template <class Leaf>
+void box_tree(const Leaf* leaves, Index m, Vec3* lo, Vec3* hi) {
+  for (Index j = 0; j < m; ++j) {
+    lo[m + j] = leaves[j].lo;
+    hi[m + j] = leaves[j].hi;
+  }
+  for (Index i = m - 1; i >= 1; --i) {
+    lo[i] = lo[2 * i].cwiseMin(lo[2 * i + 1]);
+    hi[i] = hi[2 * i].cwiseMax(hi[2 * i + 1]);
+  }
+}
+}  // namespace
+
 MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const LoadTree& tree,
                                const std::vector<int>& vertex_bone,
                                const std::vector<std::vector<double>>& slab_params,
@@ -105,61 +124,96 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
   for (int b = 0; b < nb; ++b)
     group_offset_[b + 1] = group_offset_[b] + static_cast<Index>(slab_params_[b].size()) + 1;
   const Index ngroups = group_offset_[nb];
-  std::vector<Index> vertex_group(mesh.num_vertices);
-  std::vector<Index> count(ngroups + 1, 0);
-  std::vector<Vec3> axis(nb);
-  for (int b = 0; b < nb; ++b) axis[b] = s.direction(b);
+  // Each vertex's group and its pseudo-angle in [0, 4] around the bone axis (a monotone
+  // function of the angle in the bone's frame u, v: no atan).
+  // (Scratch arrays left uninitialised: every kept vertex's entry is written before it is read.)
+  const std::unique_ptr<Index[]> vertex_group(new Index[mesh.num_vertices]);
+  const std::unique_ptr<double[]> vertex_angle(new double[mesh.num_vertices]);
+  std::vector<Index> group_count(ngroups, 0);
+  std::vector<Vec3> axis(nb), frame_u(nb), frame_v(nb);
+  for (int b = 0; b < nb; ++b) {
+    axis[b] = s.direction(b);
+    frame_u[b] = axis[b].unitOrthogonal();
+    frame_v[b] = axis[b].cross(frame_u[b]);
+  }
   auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
+  for (Index v = 0; v < mesh.num_vertices; ++v) {
+    if (skipped(v)) continue;
+    const int b = vertex_bone[v];
+    const Vec3 d = mesh.vertex(v) - s.heads[b];
+    const Index g =
+        group_offset_[b] + static_cast<Index>(detail::upper_index(slab_params_[b], d.dot(axis[b])));
+    vertex_group[v] = g;
+    ++group_count[g];
+    const double du = d.dot(frame_u[b]), dv = d.dot(frame_v[b]);
+    const double sum = std::abs(du) + std::abs(dv);
+    const double r = sum > 0 ? du / sum : 1.0;
+    vertex_angle[v] = dv >= 0 ? 1.0 - r : 3.0 + r;
+  }
+  // Buckets: ~16 vertices each (fewer, wider buckets cost more scanning, more cost heap work).
+  constexpr Index kBucket = 16;
+  bucket_offset_.assign(ngroups + 1, 0);
+  for (Index g = 0; g < ngroups; ++g)
+    bucket_offset_[g + 1] =
+        bucket_offset_[g] + std::max<Index>(1, (group_count[g] + kBucket - 1) / kBucket);
+  const Index nbuckets = bucket_offset_[ngroups];
+  std::vector<Index> count(nbuckets + 1, 0);
   Index kept = 0;
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     if (skipped(v)) continue;
     ++kept;
-    const int b = vertex_bone[v];
-    const auto& p = slab_params_[b];
-    const double t = (mesh.vertex(v) - s.heads[b]).dot(axis[b]);
-    const Index j = std::upper_bound(p.begin(), p.end(), t) - p.begin();
-    vertex_group[v] = group_offset_[b] + j;
+    const Index g = vertex_group[v];
+    const Index k = bucket_offset_[g + 1] - bucket_offset_[g];
+    const double q = vertex_angle[v] * (0.25 * static_cast<double>(k));
+    const Index j = q > 0 ? (q < static_cast<double>(k) ? static_cast<Index>(q) : k - 1) : 0;
+    vertex_group[v] = bucket_offset_[g] + j;  // from here on: the vertex's bucket
     ++count[vertex_group[v] + 1];
   }
-  for (Index g = 0; g < ngroups; ++g) count[g + 1] += count[g];
-  groups_.assign(ngroups, Group{});
+  for (Index g = 0; g < nbuckets; ++g) count[g + 1] += count[g];
   const double inf = std::numeric_limits<double>::infinity();
-  for (Index g = 0; g < ngroups; ++g) {
-    groups_[g].begin = count[g];
-    groups_[g].end = count[g + 1];
-    groups_[g].lo = Vec3::Constant(inf);
-    groups_[g].hi = Vec3::Constant(-inf);
+  buckets_.assign(nbuckets, Group{});
+  for (Index g = 0; g < nbuckets; ++g) {
+    buckets_[g].begin = count[g];
+    buckets_[g].end = count[g + 1];
+    buckets_[g].lo = Vec3::Constant(inf);
+    buckets_[g].hi = Vec3::Constant(-inf);
   }
-  packed_xyz_.resize(3 * kept);
-  packed_index_.resize(kept);
+  packed_xyz_.assign(3 * kept, 0.0);
+  packed_index_.assign(kept, 0);
   std::vector<Index> fill(count.begin(), count.end() - 1);
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     if (skipped(v)) continue;
-    const Index g = vertex_group[v];
-    const Index k = fill[g]++;
+    Group& bucket = buckets_[vertex_group[v]];
+    const Index k = fill[vertex_group[v]]++;
     const Vec3 p = mesh.vertex(v);
     packed_xyz_[3 * k] = p.x();
     packed_xyz_[3 * k + 1] = p.y();
     packed_xyz_[3 * k + 2] = p.z();
     packed_index_[k] = v;
-    groups_[g].lo = groups_[g].lo.cwiseMin(p);
-    groups_[g].hi = groups_[g].hi.cwiseMax(p);
+    bucket.lo = bucket.lo.cwiseMin(p);
+    bucket.hi = bucket.hi.cwiseMax(p);
+  }
+  // A bottom-up tree over the buckets of each group (leaves k + j, parents i = (k + j) / 2, ...);
+  // its root (or single leaf) is the group's box.
+  groups_.assign(ngroups, Group{});
+  bucket_lo_.assign(2 * nbuckets, Vec3::Constant(inf));
+  bucket_hi_.assign(2 * nbuckets, Vec3::Constant(-inf));
+  for (Index g = 0; g < ngroups; ++g) {
+    const Index first = bucket_offset_[g], k = bucket_offset_[g + 1] - first;
+    Vec3* lo = bucket_lo_.data() + 2 * first;
+    Vec3* hi = bucket_hi_.data() + 2 * first;
+    box_tree(buckets_.data() + first, k, lo, hi);
+    groups_[g].begin = buckets_[first].begin;
+    groups_[g].end = buckets_[first + k - 1].end;
+    groups_[g].lo = lo[1];
+    groups_[g].hi = hi[1];
   }
   // Each bone's tree of slab boxes (leaves m + j, parents i = (m + j) / 2, ...).
   node_lo_.assign(2 * ngroups, Vec3::Constant(inf));
   node_hi_.assign(2 * ngroups, Vec3::Constant(-inf));
   for (int b = 0; b < nb; ++b) {
     const Index first = group_offset_[b], m = group_offset_[b + 1] - first;
-    Vec3* lo = node_lo_.data() + 2 * first;
-    Vec3* hi = node_hi_.data() + 2 * first;
-    for (Index j = 0; j < m; ++j) {
-      lo[m + j] = groups_[first + j].lo;
-      hi[m + j] = groups_[first + j].hi;
-    }
-    for (Index i = m - 1; i >= 1; --i) {
-      lo[i] = lo[2 * i].cwiseMin(lo[2 * i + 1]);
-      hi[i] = hi[2 * i].cwiseMax(hi[2 * i + 1]);
-    }
+    box_tree(groups_.data() + first, m, node_lo_.data() + 2 * first, node_hi_.data() + 2 * first);
   }
   // Subtree boxes, leaves first (reverse breadth-first order).
   subtree_lo_.assign(nb, Vec3::Constant(inf));
@@ -193,23 +247,23 @@ inline double farthest_corner2(const Vec3& c, const Vec3& lo, const Vec3& hi) {
 
 std::pair<double, Index> MomentArmIndex::farthest(int bone, int boundary, bool plus_side,
                                                   const Vec3& c) const {
-  // Best-first branch and bound. Items: node >= 1 of a bone's slab tree (a leaf: one slab), or
-  // node 0: the bone's whole downstream subtree (its slabs and its children's subtrees).
+  // Best-first branch and bound. Items (id < 0: bone -1 - id): node >= 1 of a bone's slab tree
+  // (a leaf: one slab), or node 0: the bone's whole downstream subtree (its slabs and its
+  // children's subtrees); (id >= 0: group id) node >= 1 of a slab's bucket tree.
   struct Item {
     double ub;  // squared distance to the box's farthest corner, mm^2
-    int bone;
-    Index node;
+    std::int32_t id, node;
     bool operator<(const Item& o) const { return ub < o.ub; }
   };
   std::priority_queue<Item> heap;
   auto push_node = [&](int b, Index i) {
     const Index at = 2 * group_offset_[b] + i;
     const double ub = farthest_corner2(c, node_lo_[at], node_hi_[at]);
-    if (ub >= 0) heap.push({ub, b, i});
+    if (ub >= 0) heap.push({ub, -1 - b, static_cast<std::int32_t>(i)});
   };
   auto push_subtree = [&](int b) {
     const double ub = farthest_corner2(c, subtree_lo_[b], subtree_hi_[b]);
-    if (ub >= 0) heap.push({ub, b, 0});
+    if (ub >= 0) heap.push({ub, -1 - b, 0});
   };
   const auto& params = slab_params_[bone];
   const double split = params[boundary];
@@ -225,11 +279,46 @@ std::pair<double, Index> MomentArmIndex::farthest(int bone, int boundary, bool p
   }
   double best = -1.0;
   Index best_vertex = -1;
+  // Node i of group g's bucket tree, its bound passed: down to a bucket through the child with
+  // the larger bound (the other one queued), then its vertices. A box whose bound is below the
+  // best so far holds no vertex as far (nor one as far with a smaller index).
+  auto descend = [&](Index g, Index i) {
+    const Index first = bucket_offset_[g], k = bucket_offset_[g + 1] - first;
+    const Vec3* lo = bucket_lo_.data() + 2 * first;
+    const Vec3* hi = bucket_hi_.data() + 2 * first;
+    while (i < k) {
+      Index near = 2 * i, far = 2 * i + 1;
+      double un = farthest_corner2(c, lo[near], hi[near]);
+      double uf = farthest_corner2(c, lo[far], hi[far]);
+      if (uf > un) {
+        std::swap(near, far);
+        std::swap(un, uf);
+      }
+      if (uf >= 0 && !(uf < best))
+        heap.push({uf, static_cast<std::int32_t>(g), static_cast<std::int32_t>(far)});
+      if (un < 0 || un < best) return;
+      i = near;
+    }
+    const Group& bucket = buckets_[first + i - k];
+    const double* p = packed_xyz_.data() + 3 * bucket.begin;
+    for (Index v = bucket.begin; v < bucket.end; ++v, p += 3) {
+      const double dx = p[0] - c.x(), dy = p[1] - c.y(), dz = p[2] - c.z();
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      if (d2 > best || (d2 == best && packed_index_[v] < best_vertex)) {
+        best = d2;
+        best_vertex = packed_index_[v];
+      }
+    }
+  };
   while (!heap.empty()) {
     const Item item = heap.top();
     heap.pop();
     if (item.ub < best) break;  // (equal: it may hold a vertex of smaller index at the same d)
-    const int b = item.bone;
+    if (item.id >= 0) {
+      descend(item.id, item.node);
+      continue;
+    }
+    const int b = -1 - item.id;
     const Index m = group_offset_[b + 1] - group_offset_[b];
     if (item.node == 0) {
       push_node(b, 1);
@@ -241,16 +330,8 @@ std::pair<double, Index> MomentArmIndex::farthest(int bone, int boundary, bool p
       push_node(b, 2 * item.node);
       push_node(b, 2 * item.node + 1);
     } else {
-      const Group& g = groups_[group_offset_[b] + item.node - m];
-      const double* p = packed_xyz_.data() + 3 * g.begin;
-      for (Index k = g.begin; k < g.end; ++k, p += 3) {
-        const double dx = p[0] - c.x(), dy = p[1] - c.y(), dz = p[2] - c.z();
-        const double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 > best || (d2 == best && packed_index_[k] < best_vertex)) {
-          best = d2;
-          best_vertex = packed_index_[k];
-        }
-      }
+      // A slab: its bucket tree's root has the slab's box (the bound just passed).
+      descend(group_offset_[b] + item.node - m, 1);
     }
   }
   if (best_vertex < 0) return {0.0, -1};

@@ -7,6 +7,9 @@
 #include <cstdlib>
 #include <limits>
 #include <utility>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "clipper2/clipper.h"
 #include "line_triangle.hpp"
@@ -77,7 +80,20 @@ struct Box2 {
 
 Box2 box_of(const std::vector<Vec2>& pts) {
   Box2 b;
+#if defined(__SSE2__)
+  // Both coordinates at once: minpd(q, lo) is q < lo ? q : lo per lane, i.e. std::min(lo, q)
+  // (NaN and equal zeros included), maxpd(q, hi) likewise std::max(hi, q): the same box as add().
+  __m128d lo = _mm_loadu_pd(b.lo.data()), hi = _mm_loadu_pd(b.hi.data());
+  for (const Vec2& p : pts) {
+    const __m128d q = _mm_loadu_pd(p.data());
+    lo = _mm_min_pd(q, lo);
+    hi = _mm_max_pd(q, hi);
+  }
+  _mm_storeu_pd(b.lo.data(), lo);
+  _mm_storeu_pd(b.hi.data(), hi);
+#else
   for (const Vec2& p : pts) b.add(p);
+#endif
   return b;
 }
 
@@ -180,24 +196,11 @@ bool owned(const CutSegment& s, const BoneDomain& d) {
 // visits exactly the segment pairs whose x-ranges meet, so smooth loops cost about their number
 // of segments.
 bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
-  Box2 all;
   std::size_t m = 0;
   for (const auto* loop : loops) {
-    const std::size_t n = loop->size();
-    if (n < 3) return true;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec2& a = (*loop)[i];
-      if (a == (*loop)[i + 1 == n ? 0 : i + 1]) return true;
-      all.add(a);
-    }
-    m += n;
+    if (loop->size() < 3) return true;
+    m += loop->size();
   }
-  const Vec2 size = all.hi - all.lo;
-  const double extent = std::max(size.x(), size.y());
-  if (!(extent > 0) || !std::isfinite(extent)) return true;
-  // Orientation values below this (mm^2) are treated as zero: near-touching counts as touching.
-  const double eps = 1e-12 * extent * extent;
-  const double margin = 1e-9 * extent;
   // Segment i of a loop joins its points i and i + 1. A chain is a run of a loop's segments
   // whose x never decreases, or never increases (then stored backwards): in storage order both
   // ends of the segments' x-ranges never decrease.
@@ -214,33 +217,49 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
   segs.reserve(m);
   std::vector<Chain> chains;
   chains.reserve(4 * loops.size() + 16);
+  Box2 all;
   for (std::size_t l = 0; l < loops.size(); ++l) {
     const auto& loop = *loops[l];
     const std::size_t n = loop.size();
     int dir = 0;
-    auto close = [&]() {
+    double ylo = 0, yhi = 0;  // y-range of the open chain's points so far
+    // The chain's box: its x-range from its first and last segments (both ends of the x-ranges
+    // never decrease in storage order), its y-range from its points.
+    auto close = [&](const Vec2& last) {
       Chain& c = chains.back();
       c.end = static_cast<std::uint32_t>(segs.size());
       if (dir < 0) std::reverse(segs.begin() + c.begin, segs.end());
+      c.box.lo = Vec2(segs[c.begin].xlo, std::min(ylo, last.y()));
+      c.box.hi = Vec2(segs[c.end - 1].xhi, std::max(yhi, last.y()));
+      all.add(c.box.lo);
+      all.add(c.box.hi);
     };
     for (std::size_t i = 0; i < n; ++i) {
       const Vec2& a = loop[i];
       const Vec2& b = loop[i + 1 == n ? 0 : i + 1];
+      if (a == b) return true;  // a degenerate segment counts as touching
       const int s = static_cast<int>(b.x() > a.x()) - static_cast<int>(b.x() < a.x());
       if (i == 0 || (s != 0 && dir != 0 && s != dir)) {
-        if (i > 0) close();
+        if (i > 0) close(a);
         chains.push_back({static_cast<std::uint32_t>(segs.size()), 0, Box2{}});
         dir = 0;
+        ylo = yhi = a.y();
       }
       if (s != 0) dir = s;
-      chains.back().box.add(a);
-      chains.back().box.add(b);
+      ylo = std::min(ylo, a.y());
+      yhi = std::max(yhi, a.y());
       segs.push_back({std::min(a.x(), b.x()), std::max(a.x(), b.x()), std::min(a.y(), b.y()),
                       std::max(a.y(), b.y()), a, b, static_cast<std::uint32_t>(l),
                       static_cast<std::uint32_t>(i)});
     }
-    close();
+    close(loop[0]);
   }
+  const Vec2 size = all.hi - all.lo;
+  const double extent = std::max(size.x(), size.y());
+  if (!(extent > 0) || !std::isfinite(extent)) return true;
+  // Orientation values below this (mm^2) are treated as zero: near-touching counts as touching.
+  const double eps = 1e-12 * extent * extent;
+  const double margin = 1e-9 * extent;
   auto orient = [&](const Vec2& o, const Vec2& a, const Vec2& b) {
     const double c = (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
     return c > eps ? 1 : (c < -eps ? -1 : 0);
@@ -1393,6 +1412,9 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
   };
   for (Index f = 0; f < nf; ++f) {
     const std::int32_t* t = mesh.faces + 3 * f;
+    // Most faces join nothing new: their vertices already point at one root.
+    const std::int32_t p0 = parent[t[0]];
+    if (parent[t[1]] == p0 && parent[t[2]] == p0 && parent[p0] == p0) continue;
     const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
     join_roots(r, find_root(parent, t[2]));
   }

@@ -14,16 +14,25 @@ struct LoopIntegrals {
 LoopIntegrals integrate(const std::vector<Vec2>& loop, const Vec2& ref) {
   LoopIntegrals r;
   const std::size_t n = loop.size();
+  if (n == 0) return r;
+  // Each point's offset and squares are computed once and carried to the next edge (the same
+  // values as computing them on both of its edges).
+  Vec2 p = loop[0] - ref;
+  double pxx = p.x() * p.x(), pyy = p.y() * p.y(), pxy2 = 2 * p.x() * p.y();
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec2 p = loop[i] - ref;
     const Vec2 q = loop[i + 1 == n ? 0 : i + 1] - ref;
+    const double qxx = q.x() * q.x(), qyy = q.y() * q.y(), qxy2 = 2 * q.x() * q.y();
     const double cr = p.x() * q.y() - q.x() * p.y();
     r.a += cr;
     r.sx += (p.x() + q.x()) * cr;
     r.sy += (p.y() + q.y()) * cr;
-    r.ixx += (p.x() * p.x() + p.x() * q.x() + q.x() * q.x()) * cr;
-    r.iyy += (p.y() * p.y() + p.y() * q.y() + q.y() * q.y()) * cr;
-    r.ixy += (p.x() * q.y() + 2 * p.x() * p.y() + 2 * q.x() * q.y() + q.x() * p.y()) * cr;
+    r.ixx += (pxx + p.x() * q.x() + qxx) * cr;
+    r.iyy += (pyy + p.y() * q.y() + qyy) * cr;
+    r.ixy += (p.x() * q.y() + pxy2 + qxy2 + q.x() * p.y()) * cr;
+    p = q;
+    pxx = qxx;
+    pyy = qyy;
+    pxy2 = qxy2;
   }
   r.a /= 2;
   r.sx /= 6;
@@ -50,7 +59,7 @@ double signed_area(const std::vector<Vec2>& loop) {
   const std::size_t n = loop.size();
   for (std::size_t i = 0; i < n; ++i) {
     const Vec2& p = loop[i];
-    const Vec2& q = loop[(i + 1) % n];
+    const Vec2& q = loop[i + 1 == n ? 0 : i + 1];
     a += p.x() * q.y() - q.x() * p.y();
   }
   return a / 2;

@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <vector>
 
 #include "osteon/loads.hpp"
 #include "osteon/skeleton.hpp"
+#include "sorted_index.hpp"
 
 using namespace osteon;
 
@@ -19,6 +21,45 @@ Skeleton tee() {
   s.tails = {Vec3(60, 0, 0), Vec3(60, 40, 0), Vec3(30, -30, 0)};
   s.parents = {-1, 0, 0};
   return s;
+}
+
+// The farthest downstream vertex from c for the section of bone b at boundary i, by a scan of
+// every vertex (largest squared distance, of those the smallest index; -1 when none), `skip`d
+// vertices left out.
+std::pair<double, Index> scan_farthest(const MeshView& mesh, const Skeleton& s,
+                                       const LoadTree& tree, const std::vector<int>& vertex_bone,
+                                       const std::vector<std::vector<double>>& params, int b, int i,
+                                       bool plus, const Vec3& c,
+                                       const std::vector<std::uint8_t>* skip = nullptr) {
+  std::function<void(int, std::vector<std::uint8_t>&)> mark_subtree =
+      [&](int bone, std::vector<std::uint8_t>& in) {
+        in[bone] = 1;
+        for (const auto& [child, param] : tree.children[bone]) mark_subtree(child, in);
+      };
+  const double split = params[b][i];
+  std::vector<std::uint8_t> whole(s.num_bones(), 0);
+  for (const auto& [child, param] : tree.children[b])
+    if (plus ? param >= split : param <= split) mark_subtree(child, whole);
+  double best = -1.0;
+  Index best_v = -1;
+  for (Index v = 0; v < mesh.num_vertices; ++v) {
+    if (skip != nullptr && (*skip)[v]) continue;
+    const int vb = vertex_bone[v];
+    bool down = whole[vb] != 0;
+    if (vb == b) {
+      const double t = (mesh.vertex(v) - s.heads[b]).dot(s.direction(b));
+      const auto& p = params[b];
+      const long slab = std::upper_bound(p.begin(), p.end(), t) - p.begin();
+      down = plus ? slab > i : slab <= i;
+    }
+    if (!down) continue;
+    const double d2 = (mesh.vertex(v) - c).squaredNorm();
+    if (d2 > best) {
+      best = d2;
+      best_v = v;
+    }
+  }
+  return {best, best_v};
 }
 }  // namespace
 
@@ -100,38 +141,13 @@ TEST(MomentArmIndex, FarthestDownstreamPointMatchesBruteForce) {
     params[b].push_back(s.length(b));
   }
   const MomentArmIndex index(mesh, s, tree, vertex_bone, params);
-  std::function<void(int, std::vector<std::uint8_t>&)> mark_subtree =
-      [&](int b, std::vector<std::uint8_t>& in) {
-        in[b] = 1;
-        for (const auto& [child, param] : tree.children[b]) mark_subtree(child, in);
-      };
   int checked = 0;
   for (int b = 0; b < s.num_bones(); ++b) {
     for (int i = 0; i < static_cast<int>(params[b].size()); ++i) {
       for (const bool plus : {true, false}) {
-        const double split = params[b][i];
-        std::vector<std::uint8_t> whole(s.num_bones(), 0);
-        for (const auto& [child, param] : tree.children[b])
-          if (plus ? param >= split : param <= split) mark_subtree(child, whole);
-        const Vec3 c = s.heads[b] + split * s.direction(b) + Vec3(0.3, -0.2, 0.1);
-        double best = -1.0;
-        Index best_v = -1;
-        for (Index v = 0; v < mesh.num_vertices; ++v) {
-          const int vb = vertex_bone[v];
-          bool down = whole[vb] != 0;
-          if (vb == b) {
-            const double t = (mesh.vertex(v) - s.heads[b]).dot(s.direction(b));
-            const auto& p = params[b];
-            const long slab = std::upper_bound(p.begin(), p.end(), t) - p.begin();
-            down = plus ? slab > i : slab <= i;
-          }
-          if (!down) continue;
-          const double d2 = (mesh.vertex(v) - c).squaredNorm();
-          if (d2 > best) {
-            best = d2;
-            best_v = v;
-          }
-        }
+        const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + Vec3(0.3, -0.2, 0.1);
+        const auto [best, best_v] =
+            scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c);
         const auto [arm, vertex] = index.farthest(b, i, plus, c);
         if (best_v < 0) {
           EXPECT_EQ(vertex, -1);
@@ -145,4 +161,95 @@ TEST(MomentArmIndex, FarthestDownstreamPointMatchesBruteForce) {
     }
   }
   EXPECT_GT(checked, 600);
+}
+
+TEST(MomentArmIndex, BucketsKeepTiesAndSkippedVerticesLikeAScan) {
+  // Vertices on rings around the bones (integer coordinates: many at exactly the same distance
+  // from a centre on the axis, in different buckets of a slab), some exactly on a slab boundary
+  // or beyond the last one, unevenly spaced boundaries with a repeated one, and skipped
+  // vertices: the farthest downstream vertex equals a scan (largest distance, then smallest
+  // index).
+  const Skeleton s = tee();
+  const LoadTree tree = build_load_tree(s, -1, {});
+  std::vector<std::vector<double>> params = {
+      {0, 1, 2, 2, 5, 6, 7, 11, 12, 13, 20, 30, 31, 50}, {0, 4, 8, 12, 16, 20, 24, 28, 32}, {10}};
+  std::vector<double> xyz;
+  std::vector<int> vertex_bone;
+  const int ring[][2] = {{5, 0},  {4, 3},   {3, 4},   {0, 5},  {-3, 4}, {-4, 3},
+                         {-5, 0}, {-4, -3}, {-3, -4}, {0, -5}, {3, -4}, {4, -3}};
+  for (int b = 0; b < s.num_bones(); ++b) {
+    const Vec3 d = s.direction(b);
+    for (int t = -2; t <= static_cast<int>(s.length(b)) + 2; ++t) {
+      for (int r = 1; r <= 3; ++r) {
+        for (const auto& q : ring) {
+          // Integer offsets in the two axes across the bone (bones run along x or y).
+          const Vec3 off = d.x() != 0 ? Vec3(0, r * q[0], r * q[1]) : Vec3(r * q[0], 0, r * q[1]);
+          const Vec3 p = s.heads[b] + static_cast<double>(t) * d + off;
+          xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+          vertex_bone.push_back(b);
+        }
+      }
+    }
+  }
+  const Index nv = static_cast<Index>(vertex_bone.size());
+  const MeshView mesh{xyz.data(), nv, nullptr, 0};
+  std::vector<std::uint8_t> skip(nv, 0);
+  for (Index v = 0; v < nv; v += 7) skip[v] = 1;
+  int checked = 0;
+  for (const bool use_skip : {false, true}) {
+    const std::vector<std::uint8_t>* skipped = use_skip ? &skip : nullptr;
+    const MomentArmIndex index(mesh, s, tree, vertex_bone, params, skipped);
+    for (int b = 0; b < s.num_bones(); ++b) {
+      for (int i = 0; i < static_cast<int>(params[b].size()); ++i) {
+        for (const bool plus : {true, false}) {
+          for (int c_kind = 0; c_kind < 3; ++c_kind) {
+            // On the axis (ties everywhere), off it by integers, off it by fractions.
+            const Vec3 off =
+                c_kind == 0 ? Vec3::Zero() : (c_kind == 1 ? Vec3(1, 2, -1) : Vec3(0.3, -0.2, 0.1));
+            const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + off;
+            const auto [best, best_v] =
+                scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c, skipped);
+            const auto [arm, vertex] = index.farthest(b, i, plus, c);
+            if (best_v < 0) {
+              EXPECT_EQ(vertex, -1);
+              continue;
+            }
+            EXPECT_EQ(arm, std::sqrt(best)) << "bone " << b << " boundary " << i;
+            EXPECT_EQ(vertex, best_v) << "bone " << b << " boundary " << i << " c " << c_kind;
+            ++checked;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(SortedIndex, UpperIndexIsUpperBound) {
+  // Evenly and unevenly spaced values, repeated values, queries on, between and beyond them,
+  // and NaN: the same index as std::upper_bound.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = trial % 13;
+    std::vector<double> p;
+    for (int k = 0; k < n; ++k) {
+      const double step = trial % 3 == 0 ? 2.0 : (trial % 3 == 1 ? u(rng) * 5.0 : 0.0);
+      p.push_back(p.empty() ? u(rng) * 10.0 - 5.0 : p.back() + (u(rng) < 0.2 ? 0.0 : step));
+    }
+    std::vector<double> queries = {-1e300, 1e300, -std::numeric_limits<double>::infinity(),
+                                   std::numeric_limits<double>::infinity(),
+                                   std::numeric_limits<double>::quiet_NaN()};
+    for (const double v : p)
+      queries.insert(queries.end(), {v, std::nextafter(v, -1e9), std::nextafter(v, 1e9)});
+    for (int k = 0; k < 20; ++k) queries.push_back(u(rng) * 40.0 - 10.0);
+    for (const double t : queries) {
+      const auto expected =
+          static_cast<std::size_t>(std::upper_bound(p.begin(), p.end(), t) - p.begin());
+      EXPECT_EQ(detail::upper_index(p, t), expected) << "n " << n << " t " << t;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 5000);
 }

@@ -675,3 +675,66 @@ TEST(Regions, SimplifyClosedIsClippersSimplifyPath) {
     }
   }
 }
+
+TEST(Regions, LoosePiecesCountsFaceShellsLikeASearch) {
+  // Shells of random faces (vertex indices shuffled, faces interleaved, isolated vertices): the
+  // face shells counted (union-find with a skip for faces that join nothing) equal the connected
+  // components of a search over the faces.
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int shells = 1 + trial % 6, per = 3 + trial % 9, isolated = trial % 3;
+    const int nv = shells * per + isolated;
+    std::vector<int> perm(nv);
+    for (int v = 0; v < nv; ++v) perm[v] = v;
+    std::shuffle(perm.begin(), perm.end(), rng);
+    std::vector<std::int32_t> faces;
+    for (int s = 0; s < shells; ++s) {
+      const int base = s * per;
+      std::uniform_int_distribution<int> pick(0, per - 1);
+      // A strip joins the shell; extra random faces inside it repeat joins.
+      for (int k = 0; k + 2 < per; ++k)
+        faces.insert(faces.end(), {perm[base + k], perm[base + k + 1], perm[base + k + 2]});
+      for (int k = 0; k < per; ++k)
+        faces.insert(faces.end(),
+                     {perm[base + pick(rng)], perm[base + pick(rng)], perm[base + pick(rng)]});
+    }
+    // Interleave the shells' faces.
+    const int nf = static_cast<int>(faces.size() / 3);
+    std::vector<int> order(nf);
+    for (int f = 0; f < nf; ++f) order[f] = f;
+    std::shuffle(order.begin(), order.end(), rng);
+    std::vector<std::int32_t> shuffled;
+    for (int f : order)
+      shuffled.insert(shuffled.end(), faces.begin() + 3 * f, faces.begin() + 3 * f + 3);
+    std::vector<double> xyz(3 * nv);
+    std::uniform_real_distribution<double> u(-50.0, 50.0);
+    for (double& x : xyz) x = u(rng);
+    // Reference: components by a search over vertex adjacency.
+    std::vector<std::vector<int>> adj(nv);
+    for (int f = 0; f < nf; ++f)
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) adj[shuffled[3 * f + a]].push_back(shuffled[3 * f + b]);
+    std::vector<std::uint8_t> seen(nv, 0);
+    Index components = 0;
+    for (int v = 0; v < nv; ++v) {
+      if (seen[v]) continue;
+      ++components;
+      std::vector<int> stack{v};
+      seen[v] = 1;
+      while (!stack.empty()) {
+        const int w = stack.back();
+        stack.pop_back();
+        for (int x : adj[w])
+          if (!seen[x]) {
+            seen[x] = 1;
+            stack.push_back(x);
+          }
+      }
+    }
+    const MeshView mesh{xyz.data(), nv, shuffled.data(), nf};
+    const std::vector<int> vertex_bone(nv, 0);
+    Index face_shells = -1;
+    loose_pieces(mesh, vertex_bone, 0, 0.0, &face_shells);
+    EXPECT_EQ(face_shells, components) << "trial " << trial;
+  }
+}

@@ -62,6 +62,12 @@ class MomentArmIndex {
   // nodes 2i and 2i+1.
   std::vector<Vec3> node_lo_, node_hi_;
   std::vector<Vec3> subtree_lo_, subtree_hi_;
+  // Each slab's vertices in buckets of ~16 (sectors around the bone axis: a slab's skin is a
+  // ring, a sector a short arc with a small box), under the same kind of tree: group g with k
+  // buckets has node i in [1, 2k) at bucket_lo_/bucket_hi_[2 * bucket_offset_[g] + i].
+  std::vector<Index> bucket_offset_;  // G+1: first bucket of each group
+  std::vector<Group> buckets_;        // packed vertex ranges [begin, end) and boxes
+  std::vector<Vec3> bucket_lo_, bucket_hi_;
   std::vector<double> packed_xyz_;   // vertices grouped by (bone, slab), xyz interleaved, mm
   std::vector<Index> packed_index_;  // original vertex index of each packed vertex
 };
