@@ -2,6 +2,7 @@
 // (see osteon/slicer.hpp).
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 #include "osteon/slicer.hpp"
@@ -100,18 +101,21 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
               const FaceGrid* grid, const CutRegion* region, const CutRegion* exclude) {
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
-  auto cut_face = [&](const std::int32_t* f) {
-    double height[3];
-    bool above[3];
-    for (int k = 0; k < 3; ++k) {
-      const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
-      height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
-      above[k] = height[k] >= 0.0;
-    }
+  // Face f given its corners' heights.
+  auto cut_face_at = [&](const std::int32_t* f, double height[3]) {
+    const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
     if (above[0] == above[1] && above[1] == above[2]) return;
     CutSegment seg;
     emit_segment(mesh, plane, f, above, height, seg);
     out.push_back(seg);
+  };
+  auto cut_face = [&](const std::int32_t* f) {
+    double height[3];
+    for (int k = 0; k < 3; ++k) {
+      const double* p = mesh.vertices + 3 * static_cast<Index>(f[k]);
+      height[k] = p[0] * nx + p[1] * ny + p[2] * nz - offset;
+    }
+    cut_face_at(f, height);
   };
   if (grid == nullptr || !grid->tight_bounds()) {
     for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude, cut_face);
@@ -127,6 +131,12 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
   };
   const std::int32_t* faces = grid->faces();
   constexpr Index kGroup = FaceGrid::kGroup;
+  // The heights of a cell's vertices (entries), computed in one vectorized pass when the plane
+  // meets one of its runs of faces (the same formula as cut_face, so the same bits).
+  const double *gx = grid->entry_x(), *gy = grid->entry_y(), *gz = grid->entry_z();
+  const std::int32_t* entries = grid->face_entries();
+  thread_local std::vector<double> cell_heights;
+  std::vector<double>& heights = cell_heights;
   for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, [&](Index c) {
     FaceGrid::TightBoxes boxes;
     const Index begin = grid->begin(c), end = grid->end(c);
@@ -137,9 +147,22 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
     }
     if (state == FaceGrid::Tight::kMine) grid->bound_cell(c, mesh, boxes);
     if (misses(boxes.cell[0], boxes.cell[1])) return;
+    const Index vb = grid->vertex_begin(c), nv = grid->vertex_end(c) - vb;
+    bool have_heights = false;
     for (Index f = begin, g = 0; f < end; f += kGroup, ++g) {
       if (misses(boxes.group_center[g], boxes.group_half[g])) continue;
-      for (Index k = f, stop = std::min(end, f + kGroup); k < stop; ++k) cut_face(faces + 3 * k);
+      if (!have_heights) {
+        if (static_cast<Index>(heights.size()) < nv) heights.resize(nv);
+        double* __restrict h = heights.data();
+        const double* __restrict x = gx + vb, * __restrict y = gy + vb, * __restrict z = gz + vb;
+        for (Index v = 0; v < nv; ++v) h[v] = x[v] * nx + y[v] * ny + z[v] * nz - offset;
+        have_heights = true;
+      }
+      for (Index k = 3 * f, stop = 3 * std::min(end, f + kGroup); k < stop; k += 3) {
+        const std::int32_t* e = entries + k;
+        double height[3] = {heights[e[0] - vb], heights[e[1] - vb], heights[e[2] - vb]};
+        cut_face_at(faces + k, height);
+      }
     }
   });
 }
@@ -157,47 +180,80 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
     while (last >= first && !wanted[last - 1]) --last;
     if (first > last) return;
   }
-  // Height and bucket of every vertex, once: the bucket is the number of planes at or below the
-  // vertex (clamped to 0..count), so a triangle crosses plane k exactly when its vertices'
-  // buckets straddle k, and most triangles are rejected with three integer loads.
+  // Height and bucket of each vertex (with a grid: of each entry of the visited cells, a
+  // vertex shared by cells once per cell; without: of every vertex): the bucket is the number of
+  // planes at or below the vertex (clamped to 0..count), so a triangle crosses plane k exactly
+  // when its vertices' buckets straddle k, and most triangles are rejected with three integer
+  // loads. The same formula either way, so the same bits.
   thread_local std::vector<double> height;
   thread_local std::vector<std::int32_t> bucket;
-  const Index nv = mesh.num_vertices;
-  height.resize(nv);
-  bucket.resize(nv);
+  const Index size = grid != nullptr ? grid->num_entries() : mesh.num_vertices;
+  if (static_cast<Index>(height.size()) < size) {
+    height.resize(size);
+    bucket.resize(size);
+  }
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
   const double inv = 1.0 / spacing;
   const double top = static_cast<double>(count);
-  const double* x = mesh.vertices;
-  for (Index v = 0; v < nv; ++v) {
-    const double t = x[3 * v] * nx + x[3 * v + 1] * ny + x[3 * v + 2] * nz - offset;
-    height[v] = t;
-    // Clamped first, so truncation is floor (and vectorizes, unlike std::floor without SSE4.1).
-    const double q = t * inv;
-    bucket[v] = static_cast<std::int32_t>(q < 0.0 ? 0.0 : (q > top ? top : q));
+  double* __restrict ht = height.data();
+  std::int32_t* __restrict bk = bucket.data();
+  // Heights and buckets of vertices begin .. end.
+  auto heights = [&](const double* __restrict x, const double* __restrict y,
+                     const double* __restrict z, Index begin, Index end, auto stride) {
+    for (Index v = begin; v < end; ++v) {
+      const double t = x[stride * v] * nx + y[stride * v] * ny + z[stride * v] * nz - offset;
+      ht[v] = t;
+      // Clamped first, so truncation is floor (and vectorizes, unlike std::floor without SSE4.1).
+      const double q = t * inv;
+      bk[v] = static_cast<std::int32_t>(q < 0.0 ? 0.0 : (q > top ? top : q));
+    }
+  };
+  // Face f (mesh vertex indices) whose corners' heights are ht[e[0..2]].
+  auto cut_face = [&](const std::int32_t* f, const std::int32_t* e) {
+    const std::int32_t b[3] = {bk[e[0]], bk[e[1]], bk[e[2]]};
+    if (b[0] == b[1] && b[1] == b[2]) return;  // most faces: between two planes
+    const std::int32_t lo = std::max(std::min({b[0], b[1], b[2]}), first - 1);
+    const std::int32_t hi = std::min(std::max({b[0], b[1], b[2]}), last);
+    for (std::int32_t k = lo + 1; k <= hi; ++k) {
+      if (wanted != nullptr && !wanted[k - 1]) continue;
+      const double c = k * spacing;
+      bool above[3];
+      double h[3];
+      for (int j = 0; j < 3; ++j) {
+        above[j] = b[j] >= k;
+        h[j] = ht[e[j]] - c;
+      }
+      CutSegment seg;
+      emit_segment(mesh, plane, f, above, h, seg);
+      out[k - 1].push_back(seg);
+    }
+  };
+  if (grid == nullptr) {
+    const double* x = mesh.vertices;
+    heights(x, x + 1, x + 2, 0, mesh.num_vertices, std::integral_constant<Index, 3>());
+    for (Index f = 0; f < mesh.num_faces; ++f) cut_face(mesh.faces + 3 * f, mesh.faces + 3 * f);
+    return;
   }
-  const std::int32_t* bk = bucket.data();
-  const double* ht = height.data();
-  for_faces_in_slab(mesh, grid, plane.normal, offset + first * spacing, offset + last * spacing,
-                    region, exclude, [&](const std::int32_t* f) {
-                      const std::int32_t b[3] = {bk[f[0]], bk[f[1]], bk[f[2]]};
-                      const std::int32_t lo = std::max(std::min({b[0], b[1], b[2]}), first - 1);
-                      const std::int32_t hi = std::min(std::max({b[0], b[1], b[2]}), last);
-                      for (std::int32_t k = lo + 1; k <= hi; ++k) {
-                        if (wanted != nullptr && !wanted[k - 1]) continue;
-                        const double c = k * spacing;
-                        bool above[3];
-                        double h[3];
-                        for (int j = 0; j < 3; ++j) {
-                          above[j] = b[j] >= k;
-                          h[j] = ht[f[j]] - c;
-                        }
-                        CutSegment seg;
-                        emit_segment(mesh, plane, f, above, h, seg);
-                        out[k - 1].push_back(seg);
-                      }
-                    });
+  // Only the visited cells' vertices, from the grid's contiguous copies: first the cells, then
+  // the heights of each run of consecutive cells in one loop (vectorized; a cell alone has too
+  // few vertices to pay for the loop's setup), then the faces.
+  const double *gx = grid->entry_x(), *gy = grid->entry_y(), *gz = grid->entry_z();
+  const std::int32_t* faces = grid->faces();
+  const std::int32_t* entries = grid->face_entries();
+  thread_local std::vector<Index> visited_cells;
+  std::vector<Index>& visited = visited_cells;
+  visited.clear();
+  for_cells_in_slab(*grid, plane.normal, offset + first * spacing, offset + last * spacing, region,
+                    exclude, [&](Index c) { visited.push_back(c); });
+  for (std::size_t i = 0, j = 0; i < visited.size(); i = j) {
+    for (j = i + 1; j < visited.size() && visited[j] == visited[j - 1] + 1;) ++j;
+    heights(gx, gy, gz, grid->vertex_begin(visited[i]), grid->vertex_end(visited[j - 1]),
+            std::integral_constant<Index, 1>());
+  }
+  for (const Index c : visited)
+    for (Index k = 3 * grid->begin(c), stop = 3 * grid->end(c); k < stop; k += 3)
+      cut_face(faces + k, entries + k);
 }
 
 }  // namespace osteon

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "line_triangle.hpp"
@@ -53,9 +54,10 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   const Eigen::Array3i bdims = dims / kBlock;
   // Cell ids ordered block by block so that a block's cells are contiguous.
   auto cell_id = [&](const Vec3& c) {
-    int x[3];
+    unsigned x[3];  // clamped to >= 0, so unsigned: / and % by kBlock are a shift and a mask
     for (int k = 0; k < 3; ++k)
-      x[k] = std::clamp(static_cast<int>((c[k] - lo[k]) * inv[k]), 0, dims[k] - 1);
+      x[k] = static_cast<unsigned>(
+          std::clamp(static_cast<int>((c[k] - lo[k]) * inv[k]), 0, dims[k] - 1));
     const Index block =
         (Index(x[0] / kBlock) * bdims[1] + x[1] / kBlock) * bdims[2] + x[2] / kBlock;
     const Index inner = ((x[0] % kBlock) * kBlock + x[1] % kBlock) * kBlock + x[2] % kBlock;
@@ -154,6 +156,71 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   }
   start_.push_back(nf);
   block_start_.push_back(static_cast<Index>(center_.size()));
+  build_entries(mesh, parts);
+}
+
+void FaceGrid::build_entries(const MeshView& mesh, int parts) {
+  // Part p lists the distinct vertices of cells cells * p / parts .. (first appearance order),
+  // numbered from 0; the entries of the earlier parts are added afterwards (so the result does
+  // not depend on the number of parts).
+  const Index cells = num_cells();
+  parts = static_cast<int>(std::clamp<Index>(cells, 1, parts));
+  std::vector<std::unique_ptr<std::int32_t[]>> lists(parts);
+  std::vector<Index> shift(parts + 1, 0);
+  vstart_.resize(cells + 1);
+  face_entries_.reset(new std::int32_t[faces_.size()]);
+  auto cell_range = [&](long part) {
+    return std::make_pair(cells * part / parts, cells * (part + 1) / parts);
+  };
+  detail::parallel_for(parts, parts, [&](long part, int) {
+    const auto [c0, c1] = cell_range(part);
+    // slot[v]: v's latest entry; v is already listed in cell c when that is c's or later.
+    std::vector<std::int32_t> slot(mesh.num_vertices, -1);
+    lists[part].reset(new std::int32_t[3 * (start_[c1] - start_[c0])]);  // at most one per corner
+    std::int32_t* list = lists[part].get();
+    std::int32_t* corner = face_entries_.get();
+    std::int32_t n = 0;
+    for (Index c = c0; c < c1; ++c) {
+      const std::int32_t first = n;
+      vstart_[c] = first;
+      for (Index k = 3 * start_[c], stop = 3 * start_[c + 1]; k < stop; ++k) {
+        const std::int32_t v = faces_[k];
+        std::int32_t e = slot[v];
+        if (e < first) {
+          e = n++;
+          slot[v] = e;
+          list[e] = v;
+        }
+        corner[k] = e;
+      }
+    }
+    shift[part + 1] = n;
+  });
+  for (int p = 0; p < parts; ++p) shift[p + 1] += shift[p];
+  const Index total = shift[parts];
+  vstart_[cells] = total;
+  entry_vertex_.reset(new std::int32_t[total]);
+  entry_x_.reset(new double[total]);
+  entry_y_.reset(new double[total]);
+  entry_z_.reset(new double[total]);
+  detail::parallel_for(parts, parts, [&](long part, int) {
+    const auto [c0, c1] = cell_range(part);
+    const Index base = shift[part];
+    if (base != 0) {
+      for (Index c = c0; c < c1; ++c) vstart_[c] += base;
+      for (Index k = 3 * start_[c0], stop = 3 * start_[c1]; k < stop; ++k)
+        face_entries_[k] += static_cast<std::int32_t>(base);
+    }
+    const std::int32_t* list = lists[part].get();
+    for (Index e = base, stop = shift[part + 1]; e < stop; ++e) {
+      const std::int32_t v = list[e - base];
+      const double* p = mesh.vertices + 3 * static_cast<Index>(v);
+      entry_vertex_[e] = v;
+      entry_x_[e] = p[0];
+      entry_y_[e] = p[1];
+      entry_z_[e] = p[2];
+    }
+  });
 }
 
 void FaceGrid::enable_tight_bounds() {

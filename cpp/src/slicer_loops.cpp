@@ -70,6 +70,7 @@ struct LoopScratch {
   EdgeTable table;
   std::vector<std::int32_t> partner;
   std::vector<std::uint8_t> used;
+  std::vector<Vec2> forward, backward;  // the chain being walked (a loop is copied out exactly)
 };
 
 // This thread's scratch, reached through a call the compiler cannot see into: in a shared library
@@ -126,7 +127,8 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   const std::size_t m = segments.size();
   std::vector<std::uint8_t>& used = scratch.used;
   used.assign(m, 0);
-  std::vector<Vec2> forward, backward;
+  std::vector<Vec2>& forward = scratch.forward;
+  std::vector<Vec2>& backward = scratch.backward;
   for (std::size_t s0 = 0; s0 < m; ++s0) {
     if (used[s0]) continue;
     forward.clear();
@@ -166,12 +168,14 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
         backward.push_back(segments[ps].point[1 - out_end]);
         prev = partner[2 * ps + (1 - out_end)];
       }
-      std::vector<Vec2> chain(backward.rbegin(), backward.rend());
+      std::vector<Vec2> chain;
+      chain.reserve(backward.size() + forward.size());
+      chain.insert(chain.end(), backward.rbegin(), backward.rend());
       chain.insert(chain.end(), forward.begin(), forward.end());
       cut.open_chains.push_back(std::move(chain));
     } else {
-      cut.loops.push_back(std::move(forward));
-      forward = {};
+      // One allocation of the exact size (the scratch grows once per thread, not per loop).
+      cut.loops.emplace_back(forward.begin(), forward.end());
     }
   }
   // Close small gaps: join open ends closer than the tolerance, closest pairs first (a chain's

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <thread>
+#include <tuple>
 #include <utility>
 
 #include "osteon/section.hpp"
@@ -102,20 +103,33 @@ TEST(Slicer, GrownCutsAddExactlyTheTrianglesLeftOut) {
   }
 }
 
+namespace {
+// The turn of turned_prism(): oblique to the grid axes.
+Eigen::Matrix3d prism_turn() {
+  return (Eigen::AngleAxisd(0.4, Vec3::UnitZ()) *
+          Eigen::AngleAxisd(0.7, Vec3(1, 1, 0).normalized()))
+      .toRotationMatrix();
+}
+// A wide prism turned by prism_turn() and moved off the origin (heights need rounding).
+osteon::testing::OwnedMesh turned_prism() {
+  auto m = prism(regular_polygon(40, 240), 60, 61);
+  const Eigen::Matrix3d turn = prism_turn();
+  for (std::size_t i = 0; i < m.v.size(); i += 3) {
+    const Vec3 p = turn * Vec3(m.v[i], m.v[i + 1], m.v[i + 2]) + Vec3(100.25, -3.5, 7.0);
+    for (int k = 0; k < 3; ++k) m.v[i + k] = p[k];
+  }
+  return m;
+}
+}  // namespace
+
 TEST(Slicer, TightBoundsCutTheSameSegmentsInTheSameOrder) {
   // A wide prism, turned so that its faces and the planes are oblique to the grid, cut by planes
   // of random directions, by planes through rings of its vertices (heights exactly 0: such a
   // vertex counts as above, and a box that rounds it out would lose a segment) and inside
   // balls, with and without tight bounds: the same segments, bit for bit, in the same order, on
   // the cut that computes a cell's boxes and on the later ones that read them.
-  auto m = prism(regular_polygon(40, 240), 60, 61);
-  const Eigen::Matrix3d turn =
-      (Eigen::AngleAxisd(0.4, Vec3::UnitZ()) * Eigen::AngleAxisd(0.7, Vec3(1, 1, 0).normalized()))
-          .toRotationMatrix();
-  for (std::size_t i = 0; i < m.v.size(); i += 3) {
-    const Vec3 p = turn * Vec3(m.v[i], m.v[i + 1], m.v[i + 2]) + Vec3(100.25, -3.5, 7.0);
-    for (int k = 0; k < 3; ++k) m.v[i + k] = p[k];
-  }
+  const auto m = turned_prism();
+  const Eigen::Matrix3d turn = prism_turn();
   FaceGrid loose, tight;
   loose.build(m.view());
   tight.build(m.view());
@@ -190,6 +204,117 @@ TEST(Slicer, TightBoundsCutTheSameSegmentsInTheSameOrder) {
   // A new build turns them off.
   tight.build(m.view());
   EXPECT_FALSE(tight.tight_bounds());
+}
+
+TEST(Slicer, GridEntriesAreTheDistinctVerticesOfEachCell) {
+  // Checked against the mesh directly; the same on one worker and on several (29 276 faces: two
+  // parts).
+  const auto m = turned_prism();
+  const MeshView mesh = m.view();
+  FaceGrid one, many;
+  one.build(mesh, 12, 1);
+  many.build(mesh, 12, 4);
+  for (const FaceGrid* grid : {&one, &many}) {
+    Index listed = 0;
+    for (Index c = 0; c < grid->num_cells(); ++c) {
+      const Index vb = grid->vertex_begin(c), ve = grid->vertex_end(c);
+      ASSERT_EQ(vb, listed) << c;
+      listed = ve;
+      std::vector<std::int32_t> corners(grid->faces() + 3 * grid->begin(c),
+                                        grid->faces() + 3 * grid->end(c));
+      std::vector<std::int32_t> listed_vertices(grid->entry_vertex() + vb,
+                                                grid->entry_vertex() + ve);
+      for (Index k = 3 * grid->begin(c); k < 3 * grid->end(c); ++k) {
+        const Index e = grid->face_entries()[k];
+        ASSERT_TRUE(e >= vb && e < ve) << "cell " << c << " corner " << k;
+        ASSERT_EQ(grid->entry_vertex()[e], grid->faces()[k]);
+      }
+      for (Index e = vb; e < ve; ++e) {
+        const double* p = mesh.vertices + 3 * static_cast<Index>(grid->entry_vertex()[e]);
+        ASSERT_EQ(grid->entry_x()[e], p[0]);  // exact copies
+        ASSERT_EQ(grid->entry_y()[e], p[1]);
+        ASSERT_EQ(grid->entry_z()[e], p[2]);
+      }
+      std::sort(corners.begin(), corners.end());
+      corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+      std::sort(listed_vertices.begin(), listed_vertices.end());
+      ASSERT_EQ(listed_vertices, corners) << "cell " << c;  // each vertex once, none missing
+    }
+    EXPECT_EQ(listed, grid->num_entries());
+  }
+  ASSERT_EQ(one.num_entries(), many.num_entries());
+  EXPECT_TRUE(
+      std::equal(one.entry_vertex(), one.entry_vertex() + one.num_entries(), many.entry_vertex()));
+  EXPECT_TRUE(
+      std::equal(one.face_entries(), one.face_entries() + 3 * mesh.num_faces, many.face_entries()));
+}
+
+TEST(Slicer, ParallelCutsThroughTheGridMatchTheFullHeightTable) {
+  // Families of random planes (some through vertices: height exactly 0), in regions, with masks:
+  // the grid's per-cell heights give the segments of the full per-vertex table (no grid), bit for
+  // bit (compared as sets, the two visit the faces in different orders).
+  const auto m = turned_prism();
+  FaceGrid grid;
+  grid.build(m.view());
+  std::uint64_t state = 777;
+  auto uniform = [&]() {  // deterministic, in [-1, 1)
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 4503599627370496.0 - 1.0;
+  };
+  using Key = std::tuple<std::uint64_t, std::uint64_t, double, double, double, double>;
+  auto keys = [](const std::vector<CutSegment>& segs) {
+    std::vector<Key> out;
+    for (const CutSegment& s : segs)
+      out.emplace_back(s.edge[0], s.edge[1], s.point[0].x(), s.point[0].y(), s.point[1].x(),
+                       s.point[1].y());
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  std::size_t segments = 0;
+  for (int trial = 0; trial < 24; ++trial) {
+    const Index v = static_cast<Index>((uniform() + 1) * 0.5 * (m.v.size() / 3 - 1));
+    Vec3 origin(m.v[3 * v], m.v[3 * v + 1], m.v[3 * v + 2]);
+    if (trial % 3 != 0) origin += 30 * Vec3(uniform(), uniform(), uniform());
+    const Vec3 normal(uniform(), uniform(), uniform() + 1.5);
+    const PlaneFrame base = PlaneFrame::make(origin, normal);
+    const double spacing = trial % 3 == 0 ? 1.0 : 0.5 + 3 * (uniform() + 1);
+    const int count = 5 + static_cast<int>(20 * (uniform() + 1));
+    // Start one spacing below the origin so that plane 1 passes through the vertex when
+    // trial % 3 == 0 (spacing 1.0 is exact).
+    PlaneFrame shifted = base;
+    shifted.origin = base.origin - spacing * base.normal;
+    std::vector<std::uint8_t> wanted(count);
+    for (auto& w : wanted) w = uniform() > -0.4;
+    const CutRegion region{origin, base.normal, 10 + 20 * (uniform() + 1)};
+    const CutRegion* regions[2] = {nullptr, &region};
+    for (const CutRegion* r : regions) {
+      std::vector<std::vector<CutSegment>> full, cells;
+      cut_mesh_parallel(m.view(), shifted, spacing, count, full, nullptr, nullptr, wanted.data());
+      cut_mesh_parallel(m.view(), shifted, spacing, count, cells, &grid, r, wanted.data());
+      for (int k = 0; k < count; ++k) {
+        if (r == nullptr) {
+          EXPECT_EQ(keys(cells[k]), keys(full[k])) << "trial " << trial << " plane " << k;
+        } else {  // the region's cut is a subset of the plane's
+          const auto all = keys(full[k]), part = keys(cells[k]);
+          EXPECT_TRUE(std::includes(all.begin(), all.end(), part.begin(), part.end()))
+              << "trial " << trial << " plane " << k;
+        }
+        if (!wanted[k]) {
+          EXPECT_TRUE(cells[k].empty());
+        } else if (r == nullptr && trial % 3 != 0) {
+          // The same triangles as a single-plane cut (its own per-face heights; rounded
+          // differently, so compared by edges, on planes through no vertex).
+          PlaneFrame single = shifted;
+          single.origin = shifted.origin + (k + 1) * spacing * shifted.normal;
+          std::vector<CutSegment> one;
+          cut_mesh(m.view(), single, one, nullptr);
+          EXPECT_EQ(cut_keys(cells[k]), cut_keys(one)) << "trial " << trial << " plane " << k;
+        }
+        segments += cells[k].size();
+      }
+    }
+  }
+  EXPECT_GT(segments, 5000u);
 }
 
 namespace {

@@ -99,6 +99,21 @@ class FaceGrid {
   Index begin(Index c) const { return start_[c]; }
   Index end(Index c) const { return start_[c + 1]; }
   const std::int32_t* faces() const { return faces_.data(); }
+  /// Cell c's distinct vertices ("entries", a vertex shared by k cells has k) are entries
+  /// vertex_begin(c) .. vertex_end(c): mesh vertex entry_vertex()[e], coordinates (mm)
+  /// entry_x()[e], entry_y()[e], entry_z()[e] (bit-exact copies, laid out so that a cut computes
+  /// the heights of a cell's vertices in one contiguous, vectorized pass).
+  Index vertex_begin(Index c) const { return vstart_[c]; }
+  Index vertex_end(Index c) const { return vstart_[c + 1]; }
+  /// Number of entries (#entries; between #V used and 3 #F).
+  Index num_entries() const { return vstart_.empty() ? 0 : vstart_.back(); }
+  const std::int32_t* entry_vertex() const { return entry_vertex_.get(); }
+  const double* entry_x() const { return entry_x_.get(); }
+  const double* entry_y() const { return entry_y_.get(); }
+  const double* entry_z() const { return entry_z_.get(); }
+  /// Corner k of faces() (3 #F) as an entry of its cell: entry_vertex()[face_entries()[k]] ==
+  /// faces()[k].
+  const std::int32_t* face_entries() const { return face_entries_.get(); }
   /// True when cell c's box meets the slab lo <= dot(n, x) <= hi (and the region, if any).
   bool meets(Index c, const Vec3& n, double lo, double hi,
              const CutRegion* region = nullptr) const {
@@ -175,6 +190,11 @@ class FaceGrid {
   std::vector<Vec3> center_, half_;
   std::vector<Index> start_;
   std::vector<std::int32_t> faces_;
+  std::vector<Index> vstart_;  // cell c's entries: vstart_[c] .. [c + 1]
+  // Written in full by build_entries, so left uninitialized on allocation (no zero-fill pass).
+  std::unique_ptr<std::int32_t[]> entry_vertex_, face_entries_;
+  std::unique_ptr<double[]> entry_x_, entry_y_, entry_z_;
+  void build_entries(const MeshView& mesh, int parts);
   std::vector<Vec3> block_center_, block_half_;
   std::vector<Index> block_start_;
 };
