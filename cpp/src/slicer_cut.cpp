@@ -148,19 +148,21 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
     if (state == FaceGrid::Tight::kMine) grid->bound_cell(c, mesh, boxes);
     if (misses(boxes.cell[0], boxes.cell[1])) return;
     const Index vb = grid->vertex_begin(c), nv = grid->vertex_end(c) - vb;
-    bool have_heights = false;
+    // Heights of the cell's entries (hv[e - vb]); a plain pointer, because each use of the
+    // thread_local vector would re-derive its address (a __tls_get_addr call in a shared library).
+    const double* hv = nullptr;
     for (Index f = begin, g = 0; f < end; f += kGroup, ++g) {
       if (misses(boxes.group_center[g], boxes.group_half[g])) continue;
-      if (!have_heights) {
+      if (hv == nullptr) {
         if (static_cast<Index>(heights.size()) < nv) heights.resize(nv);
         double* __restrict h = heights.data();
         const double* __restrict x = gx + vb, * __restrict y = gy + vb, * __restrict z = gz + vb;
         for (Index v = 0; v < nv; ++v) h[v] = x[v] * nx + y[v] * ny + z[v] * nz - offset;
-        have_heights = true;
+        hv = h;
       }
       for (Index k = 3 * f, stop = 3 * std::min(end, f + kGroup); k < stop; k += 3) {
         const std::int32_t* e = entries + k;
-        double height[3] = {heights[e[0] - vb], heights[e[1] - vb], heights[e[2] - vb]};
+        double height[3] = {hv[e[0] - vb], hv[e[1] - vb], hv[e[2] - vb]};
         cut_face_at(faces + k, height);
       }
     }

@@ -2,6 +2,7 @@
 // across small gaps (see osteon/slicer.hpp).
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <unordered_map>
 #include <utility>
@@ -37,26 +38,40 @@ struct EdgeTable {
       round = 1;
     }
   }
-  // Pairs `occurrence` with the endpoint already on the edge (partner[] both ways); returns
-  // false if the edge already had two endpoints (non-manifold).
-  bool insert(std::uint64_t key, std::int32_t occurrence, std::vector<std::int32_t>& partner) {
-    std::uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> (64 - bits);
-    while (true) {
-      Slot& slot = slots[h];
-      if (slot.stamp != round) {
-        slot = Slot{key, occurrence, round};
-        return true;
+  // This round's table seen through local copies: partner[] stores cannot alias them, so
+  // nothing is reloaded after each store (they could alias the members above).
+  struct Round {
+    Slot* slots;
+    std::uint64_t mask;
+    int shift;
+    std::uint32_t round;
+    std::int32_t* partner;
+    // Pairs `occurrence` with the endpoint already on the edge (partner[] both ways; an endpoint
+    // alone so far gets -1); returns false if the edge already had two endpoints (non-manifold).
+    bool insert(std::uint64_t key, std::int32_t occurrence) const {
+      std::uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> shift;
+      while (true) {
+        Slot& slot = slots[h];
+        if (slot.stamp != round) {
+          slot = Slot{key, occurrence, round};
+          partner[occurrence] = -1;
+          return true;
+        }
+        if (slot.key == key) {
+          if (slot.first < 0) {
+            partner[occurrence] = -1;
+            return false;
+          }
+          partner[slot.first] = occurrence;
+          partner[occurrence] = slot.first;
+          slot.first = -1;  // paired: a third endpoint is non-manifold
+          return true;
+        }
+        h = (h + 1) & mask;
       }
-      if (slot.key == key) {
-        if (slot.first < 0) return false;
-        partner[slot.first] = occurrence;
-        partner[occurrence] = slot.first;
-        slot.first = -1;  // paired: a third endpoint is non-manifold
-        return true;
-      }
-      h = (h + 1) & mask;
     }
-  }
+  };
+  Round view(std::int32_t* partner) { return Round{slots.data(), mask, 64 - bits, round, partner}; }
 };
 
 // Unordered pair of the two edge keys of a segment: identical for a doubled triangle.
@@ -98,13 +113,16 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   for (int attempt = 0; attempt < 2; ++attempt) {
     const std::vector<CutSegment>& segs = *source;
     const std::size_t count = segs.size();
-    table.reset(2 * count);  // 2*count endpoints: at most that many distinct edges
-    partner.assign(2 * count, -1);
+    table.reset(2 * count);     // 2*count endpoints: at most that many distinct edges
+    partner.resize(2 * count);  // every endpoint's entry is written by its insert
+    const EdgeTable::Round edges = table.view(partner.data());
+    const CutSegment* seg = segs.data();
     bool crowded = false;
-    for (std::size_t s = 0; s < count; ++s)
-      for (int e = 0; e < 2; ++e)
-        if (!table.insert(segs[s].edge[e], static_cast<std::int32_t>(2 * s + e), partner))
-          crowded = true;
+    for (std::size_t s = 0; s < count; ++s) {
+      const std::int32_t o = static_cast<std::int32_t>(2 * s);
+      crowded |= !edges.insert(seg[s].edge[0], o);
+      crowded |= !edges.insert(seg[s].edge[1], o + 1);
+    }
     if (crowded && attempt == 0) {
       deduplicated = input;
       std::sort(
@@ -123,26 +141,32 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
     if (crowded) cut.flags |= kFlagNonManifold;
     break;
   }
-  const std::vector<CutSegment>& segments = *source;
-  const std::size_t m = segments.size();
-  std::vector<std::uint8_t>& used = scratch.used;
-  used.assign(m, 0);
-  std::vector<Vec2>& forward = scratch.forward;
-  std::vector<Vec2>& backward = scratch.backward;
+  const CutSegment* segments = source->data();
+  const std::size_t m = source->size();
+  const std::int32_t* pair = partner.data();
+  std::vector<std::uint8_t>& used_flags = scratch.used;
+  used_flags.assign(m, 0);
+  std::uint8_t* used = used_flags.data();
+  // A chain holds each segment once, plus its last point: m + 1 points at most either way.
+  if (scratch.forward.size() < m + 1) {
+    scratch.forward.resize(m + 1);
+    scratch.backward.resize(m + 1);
+  }
+  Vec2* forward = scratch.forward.data();
+  Vec2* backward = scratch.backward.data();
   for (std::size_t s0 = 0; s0 < m; ++s0) {
     if (used[s0]) continue;
-    forward.clear();
-    backward.clear();
+    std::size_t nf = 0, nb = 0;
     bool closed = false;
     // Walk forward: enter s at endpoint `in`, leave through the other endpoint.
     std::size_t cur = s0;
     int in = 0;
     while (true) {
       used[cur] = 1;
-      forward.push_back(segments[cur].point[in]);
-      const std::int32_t next = partner[2 * cur + (1 - in)];
+      forward[nf++] = segments[cur].point[in];
+      const std::int32_t next = pair[2 * cur + (1 - in)];
       if (next < 0) {
-        forward.push_back(segments[cur].point[1 - in]);
+        forward[nf++] = segments[cur].point[1 - in];
         break;
       }
       const std::size_t ns = static_cast<std::size_t>(next / 2);
@@ -151,7 +175,7 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
         break;
       }
       if (used[ns]) {
-        forward.push_back(segments[cur].point[1 - in]);
+        forward[nf++] = segments[cur].point[1 - in];
         break;
       }
       cur = ns;
@@ -159,23 +183,24 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
     }
     if (!closed) {
       // Walk backward from s0's entry endpoint to find the chain's true start.
-      std::int32_t prev = partner[2 * s0 + 0];
+      std::int32_t prev = pair[2 * s0 + 0];
       while (prev >= 0) {
         const std::size_t ps = static_cast<std::size_t>(prev / 2);
         if (used[ps]) break;
         used[ps] = 1;
         const int out_end = prev % 2;  // we reach ps through this endpoint: it is ps's exit
-        backward.push_back(segments[ps].point[1 - out_end]);
-        prev = partner[2 * ps + (1 - out_end)];
+        backward[nb++] = segments[ps].point[1 - out_end];
+        prev = pair[2 * ps + (1 - out_end)];
       }
       std::vector<Vec2> chain;
-      chain.reserve(backward.size() + forward.size());
-      chain.insert(chain.end(), backward.rbegin(), backward.rend());
-      chain.insert(chain.end(), forward.begin(), forward.end());
+      chain.reserve(nb + nf);
+      chain.insert(chain.end(), std::reverse_iterator<Vec2*>(backward + nb),
+                   std::reverse_iterator<Vec2*>(backward));
+      chain.insert(chain.end(), forward, forward + nf);
       cut.open_chains.push_back(std::move(chain));
     } else {
       // One allocation of the exact size (the scratch grows once per thread, not per loop).
-      cut.loops.emplace_back(forward.begin(), forward.end());
+      cut.loops.emplace_back(forward, forward + nf);
     }
   }
   // Close small gaps: join open ends closer than the tolerance, closest pairs first (a chain's
