@@ -178,8 +178,8 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
     buckets_[g].lo = Vec3::Constant(inf);
     buckets_[g].hi = Vec3::Constant(-inf);
   }
-  packed_xyz_.assign(3 * kept, 0.0);
-  packed_index_.assign(kept, 0);
+  packed_xyz_.reset(new double[3 * kept]);
+  packed_index_.reset(new Index[kept]);
   std::vector<Index> fill(count.begin(), count.end() - 1);
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     if (skipped(v)) continue;
@@ -300,7 +300,7 @@ std::pair<double, Index> MomentArmIndex::farthest(int bone, int boundary, bool p
       i = near;
     }
     const Group& bucket = buckets_[first + i - k];
-    const double* p = packed_xyz_.data() + 3 * bucket.begin;
+    const double* p = packed_xyz_.get() + 3 * bucket.begin;
     for (Index v = bucket.begin; v < bucket.end; ++v, p += 3) {
       const double dx = p[0] - c.x(), dy = p[1] - c.y(), dz = p[2] - c.z();
       const double d2 = dx * dx + dy * dy + dz * dz;

@@ -2,6 +2,7 @@
 // (see osteon/slicer.hpp).
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <type_traits>
 #include <vector>
 
@@ -187,19 +188,22 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
   // planes at or below the vertex (clamped to 0..count), so a triangle crosses plane k exactly
   // when its vertices' buckets straddle k, and most triangles are rejected with three integer
   // loads. The same formula either way, so the same bits.
-  thread_local std::vector<double> height;
-  thread_local std::vector<std::int32_t> bucket;
+  // (Per-thread buffers, uninitialized: every entry read was written first in this call.)
+  thread_local std::unique_ptr<double[]> height;
+  thread_local std::unique_ptr<std::int32_t[]> bucket;
+  thread_local Index capacity = 0;
   const Index size = grid != nullptr ? grid->num_entries() : mesh.num_vertices;
-  if (static_cast<Index>(height.size()) < size) {
-    height.resize(size);
-    bucket.resize(size);
+  if (capacity < size) {
+    height.reset(new double[size]);
+    bucket.reset(new std::int32_t[size]);
+    capacity = size;
   }
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
   const double inv = 1.0 / spacing;
   const double top = static_cast<double>(count);
-  double* __restrict ht = height.data();
-  std::int32_t* __restrict bk = bucket.data();
+  double* __restrict ht = height.get();
+  std::int32_t* __restrict bk = bucket.get();
   // Heights and buckets of vertices begin .. end.
   auto heights = [&](const double* __restrict x, const double* __restrict y,
                      const double* __restrict z, Index begin, Index end, auto stride) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -68,8 +69,10 @@ class MomentArmIndex {
   std::vector<Index> bucket_offset_;  // G+1: first bucket of each group
   std::vector<Group> buckets_;        // packed vertex ranges [begin, end) and boxes
   std::vector<Vec3> bucket_lo_, bucket_hi_;
-  std::vector<double> packed_xyz_;   // vertices grouped by (bone, slab), xyz interleaved, mm
-  std::vector<Index> packed_index_;  // original vertex index of each packed vertex
+  // Written in full by the constructor, so left uninitialized on allocation (a zero-fill pass
+  // would cost as much as the scatter that fills them).
+  std::unique_ptr<double[]> packed_xyz_;   // vertices grouped by (bone, slab), xyz interleaved, mm
+  std::unique_ptr<Index[]> packed_index_;  // original vertex index of each packed vertex
 };
 
 }  // namespace osteon

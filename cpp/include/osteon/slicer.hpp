@@ -98,7 +98,7 @@ class FaceGrid {
   /// Cell c's faces are faces()[3*begin(c) .. 3*end(c)) (vertex indices, reordered copy).
   Index begin(Index c) const { return start_[c]; }
   Index end(Index c) const { return start_[c + 1]; }
-  const std::int32_t* faces() const { return faces_.data(); }
+  const std::int32_t* faces() const { return faces_.get(); }
   /// Cell c's distinct vertices ("entries", a vertex shared by k cells has k) are entries
   /// vertex_begin(c) .. vertex_end(c): mesh vertex entry_vertex()[e], coordinates (mm)
   /// entry_x()[e], entry_y()[e], entry_z()[e] (bit-exact copies, laid out so that a cut computes
@@ -191,10 +191,10 @@ class FaceGrid {
   double slack_ = 0.0;  // mm: how far every box is widened (a few ulps of the coordinates)
   std::vector<Vec3> center_, half_;
   std::vector<Index> start_;
-  std::vector<std::int32_t> faces_;
   std::vector<Index> vstart_;  // cell c's entries: vstart_[c] .. [c + 1]
-  // Written in full by build_entries, so left uninitialized on allocation (no zero-fill pass).
-  std::unique_ptr<std::int32_t[]> entry_vertex_, face_entries_;
+  // Written in full by build / build_entries, so left uninitialized on allocation (no zero-fill
+  // pass). faces_, face_entries_: 3 #F.
+  std::unique_ptr<std::int32_t[]> faces_, entry_vertex_, face_entries_;
   std::unique_ptr<double[]> entry_x_, entry_y_, entry_z_;
   void build_entries(const MeshView& mesh, int parts);
   std::vector<Vec3> block_center_, block_half_;
