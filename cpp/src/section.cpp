@@ -57,11 +57,11 @@ void accumulate(LoopIntegrals& total, const LoopIntegrals& l, double sign) {
 double signed_area(const std::vector<Vec2>& loop) {
   double a = 0.0;
   const std::size_t n = loop.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec2& p = loop[i];
-    const Vec2& q = loop[i + 1 == n ? 0 : i + 1];
-    a += p.x() * q.y() - q.x() * p.y();
-  }
+  if (n == 0) return a;
+  // Edges (i, i + 1), then the closing edge (n - 1, 0), in the order of a modulo per edge.
+  auto edge = [&](const Vec2& p, const Vec2& q) { a += p.x() * q.y() - q.x() * p.y(); };
+  for (std::size_t i = 0; i + 1 < n; ++i) edge(loop[i], loop[i + 1]);
+  edge(loop[n - 1], loop[0]);
   return a / 2;
 }
 

@@ -81,8 +81,13 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   // without a second pass).
   const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
   const std::unique_ptr<std::int32_t[]> cell_of(new std::int32_t[nf]);  // each written once
-  std::vector<std::vector<Index>> part_count(parts, std::vector<Index>(total, 0));
-  std::vector<std::vector<float>> part_overhang(parts, std::vector<float>(total, 0.0f));
+  // (Each part's counters zeroed in place, not copied from a zeroed prototype.)
+  std::vector<std::vector<Index>> part_count(parts);
+  std::vector<std::vector<float>> part_overhang(parts);
+  for (int p = 0; p < parts; ++p) {
+    part_count[p].assign(total, 0);
+    part_overhang[p].assign(total, 0.0f);
+  }
   const Vec3 size(extent.x() / dims[0], extent.y() / dims[1], extent.z() / dims[2]);
   auto part_range = [&](long part) {
     return std::make_pair(nf * part / parts, nf * (part + 1) / parts);
@@ -135,7 +140,9 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   });
   // Cell starts, and where each part writes its triangles of a cell: after the earlier parts', so
   // the order is the sequential one whatever the number of workers.
-  std::vector<Index> count(total + 1, 0);
+  // The cell starts; count[c + 1] is written at cell c (so no zero-fill).
+  const std::unique_ptr<Index[]> count(new Index[total + 1]);
+  count[0] = 0;
   std::vector<float>& overhang = part_overhang[0];
   for (Index c = 0; c < total; ++c) {
     Index sum = count[c];
