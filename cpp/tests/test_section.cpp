@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "osteon/section.hpp"
 #include "test_helpers.hpp"
@@ -56,4 +58,21 @@ TEST(PointInLoop, EvenOdd) {
   EXPECT_TRUE(point_in_loop(sq, {0, 0}));
   EXPECT_FALSE(point_in_loop(sq, {3, 0}));
   EXPECT_NEAR(std::abs(signed_area(sq)), 4.0, 1e-12);
+}
+
+TEST(SignedArea, SameBitsAsAModuloPerEdge) {
+  // The shoelace sum edge by edge with the closing edge last, as (i, (i + 1) % n) gives it.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coord(-500.0, 500.0);
+  for (int n = 0; n < 60; ++n) {
+    std::vector<Vec2> loop;
+    for (int i = 0; i < n; ++i) loop.emplace_back(coord(rng), coord(rng));
+    double a = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const Vec2& p = loop[i];
+      const Vec2& q = loop[(i + 1) % n];
+      a += p.x() * q.y() - q.x() * p.y();
+    }
+    EXPECT_EQ(signed_area(loop), a / 2) << n;
+  }
 }

@@ -2,7 +2,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <random>
 #include <thread>
 #include <tuple>
 #include <utility>
@@ -247,6 +249,47 @@ TEST(Slicer, GridEntriesAreTheDistinctVerticesOfEachCell) {
       std::equal(one.entry_vertex(), one.entry_vertex() + one.num_entries(), many.entry_vertex()));
   EXPECT_TRUE(
       std::equal(one.face_entries(), one.face_entries() + 3 * mesh.num_faces, many.face_entries()));
+}
+
+TEST(Slicer, GridCellBoxesHoldTheirTriangles) {
+  // The cell of each triangle (tabulated cell ids, x/y of the centroid and overhang as SSE2
+  // pairs) must be the one whose box holds it: every corner inside its cell's box along each
+  // axis, every face exactly once. A random soup (sizes from 0.01 to 20 mm, off the origin) and
+  // the turned prism, on one worker and on four.
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<double> pos(-40.0, 60.0), unit(-1.0, 1.0), size(-2.0, 1.3);
+  osteon::testing::OwnedMesh soup;
+  for (int t = 0; t < 40000; ++t) {
+    const Vec3 base(pos(rng) + 1000.5, pos(rng), 0.25 * pos(rng));
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 p = base + std::pow(10.0, size(rng)) * Vec3(unit(rng), unit(rng), unit(rng));
+      soup.v.insert(soup.v.end(), {p.x(), p.y(), p.z()});
+      soup.f.push_back(3 * t + k);
+    }
+  }
+  for (const auto& m : {soup, turned_prism()}) {
+    const MeshView mesh = m.view();
+    for (int threads : {1, 4}) {
+      FaceGrid grid;
+      grid.build(mesh, 12, threads);
+      std::vector<std::array<std::int32_t, 3>> listed, faces;
+      for (Index c = 0; c < grid.num_cells(); ++c)
+        for (Index k = 3 * grid.begin(c); k < 3 * grid.end(c); k += 3) {
+          const std::int32_t* t = grid.faces() + k;
+          listed.push_back({t[0], t[1], t[2]});
+          for (int j = 0; j < 3; ++j)
+            for (int a = 0; a < 3; ++a) {
+              const double x = mesh.vertices[3 * static_cast<Index>(t[j]) + a];
+              ASSERT_TRUE(grid.meets(c, Vec3::Unit(a), x, x)) << "cell " << c << " axis " << a;
+            }
+        }
+      for (Index f = 0; f < mesh.num_faces; ++f)
+        faces.push_back({mesh.faces[3 * f], mesh.faces[3 * f + 1], mesh.faces[3 * f + 2]});
+      std::sort(listed.begin(), listed.end());
+      std::sort(faces.begin(), faces.end());
+      EXPECT_EQ(listed, faces);
+    }
+  }
 }
 
 TEST(Slicer, ParallelCutsThroughTheGridMatchTheFullHeightTable) {
