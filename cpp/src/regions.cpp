@@ -923,6 +923,10 @@ std::vector<Point64> rect_with_arms(const std::vector<const Paths64*>& regions,
       for (std::size_t k = 0, n = path.size(); k < n; ++k) {
         const Point64& p = path[k];
         const Point64& q = path[k + 1 == n ? 0 : k + 1];
+        // Most edges are beside neither band of sides (r's x and y ranges, +2).
+        if ((std::max(p.x, q.x) < r.left - 2 || std::min(p.x, q.x) > r.right + 2) &&
+            (std::max(p.y, q.y) < r.top - 2 || std::min(p.y, q.y) > r.bottom + 2))
+          continue;
         for (int side = 0; side < 4; ++side) {
           const bool vertical = side % 2 == 0;
           const double sign = side < 2 ? -1.0 : 1.0;
@@ -1063,6 +1067,12 @@ SectionGeometry junction_core(
   // raw offset): the widening still exceeds 3/4 of the margin everywhere.
   std::vector<Paths64> regions(neighbours.size());
   for (std::size_t k = 0; k < neighbours.size(); ++k) {
+    // A neighbour given twice (a neck that is also a neighbour plane) is clipped and thinned once.
+    const auto same = std::find(neighbours.begin(), neighbours.begin() + k, neighbours[k]);
+    if (same != neighbours.begin() + k) {
+      regions[k] = regions[same - neighbours.begin()];
+      continue;
+    }
     regions[k] = Clipper2Lib::RectClip(near, paths_of(*neighbours[k], s));
     if (margin_mm > 0) regions[k] = detail::simplify_closed(regions[k], 0.25 * margin_mm * s.scale);
   }
@@ -1085,7 +1095,11 @@ SectionGeometry junction_core(
   }
   if (ask) {
     std::vector<const Paths64*> all_regions{&whole};
-    for (const Paths64& region : regions) all_regions.push_back(&region);
+    // (a neighbour given twice once: its edges would only be checked twice)
+    for (std::size_t k = 0; k < regions.size(); ++k)
+      if (std::find(neighbours.begin(), neighbours.begin() + k, neighbours[k]) ==
+          neighbours.begin() + k)
+        all_regions.push_back(&regions[k]);
     Rect64 r;
     if (rect_inside(all_regions, origin, r)) {
       SectionPolygon rect;

@@ -614,6 +614,29 @@ TEST(Regions, JunctionCoreAsksFirstWithARegionTheCoreHolds) {
     for (const SectionPolygon& region : asked)
       for (const Vec2& q : region.outer)
         EXPECT_TRUE(q.x() >= lo.x() && q.x() <= hi.x() && q.y() >= lo.y() && q.y() <= hi.y());
+    // A neighbour given twice (a neck that is also a neighbour plane) is read once: the same
+    // answers as with a copy of it, a distinct neighbour.
+    {
+      std::vector<const SectionPolygon*> twice = c.neighbours, copied = c.neighbours;
+      const SectionPolygon copy = *c.neighbours.back();
+      twice.push_back(c.neighbours.back());
+      copied.push_back(&copy);
+      std::vector<SectionPolygon> asked_twice, asked_copied;
+      const SectionGeometry a =
+          junction_core(*c.section, twice, 0.15, 0.9, [&](const SectionPolygon& p) {
+            asked_twice.push_back(p);
+            return true;
+          });
+      const SectionGeometry b =
+          junction_core(*c.section, copied, 0.15, 0.9, [&](const SectionPolygon& p) {
+            asked_copied.push_back(p);
+            return true;
+          });
+      EXPECT_EQ(a.polygon.outer, b.polygon.outer);
+      ASSERT_EQ(asked_twice.size(), asked_copied.size());
+      for (std::size_t k = 0; k < asked_twice.size(); ++k)
+        EXPECT_EQ(asked_twice[k].outer, asked_copied[k].outer);
+    }
     // A "no" ends the call: no core.
     EXPECT_FALSE(junction_core(*c.section, c.neighbours, 0.15, 0.9, [](const SectionPolygon&) {
                    return false;
