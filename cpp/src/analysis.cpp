@@ -88,7 +88,7 @@ AnalysisResult Analyzer::run(const double* vertices, const Skeleton& skeleton, P
 
 AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, const Box3* dirty,
                                    Progress* progress) {
-  RunState run(vertices, sk, dirty, progress);
+  RunState run(vertices, sk, dirty, progress, grid);
   try {
     if (progress != nullptr) {
       progress->sections_done = 0;

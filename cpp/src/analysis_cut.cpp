@@ -129,7 +129,7 @@ void Analyzer::Impl::prepare_cuts(RunState& run) {
   const long jobs = static_cast<long>(job_bone.size());
   run.workers = detail::worker_count(threads, jobs);
   if (std::find(run.job_dirty.begin(), run.job_dirty.end(), 1) != run.job_dirty.end())
-    run.grid.build(mesh, 12, threads);
+    run.build_grid(threads);
   run.timer.lap("grid");
   run.reach.assign(nb, 0.0);
   run.axis.resize(nb);
@@ -246,7 +246,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
   std::stable_partition(units.begin(), units.end(), [&](int job) { return job_bone[job] >= 0; });
   // Joints' and whole planes' cuts skip the cells and runs of faces whose triangles' own box the
   // plane misses (FaceGrid::enable_tight_bounds: the same segments, in the same order).
-  if (!units.empty() && run.grid.num_cells() > 0) run.grid.enable_tight_bounds();
+  if (!units.empty() && run.grid_built) run.grid.enable_tight_bounds();
   // The loose pieces and the moment-arm index (stage 4) need no section: they are one more
   // unit, third in line, so that it fills a core while the other cuts.
   const long index_unit = std::min<long>(2, static_cast<long>(units.size()));

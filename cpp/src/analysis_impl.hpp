@@ -113,8 +113,12 @@ double section_thickness_at(SectionState& st);
 /// Working data of one run, handed from stage to stage (see Analyzer::Impl::run).
 struct RunState {
   RunState(const double* vertices_in, const Skeleton& skeleton, const Box3* dirty_in,
-           Progress* progress_in)
-      : vertices(vertices_in), sk(skeleton), dirty(dirty_in), progress(progress_in) {}
+           Progress* progress_in, FaceGrid& grid_in)
+      : vertices(vertices_in),
+        sk(skeleton),
+        dirty(dirty_in),
+        progress(progress_in),
+        grid(grid_in) {}
 
   const double* vertices;  // #V by 3 row-major, mm
   const Skeleton& sk;      // posed skeleton
@@ -148,7 +152,16 @@ struct RunState {
 
   // Cuts (prepare_cuts, cut_local, cut_retries).
   int workers = 1;
-  FaceGrid grid;
+  // The Analyzer's grid (its buffers are reused from run to run: live mode rebuilds it on every
+  // update); it holds this run's mesh only once build_grid() ran.
+  FaceGrid& grid;
+  bool grid_built = false;
+  /// Buckets this run's mesh into `grid` (once per run).
+  void build_grid(int threads) {
+    if (grid_built) return;
+    grid.build(mesh, 12, threads);
+    grid_built = true;
+  }
   std::vector<double> reach;                   // B radius of the local cut around the bone, mm
   std::vector<Vec3> axis;                      // B unit bone directions
   std::vector<std::vector<double>> crossings;  // B sorted bone-axis crossings of the mesh, mm
@@ -187,6 +200,7 @@ struct Analyzer::Impl {
   std::vector<int> job_bone;     // >= 0: interior family of that bone; -1: a single plane
   std::vector<int> job_section;  // first section of the job
   LoadTree tree;
+  FaceGrid grid;  // rebuilt by each run that cuts (RunState::build_grid); kept for its buffers
   // Loose pieces (full runs; a partial run keeps them): vertex lists, and #V 1 = loose vertex.
   std::vector<std::vector<std::int32_t>> loose;
   std::vector<std::uint8_t> loose_vertex;

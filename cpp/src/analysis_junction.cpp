@@ -193,7 +193,7 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
   }
   run.junction_checks = static_cast<long>(todo.size());
   if (todo.empty()) return;
-  if (run.grid.num_cells() == 0) run.grid.build(run.mesh, 12, options.threads);
+  run.build_grid(options.threads);
   // The neighbour planes' cuts skip the cells and runs of faces whose triangles' own box they
   // miss (FaceGrid::enable_tight_bounds: the same segments, in the same order).
   run.grid.enable_tight_bounds();

@@ -26,7 +26,7 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   const double slack = 64 * std::numeric_limits<double>::epsilon() *
                        std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
   slack_ = slack;
-  tight_.reset();
+  tight_on_ = false;
   // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
   // sample) so that a non-empty cell holds about faces_per_cell triangles.
   const Index step = std::max<Index>(1, nf / 2048);
@@ -68,9 +68,17 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   // cell's triangles stick out of it (so that a cell's box = its grid box widened by that,
   // without a second pass).
   const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
-  std::vector<std::int32_t> cell_of(nf);
-  std::vector<std::vector<Index>> part_count(parts, std::vector<Index>(total, 0));
-  std::vector<std::vector<float>> part_overhang(parts, std::vector<float>(total, 0.0f));
+  std::int32_t* cell_of = cell_of_.reserve(nf);
+  auto& part_count = part_count_;
+  auto& part_overhang = part_overhang_;
+  if (static_cast<int>(part_count.size()) < parts) {
+    part_count.resize(parts);
+    part_overhang.resize(parts);
+  }
+  for (int p = 0; p < parts; ++p) {
+    part_count[p].assign(total, 0);
+    part_overhang[p].assign(total, 0.0f);
+  }
   const Vec3 size(extent.x() / dims[0], extent.y() / dims[1], extent.z() / dims[2]);
   auto part_range = [&](long part) {
     return std::make_pair(nf * part / parts, nf * (part + 1) / parts);
@@ -94,7 +102,8 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   });
   // Cell starts, and where each part writes its triangles of a cell: after the earlier parts', so
   // the order is the sequential one whatever the number of workers.
-  std::vector<Index> count(total + 1, 0);
+  std::vector<Index>& count = cell_start_;
+  count.assign(total + 1, 0);
   std::vector<float>& overhang = part_overhang[0];
   for (Index c = 0; c < total; ++c) {
     Index sum = count[c];
@@ -165,19 +174,22 @@ void FaceGrid::build_entries(const MeshView& mesh, int parts) {
   // not depend on the number of parts).
   const Index cells = num_cells();
   parts = static_cast<int>(std::clamp<Index>(cells, 1, parts));
-  std::vector<std::unique_ptr<std::int32_t[]>> lists(parts);
+  if (static_cast<int>(part_lists_.size()) < parts) {
+    part_lists_.resize(parts);
+    part_slots_.resize(parts);
+  }
   std::vector<Index> shift(parts + 1, 0);
   vstart_.resize(cells + 1);
-  face_entries_.reset(new std::int32_t[faces_.size()]);
+  face_entries_.reserve(faces_.size());
   auto cell_range = [&](long part) {
     return std::make_pair(cells * part / parts, cells * (part + 1) / parts);
   };
   detail::parallel_for(parts, parts, [&](long part, int) {
     const auto [c0, c1] = cell_range(part);
     // slot[v]: v's latest entry; v is already listed in cell c when that is c's or later.
-    std::vector<std::int32_t> slot(mesh.num_vertices, -1);
-    lists[part].reset(new std::int32_t[3 * (start_[c1] - start_[c0])]);  // at most one per corner
-    std::int32_t* list = lists[part].get();
+    std::vector<std::int32_t>& slot = part_slots_[part];
+    slot.assign(mesh.num_vertices, -1);
+    std::int32_t* list = part_lists_[part].reserve(3 * (start_[c1] - start_[c0]));  // <= 1 a corner
     std::int32_t* corner = face_entries_.get();
     std::int32_t n = 0;
     for (Index c = c0; c < c1; ++c) {
@@ -199,10 +211,10 @@ void FaceGrid::build_entries(const MeshView& mesh, int parts) {
   for (int p = 0; p < parts; ++p) shift[p + 1] += shift[p];
   const Index total = shift[parts];
   vstart_[cells] = total;
-  entry_vertex_.reset(new std::int32_t[total]);
-  entry_x_.reset(new double[total]);
-  entry_y_.reset(new double[total]);
-  entry_z_.reset(new double[total]);
+  entry_vertex_.reserve(total);
+  entry_x_.reserve(total);
+  entry_y_.reserve(total);
+  entry_z_.reserve(total);
   detail::parallel_for(parts, parts, [&](long part, int) {
     const auto [c0, c1] = cell_range(part);
     const Index base = shift[part];
@@ -211,7 +223,7 @@ void FaceGrid::build_entries(const MeshView& mesh, int parts) {
       for (Index k = 3 * start_[c0], stop = 3 * start_[c1]; k < stop; ++k)
         face_entries_[k] += static_cast<std::int32_t>(base);
     }
-    const std::int32_t* list = lists[part].get();
+    const std::int32_t* list = part_lists_[part].get();
     for (Index e = base, stop = shift[part + 1]; e < stop; ++e) {
       const std::int32_t v = list[e - base];
       const double* p = mesh.vertices + 3 * static_cast<Index>(v);
@@ -224,27 +236,27 @@ void FaceGrid::build_entries(const MeshView& mesh, int parts) {
 }
 
 void FaceGrid::enable_tight_bounds() {
-  if (tight_) return;
-  auto t = std::make_unique<TightData>();
+  if (tight_on_) return;
+  TightData& t = tight_;
   const Index cells = num_cells();
-  t->group_start.resize(cells + 1);
-  t->group_start[0] = 0;
+  t.group_start.resize(cells + 1);
+  t.group_start[0] = 0;
   for (Index c = 0; c < cells; ++c)
-    t->group_start[c + 1] = t->group_start[c] + (end(c) - begin(c) + kGroup - 1) / kGroup;
-  t->cell_box.resize(2 * cells);
-  t->group_center.resize(t->group_start[cells]);
-  t->group_half.resize(t->group_start[cells]);
-  t->state = std::make_unique<std::atomic<std::uint8_t>[]>(cells);
-  for (Index c = 0; c < cells; ++c) t->state[c].store(0, std::memory_order_relaxed);
-  tight_ = std::move(t);
+    t.group_start[c + 1] = t.group_start[c] + (end(c) - begin(c) + kGroup - 1) / kGroup;
+  t.cell_box.resize(2 * cells);
+  t.group_center.resize(t.group_start[cells]);
+  t.group_half.resize(t.group_start[cells]);
+  tight_state_.reserve(cells);
+  for (Index c = 0; c < cells; ++c) tight_state_[c].store(0, std::memory_order_relaxed);
+  tight_on_ = true;
 }
 
 FaceGrid::Tight FaceGrid::tight_boxes(Index c, TightBoxes& boxes) const {
-  TightData& t = *tight_;
+  TightData& t = tight_;
   boxes.cell = &t.cell_box[2 * c];
   boxes.group_center = t.group_center.data() + t.group_start[c];
   boxes.group_half = t.group_half.data() + t.group_start[c];
-  std::atomic<std::uint8_t>& state = t.state[c];
+  std::atomic<std::uint8_t>& state = tight_state_[c];
   if (state.load(std::memory_order_acquire) == 2) return Tight::kReady;
   std::uint8_t none = 0;
   return state.compare_exchange_strong(none, 1, std::memory_order_acq_rel) ? Tight::kMine
@@ -282,7 +294,7 @@ void FaceGrid::bound_cell(Index c, const MeshView& mesh, const TightBoxes& boxes
   const Pair mid = 0.5 * (cell_lo + cell_hi), half = 0.5 * (cell_hi - cell_lo) + slack;
   boxes.cell[0] = Vec3(mid.x(), mid.y(), 0.5 * (cell_zlo + cell_zhi));
   boxes.cell[1] = Vec3(half.x(), half.y(), 0.5 * (cell_zhi - cell_zlo) + slack_);
-  tight_->state[c].store(2, std::memory_order_release);
+  tight_state_[c].store(2, std::memory_order_release);
 }
 
 std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,

@@ -6,6 +6,8 @@ These run the real programs; they are skipped only when ``gmsh`` or ``ccx`` is n
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from osteon import fem
@@ -85,14 +87,24 @@ def test_cantilever_worst_direction(tmp_path, mode):
         hold_plane=([0, 0, 0], [1, 0, 0]),
         mesh_size=2.5,
         workdir=str(tmp_path),
+        keep_field=True,
     )
     s = rep.sections[0]
     assert s.fem_stress_mpa == pytest.approx(_worst_eb(arm), rel=0.05)
+    # the kept field: its peak is the reported stress, and the z-load case is the beam's
+    # linear σ_nn = -arm·z/I_y per newton (tip lifted: the top fibres in compression)
+    P, G = s.extra["field_points_mm"], s.extra["field_mpa_per_n"]
+    assert P.shape[1] == 3 and G.shape == (3, len(P))
+    np.testing.assert_allclose(P[:, 0], X, atol=1e-9)
+    assert np.max(np.linalg.norm(G, axis=0)) * F == pytest.approx(s.fem_stress_mpa, rel=1e-12)
+    beam = -arm * P[:, 2] / I_Y
+    assert np.max(np.abs(G[2] - beam)) < 0.05 * np.max(np.abs(beam))
     assert abs(s.rel_error) < 0.05
     assert rep.median_error < 0.05
     assert rep.nodes > 100 and rep.solve_seconds > 0
     d = rep.as_dict()
     assert d["sections"][0]["fem_stress_mpa"] == pytest.approx(s.fem_stress_mpa)
+    json.dumps(d)  # the field stays out of the report
 
 
 def test_crop_mesh_closed_and_volume():

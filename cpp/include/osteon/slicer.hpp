@@ -163,7 +163,7 @@ class FaceGrid {
   /// Turns tight bounds on (allocation only: nothing is computed until a cut visits a cell).
   void enable_tight_bounds();
   /// True when enable_tight_bounds() ran after the last build().
-  bool tight_bounds() const { return tight_ != nullptr; }
+  bool tight_bounds() const { return tight_on_; }
   /// Cell c's tight boxes (tight bounds on): `cell` (center, half extents) and its groups' (cell
   /// c's faces begin(c) + kGroup * j .. : group j; group_center[j], group_half[j]), mm.
   struct TightBoxes {
@@ -185,20 +185,45 @@ class FaceGrid {
   struct TightData {
     std::vector<Index> group_start;  // cell c's groups: group_start[c] .. group_start[c + 1]
     std::vector<Vec3> cell_box, group_center, group_half;  // cell_box: 2 per cell
-    std::unique_ptr<std::atomic<std::uint8_t>[]> state;    // per cell: 0 none, 1 busy, 2 ready
   };
-  std::unique_ptr<TightData> tight_;
+  /// An array written in full before it is read (so never zero-filled) whose storage outlives a
+  /// build: a grid rebuilt on every live update reuses it instead of touching fresh pages.
+  template <class T>
+  struct Buffer {
+    std::unique_ptr<T[]> data;
+    std::size_t capacity = 0;
+    /// Room for n elements (contents unspecified).
+    T* reserve(std::size_t n) {
+      if (n > capacity) {
+        data.reset(new T[n]);
+        capacity = n;
+      }
+      return data.get();
+    }
+    T* get() const { return data.get(); }
+    T& operator[](std::size_t i) const { return data[i]; }
+  };
+  // Tight boxes: storage kept across builds, valid while tight_on_ (filled lazily by const cuts).
+  mutable TightData tight_;
+  Buffer<std::atomic<std::uint8_t>> tight_state_;
+  bool tight_on_ = false;
   double slack_ = 0.0;  // mm: how far every box is widened (a few ulps of the coordinates)
   std::vector<Vec3> center_, half_;
   std::vector<Index> start_;
   std::vector<std::int32_t> faces_;
   std::vector<Index> vstart_;  // cell c's entries: vstart_[c] .. [c + 1]
-  // Written in full by build_entries, so left uninitialized on allocation (no zero-fill pass).
-  std::unique_ptr<std::int32_t[]> entry_vertex_, face_entries_;
-  std::unique_ptr<double[]> entry_x_, entry_y_, entry_z_;
+  Buffer<std::int32_t> entry_vertex_, face_entries_;
+  Buffer<double> entry_x_, entry_y_, entry_z_;
   void build_entries(const MeshView& mesh, int parts);
   std::vector<Vec3> block_center_, block_half_;
   std::vector<Index> block_start_;
+  // Scratch of build() and build_entries(), kept for its storage.
+  Buffer<std::int32_t> cell_of_;
+  std::vector<std::vector<Index>> part_count_;
+  std::vector<std::vector<float>> part_overhang_;
+  std::vector<Index> cell_start_;
+  std::vector<Buffer<std::int32_t>> part_lists_;
+  std::vector<std::vector<std::int32_t>> part_slots_;
 };
 
 /// Cuts every triangle of the mesh that crosses the plane; appends to `out`. With a grid only

@@ -58,7 +58,7 @@ class FemSection:
             if self.moment_arm_mm > 0
             else None,
             "cut_points": int(self.cut_points),
-            **self.extra,
+            **{k: v for k, v in self.extra.items() if not k.startswith("field_")},
         }
 
 
@@ -144,11 +144,11 @@ def find_load_point(vertices, center, normal, moment_arm):
     return vertices[cand[0]]
 
 
-def _finish_section(rep, k, s, nodes, tets, S3, force):
+def _finish_section(rep, k, s, nodes, tets, S3, force, keep_field=False):
     c = np.asarray(s["center"], float)
     n = np.asarray(s["normal"], float)
     n = n / np.linalg.norm(n)
-    _, G = section_cut(nodes, tets, c, n, S3)
+    P, G = section_cut(nodes, tets, c, n, S3)
     fem = float(np.max(np.linalg.norm(G, axis=0))) * force if G.shape[1] else float("nan")
     lp = np.asarray(s["load_point"], float)
     rep.sections.append(
@@ -180,6 +180,8 @@ def _finish_section(rep, k, s, nodes, tets, S3, force):
             },
         )
     )
+    if keep_field:
+        rep.sections[-1].extra.update(field_points_mm=P, field_mpa_per_n=G)
 
 
 def _unit_cases(nodes, tets, point, radius):
@@ -208,6 +210,7 @@ class _Run:
     poisson: float
     progress: object
     fine_factor: float
+    keep_field: bool = False
 
 
 def cross_check(
@@ -228,6 +231,7 @@ def cross_check(
     fine_factor=3.0,
     mode="crop",
     clamp_distance=4.0,
+    keep_field=False,
 ):
     """Run the FEM cross-check; returns a :class:`FemReport`.
 
@@ -249,6 +253,10 @@ def cross_check(
     within ``hold_radius`` mm of ``hold_point`` (default radius: 1.25 × the depth of the point
     below the surface), or, with ``hold_plane=(point, normal)``, at all nodes on the negative
     side of that plane.
+
+    ``keep_field=True``: each section's ``extra["field_points_mm"]`` (P, 3) holds the points where
+    the plane cuts the tetrahedra and ``extra["field_mpa_per_n"]`` (3, P) σ_nn there per newton
+    of force along x, y and z (MPa/N): the stress field on the plane, not only its peak.
     """
     V = np.asarray(vertices, float)
     F = np.asarray(faces)
@@ -259,7 +267,8 @@ def cross_check(
     wd = tempfile.mkdtemp(prefix="osteon_fem_") if own_dir else workdir
     os.makedirs(wd, exist_ok=True)
     rep = FemReport(force_n=float(force), mode=mode)
-    run = _Run(V, F, sections, force, wd, threads, young, poisson, progress, fine_factor)
+    run = _Run(V, F, sections, force, wd, threads, young, poisson, progress, fine_factor,
+               keep_field)
     try:
         if mode == "crop":
             _cross_check_crop(rep, run, clamp_distance)
@@ -355,7 +364,7 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
                   threads=threads)
         rep.solve_seconds += time.perf_counter() - t1
         sec = dict(sec, nodes=len(nodes), elements=len(tets))
-        _finish_section(rep, k, sec, nodes, tets, S, run.force)
+        _finish_section(rep, k, sec, nodes, tets, S, run.force, run.keep_field)
         rep.mesh_size_mm = max(rep.mesh_size_mm, float(h))
 
 
@@ -411,4 +420,4 @@ def _cross_check_full(rep, run: _Run, hold_point, hold_radius, hold_plane, mesh_
     rep.solve_seconds = time.perf_counter() - t1
     for k, s in enumerate(sections):
         j = which[k]
-        _finish_section(rep, k, s, nodes, tets, S[3 * j : 3 * j + 3], run.force)
+        _finish_section(rep, k, s, nodes, tets, S[3 * j : 3 * j + 3], run.force, run.keep_field)
