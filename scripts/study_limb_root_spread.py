@@ -27,7 +27,7 @@ DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 # model arguments (as for `osteon validate`), junction sections, FEM peak on the plane (MPa)
 CASES = {
     "elephant (limb root)": (["libigl-tutorial-data/elephant.obj"], {10: 0.78}),
-    "cheburashka (neck through the head)": (
+    "cheburashka (forearm fused to the torso)": (
         ["Hyperspectral-Inverse-Skinning/cheburashka.obj"], {20: 4.85}),
     "cow_clean (leg roots)": (
         ["Hyperspectral-Inverse-Skinning/cow_clean.obj",
