@@ -878,6 +878,134 @@ bool rect_inside(const std::vector<const Paths64*>& regions, const Point64& orig
   return false;
 }
 
+// True when no edge of the regions meets the rectangle r grown by 2 (exact).
+bool rect_clear(const std::vector<const Paths64*>& regions, const Clipper2Lib::Rect64& r) {
+  const Clipper2Lib::Rect64 clear = grown(r, 2);
+  for (const Paths64* region : regions)
+    for (const Path64& path : *region)
+      for (std::size_t k = 0, n = path.size(); k < n; ++k)
+        if (segment_meets_rect(path[k], path[k + 1 == n ? 0 : k + 1], clear)) return false;
+  return true;
+}
+
+// A region around a rectangle r found by rect_inside: r and, on each side, an arm (a rectangle
+// standing on that side, on all of it or on its middle 60 %: a neighbour's corner near r's
+// often blocks the whole side) as deep as the edges allow, found in one pass over them and then
+// checked exactly (an arm whose check fails is left out). No edge comes within 2 units of r or
+// an arm, and each arm touches r along a side: like r, the region lies inside every region and
+// is joined to the origin. The outline goes round r, out along each arm and back. A body cut
+// whose bone point sits near its rim gets a region many times larger than r.
+std::vector<Point64> rect_with_arms(const std::vector<const Paths64*>& regions,
+                                    const Clipper2Lib::Rect64& r) {
+  // Per side (left, top, right, bottom) and band (whole side, middle 60 %): the room ahead.
+  constexpr int kBands = 2;
+  struct Arm {
+    double lo, hi, front, room;  // band across the side, the side's line, room (all with sign)
+  };
+  Arm arms[4][kBands];
+  for (int side = 0; side < 4; ++side) {
+    const bool vertical = side % 2 == 0;  // left and right sides: the arm grows along x
+    const double sign = side < 2 ? -1.0 : 1.0;
+    const double a0 = static_cast<double>(vertical ? r.top : r.left);
+    const double a1 = static_cast<double>(vertical ? r.bottom : r.right);
+    const double front = sign * static_cast<double>(side == 0   ? r.left
+                                                    : side == 1 ? r.top
+                                                    : side == 2 ? r.right
+                                                                : r.bottom);
+    for (int band = 0; band < kBands; ++band) {
+      const double cut = band == 0 ? 0.0 : std::floor(0.2 * (a1 - a0));
+      arms[side][band] = {a0 + cut - 2, a1 - cut + 2, front + 2,
+                          std::numeric_limits<double>::infinity()};
+    }
+  }
+  for (const Paths64* region : regions) {
+    for (const Path64& path : *region) {
+      for (std::size_t k = 0, n = path.size(); k < n; ++k) {
+        const Point64& p = path[k];
+        const Point64& q = path[k + 1 == n ? 0 : k + 1];
+        // Most edges are beside neither band of sides (r's x and y ranges, +2).
+        if ((std::max(p.x, q.x) < r.left - 2 || std::min(p.x, q.x) > r.right + 2) &&
+            (std::max(p.y, q.y) < r.top - 2 || std::min(p.y, q.y) > r.bottom + 2))
+          continue;
+        for (int side = 0; side < 4; ++side) {
+          const bool vertical = side % 2 == 0;
+          const double sign = side < 2 ? -1.0 : 1.0;
+          const double pa = sign * static_cast<double>(vertical ? p.x : p.y);
+          const double qa = sign * static_cast<double>(vertical ? q.x : q.y);
+          const double pc = static_cast<double>(vertical ? p.y : p.x);
+          const double qc = static_cast<double>(vertical ? q.y : q.x);
+          for (Arm& arm : arms[side]) {
+            if (std::max(pa, qa) < arm.front || std::max(pc, qc) < arm.lo ||
+                std::min(pc, qc) > arm.hi)
+              continue;
+            // The edge's part inside the band: its extreme `along` values are at its ends there
+            // or where it crosses the band's lines. A part behind the side does not count.
+            double near = std::numeric_limits<double>::infinity(), far = -near;
+            auto add = [&](double a) {
+              near = std::min(near, a);
+              far = std::max(far, a);
+            };
+            if (pc >= arm.lo && pc <= arm.hi) add(pa);
+            if (qc >= arm.lo && qc <= arm.hi) add(qa);
+            for (const double c : {arm.lo, arm.hi})
+              if ((pc - c) * (qc - c) < 0) add(pa + (c - pc) / (qc - pc) * (qa - pa));
+            if (far >= arm.front) arm.room = std::min(arm.room, near - arm.front);
+          }
+        }
+      }
+    }
+  }
+  // Per side the larger arm that passes the exact check; the outline (Clipper2's y axis points
+  // down: left side upwards, top side rightwards, ...).
+  std::vector<Point64> out;
+  const Point64 corners[4] = {
+      {r.left, r.bottom}, {r.left, r.top}, {r.right, r.top}, {r.right, r.bottom}};
+  for (int side = 0; side < 4; ++side) {
+    out.push_back(corners[side]);
+    Clipper2Lib::Rect64 best;
+    double best_area = 0.0;
+    for (const Arm& arm : arms[side]) {
+      if (!(arm.room > 8)) continue;
+      const auto depth = static_cast<std::int64_t>(std::min(arm.room * 0.999, 4e18)) - 4;
+      const auto lo = static_cast<std::int64_t>(arm.lo) + 2;
+      const auto hi = static_cast<std::int64_t>(arm.hi) - 2;
+      const double area = static_cast<double>(depth) * static_cast<double>(hi - lo);
+      if (area <= best_area) continue;
+      Clipper2Lib::Rect64 a = side == 0   ? Clipper2Lib::Rect64(r.left - depth, lo, r.left, hi)
+                              : side == 1 ? Clipper2Lib::Rect64(lo, r.top - depth, hi, r.top)
+                              : side == 2 ? Clipper2Lib::Rect64(r.right, lo, r.right + depth, hi)
+                                          : Clipper2Lib::Rect64(lo, r.bottom, hi, r.bottom + depth);
+      if (!rect_clear(regions, a)) continue;
+      best = a;
+      best_area = area;
+    }
+    if (best_area == 0.0) continue;
+    // Out along the arm and back, in the direction the outline runs along this side.
+    if (side == 0) {
+      out.insert(out.end(), {{best.right, best.bottom},
+                             {best.left, best.bottom},
+                             {best.left, best.top},
+                             {best.right, best.top}});
+    } else if (side == 1) {
+      out.insert(out.end(), {{best.left, best.bottom},
+                             {best.left, best.top},
+                             {best.right, best.top},
+                             {best.right, best.bottom}});
+    } else if (side == 2) {
+      out.insert(out.end(), {{best.left, best.top},
+                             {best.right, best.top},
+                             {best.right, best.bottom},
+                             {best.left, best.bottom}});
+    } else {
+      out.insert(out.end(), {{best.right, best.top},
+                             {best.right, best.bottom},
+                             {best.left, best.bottom},
+                             {best.left, best.top}});
+    }
+  }
+  return out;
+}
+
 // Clipper2's Intersect(a, b) (non-zero), with the operand whose box is the larger clamped to the
 // other's box first (clamp_to_rect: nothing inside changes, and the intersection lies inside).
 Paths64 intersect_near(const Paths64& a, const Paths64& b) {
@@ -939,6 +1067,12 @@ SectionGeometry junction_core(
   // raw offset): the widening still exceeds 3/4 of the margin everywhere.
   std::vector<Paths64> regions(neighbours.size());
   for (std::size_t k = 0; k < neighbours.size(); ++k) {
+    // A neighbour given twice (a neck that is also a neighbour plane) is clipped and thinned once.
+    const auto same = std::find(neighbours.begin(), neighbours.begin() + k, neighbours[k]);
+    if (same != neighbours.begin() + k) {
+      regions[k] = regions[same - neighbours.begin()];
+      continue;
+    }
     regions[k] = Clipper2Lib::RectClip(near, paths_of(*neighbours[k], s));
     if (margin_mm > 0) regions[k] = detail::simplify_closed(regions[k], 0.25 * margin_mm * s.scale);
   }
@@ -961,13 +1095,24 @@ SectionGeometry junction_core(
   }
   if (ask) {
     std::vector<const Paths64*> all_regions{&whole};
-    for (const Paths64& region : regions) all_regions.push_back(&region);
+    // (a neighbour given twice once: its edges would only be checked twice)
+    for (std::size_t k = 0; k < regions.size(); ++k)
+      if (std::find(neighbours.begin(), neighbours.begin() + k, neighbours[k]) ==
+          neighbours.begin() + k)
+        all_regions.push_back(&regions[k]);
     Rect64 r;
     if (rect_inside(all_regions, origin, r)) {
       SectionPolygon rect;
       rect.outer = {s.from(Point64(r.left, r.top)), s.from(Point64(r.right, r.top)),
                     s.from(Point64(r.right, r.bottom)), s.from(Point64(r.left, r.bottom))};
       if (!worth(rect)) return geom;
+      // Too small to tell: the rectangle with arms as deep as the edges allow.
+      const std::vector<Point64> armed = rect_with_arms(all_regions, r);
+      if (armed.size() > 4) {
+        rect.outer.clear();
+        for (const Point64& q : armed) rect.outer.push_back(s.from(q));
+        if (!worth(rect)) return geom;
+      }
     }
   }
   Paths64 covered;
