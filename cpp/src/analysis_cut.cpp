@@ -258,14 +258,16 @@ void Analyzer::Impl::cut_retries(RunState& run) {
           if (!run.partial) {
             // A gap under half the minimum printable thickness is fused by the printer.
             loose = face_shells == 1 ? std::vector<std::vector<std::int32_t>>{}
-                                     : loose_pieces(mesh, run.vertex_bone, tree.held_bone,
-                                                    0.5 * options.min_thickness, &face_shells);
+                                     : loose_finder.find(mesh, run.vertex_bone, tree.held_bone,
+                                                         0.5 * options.min_thickness, &face_shells,
+                                                         /*same_faces=*/true);
             loose_vertex.assign(num_vertices, 0);
             for (const auto& piece : loose)
               for (std::int32_t v : piece) loose_vertex[v] = 1;
           }
-          run.arms = std::make_unique<MomentArmIndex>(mesh, sk, tree, run.vertex_bone, slab_params,
-                                                      loose.empty() ? nullptr : &loose_vertex);
+          arm_index.build(mesh, sk, tree, run.vertex_bone, slab_params,
+                          loose.empty() ? nullptr : &loose_vertex);
+          run.arms = &arm_index;
           return;
         }
         run.check_cancel();

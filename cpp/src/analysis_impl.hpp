@@ -25,6 +25,7 @@
 
 #include "osteon/analysis.hpp"
 #include "osteon/loads.hpp"
+#include "osteon/regions.hpp"
 #include "osteon/slicer.hpp"
 
 namespace osteon {
@@ -179,7 +180,7 @@ struct RunState {
   long junction_checks = 0;
 
   // Loads (built during cut_retries, used by compute_loads).
-  std::unique_ptr<MomentArmIndex> arms;
+  const MomentArmIndex* arms = nullptr;  // the Analyzer's arm_index, once built
 };
 
 struct Analyzer::Impl {
@@ -204,6 +205,10 @@ struct Analyzer::Impl {
   // Loose pieces (full runs; a partial run keeps them): vertex lists, and #V 1 = loose vertex.
   std::vector<std::vector<std::int32_t>> loose;
   std::vector<std::uint8_t> loose_vertex;
+  // Kept from run to run with their storage (live mode: no memory freed and faulted in again on
+  // every update): the loose-piece search (the faces' shells found once) and the moment-arm index.
+  LoosePieceFinder loose_finder;
+  MomentArmIndex arm_index;
 
   // Inputs of the last run, so that the next run re-cuts only what changed (live mode).
   std::vector<double> last_vertices;

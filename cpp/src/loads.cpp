@@ -115,8 +115,16 @@ void box_tree(const Leaf* leaves, Index m, Vec3* lo, Vec3* hi) {
 MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const LoadTree& tree,
                                const std::vector<int>& vertex_bone,
                                const std::vector<std::vector<double>>& slab_params,
-                               const std::vector<std::uint8_t>* skip)
-    : tree_(&tree), slab_params_(slab_params) {
+                               const std::vector<std::uint8_t>* skip) {
+  build(mesh, s, tree, vertex_bone, slab_params, skip);
+}
+
+void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTree& tree,
+                           const std::vector<int>& vertex_bone,
+                           const std::vector<std::vector<double>>& slab_params,
+                           const std::vector<std::uint8_t>* skip) {
+  tree_ = &tree;
+  slab_params_ = slab_params;
   const int nb = s.num_bones();
   // Slab j of bone b holds the vertices with params in [p[j-1], p[j]) (slab 0: below p[0],
   // last slab: at or above the last param); a section at boundary i splits slabs <= i from > i.
@@ -127,10 +135,19 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
   // Each vertex's group and its pseudo-angle in [0, 4] around the bone axis (a monotone
   // function of the angle in the bone's frame u, v: no atan).
   // (Scratch arrays left uninitialised: every kept vertex's entry is written before it is read.)
-  const std::unique_ptr<Index[]> vertex_group(new Index[mesh.num_vertices]);
-  const std::unique_ptr<double[]> vertex_angle(new double[mesh.num_vertices]);
-  std::vector<Index> group_count(ngroups, 0);
-  std::vector<Vec3> axis(nb), frame_u(nb), frame_v(nb);
+  if (vertex_capacity_ < mesh.num_vertices) {
+    vertex_group_.reset(new Index[mesh.num_vertices]);
+    vertex_angle_.reset(new double[mesh.num_vertices]);
+    vertex_capacity_ = mesh.num_vertices;
+  }
+  Index* const vertex_group = vertex_group_.get();
+  double* const vertex_angle = vertex_angle_.get();
+  std::vector<Index>& group_count = group_count_;
+  group_count.assign(ngroups, 0);
+  std::vector<Vec3>&axis = axis_, &frame_u = frame_u_, &frame_v = frame_v_;
+  axis.resize(nb);
+  frame_u.resize(nb);
+  frame_v.resize(nb);
   for (int b = 0; b < nb; ++b) {
     axis[b] = s.direction(b);
     frame_u[b] = axis[b].unitOrthogonal();
@@ -157,7 +174,8 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
     bucket_offset_[g + 1] =
         bucket_offset_[g] + std::max<Index>(1, (group_count[g] + kBucket - 1) / kBucket);
   const Index nbuckets = bucket_offset_[ngroups];
-  std::vector<Index> count(nbuckets + 1, 0);
+  std::vector<Index>& count = bucket_count_;
+  count.assign(nbuckets + 1, 0);
   Index kept = 0;
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     if (skipped(v)) continue;
@@ -178,9 +196,13 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
     buckets_[g].lo = Vec3::Constant(inf);
     buckets_[g].hi = Vec3::Constant(-inf);
   }
-  packed_xyz_.reset(new double[3 * kept]);
-  packed_index_.reset(new Index[kept]);
-  std::vector<Index> fill(count.begin(), count.end() - 1);
+  if (packed_capacity_ < kept) {
+    packed_xyz_.reset(new double[3 * kept]);
+    packed_index_.reset(new Index[kept]);
+    packed_capacity_ = kept;
+  }
+  std::vector<Index>& fill = bucket_fill_;
+  fill.assign(count.begin(), count.end() - 1);
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     if (skipped(v)) continue;
     Group& bucket = buckets_[vertex_group[v]];

@@ -1539,15 +1539,20 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     const std::vector<int>& vertex_bone,
                                                     int held_bone, double contact_gap,
                                                     Index* face_shells) {
+  return LoosePieceFinder().find(mesh, vertex_bone, held_bone, contact_gap, face_shells, false);
+}
+
+std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& mesh,
+                                                              const std::vector<int>& vertex_bone,
+                                                              int held_bone, double contact_gap,
+                                                              Index* face_shells, bool same_faces) {
   const Index nv = mesh.num_vertices, nf = mesh.num_faces;
   const double gap = std::isfinite(contact_gap) ? std::max(0.0, contact_gap) : 0.0;
-  std::vector<std::int32_t> parent(nv);
-  for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
-  // A set's root is its smallest vertex (the larger root always joins the smaller one).
-  Index roots = nv;  // each join of two sets leaves one root fewer
+  std::vector<std::int32_t>& parent = parent_;
+  // A set's root is its smallest vertex (the larger root always joins the smaller one), so the
+  // sets and roots below do not depend on whether the faces' shells were found now or kept.
   auto join_roots = [&](std::int32_t a, std::int32_t b) {
     if (a == b) return a;
-    --roots;
     if (a > b) std::swap(a, b);
     parent[b] = a;
     return a;
@@ -1555,26 +1560,43 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
   auto join = [&](std::int32_t a, std::int32_t b) {
     join_roots(find_root(parent, a), find_root(parent, b));
   };
-  for (Index f = 0; f < nf; ++f) {
-    const std::int32_t* t = mesh.faces + 3 * f;
-    // Most faces join nothing new: their vertices already point at one root.
-    const std::int32_t p0 = parent[t[0]];
-    if (parent[t[1]] == p0 && parent[t[2]] == p0 && parent[p0] == p0) continue;
-    const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
-    join_roots(r, find_root(parent, t[2]));
+  if (!same_faces || !have_shells_ || static_cast<Index>(shell_root_.size()) != nv) {
+    parent.resize(nv);
+    for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
+    Index roots = nv;  // each join of two sets leaves one root fewer
+    auto join_counted = [&](std::int32_t a, std::int32_t b) {
+      if (a != b) --roots;
+      return join_roots(a, b);
+    };
+    for (Index f = 0; f < nf; ++f) {
+      const std::int32_t* t = mesh.faces + 3 * f;
+      // Most faces join nothing new: their vertices already point at one root.
+      const std::int32_t p0 = parent[t[0]];
+      if (parent[t[1]] == p0 && parent[t[2]] == p0 && parent[p0] == p0) continue;
+      const std::int32_t r = join_counted(find_root(parent, t[0]), find_root(parent, t[1]));
+      join_counted(r, find_root(parent, t[2]));
+    }
+    shell_root_.resize(nv);
+    for (Index v = 0; v < nv; ++v) shell_root_[v] = find_root(parent, static_cast<std::int32_t>(v));
+    shells_ = roots;
+    have_shells_ = true;
   }
-  if (face_shells != nullptr) *face_shells = roots;
-  if (roots <= 1) return {};
+  if (face_shells != nullptr) *face_shells = shells_;
+  if (shells_ <= 1) return {};
+  parent.assign(shell_root_.begin(), shell_root_.end());
   // Shells touching at exactly the same position (unwelded meshes) are one piece. Positions
   // shared within one shell change nothing, so only the vertices outside the largest shell are
   // sorted; each vertex of the largest shell inside their box looks its position up among them
   // (a figurine with a small separate part: no sort of the whole mesh on every live run).
-  std::vector<Index> shell_size(nv, 0);
+  std::vector<Index>& shell_size = shell_size_;
+  shell_size.assign(nv, 0);
   for (Index v = 0; v < nv; ++v) ++shell_size[find_root(parent, static_cast<std::int32_t>(v))];
   const auto largest = static_cast<std::int32_t>(
       std::max_element(shell_size.begin(), shell_size.end()) - shell_size.begin());
-  std::vector<std::uint8_t> in_largest(nv);
-  std::vector<std::int32_t> order;
+  std::vector<std::uint8_t>& in_largest = in_largest_;
+  in_largest.resize(nv);  // written for every vertex below
+  std::vector<std::int32_t>& order = order_;
+  order.clear();
   Vec3 others_lo = Vec3::Constant(std::numeric_limits<double>::infinity()), others_hi = -others_lo;
   for (Index v = 0; v < nv; ++v) {
     in_largest[v] = find_root(parent, static_cast<std::int32_t>(v)) == largest;
@@ -1600,20 +1622,27 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
     if (it != order.end() && !less(u, *it)) join(u, *it);
   }
   // Pieces: vertices, faces and boxes.
-  std::vector<std::int32_t> piece_of(nv, -1), root_piece(nv, -1);
-  std::vector<std::vector<std::int32_t>> verts;
+  // (The per-piece lists are the kept ones, emptied: pieces 0 .. np - 1 are this call's.)
+  std::vector<std::int32_t>& piece_of = piece_of_;
+  std::vector<std::int32_t>& root_piece = root_piece_;
+  piece_of.resize(nv);  // written for every vertex below
+  root_piece.assign(nv, -1);
+  std::vector<std::vector<std::int32_t>>& verts = verts_;
+  std::size_t np = 0;
   for (Index v = 0; v < nv; ++v) {
     const std::int32_t r = find_root(parent, static_cast<std::int32_t>(v));
     if (root_piece[r] < 0) {
-      root_piece[r] = static_cast<std::int32_t>(verts.size());
-      verts.emplace_back();
+      root_piece[r] = static_cast<std::int32_t>(np);
+      if (verts.size() <= np) verts.emplace_back();
+      verts[np++].clear();
     }
     piece_of[v] = root_piece[r];
     verts[piece_of[v]].push_back(static_cast<std::int32_t>(v));
   }
-  const std::size_t np = verts.size();
   if (np <= 1) return {};
-  std::vector<std::vector<std::int32_t>> faces(np);
+  std::vector<std::vector<std::int32_t>>& faces = faces_;
+  if (faces.size() < np) faces.resize(np);
+  for (std::size_t p = 0; p < np; ++p) faces[p].clear();
   for (Index f = 0; f < nf; ++f) {
     auto& out = faces[piece_of[mesh.faces[3 * f]]];
     out.insert(out.end(), mesh.faces + 3 * f, mesh.faces + 3 * f + 3);

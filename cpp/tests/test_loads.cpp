@@ -253,3 +253,46 @@ TEST(SortedIndex, UpperIndexIsUpperBound) {
   }
   EXPECT_GT(checked, 5000);
 }
+
+TEST(MomentArmIndex, RebuiltIndexAnswersAsAFreshOne) {
+  // One index rebuilt for meshes of different sizes, slab counts and skipped vertices (live
+  // mode keeps one across runs): every answer equals that of an index built fresh.
+  const Skeleton s = tee();
+  const LoadTree tree = build_load_tree(s, -1, {});
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  MomentArmIndex kept;
+  int checked = 0;
+  for (const int per_bone : {900, 150, 400}) {
+    std::vector<double> xyz;
+    std::vector<int> vertex_bone;
+    for (int b = 0; b < s.num_bones(); ++b)
+      for (int k = 0; k < per_bone; ++k) {
+        const double t = (0.5 * (u(rng) + 1.0)) * s.length(b);
+        const Vec3 p = s.heads[b] + t * s.direction(b) + Vec3(u(rng), u(rng), u(rng)) * 3.0;
+        xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+        vertex_bone.push_back(b);
+      }
+    const Index nv = static_cast<Index>(vertex_bone.size());
+    const MeshView mesh{xyz.data(), nv, nullptr, 0};
+    std::vector<std::vector<double>> params(s.num_bones());
+    for (int b = 0; b < s.num_bones(); ++b) {
+      const int count = per_bone / 50 + b;
+      for (int k = 0; k <= count + 1; ++k) params[b].push_back(k * s.length(b) / (count + 1));
+    }
+    std::vector<std::uint8_t> skip(nv, 0);
+    for (Index v = per_bone % 3; v < nv; v += 5) skip[v] = 1;
+    const std::vector<std::uint8_t>* skipped = per_bone == 150 ? &skip : nullptr;
+    kept.build(mesh, s, tree, vertex_bone, params, skipped);
+    const MomentArmIndex fresh(mesh, s, tree, vertex_bone, params, skipped);
+    for (int b = 0; b < s.num_bones(); ++b)
+      for (int i = 0; i < static_cast<int>(params[b].size()); ++i)
+        for (const bool plus : {true, false}) {
+          const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + Vec3(0.2, 0.1, -0.3);
+          EXPECT_EQ(kept.farthest(b, i, plus, c), fresh.farthest(b, i, plus, c))
+              << "mesh of " << nv << " bone " << b << " boundary " << i;
+          ++checked;
+        }
+  }
+  EXPECT_GT(checked, 100);
+}

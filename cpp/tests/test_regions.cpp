@@ -776,3 +776,50 @@ TEST(Regions, LoosePiecesCountsFaceShellsLikeASearch) {
     EXPECT_EQ(face_shells, components) << "trial " << trial;
   }
 }
+
+TEST(Regions, LoosePieceFinderKeptAcrossMovesAnswersAsAFreshSearch) {
+  // A bar (the held piece), a small box and a prism, with the faces fixed and the vertices moved
+  // between calls (live mode): the box floats apart, sinks into the bar, touches the bar's end at
+  // exactly shared positions, then floats again; the kept finder (shells of the first call, kept
+  // arrays) lists the same loose pieces as a fresh loose_pieces() each time.
+  using osteon::testing::prism;
+  using osteon::testing::rectangle;
+  const auto bar = prism(rectangle(4, 4), 40, 11);
+  const auto box = prism(rectangle(2, 2), 2, 2);
+  const auto rod = prism(rectangle(1, 1), 6, 3);
+  std::vector<std::int32_t> faces;
+  std::vector<double> rest;
+  for (const auto* part : {&bar, &box, &rod}) {
+    const auto base = static_cast<std::int32_t>(rest.size() / 3);
+    for (std::int32_t k : part->f) faces.push_back(base + k);
+    rest.insert(rest.end(), part->v.begin(), part->v.end());
+  }
+  const Index nv = static_cast<Index>(rest.size() / 3);
+  const Index box_first = static_cast<Index>(bar.v.size() / 3);
+  const Index rod_first = box_first + static_cast<Index>(box.v.size() / 3);
+  const std::vector<int> vertex_bone(nv, 0);
+  // Offsets (mm) of the box and of the rod for each call.
+  const Vec3 box_at[] = {{60, 0, 0}, {20, 0, 0}, {40, 1, 1}, {60, 0, 0}, {-1, 0, 0}};
+  const Vec3 rod_at[] = {{0, 30, 0}, {10, 0, 0}, {17, 0, 0}, {17, 0, 0}, {0, 50, 0}};
+  LoosePieceFinder finder;
+  int loose_seen = 0;
+  for (int call = 0; call < 5; ++call) {
+    std::vector<double> xyz = rest;
+    for (Index v = box_first; v < nv; ++v) {
+      const Vec3& at = v < rod_first ? box_at[call] : rod_at[call];
+      for (int k = 0; k < 3; ++k) xyz[3 * v + k] += at[k];
+    }
+    const MeshView mesh{xyz.data(), nv, faces.data(), static_cast<Index>(faces.size() / 3)};
+    Index kept_shells = -1, fresh_shells = -1;
+    const auto kept = finder.find(mesh, vertex_bone, 0, 0.2, &kept_shells, true);
+    const auto fresh = loose_pieces(mesh, vertex_bone, 0, 0.2, &fresh_shells);
+    EXPECT_EQ(kept, fresh) << "call " << call;
+    EXPECT_EQ(kept_shells, 3);
+    EXPECT_EQ(fresh_shells, 3);
+    loose_seen += static_cast<int>(kept.size());
+  }
+  // Both apart; both inside the bar; the box on the bar's end face (a corner at one of the
+  // bar's own positions: one piece) and the rod inside; the box apart again (the last call's
+  // joins are not kept) and the rod inside; the box through the bar's end and the rod apart.
+  EXPECT_EQ(loose_seen, 2 + 0 + 0 + 1 + 1);
+}

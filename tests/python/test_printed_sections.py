@@ -179,6 +179,30 @@ def test_loose_piece_is_no_load_point():
     np.testing.assert_allclose(a.vertex_stress[:len(bar[0])], bar_only.vertex_stress, rtol=1e-12)
 
 
+def test_reused_analyzer_finds_loose_pieces_as_a_fresh_analysis():
+    # Live mode: one Analyzer, faces fixed, the capsule moved between runs: beyond the bar's end
+    # (loose: the moment is that of the bar alone), inside the bar (attached), and beyond again.
+    # Each run equals a fresh analysis of the same vertices (the kept search forgets the last
+    # run's pieces).
+    bar = prism(rectangle(4, 4), 40)
+    ball = cylinder_along((70, 0, 0), (74, 0, 0), 2.0, n=16, stations=4)
+    v, f = merge(bar, ball)
+    start = len(bar[0])
+    an = osteon.Analyzer(f, len(v), _bone(40), interval=4, force=20.0)
+    bar_only = osteon.analyze(*bar, _bone(40), interval=4, force=20.0)
+    for shift, loose in ((0.0, True), (-50.0, False), (10.0, True)):
+        moved = v.copy()
+        moved[start:, 0] += shift
+        again = an.run(moved)
+        fresh = osteon.analyze(moved, f, _bone(40), interval=4, force=20.0)
+        assert [list(p) for p in again.loose_pieces] == [list(p) for p in fresh.loose_pieces]
+        assert len(again.loose_pieces) == int(loose)
+        np.testing.assert_array_equal(again.moment, fresh.moment)
+        np.testing.assert_array_equal(again.vertex_stress, fresh.vertex_stress)
+        if loose:
+            np.testing.assert_allclose(again.moment, bar_only.moment, rtol=1e-12)
+
+
 @pytest.mark.parametrize(("inner", "expect"), [
     (4.0, np.cos(np.pi / 64)),  # a tube r 5 / r 4: its wall (parallel 64-gon edges cos(π/64) apart)
     (None, 10 * np.cos(np.pi / 64)),  # a solid round: its diameter (across flats)

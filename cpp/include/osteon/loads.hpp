@@ -41,6 +41,15 @@ class MomentArmIndex {
                  const std::vector<int>& vertex_bone,
                  const std::vector<std::vector<double>>& slab_params,
                  const std::vector<std::uint8_t>* skip = nullptr);
+  /// An empty index (build() before farthest()).
+  MomentArmIndex() = default;
+  /// (Re)builds the index, as the constructor; the storage of an earlier build is reused (an
+  /// index kept across live runs allocates nothing once the mesh size is steady). `tree` must
+  /// outlive the index's use.
+  void build(const MeshView& mesh, const Skeleton& skeleton, const LoadTree& tree,
+             const std::vector<int>& vertex_bone,
+             const std::vector<std::vector<double>>& slab_params,
+             const std::vector<std::uint8_t>* skip = nullptr);
 
   /// Farthest downstream vertex from `center` (mm) for a section of `bone` at slab boundary
   /// `boundary` (index into slab_params[bone]); downstream is the far side (plus = beyond the
@@ -54,7 +63,7 @@ class MomentArmIndex {
     Vec3 lo, hi;
     Index begin = 0, end = 0;
   };
-  const LoadTree* tree_;
+  const LoadTree* tree_ = nullptr;
   std::vector<std::vector<double>> slab_params_;
   std::vector<Index> group_offset_;  // B+1: first group of each bone
   std::vector<Group> groups_;        // slabs of every bone
@@ -73,6 +82,13 @@ class MomentArmIndex {
   // would cost as much as the scatter that fills them).
   std::unique_ptr<double[]> packed_xyz_;   // vertices grouped by (bone, slab), xyz interleaved, mm
   std::unique_ptr<Index[]> packed_index_;  // original vertex index of each packed vertex
+  Index packed_capacity_ = 0;              // vertices packed_xyz_ and packed_index_ have room for
+  // Scratch of build(), kept for its storage.
+  std::unique_ptr<Index[]> vertex_group_;
+  std::unique_ptr<double[]> vertex_angle_;
+  Index vertex_capacity_ = 0;
+  std::vector<Index> group_count_, bucket_count_, bucket_fill_;
+  std::vector<Vec3> axis_, frame_u_, frame_v_;
 };
 
 }  // namespace osteon

@@ -112,4 +112,29 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     int held_bone, double contact_gap = 0.0,
                                                     Index* face_shells = nullptr);
 
+/// loose_pieces() for repeated use (an Analyzer's live runs): the same answer, with the working
+/// arrays kept from call to call (a live update allocates and frees no memory for it: freed
+/// arrays go back to the system and their pages come back zero-filled, at a cost per page) and,
+/// when `same_faces`, the faces' shells of the previous call reused (they do not depend on the
+/// vertices' positions).
+class LoosePieceFinder {
+ public:
+  /// As loose_pieces(mesh, vertex_bone, held_bone, contact_gap (mm), face_shells); same_faces:
+  /// the mesh's faces and vertex count are those of the previous call.
+  std::vector<std::vector<std::int32_t>> find(const MeshView& mesh,
+                                              const std::vector<int>& vertex_bone, int held_bone,
+                                              double contact_gap, Index* face_shells,
+                                              bool same_faces);
+
+ private:
+  bool have_shells_ = false;
+  Index shells_ = 0;                      // shells of the faces alone
+  std::vector<std::int32_t> shell_root_;  // #V the smallest vertex of each vertex's shell
+  std::vector<std::int32_t> parent_, order_, piece_of_, root_piece_;
+  std::vector<Index> shell_size_;
+  std::vector<std::uint8_t> in_largest_;
+  // Per piece: its vertices and faces (kept lists, emptied for each call).
+  std::vector<std::vector<std::int32_t>> verts_, faces_;
+};
+
 }  // namespace osteon
