@@ -1563,22 +1563,24 @@ std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& me
   if (!same_faces || !have_shells_ || static_cast<Index>(shell_root_.size()) != nv) {
     parent.resize(nv);
     for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
-    Index roots = nv;  // each join of two sets leaves one root fewer
-    auto join_counted = [&](std::int32_t a, std::int32_t b) {
-      if (a != b) --roots;
-      return join_roots(a, b);
-    };
+    used_.assign(nv, 0);
     for (Index f = 0; f < nf; ++f) {
       const std::int32_t* t = mesh.faces + 3 * f;
+      used_[t[0]] = used_[t[1]] = used_[t[2]] = 1;
       // Most faces join nothing new: their vertices already point at one root.
       const std::int32_t p0 = parent[t[0]];
       if (parent[t[1]] == p0 && parent[t[2]] == p0 && parent[p0] == p0) continue;
-      const std::int32_t r = join_counted(find_root(parent, t[0]), find_root(parent, t[1]));
-      join_counted(r, find_root(parent, t[2]));
+      const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
+      join_roots(r, find_root(parent, t[2]));
     }
+    // A vertex of no face is not printed: it is no shell (a stray vertex of a modelled figurine
+    // would otherwise make it two shells and send every live run through the search below).
     shell_root_.resize(nv);
-    for (Index v = 0; v < nv; ++v) shell_root_[v] = find_root(parent, static_cast<std::int32_t>(v));
-    shells_ = roots;
+    shells_ = 0;
+    for (Index v = 0; v < nv; ++v) {
+      shell_root_[v] = find_root(parent, static_cast<std::int32_t>(v));
+      shells_ += used_[v] && shell_root_[v] == v;
+    }
     have_shells_ = true;
   }
   if (face_shells != nullptr) *face_shells = shells_;
@@ -1590,7 +1592,8 @@ std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& me
   // (a figurine with a small separate part: no sort of the whole mesh on every live run).
   std::vector<Index>& shell_size = shell_size_;
   shell_size.assign(nv, 0);
-  for (Index v = 0; v < nv; ++v) ++shell_size[find_root(parent, static_cast<std::int32_t>(v))];
+  for (Index v = 0; v < nv; ++v)
+    if (used_[v]) ++shell_size[find_root(parent, static_cast<std::int32_t>(v))];
   const auto largest = static_cast<std::int32_t>(
       std::max_element(shell_size.begin(), shell_size.end()) - shell_size.begin());
   std::vector<std::uint8_t>& in_largest = in_largest_;
@@ -1600,7 +1603,7 @@ std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& me
   Vec3 others_lo = Vec3::Constant(std::numeric_limits<double>::infinity()), others_hi = -others_lo;
   for (Index v = 0; v < nv; ++v) {
     in_largest[v] = find_root(parent, static_cast<std::int32_t>(v)) == largest;
-    if (in_largest[v]) continue;
+    if (in_largest[v] || !used_[v]) continue;
     order.push_back(static_cast<std::int32_t>(v));
     others_lo = others_lo.cwiseMin(mesh.vertex(v));
     others_hi = others_hi.cwiseMax(mesh.vertex(v));
@@ -1630,6 +1633,10 @@ std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& me
   std::vector<std::vector<std::int32_t>>& verts = verts_;
   std::size_t np = 0;
   for (Index v = 0; v < nv; ++v) {
+    if (!used_[v]) {
+      piece_of[v] = -1;
+      continue;
+    }
     const std::int32_t r = find_root(parent, static_cast<std::int32_t>(v));
     if (root_piece[r] < 0) {
       root_piece[r] = static_cast<std::int32_t>(np);
@@ -1652,6 +1659,7 @@ std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& me
   std::vector<Index> held_count(np, 0);
   for (Index v = 0; v < nv; ++v) {
     const int p = piece_of[v];
+    if (p < 0) continue;
     lo[p] = lo[p].cwiseMin(mesh.vertex(v));
     hi[p] = hi[p].cwiseMax(mesh.vertex(v));
     held_count[p] += vertex_bone[v] == held_bone;

@@ -717,7 +717,7 @@ TEST(Regions, SimplifyClosedIsClippersSimplifyPath) {
 TEST(Regions, LoosePiecesCountsFaceShellsLikeASearch) {
   // Shells of random faces (vertex indices shuffled, faces interleaved, isolated vertices): the
   // face shells counted (union-find with a skip for faces that join nothing) equal the connected
-  // components of a search over the faces.
+  // components of a search over the faces; a vertex of no face (not printed) is no shell.
   std::mt19937 rng(3);
   for (int trial = 0; trial < 40; ++trial) {
     const int shells = 1 + trial % 6, per = 3 + trial % 9, isolated = trial % 3;
@@ -755,7 +755,7 @@ TEST(Regions, LoosePiecesCountsFaceShellsLikeASearch) {
     std::vector<std::uint8_t> seen(nv, 0);
     Index components = 0;
     for (int v = 0; v < nv; ++v) {
-      if (seen[v]) continue;
+      if (seen[v] || adj[v].empty()) continue;
       ++components;
       std::vector<int> stack{v};
       seen[v] = 1;
@@ -774,6 +774,7 @@ TEST(Regions, LoosePiecesCountsFaceShellsLikeASearch) {
     Index face_shells = -1;
     loose_pieces(mesh, vertex_bone, 0, 0.0, &face_shells);
     EXPECT_EQ(face_shells, components) << "trial " << trial;
+    EXPECT_EQ(face_shells, shells) << "trial " << trial;
   }
 }
 
@@ -822,4 +823,39 @@ TEST(Regions, LoosePieceFinderKeptAcrossMovesAnswersAsAFreshSearch) {
   // bar's own positions: one piece) and the rod inside; the box apart again (the last call's
   // joins are not kept) and the rod inside; the box through the bar's end and the rod apart.
   EXPECT_EQ(loose_seen, 2 + 0 + 0 + 1 + 1);
+}
+
+TEST(Regions, AVertexOfNoFaceIsNoPiece) {
+  // A bar, a box floating 0.3 mm past its end, and a stray vertex (in no face) between them,
+  // 0.15 mm from each: the stray vertex is not printed, so it neither counts as a shell nor
+  // holds the box on (contact gap 0.2 mm); the box is loose.
+  using osteon::testing::prism;
+  using osteon::testing::rectangle;
+  const auto bar = prism(rectangle(4, 4), 40, 11);
+  const auto box = prism(rectangle(2, 2), 2, 2);
+  std::vector<double> xyz = bar.v;
+  std::vector<std::int32_t> faces = bar.f;
+  const auto base = static_cast<std::int32_t>(xyz.size() / 3);
+  for (std::size_t k = 0; k < box.v.size(); k += 3)
+    xyz.insert(xyz.end(), {box.v[k] + 40.3, box.v[k + 1], box.v[k + 2]});
+  for (std::int32_t k : box.f) faces.push_back(base + k);
+  xyz.insert(xyz.end(), {40.15, 0.0, 0.0});
+  const Index nv = static_cast<Index>(xyz.size() / 3);
+  const MeshView mesh{xyz.data(), nv, faces.data(), static_cast<Index>(faces.size() / 3)};
+  const std::vector<int> vertex_bone(nv, 0);
+  Index face_shells = -1;
+  const auto loose = loose_pieces(mesh, vertex_bone, 0, 0.2, &face_shells);
+  EXPECT_EQ(face_shells, 2);
+  ASSERT_EQ(loose.size(), 1u);
+  std::vector<std::int32_t> box_vertices;
+  for (std::int32_t v = base; v < nv - 1; ++v) box_vertices.push_back(v);
+  EXPECT_EQ(loose[0], box_vertices);
+  // Only the bar and the stray vertex: one shell, nothing loose.
+  std::vector<double> bar_xyz = bar.v;
+  bar_xyz.insert(bar_xyz.end(), {60.0, 0.0, 0.0});
+  const MeshView lone{bar_xyz.data(), static_cast<Index>(bar_xyz.size() / 3), bar.f.data(),
+                      static_cast<Index>(bar.f.size() / 3)};
+  EXPECT_TRUE(
+      loose_pieces(lone, std::vector<int>(bar_xyz.size() / 3, 0), 0, 0.2, &face_shells).empty());
+  EXPECT_EQ(face_shells, 1);
 }

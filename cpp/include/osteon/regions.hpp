@@ -105,8 +105,9 @@ namespace osteon {
 /// they are closer than `contact_gap` mm (a vertex of either within that distance of a face of
 /// the other): a printer fuses a gap narrower than it can print. Returns the vertex indices of
 /// each loose piece. `face_shells`, when given, receives the number of shells the faces alone
-/// make (shared vertex indices; positions not used): 1 means no loose piece whatever the
-/// vertices' positions, which a caller with fixed faces (Analyzer) may keep.
+/// make (shared vertex indices; positions not used; a vertex of no face is not printed and is no
+/// shell, nor part of any piece): 1 means no loose piece whatever the vertices' positions, which
+/// a caller with fixed faces (Analyzer) may keep.
 std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
                                                     const std::vector<int>& vertex_bone,
                                                     int held_bone, double contact_gap = 0.0,
@@ -130,6 +131,7 @@ class LoosePieceFinder {
   bool have_shells_ = false;
   Index shells_ = 0;                      // shells of the faces alone
   std::vector<std::int32_t> shell_root_;  // #V the smallest vertex of each vertex's shell
+  std::vector<std::uint8_t> used_;        // #V 1: the vertex is a corner of some face
   std::vector<std::int32_t> parent_, order_, piece_of_, root_piece_;
   std::vector<Index> shell_size_;
   std::vector<std::uint8_t> in_largest_;
