@@ -260,7 +260,8 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             loose = face_shells == 1 ? std::vector<std::vector<std::int32_t>>{}
                                      : loose_finder.find(mesh, run.vertex_bone, tree.held_bone,
                                                          0.5 * options.min_thickness, &face_shells,
-                                                         /*same_faces=*/true);
+                                                         /*same_faces=*/true,
+                                                         run.grid_built ? &run.grid : nullptr);
             loose_vertex.assign(num_vertices, 0);
             for (const auto& piece : loose)
               for (std::int32_t v : piece) loose_vertex[v] = 1;

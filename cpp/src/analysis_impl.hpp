@@ -193,6 +193,7 @@ struct Analyzer::Impl {
   int num_bones = 0;
   bool has_weights = false;  // weights given: `dominant` holds each vertex's bone (-1: none)
   std::vector<int> dominant;
+  std::vector<double> unweighted_xyz;  // scratch: positions of the vertices no bone weighs, mm
 
   // State of the last run.
   std::vector<SectionSpec> specs;

@@ -95,10 +95,19 @@ void Analyzer::Impl::assign_vertex_bones(RunState& run) {
   std::vector<int>& vertex_bone = run.vertex_bone;
   if (has_weights) {
     vertex_bone = dominant;
-    if (std::find(vertex_bone.begin(), vertex_bone.end(), -1) != vertex_bone.end()) {
-      const std::vector<int> nearest = nearest_bones(mesh, sk, threads);
+    // Vertices no bone weighs (an unweighted eye or prop) take their nearest bone: only they
+    // are measured (each vertex's nearest bone does not depend on the others).
+    std::vector<double>& xyz = unweighted_xyz;
+    xyz.clear();
+    for (Index v = 0; v < num_vertices; ++v)
+      if (vertex_bone[v] < 0)
+        xyz.insert(xyz.end(), mesh.vertices + 3 * v, mesh.vertices + 3 * v + 3);
+    if (!xyz.empty()) {
+      const MeshView some{xyz.data(), static_cast<Index>(xyz.size() / 3), nullptr, 0};
+      const std::vector<int> nearest = nearest_bones(some, sk, threads);
+      Index k = 0;
       for (Index v = 0; v < num_vertices; ++v)
-        if (vertex_bone[v] < 0) vertex_bone[v] = nearest[v];
+        if (vertex_bone[v] < 0) vertex_bone[v] = nearest[k++];
     }
   } else {
     vertex_bone = nearest_bones(mesh, sk, threads);

@@ -1497,15 +1497,50 @@ int find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
   return i;
 }
 
-// True when point p lies inside the closed triangle set `faces` (parity of crossings of a ray).
-bool inside_shell(const MeshView& mesh, const std::vector<std::int32_t>& faces, const Vec3& p) {
-  const Vec3 dir = Vec3(1.0, 0.3141592653589793, 0.2718281828459045).normalized();
+// The ray of the inside tests: a fixed direction that mesh edges are unlikely to follow.
+Vec3 inside_ray() { return Vec3(1.0, 0.3141592653589793, 0.2718281828459045).normalized(); }
+
+// True when point p lies inside the closed triangle set `faces` (`corners` = 3 per face; parity
+// of crossings of a ray).
+
+bool inside_shell(const MeshView& mesh, const std::int32_t* faces, std::size_t corners,
+                  const Vec3& p) {
+  const Vec3 dir = inside_ray();
   int hits = 0;
-  for (std::size_t k = 0; k < faces.size(); k += 3) {
+  for (std::size_t k = 0; k < corners; k += 3) {
     const Vec3 a = mesh.vertex(faces[k]);
     const Vec3 e1 = mesh.vertex(faces[k + 1]) - a, e2 = mesh.vertex(faces[k + 2]) - a;
     double t = 0.0;
     if (detail::line_hits_triangle(p, dir, a, e1, e2, t) && t > 0.0) ++hits;
+  }
+  return hits % 2 == 1;
+}
+
+// inside_shell over the faces of one piece (shell_of: #V shell of each vertex of a face;
+// piece_of_shell: the piece of each shell; a face belongs to its vertices' shell), visiting only
+// the grid cells that the ray's line passes near: every face the line hits lies in such a cell, and
+// each face is tested as inside_shell tests it, so the parity is the same (a live run's grid is
+// there anyway; the whole held body is not scanned for each sampled vertex).
+bool inside_piece(const MeshView& mesh, const FaceGrid& grid,
+                  const std::vector<std::int32_t>& shell_of,
+                  const std::vector<std::int32_t>& piece_of_shell, std::int32_t piece,
+                  const Vec3& p) {
+  const Vec3 dir = inside_ray();
+  const CutRegion line{p, dir, 0.0};
+  int hits = 0;
+  for (Index k = 0; k < grid.num_blocks(); ++k) {
+    if (!grid.block_near(k, line)) continue;
+    for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+      if (!grid.near(c, line)) continue;
+      const std::int32_t* t = grid.faces() + 3 * grid.begin(c);
+      for (Index f = grid.begin(c); f < grid.end(c); ++f, t += 3) {
+        if (piece_of_shell[shell_of[t[0]]] != piece) continue;
+        const Vec3 a = mesh.vertex(t[0]);
+        const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
+        double hit = 0.0;
+        if (detail::line_hits_triangle(p, dir, a, e1, e2, hit) && hit > 0.0) ++hits;
+      }
+    }
   }
   return hits % 2 == 1;
 }
@@ -1542,69 +1577,100 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
   return LoosePieceFinder().find(mesh, vertex_bone, held_bone, contact_gap, face_shells, false);
 }
 
-std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& mesh,
-                                                              const std::vector<int>& vertex_bone,
-                                                              int held_bone, double contact_gap,
-                                                              Index* face_shells, bool same_faces) {
+void LoosePieceFinder::find_shells(const MeshView& mesh) {
   const Index nv = mesh.num_vertices, nf = mesh.num_faces;
-  const double gap = std::isfinite(contact_gap) ? std::max(0.0, contact_gap) : 0.0;
   std::vector<std::int32_t>& parent = parent_;
-  // A set's root is its smallest vertex (the larger root always joins the smaller one), so the
-  // sets and roots below do not depend on whether the faces' shells were found now or kept.
+  parent.resize(nv);
+  for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
+  // A set's root is its smallest vertex (the larger root always joins the smaller one).
   auto join_roots = [&](std::int32_t a, std::int32_t b) {
     if (a == b) return a;
     if (a > b) std::swap(a, b);
     parent[b] = a;
     return a;
   };
-  auto join = [&](std::int32_t a, std::int32_t b) {
-    join_roots(find_root(parent, a), find_root(parent, b));
-  };
-  if (!same_faces || !have_shells_ || static_cast<Index>(shell_root_.size()) != nv) {
-    parent.resize(nv);
-    for (Index v = 0; v < nv; ++v) parent[v] = static_cast<std::int32_t>(v);
-    used_.assign(nv, 0);
-    for (Index f = 0; f < nf; ++f) {
-      const std::int32_t* t = mesh.faces + 3 * f;
-      used_[t[0]] = used_[t[1]] = used_[t[2]] = 1;
-      // Most faces join nothing new: their vertices already point at one root.
-      const std::int32_t p0 = parent[t[0]];
-      if (parent[t[1]] == p0 && parent[t[2]] == p0 && parent[p0] == p0) continue;
-      const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
-      join_roots(r, find_root(parent, t[2]));
-    }
-    // A vertex of no face is not printed: it is no shell (a stray vertex of a modelled figurine
-    // would otherwise make it two shells and send every live run through the search below).
-    shell_root_.resize(nv);
-    shells_ = 0;
-    for (Index v = 0; v < nv; ++v) {
-      shell_root_[v] = find_root(parent, static_cast<std::int32_t>(v));
-      shells_ += used_[v] && shell_root_[v] == v;
-    }
-    have_shells_ = true;
+  std::vector<std::uint8_t> used(nv, 0);
+  for (Index f = 0; f < nf; ++f) {
+    const std::int32_t* t = mesh.faces + 3 * f;
+    used[t[0]] = used[t[1]] = used[t[2]] = 1;
+    // Most faces join nothing new: their vertices already point at one root.
+    const std::int32_t p0 = parent[t[0]];
+    if (parent[t[1]] == p0 && parent[t[2]] == p0 && parent[p0] == p0) continue;
+    const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
+    join_roots(r, find_root(parent, t[2]));
   }
+  // Shells numbered by their smallest vertex (a root comes before the rest of its set). A vertex
+  // of no face is not printed: it is no shell (a stray vertex of a modelled figurine would
+  // otherwise make it two shells and send every live run through the search).
+  shell_of_.assign(nv, -1);
+  std::int32_t shells = 0;
+  for (Index v = 0; v < nv; ++v) {
+    if (!used[v]) continue;
+    const std::int32_t r = find_root(parent, static_cast<std::int32_t>(v));
+    shell_of_[v] = r == v ? shells++ : shell_of_[r];
+  }
+  shells_ = shells;
+  // Each shell's vertices (ascending) and faces (as in the mesh), and the largest shell.
+  shell_vstart_.assign(shells + 1, 0);
+  shell_fstart_.assign(shells + 1, 0);
+  for (Index v = 0; v < nv; ++v)
+    if (shell_of_[v] >= 0) ++shell_vstart_[shell_of_[v] + 1];
+  for (Index f = 0; f < nf; ++f) ++shell_fstart_[shell_of_[mesh.faces[3 * f]] + 1];
+  largest_ = 0;
+  for (std::int32_t k = 0; k < shells; ++k)
+    if (shell_vstart_[k + 1] > shell_vstart_[largest_ + 1]) largest_ = k;
+  for (std::int32_t k = 0; k < shells; ++k) {
+    shell_vstart_[k + 1] += shell_vstart_[k];
+    shell_fstart_[k + 1] += shell_fstart_[k];
+  }
+  shell_vertices_.resize(shell_vstart_[shells]);
+  shell_faces_.resize(3 * shell_fstart_[shells]);
+  other_vertices_.clear();
+  std::vector<Index> fill(shell_vstart_.begin(), shell_vstart_.end() - 1);
+  for (Index v = 0; v < nv; ++v) {
+    const std::int32_t k = shell_of_[v];
+    if (k < 0) continue;
+    shell_vertices_[fill[k]++] = static_cast<std::int32_t>(v);
+    if (k != largest_) other_vertices_.push_back(static_cast<std::int32_t>(v));
+  }
+  fill.assign(shell_fstart_.begin(), shell_fstart_.end() - 1);
+  for (Index f = 0; f < nf; ++f) {
+    const std::int32_t* t = mesh.faces + 3 * f;
+    std::copy(t, t + 3, shell_faces_.begin() + 3 * fill[shell_of_[t[0]]]++);
+  }
+  have_shells_ = true;
+}
+
+std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& mesh,
+                                                              const std::vector<int>& vertex_bone,
+                                                              int held_bone, double contact_gap,
+                                                              Index* face_shells, bool same_faces,
+                                                              const FaceGrid* grid) {
+  const Index nv = mesh.num_vertices;
+  const double gap = std::isfinite(contact_gap) ? std::max(0.0, contact_gap) : 0.0;
+  if (!same_faces || !have_shells_ || static_cast<Index>(shell_of_.size()) != nv) find_shells(mesh);
   if (face_shells != nullptr) *face_shells = shells_;
   if (shells_ <= 1) return {};
-  parent.assign(shell_root_.begin(), shell_root_.end());
-  // Shells touching at exactly the same position (unwelded meshes) are one piece. Positions
-  // shared within one shell change nothing, so only the vertices outside the largest shell are
-  // sorted; each vertex of the largest shell inside their box looks its position up among them
-  // (a figurine with a small separate part: no sort of the whole mesh on every live run).
-  std::vector<Index>& shell_size = shell_size_;
-  shell_size.assign(nv, 0);
-  for (Index v = 0; v < nv; ++v)
-    if (used_[v]) ++shell_size[find_root(parent, static_cast<std::int32_t>(v))];
-  const auto largest = static_cast<std::int32_t>(
-      std::max_element(shell_size.begin(), shell_size.end()) - shell_size.begin());
-  std::vector<std::uint8_t>& in_largest = in_largest_;
-  in_largest.resize(nv);  // written for every vertex below
+  const auto shells = static_cast<std::int32_t>(shells_);
+  // Shells touching at exactly the same position (unwelded meshes) are one piece: a union-find
+  // over the shells, whose root is its smallest shell (so the pieces are numbered, below, by
+  // their smallest vertex, as shells are). Positions shared within one shell change nothing, so
+  // only the vertices outside the largest shell are sorted; each vertex of the largest shell
+  // inside their box looks its position up among them (a figurine with a small separate part:
+  // no sort of the whole mesh on every live run).
+  std::vector<std::int32_t>& parent = parent_;
+  parent.resize(shells);
+  for (std::int32_t k = 0; k < shells; ++k) parent[k] = k;
+  auto join = [&](std::int32_t u, std::int32_t v) {
+    std::int32_t a = find_root(parent, shell_of_[u]), b = find_root(parent, shell_of_[v]);
+    if (a == b) return;
+    if (a > b) std::swap(a, b);
+    parent[b] = a;
+  };
   std::vector<std::int32_t>& order = order_;
-  order.clear();
+  order.assign(other_vertices_.begin(), other_vertices_.end());
   Vec3 others_lo = Vec3::Constant(std::numeric_limits<double>::infinity()), others_hi = -others_lo;
-  for (Index v = 0; v < nv; ++v) {
-    in_largest[v] = find_root(parent, static_cast<std::int32_t>(v)) == largest;
-    if (in_largest[v] || !used_[v]) continue;
-    order.push_back(static_cast<std::int32_t>(v));
+  for (std::int32_t v : order) {
     others_lo = others_lo.cwiseMin(mesh.vertex(v));
     others_hi = others_hi.cwiseMax(mesh.vertex(v));
   }
@@ -1616,50 +1682,72 @@ std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& me
   std::sort(order.begin(), order.end(), less);
   for (std::size_t k = 1; k < order.size(); ++k)
     if (!less(order[k - 1], order[k])) join(order[k - 1], order[k]);
-  for (Index v = 0; v < nv; ++v) {
-    if (!in_largest[v]) continue;
-    const Vec3 p = mesh.vertex(v);
+  for (Index k = shell_vstart_[largest_], e = shell_vstart_[largest_ + 1]; k < e; ++k) {
+    const std::int32_t u = shell_vertices_[k];
+    const Vec3 p = mesh.vertex(u);
     if ((p.array() < others_lo.array()).any() || (p.array() > others_hi.array()).any()) continue;
-    const auto u = static_cast<std::int32_t>(v);
     const auto it = std::lower_bound(order.begin(), order.end(), u, less);
     if (it != order.end() && !less(u, *it)) join(u, *it);
   }
-  // Pieces: vertices, faces and boxes.
-  // (The per-piece lists are the kept ones, emptied: pieces 0 .. np - 1 are this call's.)
-  std::vector<std::int32_t>& piece_of = piece_of_;
-  std::vector<std::int32_t>& root_piece = root_piece_;
-  piece_of.resize(nv);  // written for every vertex below
-  root_piece.assign(nv, -1);
-  std::vector<std::vector<std::int32_t>>& verts = verts_;
+  // Pieces: shells, or unions of shells (their vertices in ascending order, their faces in any:
+  // every test below on a piece's faces asks whether some face does something).
+  std::vector<std::int32_t>& piece_of_shell = piece_of_shell_;
+  piece_of_shell.assign(shells, -1);
   std::size_t np = 0;
-  for (Index v = 0; v < nv; ++v) {
-    if (!used_[v]) {
-      piece_of[v] = -1;
-      continue;
-    }
-    const std::int32_t r = find_root(parent, static_cast<std::int32_t>(v));
-    if (root_piece[r] < 0) {
-      root_piece[r] = static_cast<std::int32_t>(np);
-      if (verts.size() <= np) verts.emplace_back();
-      verts[np++].clear();
-    }
-    piece_of[v] = root_piece[r];
-    verts[piece_of[v]].push_back(static_cast<std::int32_t>(v));
+  for (std::int32_t k = 0; k < shells; ++k) {
+    const std::int32_t r = find_root(parent, k);
+    if (piece_of_shell[r] < 0) piece_of_shell[r] = static_cast<std::int32_t>(np++);
+    piece_of_shell[k] = piece_of_shell[r];
   }
   if (np <= 1) return {};
-  std::vector<std::vector<std::int32_t>>& faces = faces_;
-  if (faces.size() < np) faces.resize(np);
-  for (std::size_t p = 0; p < np; ++p) faces[p].clear();
-  for (Index f = 0; f < nf; ++f) {
-    auto& out = faces[piece_of[mesh.faces[3 * f]]];
-    out.insert(out.end(), mesh.faces + 3 * f, mesh.faces + 3 * f + 3);
+  struct Span {
+    const std::int32_t* first = nullptr;
+    std::size_t count = 0;
+    const std::int32_t* begin() const { return first; }
+    const std::int32_t* end() const { return first + count; }
+    std::size_t size() const { return count; }
+    bool empty() const { return count == 0; }
+    std::int32_t operator[](std::size_t k) const { return first[k]; }
+  };
+  std::vector<Span> verts(np), faces(np);
+  std::vector<std::int32_t> piece_shells(np, 0), slot(np, -1);
+  for (std::int32_t k = 0; k < shells; ++k) ++piece_shells[piece_of_shell[k]];
+  std::size_t merged = 0;  // pieces of several shells: their lists are built in merged_
+  for (std::int32_t k = 0; k < shells; ++k) {
+    const std::size_t q = piece_of_shell[k];
+    const Index v0 = shell_vstart_[k], v1 = shell_vstart_[k + 1];
+    const Index f0 = 3 * shell_fstart_[k], f1 = 3 * shell_fstart_[k + 1];
+    if (piece_shells[q] == 1) {
+      verts[q] = {shell_vertices_.data() + v0, static_cast<std::size_t>(v1 - v0)};
+      faces[q] = {shell_faces_.data() + f0, static_cast<std::size_t>(f1 - f0)};
+      continue;
+    }
+    if (slot[q] < 0) {
+      slot[q] = static_cast<std::int32_t>(merged++);
+      if (merged_.size() < 2 * merged) merged_.resize(2 * merged);
+      merged_[2 * slot[q]].clear();
+      merged_[2 * slot[q] + 1].clear();
+    }
+    std::vector<std::int32_t>& vs = merged_[2 * slot[q]];
+    std::vector<std::int32_t>& fs = merged_[2 * slot[q] + 1];
+    vs.insert(vs.end(), shell_vertices_.begin() + v0, shell_vertices_.begin() + v1);
+    fs.insert(fs.end(), shell_faces_.begin() + f0, shell_faces_.begin() + f1);
+  }
+  for (std::size_t q = 0; q < np; ++q) {
+    if (slot[q] < 0) continue;
+    std::vector<std::int32_t>& vs = merged_[2 * slot[q]];
+    const std::vector<std::int32_t>& fs = merged_[2 * slot[q] + 1];
+    std::sort(vs.begin(), vs.end());
+    verts[q] = {vs.data(), vs.size()};
+    faces[q] = {fs.data(), fs.size()};
   }
   std::vector<Vec3> lo(np, Vec3::Constant(std::numeric_limits<double>::infinity())),
       hi(np, Vec3::Constant(-std::numeric_limits<double>::infinity()));
   std::vector<Index> held_count(np, 0);
   for (Index v = 0; v < nv; ++v) {
-    const int p = piece_of[v];
-    if (p < 0) continue;
+    const std::int32_t k = shell_of_[v];
+    if (k < 0) continue;
+    const int p = piece_of_shell[k];
     lo[p] = lo[p].cwiseMin(mesh.vertex(v));
     hi[p] = hi[p].cwiseMax(mesh.vertex(v));
     held_count[p] += vertex_bone[v] == held_bone;
@@ -1722,7 +1810,12 @@ std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& me
       if (faces[into].empty()) return false;
       const std::size_t n = verts[from].size(), step = std::max<std::size_t>(1, n / 16);
       for (std::size_t k = 0; k < n; k += step)
-        if (inside_shell(mesh, faces[into], mesh.vertex(verts[from][k]))) return true;
+        if (grid != nullptr
+                ? inside_piece(mesh, *grid, shell_of_, piece_of_shell,
+                               static_cast<std::int32_t>(into), mesh.vertex(verts[from][k]))
+                : inside_shell(mesh, faces[into].begin(), faces[into].size(),
+                               mesh.vertex(verts[from][k])))
+          return true;
       return false;
     };
     if (some_inside(a, b) || some_inside(b, a)) return true;
@@ -1774,7 +1867,7 @@ std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& me
       }
   std::vector<std::vector<std::int32_t>> loose;
   for (std::size_t p = 0; p < np; ++p)
-    if (!attached[p] && !faces[p].empty()) loose.push_back(std::move(verts[p]));
+    if (!attached[p] && !faces[p].empty()) loose.emplace_back(verts[p].begin(), verts[p].end());
   return loose;
 }
 

@@ -121,22 +121,28 @@ std::vector<std::vector<std::int32_t>> loose_pieces(const MeshView& mesh,
 class LoosePieceFinder {
  public:
   /// As loose_pieces(mesh, vertex_bone, held_bone, contact_gap (mm), face_shells); same_faces:
-  /// the mesh's faces and vertex count are those of the previous call.
+  /// the mesh's faces and vertex count are those of the previous call; grid (optional): a face
+  /// grid built from this mesh, which the inside tests walk along their ray instead of testing
+  /// every face of a piece (the same answer).
   std::vector<std::vector<std::int32_t>> find(const MeshView& mesh,
                                               const std::vector<int>& vertex_bone, int held_bone,
                                               double contact_gap, Index* face_shells,
-                                              bool same_faces);
+                                              bool same_faces, const FaceGrid* grid = nullptr);
 
  private:
+  /// The faces' shells (they do not depend on the vertices' positions).
+  void find_shells(const MeshView& mesh);
   bool have_shells_ = false;
-  Index shells_ = 0;                      // shells of the faces alone
-  std::vector<std::int32_t> shell_root_;  // #V the smallest vertex of each vertex's shell
-  std::vector<std::uint8_t> used_;        // #V 1: the vertex is a corner of some face
-  std::vector<std::int32_t> parent_, order_, piece_of_, root_piece_;
-  std::vector<Index> shell_size_;
-  std::vector<std::uint8_t> in_largest_;
-  // Per piece: its vertices and faces (kept lists, emptied for each call).
-  std::vector<std::vector<std::int32_t>> verts_, faces_;
+  Index shells_ = 0;                    // shells of the faces alone
+  std::vector<std::int32_t> shell_of_;  // #V shell of each vertex (by smallest vertex; -1: no face)
+  std::vector<Index> shell_vstart_, shell_fstart_;  // shell k: [start[k], start[k + 1])
+  std::vector<std::int32_t> shell_vertices_;        // each shell's vertices, ascending
+  std::vector<std::int32_t> shell_faces_;           // each shell's faces (3 per face), mesh order
+  std::int32_t largest_ = 0;                        // the shell with the most vertices
+  std::vector<std::int32_t> other_vertices_;        // vertices of the other shells, ascending
+  // Scratch kept for its storage.
+  std::vector<std::int32_t> parent_, order_, piece_of_shell_;
+  std::vector<std::vector<std::int32_t>> merged_;  // lists of pieces of several shells
 };
 
 }  // namespace osteon
