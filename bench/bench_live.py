@@ -8,6 +8,8 @@ evaluated vertex coordinates in the same process.  Target (SPEC section 9): <= 3
 The rig is the bundled sample figurine (scripts/make_sample_rig.py ``--levels 3 --cuts 2``):
 ~107k vertices, 13 bones.  Each round changes a pose-bone scale (Blender evaluates the armature outside the
 timed region), then times ``live.update_now()``; the overlay outlines are timed apart.
+``--extra-shells 2`` adds an unweighted 'eye' inside the head and a 'prop' beside it (a
+multi-shell character: the loose-piece search and nearest bones run on every update).
 """
 
 from __future__ import annotations
@@ -32,6 +34,32 @@ import osteon_blender
 from osteon_blender import live
 
 
+def add_shells(obj, count: int) -> None:
+    """Adds `count` separate icospheres (642 vertices each, in no vertex group) to the mesh: an
+    'eye' inside the head (attached: it lies inside the body) and a 'prop' beside the head (a
+    loose piece). Live mode then runs the loose-piece search and binds them to their nearest
+    bones on every update."""
+    import bmesh
+    from mathutils import Matrix
+
+    co = np.empty(len(obj.data.vertices) * 3)
+    obj.data.vertices.foreach_get("co", co)
+    co = co.reshape(-1, 3)
+    top = co[:, 2].max()
+    head = co[co[:, 2] > top - 0.1 * (top - co[:, 2].min())]
+    eye = head.mean(axis=0)
+    radius = 0.15 * float(np.ptp(head[:, 0]))
+    centers = [eye, eye + np.array([co[:, 0].max() - eye[0] + 4 * radius, 0.0, 0.0])]
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    for c in centers[:count]:
+        bmesh.ops.create_icosphere(bm, subdivisions=3, radius=radius,
+                                   matrix=Matrix.Translation(tuple(c)))
+    bm.to_mesh(obj.data)
+    bm.free()
+    obj.data.update()
+
+
 def main(argv) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=15)
@@ -39,12 +67,17 @@ def main(argv) -> int:
     ap.add_argument("--cuts", type=int, default=2, help="extra edge cuts (3 + 2: ~107k vertices)")
     ap.add_argument("--no-junction-cores", action="store_true",
                     help="the add-on's 'Junction cores' off (whole cuts, docs/junctions.md)")
+    ap.add_argument("--extra-shells", type=int, default=0, choices=(0, 1, 2),
+                    help="separate unweighted shells added to the mesh: 1 an 'eye' inside the "
+                         "head, 2 also a 'prop' floating beside it (a loose piece)")
     args = ap.parse_args(argv)
     import osteon
 
     if not hasattr(bpy.types.Scene, "osteon"):
         osteon_blender.register()
     obj, arm = make_sample_rig.build(levels=args.levels, cuts=args.cuts)
+    if args.extra_shells:
+        add_shells(obj, args.extra_shells)
     bpy.context.view_layer.objects.active = obj
     bpy.context.scene.osteon.junction_cores = not args.no_junction_cores
     nv = len(obj.data.vertices)
@@ -82,9 +115,11 @@ def main(argv) -> int:
     live.stop()
     med_live, med_base = statistics.median(t_live) * 1e3, statistics.median(t_base) * 1e3
     print(f"Blender {bpy.app.version_string}, engine {osteon.__file__}")
-    print(f"rig: {nv} vertices, {len(sess.faces)} triangles, {len(res.names)} bones, "
+    print(f"rig: {nv} vertices ({args.extra_shells} extra shells), {len(sess.faces)} triangles, "
+          f"{len(res.names)} bones, "
           f"{res.analysis.num_sections} sections at {res.analysis.interval:g} mm; "
-          f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}")
+          f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}; "
+          f"{len(res.analysis.loose_pieces)} loose pieces")
     print(f"live update median      {med_live:8.2f} ms   (target <= 33 ms)")
     print(f"foreach_get median      {med_base:8.2f} ms")
     print(f"ratio update / foreach_get {med_live / med_base:6.1f}")
