@@ -99,7 +99,8 @@ void Analyzer::Impl::assign_vertex_bones(RunState& run) {
     // are measured (each vertex's nearest bone does not depend on the others).
     std::vector<double>& xyz = unweighted_xyz;
     xyz.clear();
-    for (Index v = 0; v < num_vertices; ++v)
+    const auto first = std::find(vertex_bone.begin(), vertex_bone.end(), -1);
+    for (Index v = first - vertex_bone.begin(); v < num_vertices; ++v)
       if (vertex_bone[v] < 0)
         xyz.insert(xyz.end(), mesh.vertices + 3 * v, mesh.vertices + 3 * v + 3);
     if (!xyz.empty()) {

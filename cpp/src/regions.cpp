@@ -1592,24 +1592,29 @@ void LoosePieceFinder::find_shells(const MeshView& mesh) {
   std::vector<std::uint8_t> used(nv, 0);
   for (Index f = 0; f < nf; ++f) {
     const std::int32_t* t = mesh.faces + 3 * f;
-    used[t[0]] = used[t[1]] = used[t[2]] = 1;
-    // Most faces join nothing new: their vertices already point at one root.
+    // Most faces join nothing new: their vertices already point at one root (so an earlier
+    // face marked them used; only a face of one vertex thrice, no triangle, marks nothing).
     const std::int32_t p0 = parent[t[0]];
     if (parent[t[1]] == p0 && parent[t[2]] == p0 && parent[p0] == p0) continue;
+    used[t[0]] = used[t[1]] = used[t[2]] = 1;
     const std::int32_t r = join_roots(find_root(parent, t[0]), find_root(parent, t[1]));
     join_roots(r, find_root(parent, t[2]));
   }
   // Shells numbered by their smallest vertex (a root comes before the rest of its set). A vertex
   // of no face is not printed: it is no shell (a stray vertex of a modelled figurine would
   // otherwise make it two shells and send every live run through the search).
-  shell_of_.assign(nv, -1);
-  std::int32_t shells = 0;
+  std::int32_t shells = 0;  // the roots of used vertices
+  for (Index v = 0; v < nv; ++v) shells += used[v] && parent[v] == v;
+  shells_ = shells;
+  have_shells_ = true;
+  shell_of_.assign(nv, -1);  // (its size tells the next call which mesh the shells are of)
+  if (shells <= 1) return;   // no loose piece whatever the positions: nothing more to keep
+  shells = 0;
   for (Index v = 0; v < nv; ++v) {
     if (!used[v]) continue;
     const std::int32_t r = find_root(parent, static_cast<std::int32_t>(v));
     shell_of_[v] = r == v ? shells++ : shell_of_[r];
   }
-  shells_ = shells;
   // Each shell's vertices (ascending) and faces (as in the mesh), and the largest shell.
   shell_vstart_.assign(shells + 1, 0);
   shell_fstart_.assign(shells + 1, 0);
@@ -1638,7 +1643,6 @@ void LoosePieceFinder::find_shells(const MeshView& mesh) {
     const std::int32_t* t = mesh.faces + 3 * f;
     std::copy(t, t + 3, shell_faces_.begin() + 3 * fill[shell_of_[t[0]]]++);
   }
-  have_shells_ = true;
 }
 
 std::vector<std::vector<std::int32_t>> LoosePieceFinder::find(const MeshView& mesh,
