@@ -1500,19 +1500,23 @@ int find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
 // The ray of the inside tests: a fixed direction that mesh edges are unlikely to follow.
 Vec3 inside_ray() { return Vec3(1.0, 0.3141592653589793, 0.2718281828459045).normalized(); }
 
+// True when the inside ray from p crosses triangle t (3 vertex indices). (Inline: the inside
+// tests call it per face.)
+inline bool ray_crosses(const MeshView& mesh, const std::int32_t* t, const Vec3& p,
+                        const Vec3& dir) {
+  const Vec3 a = mesh.vertex(t[0]);
+  const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
+  double hit = 0.0;
+  return detail::line_hits_triangle(p, dir, a, e1, e2, hit) && hit > 0.0;
+}
+
 // True when point p lies inside the closed triangle set `faces` (`corners` = 3 per face; parity
 // of crossings of a ray).
-
 bool inside_shell(const MeshView& mesh, const std::int32_t* faces, std::size_t corners,
                   const Vec3& p) {
   const Vec3 dir = inside_ray();
   int hits = 0;
-  for (std::size_t k = 0; k < corners; k += 3) {
-    const Vec3 a = mesh.vertex(faces[k]);
-    const Vec3 e1 = mesh.vertex(faces[k + 1]) - a, e2 = mesh.vertex(faces[k + 2]) - a;
-    double t = 0.0;
-    if (detail::line_hits_triangle(p, dir, a, e1, e2, t) && t > 0.0) ++hits;
-  }
+  for (std::size_t k = 0; k < corners; k += 3) hits += ray_crosses(mesh, faces + k, p, dir);
   return hits % 2 == 1;
 }
 
@@ -1526,22 +1530,10 @@ bool inside_piece(const MeshView& mesh, const FaceGrid& grid,
                   const std::vector<std::int32_t>& piece_of_shell, std::int32_t piece,
                   const Vec3& p) {
   const Vec3 dir = inside_ray();
-  const CutRegion line{p, dir, 0.0};
   int hits = 0;
-  for (Index k = 0; k < grid.num_blocks(); ++k) {
-    if (!grid.block_near(k, line)) continue;
-    for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
-      if (!grid.near(c, line)) continue;
-      const std::int32_t* t = grid.faces() + 3 * grid.begin(c);
-      for (Index f = grid.begin(c); f < grid.end(c); ++f, t += 3) {
-        if (piece_of_shell[shell_of[t[0]]] != piece) continue;
-        const Vec3 a = mesh.vertex(t[0]);
-        const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
-        double hit = 0.0;
-        if (detail::line_hits_triangle(p, dir, a, e1, e2, hit) && hit > 0.0) ++hits;
-      }
-    }
-  }
+  grid.for_faces_near(CutRegion{p, dir, 0.0}, [&](const std::int32_t* t) {
+    hits += piece_of_shell[shell_of[t[0]]] == piece && ray_crosses(mesh, t, p, dir);
+  });
   return hits % 2 == 1;
 }
 

@@ -342,20 +342,12 @@ void FaceGrid::bound_cell(Index c, const MeshView& mesh, const TightBoxes& boxes
 std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, const Vec3& point,
                                    const Vec3& dir) {
   std::vector<double> hits;
-  const CutRegion line{point, dir, 0.0};
-  for (Index c = 0, k = 0; k < grid.num_blocks(); ++k) {
-    if (!grid.block_near(k, line)) continue;
-    for (c = grid.block_begin(k); c < grid.block_end(k); ++c) {
-      if (!grid.near(c, line)) continue;
-      const std::int32_t* t = grid.faces() + 3 * grid.begin(c);
-      for (Index f = grid.begin(c); f < grid.end(c); ++f, t += 3) {
-        const Vec3 a = mesh.vertex(t[0]);
-        const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
-        double hit = 0.0;
-        if (detail::line_hits_triangle(point, dir, a, e1, e2, hit)) hits.push_back(hit);
-      }
-    }
-  }
+  grid.for_faces_near(CutRegion{point, dir, 0.0}, [&](const std::int32_t* t) {
+    const Vec3 a = mesh.vertex(t[0]);
+    const Vec3 e1 = mesh.vertex(t[1]) - a, e2 = mesh.vertex(t[2]) - a;
+    double hit = 0.0;
+    if (detail::line_hits_triangle(point, dir, a, e1, e2, hit)) hits.push_back(hit);
+  });
   std::sort(hits.begin(), hits.end());
   return hits;
 }

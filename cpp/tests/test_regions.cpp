@@ -802,7 +802,7 @@ TEST(Regions, LoosePieceFinderKeptAcrossMovesAnswersAsAFreshSearch) {
   // Offsets (mm) of the box and of the rod for each call.
   const Vec3 box_at[] = {{60, 0, 0}, {20, 0, 0}, {40, 1, 1}, {60, 0, 0}, {-1, 0, 0}};
   const Vec3 rod_at[] = {{0, 30, 0}, {10, 0, 0}, {17, 0, 0}, {17, 0, 0}, {0, 50, 0}};
-  LoosePieceFinder finder;
+  LoosePieceFinder finder, gridded;  // the second walks a face grid for its inside tests
   int loose_seen = 0;
   for (int call = 0; call < 5; ++call) {
     std::vector<double> xyz = rest;
@@ -815,6 +815,10 @@ TEST(Regions, LoosePieceFinderKeptAcrossMovesAnswersAsAFreshSearch) {
     const auto kept = finder.find(mesh, vertex_bone, 0, 0.2, &kept_shells, true);
     const auto fresh = loose_pieces(mesh, vertex_bone, 0, 0.2, &fresh_shells);
     EXPECT_EQ(kept, fresh) << "call " << call;
+    FaceGrid grid;
+    grid.build(mesh, 12, 1);
+    EXPECT_EQ(gridded.find(mesh, vertex_bone, 0, 0.2, nullptr, true, &grid), fresh)
+        << "call " << call;
     EXPECT_EQ(kept_shells, 3);
     EXPECT_EQ(fresh_shells, 3);
     loose_seen += static_cast<int>(kept.size());

@@ -140,6 +140,19 @@ class FaceGrid {
   bool block_within(Index k, const CutRegion& region) const {
     return region.holds_box(block_center_[k], block_half_[k]);
   }
+  /// Calls fn(t) with the 3 vertex indices of each face of the cells whose box may reach into
+  /// `region` (block by block, cell by cell): every face that meets the region is among them.
+  template <class Fn>
+  void for_faces_near(const CutRegion& region, Fn&& fn) const {
+    for (Index k = 0; k < num_blocks(); ++k) {
+      if (!block_near(k, region)) continue;
+      for (Index c = block_begin(k); c < block_end(k); ++c) {
+        if (!near(c, region)) continue;
+        const std::int32_t* t = faces() + 3 * begin(c);
+        for (Index f = begin(c); f < end(c); ++f, t += 3) fn(t);
+      }
+    }
+  }
   /// True when block k's box meets the slab lo <= dot(n, x) <= hi (and the region, if any).
   bool block_meets(Index k, const Vec3& n, double lo, double hi,
                    const CutRegion* region = nullptr) const {
