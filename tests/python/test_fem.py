@@ -178,3 +178,47 @@ def test_crop_with_no_room_for_the_clamp_fails_that_section_only():
     assert rep.sections == []
     (failed,) = rep.failed
     assert failed["index"] == 7 and "no room for the clamp" in failed["reason"]
+
+
+def _fake_program(path, body):
+    path.write_text("#!/bin/sh\n" + body + "\n")
+    path.chmod(0o755)
+    return str(path)
+
+
+def test_a_gmsh_that_hangs_is_stopped_and_that_section_reported(tmp_path, monkeypatch):
+    # gmsh can loop for ever on a capped crop (a shoulder of the junction rig did, 600 s per
+    # attempt, then a crash with subprocess.TimeoutExpired). Each of the six attempts (three
+    # clamp distances, re-meshed and original triangles) is stopped after mesh_timeout_s; the
+    # section is listed in `failed` with the reason, and the next section is still checked.
+    monkeypatch.setenv("OSTEON_GMSH", _fake_program(tmp_path / "gmsh", "sleep 30"))
+    monkeypatch.setenv("OSTEON_CCX", _fake_program(tmp_path / "ccx", "exit 1"))
+    V, Fc = _bar()
+    secs = [{"index": i, "bone": 0, "center": [x, 0, 0], "normal": [1.0, 0, 0],
+             "load_point": [L, 0, 0], "osteon_stress": 1.0, "area": B * H}
+            for i, x in ((3, 50.0), (4, 60.0))]
+    rep = fem.cross_check(V, Fc, secs, force=F, mode="crop", mesh_timeout_s=0.2,
+                          workdir=str(tmp_path / "run"))
+    assert rep.sections == []
+    assert [f["index"] for f in rep.failed] == [3, 4]
+    assert all("did not finish tet-meshing the surface within 0.2 s" in f["reason"]
+               for f in rep.failed)
+    # full mode: the same stop, raised as the clear RuntimeError the CLI reports
+    with pytest.raises(RuntimeError, match="did not finish tet-meshing"):
+        fem.cross_check(V, Fc, secs[:1], force=F, mode="full", mesh_timeout_s=0.2,
+                        hold_plane=([0, 0, 0], [1, 0, 0]), workdir=str(tmp_path / "full"))
+
+
+@needs_tools
+@pytest.mark.slow
+def test_a_calculix_failure_fails_that_section_only(tmp_path, monkeypatch):
+    # The real gmsh meshes the crop; a CalculiX that fails (exit 1, no results) makes that
+    # section a failure with CalculiX's words, not a crash of the whole check.
+    monkeypatch.setenv("OSTEON_CCX", _fake_program(tmp_path / "ccx", "echo '*ERROR in ccx'; exit 1"))
+    V, Fc = _bar()
+    sec = {"index": 5, "bone": 0, "center": [X, 0, 0], "normal": [1.0, 0, 0],
+           "load_point": [L, 0, 0], "osteon_stress": 1.0, "area": B * H}
+    rep = fem.cross_check(V, Fc, [sec], force=F, mode="crop", workdir=str(tmp_path / "run"))
+    assert rep.sections == []
+    (failed,) = rep.failed
+    assert failed["index"] == 5 and "CalculiX failed" in failed["reason"]

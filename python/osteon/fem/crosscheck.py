@@ -211,6 +211,7 @@ class _Run:
     progress: object
     fine_factor: float
     keep_field: bool = False
+    mesh_timeout_s: float = 600.0  # gmsh stopped after this per meshing attempt
 
 
 def cross_check(
@@ -232,6 +233,7 @@ def cross_check(
     mode="crop",
     clamp_distance=4.0,
     keep_field=False,
+    mesh_timeout_s=None,
 ):
     """Run the FEM cross-check; returns a :class:`FemReport`.
 
@@ -257,6 +259,12 @@ def cross_check(
     ``keep_field=True``: each section's ``extra["field_points_mm"]`` (P, 3) holds the points where
     the plane cuts the tetrahedra and ``extra["field_mpa_per_n"]`` (3, P) σ_nn there per newton
     of force along x, y and z (MPa/N): the stress field on the plane, not only its peak.
+
+    ``mesh_timeout_s``: gmsh is stopped after this many seconds per meshing attempt (default:
+    120 s in crop mode, where a section's small model meshes in seconds and the next clamp
+    distance or the original triangles are tried instead; 600 s in full mode). A section whose
+    every attempt fails, or whose CalculiX run fails, is listed in ``failed`` with the reason;
+    the others are still checked.
     """
     V = np.asarray(vertices, float)
     F = np.asarray(faces)
@@ -268,7 +276,7 @@ def cross_check(
     os.makedirs(wd, exist_ok=True)
     rep = FemReport(force_n=float(force), mode=mode)
     run = _Run(V, F, sections, force, wd, threads, young, poisson, progress, fine_factor,
-               keep_field)
+               keep_field, mesh_timeout_s or (120.0 if mode == "crop" else 600.0))
     try:
         if mode == "crop":
             _cross_check_crop(rep, run, clamp_distance)
@@ -327,6 +335,7 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
                         threads=threads,
                         refine=[(c, 3.0 * r, h)] if remesh else (),
                         remesh=remesh,
+                        timeout=run.mesh_timeout_s,
                     )
                     sec = dict(
                         sec,
@@ -360,9 +369,15 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
         if progress:
             progress(f"section {k + 1}/{len(sections)}: solving {len(nodes)} nodes")
         t1 = time.perf_counter()
-        S = solve(nodes, tets, fixed, cases, sub, young=run.young, poisson=run.poisson,
-                  threads=threads)
-        rep.solve_seconds += time.perf_counter() - t1
+        try:
+            S = solve(nodes, tets, fixed, cases, sub, young=run.young, poisson=run.poisson,
+                      threads=threads)
+        except RuntimeError as e:
+            rep.failed.append({"index": int(sec.get("index", k)), "bone": int(sec.get("bone", -1)),
+                               "reason": str(e)[:200]})
+            continue
+        finally:
+            rep.solve_seconds += time.perf_counter() - t1
         sec = dict(sec, nodes=len(nodes), elements=len(tets))
         _finish_section(rep, k, sec, nodes, tets, S, run.force, run.keep_field)
         rep.mesh_size_mm = max(rep.mesh_size_mm, float(h))
@@ -383,7 +398,8 @@ def _cross_check_full(rep, run: _Run, hold_point, hold_radius, hold_plane, mesh_
     t0 = time.perf_counter()
     for attempt in range(4):  # coarse re-meshing of a detailed surface can fail: refine
         try:
-            nodes, tets = tet_mesh(V, F, mesh_size, wd, threads=threads, refine=refine)
+            nodes, tets = tet_mesh(V, F, mesh_size, wd, threads=threads, refine=refine,
+                                   timeout=run.mesh_timeout_s)
             break
         except RuntimeError:
             if attempt == 3:

@@ -24,7 +24,8 @@ def tet_mesh(vertices, faces, mesh_size, workdir, threads=2, timeout=600, refine
     ``mesh_size`` mm is the element size away from the refined regions; ``refine`` is a list of
     ``(center (3,), radius mm, size mm)`` balls meshed finer (the tested sections).
     ``remesh=False`` keeps the given surface triangles (only the interior is meshed; sizes grow
-    from the surface up to ``mesh_size``).
+    from the surface up to ``mesh_size``). gmsh is stopped after ``timeout`` s; that, like any
+    gmsh failure, raises ``RuntimeError``.
     """
     import trimesh
 
@@ -75,7 +76,13 @@ def tet_mesh(vertices, faces, mesh_size, workdir, threads=2, timeout=600, refine
                 f"Background Field = {m_id};\n"
             )
     cmd = [tools["gmsh"], geo, "-3", "-o", msh, "-nt", str(threads), "-v", "2"]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
+    except subprocess.TimeoutExpired:
+        # gmsh can loop for ever on some surfaces (seen on a capped crop of a shoulder): a
+        # failure the callers try the next set-up on, not a crash
+        raise RuntimeError(f"gmsh did not finish tet-meshing the surface within {timeout:g} s "
+                           "(stopped)") from None
     if p.returncode != 0 or not os.path.exists(msh):
         tail = (p.stdout + p.stderr).strip().splitlines()[-5:]
         raise RuntimeError("gmsh failed to tet-mesh the surface: " + " | ".join(tail))

@@ -53,15 +53,18 @@ def solve(
         CCX_NPROC_STIFFNESS=str(threads),
         CCX_NPROC_RESULTS=str(threads),
     )
-    p = subprocess.run(
-        ["ccx", "-i", "job"] if tools["ccx"] is None else [tools["ccx"], "-i", "job"],
-        cwd=workdir,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        env=env,
-        check=False,
-    )
+    try:
+        p = subprocess.run(
+            ["ccx", "-i", "job"] if tools["ccx"] is None else [tools["ccx"], "-i", "job"],
+            cwd=workdir,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            env=env,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        raise RuntimeError(f"CalculiX did not finish within {timeout:g} s (stopped)") from None
     frd = os.path.join(workdir, "job.frd")
     if p.returncode != 0 or not os.path.exists(frd) or "*ERROR" in p.stdout:
         tail = [ln for ln in (p.stdout + p.stderr).splitlines() if ln.strip()][-6:]
