@@ -7,12 +7,17 @@ hanging from it, its root shaped three ways, each ONE closed mesh plus a one-bon
 * ``cone``: a straight cone from r = 8 mm at the face to r = 3 mm 10 mm below (a sharp corner);
 * ``cylinder``: no flare.
 
-and four held-out rigs (docs/validation.md "Limb roots: a held-out test of the gate"), each also
-66 mm tall (``--height-mm 66`` keeps the size), limb r = 3 mm:
+and four held-out rigs (docs/validation.md "Limb roots: a held-out test of the gate"), limb
+r = 3 mm, 66 mm tall (``--height-mm 66`` keeps the size) but for ``fused`` (80 mm:
+``--height-mm 80``):
 
 * ``fused``: the limb lying fused along a side face of the block (axis 2 mm outside the face
   x = 20, so 1 mm of it is merged with the block) for its top 10 mm (z 10 -> 0), then free and
-  straight for 36 mm (z 0 -> -36), like a forearm along a torso; the bone along the limb;
+  straight for 50 mm (z 0 -> -50), like a forearm along a torso; the bone along the limb. (50,
+  not 36 mm: a plane along the fused part also cuts the block, whose slice below the plane is
+  downstream of it; with 36 mm the block's far bottom corner, not the limb's tip, is the
+  farthest point downstream and so osteon's load point, and `validate --junctions` finds no
+  section to test);
 * ``plate``: the limb (64 mm) hanging perpendicular from a thin plate 40 x 40 x 2 mm (thinner
   than r), the bone from the middle of the plate (z = 1 mm) to the tip;
 * ``necked``: the cylinder, with a neck 2 mm below the face: r = 2 mm for |z + 2| <= 0.75 mm,
@@ -38,7 +43,8 @@ SEGMENTS = 64
 LIMB_RADIUS, LIMB_LENGTH, FLARE, CONE_LENGTH = 3.0, 36.0, 5.0, 10.0  # mm
 BLOCK = (40.0, 40.0, 30.0)  # mm
 KINDS = ("fillet", "cone", "cylinder", "fused", "plate", "necked", "oblique")
-FUSED_OFFSET, FUSED_LENGTH = 2.0, 10.0  # mm: the fused limb's axis outside the face, its length
+# mm: the fused limb's axis outside the face, its fused and free lengths
+FUSED_OFFSET, FUSED_LENGTH, FUSED_FREE = 2.0, 10.0, 50.0
 PLATE, PLATE_LIMB = (40.0, 40.0, 2.0), 64.0  # mm
 NECK_RADIUS, NECK_DEPTH, NECK_FLAT, NECK_RAMP = 2.0, 2.0, 1.5, 1.0  # mm
 OBLIQUE_INSIDE = 20.0  # mm of the oblique limb's axis inside the block
@@ -73,8 +79,8 @@ def build(kind):
     from manifold3d import CrossSection, Manifold
 
     if kind == "fused":
-        limb = Manifold.cylinder(LIMB_LENGTH + FUSED_LENGTH, LIMB_RADIUS, LIMB_RADIUS, SEGMENTS)
-        limb = limb.translate((BLOCK[0] / 2 + FUSED_OFFSET, 0.0, -LIMB_LENGTH))
+        limb = Manifold.cylinder(FUSED_FREE + FUSED_LENGTH, LIMB_RADIUS, LIMB_RADIUS, SEGMENTS)
+        limb = limb.translate((BLOCK[0] / 2 + FUSED_OFFSET, 0.0, -FUSED_FREE))
     elif kind == "plate":
         limb = Manifold.cylinder(PLATE_LIMB + PLATE[2] / 2, LIMB_RADIUS, LIMB_RADIUS, SEGMENTS)
         limb = limb.translate((0.0, 0.0, -PLATE_LIMB))
@@ -96,7 +102,7 @@ def bone(kind):
     """(head, tail) of the rig's one bone, mm."""
     if kind == "fused":
         x = BLOCK[0] / 2 + FUSED_OFFSET
-        return (x, 0.0, FUSED_LENGTH), (x, 0.0, -LIMB_LENGTH)
+        return (x, 0.0, FUSED_LENGTH), (x, 0.0, -FUSED_FREE)
     if kind == "plate":
         return (0.0, 0.0, PLATE[2] / 2), (0.0, 0.0, -PLATE_LIMB)
     if kind == "oblique":
