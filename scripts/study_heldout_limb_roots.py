@@ -37,13 +37,20 @@ on bone b, at the analysis interval h (``a.interval``), with the core's area A_c
    gate (at a given K) holds when no row, in-sample or held-out, is unsafe; it reaches the
    target when, in addition, every row where it passes is within 20 %.
 
+The held-out rigs have one bone, so `validate` tests one section on each; ``--fem-every NAME``
+runs the same FEM check (``osteon.fem.cross_check``, crop mode, one thread) on every junction
+section of rig NAME that `validate --junctions` would accept (``pick_sections`` with no limit per
+bone) and writes ``NAME_every.json`` beside the logs; its sections are added to the table
+("every" rows).
+
 Rows are labelled in-sample (the sections the gate was proposed on: the shared models, the
 junction rig, the fillet / cone / cylinder limb-root rigs) or held-out (the four new rigs).
 Not part of the tests and not used by osteon. Needs shapely, the FEM logs (``--logs DIR``: the
 ``NAME.json`` of each ``osteon validate`` run, see docs/validation.md), the rigs (``--rigs DIR``:
 the output of ``make_junction_rig.py`` and ``make_limb_root_rigs.py``) and the shared models
 (``--data DIR``). Run with osteon importable (PYTHONPATH):
-``python scripts/study_heldout_limb_roots.py --data DIR --rigs DIR --logs DIR``
+``python scripts/study_heldout_limb_roots.py --data DIR --rigs DIR --logs DIR
+[--fem-every NAME]``
 """
 
 from __future__ import annotations
@@ -167,11 +174,51 @@ def mark(e):
     return f"{100 * e:+.1f} %" + (" **unsafe**" if e < UNSAFE else "")
 
 
-def main(data, rigs, logs):
+def analysis_of(argv, data, rigs):
+    """(analysis with outlines, model) as `osteon validate ARGV` makes them."""
     import osteon
     from osteon.cli import common
     from osteon.cli.parser import build_parser
 
+    argv = [x.format(data=data, rigs=rigs) for x in argv]
+    args = build_parser().parse_args(["validate", *argv])
+    settings, model = common.settings_from_args(args), common.load_model_of(args)
+    positional, keyword = common.engine_args(settings, model)
+    return osteon.analyze(*positional, **keyword, keep_outlines=True), model
+
+
+def fem_every(name, data, rigs, logs):
+    """FEM on the plane of every junction section of case NAME that `validate --junctions`
+    accepts (no limit per bone): LOGS/NAME_every.json, as `validate --json` writes its "fem"."""
+    from osteon import fem
+
+    argv = next(c[2] for c in CASES if c[3] == name)
+    a, model = analysis_of(argv, data, rigs)
+    picked = fem.pick_sections(a, model.heads, model.tails, n=len(a.stress),
+                               per_bone=len(a.stress), tiers=((0.0, 2.0),), junctions=True)
+    done = set(fem_rows_of(logs, name, every=False))
+    picked = [p for p in picked if p["index"] not in done]  # validate's run has these
+    print(f"{name}: FEM on sections {[p['index'] for p in picked]}")
+    rep = fem.cross_check(model.vertices, model.faces, picked,
+                          hold_point=fem.hold_point(a, model.heads), threads=1, progress=print)
+    out = Path(logs) / f"{name}_every.json"
+    out.write_text(json.dumps({"fem": rep.as_dict()}, indent=1))
+    print(f"{out}: " + ", ".join(f"s{s.index} {s.fem_stress_mpa:.2f} MPa" for s in rep.sections))
+
+
+def fem_rows_of(logs, name, every=True):
+    """{section: (FEM row, source)} of LOGS/NAME.json (`validate`) and, with ``every``,
+    LOGS/NAME_every.json (--fem-every); validate's row where both have the section."""
+    rows = {}
+    for suffix, source in (("_every", "every"), ("", "validate"))[0 if every else 1:]:
+        log = Path(logs) / f"{name}{suffix}.json"
+        if log.is_file():
+            for fr in json.loads(log.read_text()).get("fem", {}).get("sections", []):
+                rows[int(fr["section"])] = (fr, source)
+    return rows
+
+
+def main(data, rigs, logs):
     try:
         import shapely  # noqa: F401
     except ImportError:
@@ -181,20 +228,14 @@ def main(data, rigs, logs):
     print("|---|---|---|---|---|---|---|---|---|")
     rows, notes = [], []
     for label, sample, argv, name in CASES:
-        log = Path(logs) / f"{name}.json"
-        if not log.is_file():
-            notes.append(f"{label}: no FEM log {log}")
-            continue
-        fem_rows = json.loads(log.read_text()).get("fem", {}).get("sections", [])
+        fem_rows = fem_rows_of(logs, name)
         if not fem_rows:
-            notes.append(f"{label}: the validate run tested no section ({log})")
+            log = Path(logs) / f"{name}.log"
+            last = log.read_text().strip().splitlines()[-1] if log.is_file() else "no log"
+            notes.append(f"{label}: no section tested ({last})")
             continue
-        argv = [x.format(data=data, rigs=rigs) for x in argv]
-        args = build_parser().parse_args(["validate", *argv])
-        settings, model = common.settings_from_args(args), common.load_model_of(args)
-        positional, keyword = common.engine_args(settings, model)
-        a = osteon.analyze(*positional, **keyword, keep_outlines=True)
-        for fr in fem_rows:
+        a, model = analysis_of(argv, data, rigs)
+        for _, (fr, source) in sorted(fem_rows.items()):
             i, fem = int(fr["section"]), float(fr["fem_stress_mpa"])
             core = float(a.stress[i])
             if abs(core / fr["osteon_stress_mpa"] - 1) > 1e-6:
@@ -205,7 +246,8 @@ def main(data, rigs, logs):
             why = (f"{g['L']:.0f} / {g['r_c']:.2f}"
                    + (f", neck s{','.join(map(str, g['necks']))}" if g["necks"] else ", no neck"))
             cells = [f"{s:.2f} ({mark(err(s, fem))})" for s in gated]
-            print(f"| {sample} | {label} | s{i} ({a.bone_names[a.section_bone[i]]}) | "
+            tag = "" if source == "validate" else ", every"
+            print(f"| {sample} | {label} | s{i} ({a.bone_names[a.section_bone[i]]}{tag}) | "
                   f"**{'pass' if g['passes'] else 'fail'}**: {why} | {core:.2f} | {fem:.2f} | "
                   f"{mark(err(core, fem))} | " + " | ".join(cells) + " |")
             rows.append((sample, g["passes"], [err(s, fem) for s in gated]))
@@ -232,5 +274,10 @@ if __name__ == "__main__":
                         help="folder of make_junction_rig.py's and make_limb_root_rigs.py's output")
     parser.add_argument("--logs", required=True,
                         help="folder of the `osteon validate ... --json NAME.json` runs")
+    parser.add_argument("--fem-every", metavar="NAME",
+                        help="run FEM on every junction section of case NAME (e.g. fused) first")
     ns = parser.parse_args()
-    main(ns.data, ns.rigs, ns.logs)
+    if ns.fem_every:
+        fem_every(ns.fem_every, ns.data, ns.rigs, ns.logs)
+    else:
+        main(ns.data, ns.rigs, ns.logs)
