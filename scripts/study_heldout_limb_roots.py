@@ -41,7 +41,8 @@ The held-out rigs have one bone, so `validate` tests one section on each; ``--fe
 runs the same FEM check (``osteon.fem.cross_check``, crop mode, one thread) on every junction
 section of rig NAME that `validate --junctions` would accept (``pick_sections`` with no limit per
 bone) and writes ``NAME_every.json`` beside the logs; its sections are added to the table
-("every" rows).
+("every" rows); ``--only I ...`` limits it to those sections (the junction rig: gmsh gave up on
+the crop of its fin's sections after 600 s, which ends a `validate` run with no result).
 
 Rows are labelled in-sample (the sections the gate was proposed on: the shared models, the
 junction rig, the fillet / cone / cylinder limb-root rigs) or held-out (the four new rigs).
@@ -187,9 +188,10 @@ def analysis_of(argv, data, rigs):
     return osteon.analyze(*positional, **keyword, keep_outlines=True), model
 
 
-def fem_every(name, data, rigs, logs):
+def fem_every(name, data, rigs, logs, only=None):
     """FEM on the plane of every junction section of case NAME that `validate --junctions`
-    accepts (no limit per bone): LOGS/NAME_every.json, as `validate --json` writes its "fem"."""
+    accepts (no limit per bone; with ``only``, those of these indices): LOGS/NAME_every.json, as
+    `validate --json` writes its "fem"."""
     from osteon import fem
 
     argv = next(c[2] for c in CASES if c[3] == name)
@@ -197,7 +199,8 @@ def fem_every(name, data, rigs, logs):
     picked = fem.pick_sections(a, model.heads, model.tails, n=len(a.stress),
                                per_bone=len(a.stress), tiers=((0.0, 2.0),), junctions=True)
     done = set(fem_rows_of(logs, name, every=False))
-    picked = [p for p in picked if p["index"] not in done]  # validate's run has these
+    picked = [p for p in picked if p["index"] not in done  # validate's run has these
+              and (not only or p["index"] in only)]
     print(f"{name}: FEM on sections {[p['index'] for p in picked]}")
     rep = fem.cross_check(model.vertices, model.faces, picked,
                           hold_point=fem.hold_point(a, model.heads), threads=1, progress=print)
@@ -231,7 +234,8 @@ def main(data, rigs, logs):
         fem_rows = fem_rows_of(logs, name)
         if not fem_rows:
             log = Path(logs) / f"{name}.log"
-            last = log.read_text().strip().splitlines()[-1] if log.is_file() else "no log"
+            lines = log.read_text().strip().splitlines() if log.is_file() else []
+            last = lines[-1] if lines else "no validate log"
             notes.append(f"{label}: no section tested ({last})")
             continue
         a, model = analysis_of(argv, data, rigs)
@@ -276,8 +280,10 @@ if __name__ == "__main__":
                         help="folder of the `osteon validate ... --json NAME.json` runs")
     parser.add_argument("--fem-every", metavar="NAME",
                         help="run FEM on every junction section of case NAME (e.g. fused) first")
+    parser.add_argument("--only", type=int, nargs="+", metavar="I",
+                        help="with --fem-every: only these sections")
     ns = parser.parse_args()
     if ns.fem_every:
-        fem_every(ns.fem_every, ns.data, ns.rigs, ns.logs)
+        fem_every(ns.fem_every, ns.data, ns.rigs, ns.logs, ns.only)
     else:
         main(ns.data, ns.rigs, ns.logs)
