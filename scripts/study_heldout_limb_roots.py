@@ -42,7 +42,10 @@ runs the same FEM check (``osteon.fem.cross_check``, crop mode, one thread) on e
 section of rig NAME that `validate --junctions` would accept (``pick_sections`` with no limit per
 bone) and writes ``NAME_every.json`` beside the logs; its sections are added to the table
 ("every" rows); ``--only I ...`` limits it to those sections (the junction rig: gmsh gave up on
-the crop of its fin's sections after 600 s, which ends a `validate` run with no result).
+the crop of its fin's sections after 600 s, which ends a `validate` run with no result);
+``--full`` meshes the whole rig instead of the crop, held at every node upstream of the plane the
+crop would clamp ("full" rows: the fused rig, whose crop's cap is not closed, and the oblique
+rig, whose crop gmsh did not mesh in 600 s).
 
 Rows are labelled in-sample (the sections the gate was proposed on: the shared models, the
 junction rig, the fillet / cone / cylinder limb-root rigs) or held-out (the four new rigs).
@@ -188,10 +191,12 @@ def analysis_of(argv, data, rigs):
     return osteon.analyze(*positional, **keyword, keep_outlines=True), model
 
 
-def fem_every(name, data, rigs, logs, only=None):
+def fem_every(name, data, rigs, logs, only=None, full=False):
     """FEM on the plane of every junction section of case NAME that `validate --junctions`
     accepts (no limit per bone; with ``only``, those of these indices): LOGS/NAME_every.json, as
-    `validate --json` writes its "fem"."""
+    `validate --json` writes its "fem". ``full``: the whole model meshed (``mode="full"``), held
+    at every node upstream of the plane where the crop would clamp (4 core radii upstream of the
+    first section), for a rig whose crop fails: LOGS/NAME_full.json."""
     from osteon import fem
 
     argv = next(c[2] for c in CASES if c[3] == name)
@@ -202,9 +207,17 @@ def fem_every(name, data, rigs, logs, only=None):
     picked = [p for p in picked if p["index"] not in done  # validate's run has these
               and (not only or p["index"] in only)]
     print(f"{name}: FEM on sections {[p['index'] for p in picked]}")
+    hold_plane = None
+    if full:
+        p = picked[0]
+        n = p["normal"] / np.linalg.norm(p["normal"])
+        n = n if (p["load_point"] - p["center"]) @ n > 0 else -n  # toward the load
+        hold_plane = (p["center"] - 4.0 * np.sqrt(p["area"] / np.pi) * n, n)
+        print(f"full mode, held upstream of {hold_plane[0]} (normal {n})")
     rep = fem.cross_check(model.vertices, model.faces, picked,
-                          hold_point=fem.hold_point(a, model.heads), threads=1, progress=print)
-    out = Path(logs) / f"{name}_every.json"
+                          hold_point=fem.hold_point(a, model.heads), threads=1, progress=print,
+                          mode="full" if full else "crop", hold_plane=hold_plane)
+    out = Path(logs) / f"{name}_{'full' if full else 'every'}.json"
     out.write_text(json.dumps({"fem": rep.as_dict()}, indent=1))
     print(f"{out}: " + ", ".join(f"s{s.index} {s.fem_stress_mpa:.2f} MPa" for s in rep.sections))
 
@@ -213,7 +226,8 @@ def fem_rows_of(logs, name, every=True):
     """{section: (FEM row, source)} of LOGS/NAME.json (`validate`) and, with ``every``,
     LOGS/NAME_every.json (--fem-every); validate's row where both have the section."""
     rows = {}
-    for suffix, source in (("_every", "every"), ("", "validate"))[0 if every else 1:]:
+    for suffix, source in (("_full", "full"), ("_every", "every"),
+                           ("", "validate"))[0 if every else 2:]:
         log = Path(logs) / f"{name}{suffix}.json"
         if log.is_file():
             for fr in json.loads(log.read_text()).get("fem", {}).get("sections", []):
@@ -250,7 +264,8 @@ def main(data, rigs, logs):
             why = (f"{g['L']:.0f} / {g['r_c']:.2f}"
                    + (f", neck s{','.join(map(str, g['necks']))}" if g["necks"] else ", no neck"))
             cells = [f"{s:.2f} ({mark(err(s, fem))})" for s in gated]
-            tag = "" if source == "validate" else ", every"
+            tag = {"validate": "", "every": ", every",
+                   "full": ", full mode: the crop failed"}[source]
             print(f"| {sample} | {label} | s{i} ({a.bone_names[a.section_bone[i]]}{tag}) | "
                   f"**{'pass' if g['passes'] else 'fail'}**: {why} | {core:.2f} | {fem:.2f} | "
                   f"{mark(err(core, fem))} | " + " | ".join(cells) + " |")
@@ -282,8 +297,10 @@ if __name__ == "__main__":
                         help="run FEM on every junction section of case NAME (e.g. fused) first")
     parser.add_argument("--only", type=int, nargs="+", metavar="I",
                         help="with --fem-every: only these sections")
+    parser.add_argument("--full", action="store_true",
+                        help="with --fem-every: mesh the whole model, held where the crop clamps")
     ns = parser.parse_args()
     if ns.fem_every:
-        fem_every(ns.fem_every, ns.data, ns.rigs, ns.logs, ns.only)
+        fem_every(ns.fem_every, ns.data, ns.rigs, ns.logs, ns.only, ns.full)
     else:
         main(ns.data, ns.rigs, ns.logs)
