@@ -75,6 +75,9 @@ from study_limb_root_spread import (
 )
 
 SPREADS = (0.5, 1.0)
+# FEM readings that are not a beam section's (shown, not counted)
+EXCLUDED = {("cow_clean", 173): "osteon's load point is on the body's midline, not on this leg: "
+                                "FEM finds the core unloaded (docs/validation.md, Junctions)"}
 WITHIN, UNSAFE = 0.20, -0.15
 
 # (label, sample, arguments of `osteon validate`, name of the run's log NAME.json)
@@ -269,7 +272,10 @@ def main(data, rigs, logs):
             print(f"| {sample} | {label} | s{i} ({a.bone_names[a.section_bone[i]]}{tag}) | "
                   f"**{'pass' if g['passes'] else 'fail'}**: {why} | {core:.2f} | {fem:.2f} | "
                   f"{mark(err(core, fem))} | " + " | ".join(cells) + " |")
-            rows.append((sample, g["passes"], [err(s, fem) for s in gated]))
+            if (name, i) in EXCLUDED:
+                notes.append(f"{label} s{i}: not counted: {EXCLUDED[(name, i)]}")
+            else:
+                rows.append((sample, g["passes"], [err(s, fem) for s in gated]))
     for n in notes:
         print(f"\n* {n}")
     print()
