@@ -222,3 +222,25 @@ def test_a_calculix_failure_fails_that_section_only(tmp_path, monkeypatch):
     assert rep.sections == []
     (failed,) = rep.failed
     assert failed["index"] == 5 and "CalculiX failed" in failed["reason"]
+
+
+def test_validate_reports_when_no_section_could_be_checked(tmp_path, monkeypatch, capsys):
+    # Every FEM section failing (here a gmsh that exits with an error) is a result to report,
+    # not a crash: the JSON report had NaN median/worst errors and json refused to write it.
+    import json
+
+    from conftest import DATA
+    from osteon.cli import main
+
+    monkeypatch.setenv("OSTEON_GMSH", _fake_program(tmp_path / "gmsh", "echo 'Error : no'; exit 1"))
+    monkeypatch.setenv("OSTEON_CCX", _fake_program(tmp_path / "ccx", "exit 1"))
+    js, png = tmp_path / "v.json", tmp_path / "v.png"
+    arm = DATA / "libigl-tutorial-data" / "arm.obj"
+    argv = ["validate", str(arm), "--fem", "--sections", "2", "--json", str(js), "--png", str(png)]
+    assert main(argv) == 0
+    assert (tmp_path / "v_fem.png").is_file()
+    rep = json.loads(js.read_text())["fem"]
+    assert rep["sections"] == [] and len(rep["failed_sections"]) == 2
+    assert rep["median_abs_rel_error"] is None and rep["worst_abs_rel_error"] is None
+    assert all("gmsh failed to tet-mesh" in f["reason"] for f in rep["failed_sections"])
+    assert "no section could be checked (2 failed)" in capsys.readouterr().out

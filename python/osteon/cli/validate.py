@@ -109,10 +109,14 @@ def format_fem_table(rep, bone_names):
         )
     for f in rep.failed:
         name = bone_names[f["bone"]] if 0 <= f["bone"] < len(bone_names) else str(f["bone"])
-        lines.append(f" - {name[:22]:<22} FEM meshing failed: {f['reason'][:60]}")
-    lines.append(
+        lines.append(f" - {name[:22]:<22} FEM failed: {f['reason'][:60]}")
+    errors = (
         f"median |error| {100 * rep.median_error:.1f} %, worst {100 * rep.worst_error:.1f} %"
-        f"; FEM {rep.nodes} nodes, {rep.elements} C3D10 tets, mesh "
+        if rep.sections
+        else f"no section could be checked ({len(rep.failed)} failed)"
+    )
+    lines.append(
+        f"{errors}; FEM {rep.nodes} nodes, {rep.elements} C3D10 tets, mesh "
         f"{rep.mesh_seconds:.1f} s + solve {rep.solve_seconds:.1f} s"
     )
     return "\n".join(lines)

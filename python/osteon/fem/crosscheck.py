@@ -101,8 +101,9 @@ class FemReport:
             "hold_radius_mm": self.hold_radius_mm,
             "mesh_seconds": self.mesh_seconds,
             "solve_seconds": self.solve_seconds,
-            "median_abs_rel_error": self.median_error,
-            "worst_abs_rel_error": self.worst_error,
+            # null when no section could be checked (JSON has no NaN)
+            "median_abs_rel_error": self.median_error if self.sections else None,
+            "worst_abs_rel_error": self.worst_error if self.sections else None,
             "sections": [s.as_dict() for s in self.sections],
             "failed_sections": self.failed,
         }
