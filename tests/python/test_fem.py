@@ -107,6 +107,25 @@ def test_cantilever_worst_direction(tmp_path, mode):
     json.dumps(d)  # the field stays out of the report
 
 
+@pytest.mark.parametrize("snap", [0.3, 0.0])
+def test_crop_with_and_without_moving_vertices_onto_the_plane(snap):
+    # The cut made again without moving vertices (crop_mesh's fallback when the moved ones leave
+    # the cap open) is as closed and as exact: the bar kept beyond x = 30.2 mm (no vertex near
+    # the plane) holds (100 - 30.2) x 10 x 8 mm^3.
+    import trimesh
+    from osteon.fem.crop import _crop_mesh
+
+    box = trimesh.creation.box(extents=[L, B, H])
+    box.apply_translation([L / 2, 0, 0])
+    box = box.subdivide().subdivide().subdivide()
+    V, Fc = np.asarray(box.vertices), np.asarray(box.faces)
+    Vc, Fk = _crop_mesh(V, Fc, np.array([30.2, 0, 0]), np.array([1.0, 0, 0]),
+                        np.array([90.0, 0, 0]), snap=snap)
+    m = trimesh.Trimesh(Vc, Fk)
+    assert m.is_watertight
+    assert m.volume == pytest.approx((L - 30.2) * B * H, rel=1e-9)
+
+
 def test_crop_mesh_closed_and_volume():
     import trimesh
 
