@@ -1612,7 +1612,10 @@ void LoosePieceFinder::find_shells(const MeshView& mesh) {
   shell_fstart_.assign(shells + 1, 0);
   for (Index v = 0; v < nv; ++v)
     if (shell_of_[v] >= 0) ++shell_vstart_[shell_of_[v] + 1];
-  for (Index f = 0; f < nf; ++f) ++shell_fstart_[shell_of_[mesh.faces[3 * f]] + 1];
+  // A face of one vertex thrice whose vertex is in no other face is no triangle and in no shell
+  // (its vertex was never marked used): it is left out of the face lists.
+  for (Index f = 0; f < nf; ++f)
+    if (const std::int32_t k = shell_of_[mesh.faces[3 * f]]; k >= 0) ++shell_fstart_[k + 1];
   largest_ = 0;
   for (std::int32_t k = 0; k < shells; ++k)
     if (shell_vstart_[k + 1] > shell_vstart_[largest_ + 1]) largest_ = k;
@@ -1633,7 +1636,8 @@ void LoosePieceFinder::find_shells(const MeshView& mesh) {
   fill.assign(shell_fstart_.begin(), shell_fstart_.end() - 1);
   for (Index f = 0; f < nf; ++f) {
     const std::int32_t* t = mesh.faces + 3 * f;
-    std::copy(t, t + 3, shell_faces_.begin() + 3 * fill[shell_of_[t[0]]]++);
+    if (const std::int32_t k = shell_of_[t[0]]; k >= 0)
+      std::copy(t, t + 3, shell_faces_.begin() + 3 * fill[k]++);
   }
 }
 

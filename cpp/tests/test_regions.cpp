@@ -829,6 +829,42 @@ TEST(Regions, LoosePieceFinderKeptAcrossMovesAnswersAsAFreshSearch) {
   EXPECT_EQ(loose_seen, 2 + 0 + 0 + 1 + 1);
 }
 
+TEST(Regions, AFaceOfOneVertexThriceIsNoTriangle) {
+  // The same bar and box, and the stray vertex given a "face" of itself three times (found by
+  // the API fuzz test: such a face was counted to no shell's face list and written before the
+  // first one, out of bounds). It is no triangle: the vertex is still in no face, no shell and
+  // no piece, and the box is loose whichever of the box's or the stray's faces come first.
+  using osteon::testing::prism;
+  using osteon::testing::rectangle;
+  const auto bar = prism(rectangle(4, 4), 40, 11);
+  const auto box = prism(rectangle(2, 2), 2, 2);
+  for (const bool stray_first : {false, true}) {
+    std::vector<double> xyz = bar.v;
+    std::vector<std::int32_t> faces;
+    const auto base = static_cast<std::int32_t>(xyz.size() / 3);
+    for (std::size_t k = 0; k < box.v.size(); k += 3)
+      xyz.insert(xyz.end(), {box.v[k] + 40.3, box.v[k + 1], box.v[k + 2]});
+    const auto stray = static_cast<std::int32_t>(xyz.size() / 3);
+    xyz.insert(xyz.end(), {40.15, 0.0, 0.0});
+    if (stray_first) faces.insert(faces.end(), {stray, stray, stray});
+    faces.insert(faces.end(), bar.f.begin(), bar.f.end());
+    for (std::int32_t k : box.f) faces.push_back(base + k);
+    if (!stray_first) faces.insert(faces.end(), {stray, stray, stray});
+    const Index nv = static_cast<Index>(xyz.size() / 3);
+    const MeshView mesh{xyz.data(), nv, faces.data(), static_cast<Index>(faces.size() / 3)};
+    const std::vector<int> vertex_bone(nv, 0);
+    Index face_shells = -1;
+    LoosePieceFinder finder;
+    const auto loose = finder.find(mesh, vertex_bone, 0, 0.2, &face_shells, false);
+    EXPECT_EQ(face_shells, 2);
+    ASSERT_EQ(loose.size(), 1u);
+    std::vector<std::int32_t> box_vertices;
+    for (std::int32_t v = base; v < stray; ++v) box_vertices.push_back(v);
+    EXPECT_EQ(loose[0], box_vertices);
+    EXPECT_EQ(loose_pieces(mesh, vertex_bone, 0, 0.2), loose);
+  }
+}
+
 TEST(Regions, AVertexOfNoFaceIsNoPiece) {
   // A bar, a box floating 0.3 mm past its end, and a stray vertex (in no face) between them,
   // 0.15 mm from each: the stray vertex is not printed, so it neither counts as a shell nor

@@ -154,6 +154,24 @@ def test_loose_pieces_are_listed():
     assert osteon.analyze(v1, f1, _bone(40), interval=4).loose_pieces == []
 
 
+def test_a_face_of_one_vertex_thrice_is_no_triangle():
+    # Found by the API fuzz test under ASan: a "face" (v, v, v) of a vertex in no other face, in
+    # a mesh of several shells, was written before the first shell's face list (heap
+    # corruption; a crash). It is no triangle: the vertex is in no shell, the prop is still the
+    # one loose piece, and the analysis equals the one without that face, wherever it comes.
+    body = prism(circle(5, 64), 40)
+    prop = cylinder_along((10, 30, 0), (20, 30, 0), 2.0, n=16, stations=4)  # floating apart
+    v, f = merge(body, prop)
+    v = np.vstack([v, [[0.0, 20.0, 0.0]]])  # the stray vertex
+    stray = len(v) - 1
+    plain = osteon.analyze(v, f, _bone(40), interval=4)
+    assert len(plain.loose_pieces) == 1
+    for faces in (np.vstack([f, [[stray] * 3]]), np.vstack([[[stray] * 3], f])):
+        a = osteon.analyze(v, faces, _bone(40), interval=4)
+        np.testing.assert_array_equal(a.loose_pieces[0], plain.loose_pieces[0])
+        np.testing.assert_array_equal(a.stress, plain.stress)
+
+
 def test_loose_piece_is_no_load_point():
     # A 4 x 4 mm bar along x (0..40 mm) and, far beyond its end, a detached ball-like capsule
     # (x = 70..74 mm): it falls off the print, so it carries no load. Each section's moment is
