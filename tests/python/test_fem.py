@@ -120,7 +120,7 @@ def test_crop_with_and_without_moving_vertices_onto_the_plane(snap):
     box = box.subdivide().subdivide().subdivide()
     V, Fc = np.asarray(box.vertices), np.asarray(box.faces)
     Vc, Fk = _crop_mesh(V, Fc, np.array([30.2, 0, 0]), np.array([1.0, 0, 0]),
-                        np.array([90.0, 0, 0]), snap=snap)
+                        np.array([90.0, 0, 0]), snap_fraction=snap)
     m = trimesh.Trimesh(Vc, Fk)
     assert m.is_watertight
     assert m.volume == pytest.approx((L - 30.2) * B * H, rel=1e-9)

@@ -64,12 +64,13 @@ def crop_mesh(vertices, faces, origin, normal, keep_point):
     and the cap is left open (seen on a limb merged into a block's side face: 6 of 257
     triangles missing). The cut is then made again without moving any vertex."""
     try:
-        return _crop_mesh(vertices, faces, origin, normal, keep_point, snap=0.3)
+        return _crop_mesh(vertices, faces, origin, normal, keep_point, snap_fraction=0.3)
     except ValueError:
-        return _crop_mesh(vertices, faces, origin, normal, keep_point, snap=0.0)
+        return _crop_mesh(vertices, faces, origin, normal, keep_point, snap_fraction=0.0)
 
 
-def _crop_mesh(vertices, faces, origin, normal, keep_point, snap):
+def _crop_mesh(vertices, faces, origin, normal, keep_point, snap_fraction):
+    """crop_mesh, moving the vertices within snap_fraction x the median edge onto the plane."""
     import trimesh
 
     V = np.asarray(vertices, float)
@@ -78,7 +79,7 @@ def _crop_mesh(vertices, faces, origin, normal, keep_point, snap):
     s = (V - origin) @ n
     # vertices close to the plane are moved onto it, so that the cut makes no slivers
     el = np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1)
-    snap = np.abs(s) < snap * float(np.median(el))
+    snap = np.abs(s) < snap_fraction * float(np.median(el))
     V = V.copy()
     V[snap] -= np.outer(s[snap], n)
     s = np.where(snap, 0.0, s)

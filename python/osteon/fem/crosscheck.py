@@ -88,6 +88,11 @@ class FemReport:
     def worst_error(self):
         return float(np.max(self.errors)) if self.sections else float("nan")
 
+    def fail(self, k, section, reason):
+        """Lists the k-th tested section (a section dict) as failed, with the reason."""
+        self.failed.append({"index": int(section.get("index", k)),
+                            "bone": int(section.get("bone", -1)), "reason": reason})
+
     def as_dict(self):
         return {
             "force_n": self.force_n,
@@ -349,13 +354,7 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
             if nodes is not None:
                 break
         if nodes is None:
-            rep.failed.append(
-                {
-                    "index": int(sec.get("index", k)),
-                    "bone": int(sec.get("bone", -1)),
-                    "reason": "; ".join(errors[-2:]),
-                }
-            )
+            rep.fail(k, sec, "; ".join(errors[-2:]))
             rep.mesh_seconds += time.perf_counter() - t0
             continue
         rep.mesh_seconds += time.perf_counter() - t0
@@ -363,8 +362,7 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
         rep.elements += len(tets)
         fixed = np.nonzero((nodes - origin) @ n <= 1e-6 * r + 1e-9)[0]
         if len(fixed) < 3:
-            rep.failed.append({"index": int(sec.get("index", k)), "bone": int(sec.get("bone", -1)),
-                               "reason": f"the clamp cap at {cd:g} r holds {len(fixed)} nodes"})
+            rep.fail(k, sec, f"the clamp cap at {cd:g} r holds {len(fixed)} nodes")
             continue
         cases = _unit_cases(nodes, tets, lp, 0.75 * h)
         if progress:
@@ -374,8 +372,7 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
             S = solve(nodes, tets, fixed, cases, sub, young=run.young, poisson=run.poisson,
                       threads=threads)
         except RuntimeError as e:
-            rep.failed.append({"index": int(sec.get("index", k)), "bone": int(sec.get("bone", -1)),
-                               "reason": str(e)[:200]})
+            rep.fail(k, sec, str(e)[:200])
             continue
         finally:
             rep.solve_seconds += time.perf_counter() - t1
