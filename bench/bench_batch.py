@@ -1,8 +1,8 @@
 """Batch throughput: models per second on 1 process, the process pool on all cores and a local
 Dask cluster, over a generated library of a few hundred models, and where the time goes.
 
-The library is made in a temporary folder from the shared models (OSTEON_DATA, else
-../shared/data): the libigl / Hyperspectral TGF rigs (arm, elephant, cow, cheburashka, wolf,
+The library is made in a temporary folder from the models of tests/data (or OSTEON_DATA, e.g.
+../shared/data for the RigNet set): the libigl / Hyperspectral TGF rigs (arm, elephant, cow, cheburashka, wolf,
 cylinder) scaled, posed (a subtree of bones turned about its joint by linear blend skinning) and
 subdivided (1-to-4, weights interpolated), written as OBJ + TGF + binary DMAT; the RigNet models
 as they are (OBJ + _rig.txt; most are open meshes, so they fail as open on purpose); unrigged

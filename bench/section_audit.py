@@ -2,7 +2,8 @@
 
     python bench/section_audit.py [model.obj ...]       # default: every RigNet OBJ + rig,
                                                         # libigl, Hyperspectral models
-    /work/main/.venv/bin/python bench/section_audit.py   # the same with another build
+    OSTEON_DATA=DIR python bench/section_audit.py         # the shared models' folder (default:
+                                                        # ../shared/data beside the clone)
 
 Prints one Markdown row per model: sections, count of each flag, max stress (MPa) and the flags
 of the section it sits on, and the weak sections whose area is below a tenth of the median area
@@ -13,6 +14,7 @@ thin there, e.g. a tapering tail whose bone also cuts the body). Run it with two
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -20,9 +22,8 @@ import numpy as np
 import osteon
 from osteon.io import load_model
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-if not DATA.exists():
-    DATA = Path("/work/shared/data")
+# The shared models: $OSTEON_DATA, else ../shared/data beside the clone (no test reads them).
+DATA = Path(os.environ.get("OSTEON_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
 
 
 def models() -> list[tuple[Path, Path | None, Path | None]]:
@@ -73,6 +74,9 @@ def audit(mesh, skel, weights) -> dict:
 
 
 def main(argv: list[str]) -> None:
+    if not argv and not (DATA / "SOURCES.md").is_file():
+        raise SystemExit(f"section_audit: the shared models are not at {DATA} (set OSTEON_DATA "
+                         "to their folder, or give model files)")
     todo = [(Path(p), None, None) for p in argv] if argv else models()
     print("| model | sections | flags | max stress MPa (flags there) | weak < 1/10 bone median "
           "| of which isolated drops | loose |")

@@ -17,7 +17,7 @@ r = √(core area / π):
   that radius (σ_core (r / r_flare)³: an equivalent-radius estimate, not the engine's W).
 
 Not part of the tests and not used by osteon. Needs gmsh and ccx, ``pip install shapely`` and
-the shared models (``../shared/data`` beside the clone, or ``--data DIR``); ~1-5 min a section.
+the shared models (``--data DIR``: the folder of ``SOURCES.md``); ~1-5 min a section.
 Run: ``python scripts/study_junction_field.py [--data DIR] [--rig DIR]``
 """
 
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from study_limb_root_spread import CASES, DATA, around_origin, plane_frame, region
+from study_limb_root_spread import CASES, around_origin, plane_frame, region
 
 FORCE_N = 20.0
 
@@ -55,7 +55,7 @@ def field_profile(points, sigma, centre, r_core):
     return peak, float(dist[np.argmax(sigma)]), engaged
 
 
-def main(data=DATA, rig=None):
+def main(data, rig=None):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
     import osteon
     from osteon import fem
@@ -116,7 +116,8 @@ if __name__ == "__main__":
     import argparse
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--data", default=DATA, help="the shared models' folder (data/)")
+    parser.add_argument("--data", required=True,
+                        help="the shared models' folder (the one holding SOURCES.md)")
     parser.add_argument("--rig", help="folder of make_junction_rig.py's output")
     ns = parser.parse_args()
     main(ns.data, ns.rig)

@@ -10,7 +10,7 @@ the spread core would give next to the FEM peak on the same plane (the FEM numbe
 ``osteon validate --fem --junctions`` readings of docs/validation.md).
 
 Not part of the tests and not used by osteon. Needs ``pip install shapely`` and the shared
-models (``../shared/data`` beside the clone, or ``--data DIR``); the junction rig's real stubs are
+models (``--data DIR``: the folder of ``SOURCES.md``, e.g. ``../shared/data``); the junction rig's real stubs are
 added with ``--rig DIR`` (the output of ``python scripts/make_junction_rig.py DIR``). Run:
 ``python scripts/study_limb_root_spread.py [--data DIR] [--rig DIR] [K ...]``
 """
@@ -21,8 +21,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 # model arguments (as for `osteon validate`), junction sections, FEM peak on the plane (MPa)
 CASES = {
@@ -111,7 +109,7 @@ def spread_core(a, s, k):
     return around_origin(core)
 
 
-def main(spreads, rig=None, data=DATA):
+def main(spreads, rig, data):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
     import osteon
     from osteon.cli import common
@@ -156,7 +154,8 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("spreads", nargs="*", type=float, metavar="K",
                         help="spread per slice, x h (default: 0 0.5 1)")
-    parser.add_argument("--data", default=DATA, help="the shared models' folder (data/)")
+    parser.add_argument("--data", required=True,
+                        help="the shared models' folder (the one holding SOURCES.md)")
     parser.add_argument("--rig", help="folder of make_junction_rig.py's output")
     ns = parser.parse_args()
     main(ns.spreads or [0.0, 0.5, 1.0], ns.rig, ns.data)
