@@ -10,7 +10,7 @@ SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 APT_PACKAGES=(build-essential cmake ninja-build libeigen3-dev libgtest-dev blender calculix-ccx gmsh
-  xvfb python3-venv clang libclang-rt-14-dev)
+  xvfb python3-venv clang libclang-rt-14-dev prusa-slicer)
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
@@ -28,6 +28,10 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12" cmake ninja
+# A compiler cache, where the machine has one, makes rebuilds after small C++ edits fast.
+if command -v ccache >/dev/null 2>&1; then
+  export CMAKE_ARGS="${CMAKE_ARGS:-} -DCMAKE_CXX_COMPILER_LAUNCHER=ccache"
+fi
 echo "[setup] building osteon (C++ engine + Python package)"
 .venv/bin/python -m pip install -q --no-build-isolation -e ".[test]"
 .venv/bin/python -c "import osteon; print('[setup] osteon', osteon.__version__, 'ready in .venv')"

@@ -11,7 +11,9 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 
 echo "== C++ unit tests (GoogleTest)"
-cmake -S . -B build/ctest -G Ninja -DOSTEON_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
+launcher=""
+if command -v ccache >/dev/null 2>&1; then launcher="-DCMAKE_CXX_COMPILER_LAUNCHER=ccache"; fi
+cmake -S . -B build/ctest -G Ninja -DOSTEON_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=Release $launcher >/dev/null
 cmake --build build/ctest
 ctest --test-dir build/ctest --output-on-failure
 
