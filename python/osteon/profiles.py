@@ -1,0 +1,176 @@
+"""Print profiles: what the printer makes of the model (walls, skins, infill, hollow shells).
+
+The one table of print profiles, beside :mod:`osteon.materials`, shared by the Python API, the
+CLI, batch runs and the Blender add-on. A profile says how the part is printed; the engine turns
+each section into what that print makes of it (docs/printing.md, "The printed section").
+
+Units: mm for lengths (``line_width``, ``layer_height``, ``shell``), mm² for areas
+(``solid_infill_below_area``), a fraction 0…1 for ``infill``, counts for ``perimeters`` and
+``top_bottom_layers``.
+
+Kinds:
+
+- ``"solid"``: the part is solid (SLS, or a 100 %-infill FDM part; osteon's behaviour before
+  print profiles, bit for bit).
+- ``"fdm"``: ``perimeters`` loops of ``line_width`` around each layer (``layer_height``),
+  ``top_bottom_layers`` solid layers above and below, ``infill`` of ``pattern`` inside; regions
+  of a layer smaller than ``solid_infill_below_area`` are filled solid (PrusaSlicer's rule).
+- ``"resin_hollow"``: a hollowed resin print: a solid shell ``shell`` mm thick, hollow inside.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+#: Infill patterns the effective-stiffness law knows (docs/printing.md, "Infill").
+PATTERNS = ("gyroid", "grid", "rectilinear", "cubic", "honeycomb", "triangles", "lines")
+
+KINDS = ("solid", "fdm", "resin_hollow")
+
+
+def _count(value, name: str, low: int = 0, high: int = 1000) -> int:
+    if isinstance(value, bool) or not float(value).is_integer():
+        raise ValueError(f"{name} must be a whole number, got {value!r}")
+    v = int(value)
+    if not low <= v <= high:
+        raise ValueError(f"{name} must be between {low} and {high}, got {value!r}")
+    return v
+
+
+def _length(value, name: str, unit: str = "mm", allow_zero: bool = False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number of {unit}, got {value!r}") from None
+    ok = (v >= 0.0) if allow_zero else (v > 0.0)
+    if not (ok and math.isfinite(v)):
+        sign = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must be a finite number {sign} {unit}, got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class PrintProfile:
+    """How a part is printed. Build one with :meth:`fdm`, :meth:`resin_hollow` or :meth:`solid`
+    (checked there: ``ValueError`` naming the bad value), or take a preset from
+    :func:`print_profiles`.
+
+    ``kind``: "solid", "fdm" or "resin_hollow"; ``perimeters``: wall loops per layer (count);
+    ``line_width``: extrusion width, mm; ``layer_height``: mm; ``top_bottom_layers``: solid
+    layers at the top and bottom surfaces (count); ``infill``: sparse infill density, fraction
+    0…1; ``pattern``: infill pattern (one of :data:`PATTERNS`); ``solid_infill_below_area``: mm²,
+    a layer region whose infill area is below this is filled solid (0 = never); ``shell``: mm,
+    the resin shell of a hollowed print; ``name`` and ``source``: the preset's name and where its
+    numbers come from.
+    """
+
+    kind: str = "solid"
+    perimeters: int = 0
+    line_width: float = 0.0
+    layer_height: float = 0.0
+    top_bottom_layers: int = 0
+    infill: float = 1.0
+    pattern: str = "gyroid"
+    solid_infill_below_area: float = 0.0
+    shell: float = 0.0
+    name: str = "solid"
+    source: str = ""
+
+    @classmethod
+    def fdm(cls, perimeters: int = 2, line_width: float = 0.45, layer_height: float = 0.2,
+            top_bottom_layers: int = 4, infill: float = 0.15, pattern: str = "gyroid",
+            solid_infill_below_area: float = 70.0, *, name: str = "fdm",
+            source: str = "") -> PrintProfile:
+        """An FDM print: counts, mm, mm, layers, fraction 0…1, pattern name, mm²."""
+        pattern = str(pattern).strip().lower()
+        if pattern not in PATTERNS:
+            raise ValueError(f"unknown infill pattern {pattern!r}; choose one of "
+                             f"{', '.join(PATTERNS)}")
+        try:
+            fill = float(infill)
+        except (TypeError, ValueError):
+            raise ValueError(f"infill must be a fraction 0..1, got {infill!r}") from None
+        if not (0.0 <= fill <= 1.0):
+            raise ValueError(f"infill must be a fraction 0..1 (0.15 = 15 %), got {infill!r}")
+        return cls(kind="fdm",
+                   perimeters=_count(perimeters, "perimeters", 0, 100),
+                   line_width=_length(line_width, "line_width"),
+                   layer_height=_length(layer_height, "layer_height"),
+                   top_bottom_layers=_count(top_bottom_layers, "top_bottom_layers", 0, 1000),
+                   infill=fill, pattern=pattern,
+                   solid_infill_below_area=_length(solid_infill_below_area,
+                                                   "solid_infill_below_area", "mm²",
+                                                   allow_zero=True),
+                   name=str(name), source=str(source))
+
+    @classmethod
+    def resin_hollow(cls, shell: float = 2.0, *, name: str = "resin_hollow",
+                     source: str = "") -> PrintProfile:
+        """A hollowed resin print with a solid shell ``shell`` mm thick."""
+        return cls(kind="resin_hollow", shell=_length(shell, "shell"), infill=0.0,
+                   name=str(name), source=str(source))
+
+    @classmethod
+    def solid(cls) -> PrintProfile:
+        """A solid part (SLS, or 100 % infill): the section as cut, osteon's default."""
+        return cls(kind="solid", name="solid",
+                   source="the part is solid: the section as cut (SLS, 100 % infill)")
+
+    @property
+    def is_solid(self) -> bool:
+        """True when every section is its solid cut (kind "solid", or FDM at 100 % infill)."""
+        return self.kind == "solid" or (self.kind == "fdm" and self.infill >= 1.0)
+
+    def with_changes(self, **changes) -> PrintProfile:
+        """A copy with some fields changed, checked again (e.g. ``perimeters=4``)."""
+        p = replace(self, **changes)
+        if p.kind == "fdm":
+            return PrintProfile.fdm(p.perimeters, p.line_width, p.layer_height,
+                                    p.top_bottom_layers, p.infill, p.pattern,
+                                    p.solid_infill_below_area, name=p.name, source=p.source)
+        if p.kind == "resin_hollow":
+            return PrintProfile.resin_hollow(p.shell, name=p.name, source=p.source)
+        if p.kind == "solid":
+            return PrintProfile.solid()
+        raise ValueError(f"unknown print profile kind {p.kind!r}; one of {', '.join(KINDS)}")
+
+    def as_dict(self) -> dict:
+        """JSON-ready (the report's ``print_profile``)."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PrintProfile:
+        """The profile of :meth:`as_dict` (checked)."""
+        try:
+            kind = d["kind"]
+        except (KeyError, TypeError):
+            raise ValueError("a print profile needs a 'kind' (solid, fdm, resin_hollow)") from None
+        known = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
+        return cls(**{**cls().__dict__, **known, "kind": kind}).with_changes()
+
+
+def _presets() -> dict[str, PrintProfile]:
+    # Filled by the print-profile work (issue 31): each preset with the slicer profile file or
+    # documentation page its numbers come from.
+    return {"solid": PrintProfile.solid()}
+
+
+def print_profiles() -> dict[str, PrintProfile]:
+    """The named presets ``{key: PrintProfile}``, each with its ``source``."""
+    return dict(_presets())
+
+
+def get_profile(name: str | PrintProfile | None) -> PrintProfile:
+    """A preset by key (case-insensitive), a :class:`PrintProfile` as it is, or ``None`` → solid.
+
+    ``ValueError`` naming the presets when there is none by that name."""
+    if name is None:
+        return PrintProfile.solid()
+    if isinstance(name, PrintProfile):
+        return name
+    presets = print_profiles()
+    key = str(name).strip().lower()
+    if key not in presets:
+        raise ValueError(f"unknown print profile {name!r}; choose one of {', '.join(presets)}")
+    return presets[key]
