@@ -180,7 +180,7 @@ py::list result_fields() {
   py::list out;
   auto dtype = [](const py::object& empty) -> std::string {
     if (py::isinstance<py::array>(empty)) return py::str(empty.attr("dtype"));
-    return py::str(empty.get_type().attr("__name__"));
+    return py::str(empty.attr("__class__").attr("__name__"));
   };
 #define OSTEON_FIELD_ROW(type, name, init, shape, unit, doc) \
   out.append(py::make_tuple(#name, shape, dtype(to_python(type init)), unit, doc));

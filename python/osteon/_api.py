@@ -583,9 +583,9 @@ def _takes_options(fn):
                                  default=getattr(AnalysisOptions, name))
                for name, _, _ in option_docs()]
     fn.__signature__ = sig.replace(parameters=params)
-    fn.__doc__ = (fn.__doc__ or "").rstrip() + "\n\n    Settings, as keywords or ``options=``:\n\n" + (
-        textwrap.indent("\n".join(_field_line(n, "", u, d)
-                                  for n, u, d in option_docs()), "    ")) + "\n    "
+    settings = "\n".join(_field_line(n, "", u, d) for n, u, d in option_docs())
+    fn.__doc__ = ((fn.__doc__ or "").rstrip() + "\n\n    Settings, as keywords or ``options=``:\n\n"
+                  + textwrap.indent(settings, "    ") + "\n    ")
     return fn
 
 
@@ -613,7 +613,7 @@ class Analyzer:
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
                                     core_options)
 
-    # the settings by name, as before the options object (read by the front ends)
+    # the settings by name (public attributes before the options object), read-only views
     force = property(lambda self: self.options.force)
     allowable_stress = property(lambda self: self.options.allowable_stress)
     interval = property(lambda self: self.options.interval)
@@ -705,11 +705,12 @@ def correct(
     Blender (FBX/glTF) has bones whose local Y is not the segment analysed; scaling across the
     bone's own local axis nearest the segment is what Blender's pose scale can reproduce exactly
     (the sections stay perpendicular to the segments: every round re-analyses the scaled mesh,
-    so this changes how the bone is thickened, not what is checked). The analysis settings (keywords or
-    ``options=``) as in :func:`analyze`: the loop is driven by the stress ratio against each
-    section's direction-dependent allowable (``build_direction``, ``layer_strength_ratio``), by
-    the junction cores with ``junctions=True``; with ``keep_outlines`` ``before`` and ``after``
-    carry their sections' loops (:attr:`Analysis.section_loops`).
+    so this changes how the bone is thickened, not what is checked). The analysis settings
+    (keywords or ``options=``) as in :func:`analyze`: the loop is driven by the stress ratio
+    against each section's direction-dependent allowable (``build_direction``,
+    ``layer_strength_ratio``), by the junction cores with ``junctions=True``; with
+    ``keep_outlines`` ``before`` and ``after`` carry their sections' loops
+    (:attr:`Analysis.section_loops`).
     ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
     round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
     """
@@ -739,7 +740,7 @@ def correct(
     if weights is None:
         from scipy import sparse
 
-        o = options  # each vertex bound to the bone its nearest-bone analysis colours it with
+        o = options  # each vertex bound to its nearest bone (the settings as before)
         nearest = analyze(v, f, skeleton, None, force=o.force, allowable_stress=o.allowable_stress,
                           interval=o.interval, root=o.root, progress=progress,
                           junctions=o.junctions).vertex_bone

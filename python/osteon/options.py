@@ -169,7 +169,8 @@ class AnalysisOptions:
         if options is None:
             return cls(**settings)
         if not isinstance(options, AnalysisOptions):
-            raise ValueError(f"options must be an osteon.AnalysisOptions, got {options!r}")  # noqa: TRY004
+            raise ValueError(  # noqa: TRY004 -- every bad argument is a ValueError here
+                f"options must be an osteon.AnalysisOptions, got {options!r}")
         if settings:
             raise ValueError(f"give the settings either as options= or as keywords, not both "
                              f"(got {', '.join(sorted(settings))})")
