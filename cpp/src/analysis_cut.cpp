@@ -15,8 +15,9 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
-#include "osteon/regions.hpp"
 #include "parallel.hpp"
+#include "region_choice.hpp"
+#include "thickness.hpp"
 
 namespace osteon {
 namespace {

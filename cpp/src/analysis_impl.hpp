@@ -23,9 +23,9 @@
 #include <memory>
 #include <vector>
 
+#include "loads.hpp"
+#include "loose_pieces.hpp"
 #include "osteon/analysis.hpp"
-#include "osteon/loads.hpp"
-#include "osteon/regions.hpp"
 #include "osteon/slicer.hpp"
 
 namespace osteon {

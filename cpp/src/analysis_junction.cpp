@@ -22,8 +22,9 @@
 
 #include "analysis_impl.hpp"
 #include "clipper2/clipper.h"
-#include "osteon/regions.hpp"
+#include "junction_core.hpp"
 #include "parallel.hpp"
+#include "region_choice.hpp"
 #include "simplify_path.hpp"
 
 namespace osteon {

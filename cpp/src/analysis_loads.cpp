@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
-#include "osteon/regions.hpp"
 #include "parallel.hpp"
+#include "thickness.hpp"
 
 namespace osteon {
 

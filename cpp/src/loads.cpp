@@ -1,4 +1,4 @@
-#include "osteon/loads.hpp"
+#include "loads.hpp"
 
 #include <algorithm>
 #include <cmath>

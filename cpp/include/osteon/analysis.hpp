@@ -112,8 +112,8 @@ struct AnalysisResult {
   std::vector<std::vector<std::int32_t>> loose_pieces;
 };
 
-/// Writes the thickness (mm, regions.hpp) of every region in `pending` (S, null: none) into
-/// `thickness` (S,); the regions stay (a second call writes the same).
+/// Writes the thickness (mm, cpp/src/thickness.hpp) of every region in `pending` (S, null: none)
+/// into `thickness` (S,); the regions stay (a second call writes the same).
 void fill_section_thickness(const std::vector<std::shared_ptr<const SectionPolygon>>& pending,
                             std::vector<double>& thickness);
 
