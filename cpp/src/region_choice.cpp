@@ -76,36 +76,25 @@ bool owned(const CutSegment& s, const BoneDomain& d) {
   return count >= 2;
 }
 
-// True when any two segments of the given loops (not two neighbours of one loop) cross, touch
-// or come within rounding distance of each other; then only a polygon clipper can say what the
-// non-zero winding of the loops is. Degenerate (zero-length) segments and loops of fewer than
-// three points count as touching. Each loop is split into x-monotone chains (runs of segments
-// going the same way in x); only chains whose boxes meet are compared, by a merge along x that
-// visits exactly the segment pairs whose x-ranges meet, so smooth loops cost about their number
-// of segments.
-bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
-  std::size_t m = 0;
-  for (const auto* loop : loops) {
-    if (loop->size() < 3) return true;
-    m += loop->size();
-  }
-  // Segment i of a loop joins its points i and i + 1. A chain is a run of a loop's segments
-  // whose x never decreases, or never increases (then stored backwards): in storage order both
-  // ends of the segments' x-ranges never decrease.
-  struct Seg {
-    double xlo, xhi, ylo, yhi;
-    Vec2 a, b;
-    std::uint32_t loop, index;
-  };
-  struct Chain {
-    std::uint32_t begin, end;  // its segments in `segs`
-    Box2 box;
-  };
-  std::vector<Seg> segs;
-  segs.reserve(m);
-  std::vector<Chain> chains;
-  chains.reserve(4 * loops.size() + 16);
-  Box2 all;
+// A segment of a loop (segment i joins its points i and i + 1), with its box.
+struct LoopSegment {
+  double xlo, xhi, ylo, yhi;
+  Vec2 a, b;
+  std::uint32_t loop, index;
+};
+
+// A run of a loop's segments whose x never decreases, or never increases (then stored
+// backwards): in storage order both ends of the segments' x-ranges never decrease.
+struct MonotoneChain {
+  std::uint32_t begin, end;  // its segments in the segment list
+  Box2 box;
+};
+
+// Splits the loops into x-monotone chains (`segs`, `chains`; `all`: the box of every chain).
+// Returns false when a segment is degenerate (zero length: counts as touching).
+bool split_monotone_chains(const std::vector<const std::vector<Vec2>*>& loops,
+                           std::vector<LoopSegment>& segs, std::vector<MonotoneChain>& chains,
+                           Box2& all) {
   for (std::size_t l = 0; l < loops.size(); ++l) {
     const auto& loop = *loops[l];
     const std::size_t n = loop.size();
@@ -114,7 +103,7 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
     // The chain's box: its x-range from its first and last segments (both ends of the x-ranges
     // never decrease in storage order), its y-range from its points.
     auto close = [&](const Vec2& last) {
-      Chain& c = chains.back();
+      MonotoneChain& c = chains.back();
       c.end = static_cast<std::uint32_t>(segs.size());
       if (dir < 0) std::reverse(segs.begin() + c.begin, segs.end());
       c.box.lo = Vec2(segs[c.begin].xlo, std::min(ylo, last.y()));
@@ -125,7 +114,7 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
     for (std::size_t i = 0; i < n; ++i) {
       const Vec2& a = loop[i];
       const Vec2& b = loop[i + 1 == n ? 0 : i + 1];
-      if (a == b) return true;  // a degenerate segment counts as touching
+      if (a == b) return false;
       const int s = static_cast<int>(b.x() > a.x()) - static_cast<int>(b.x() < a.x());
       if (i == 0 || (s != 0 && dir != 0 && s != dir)) {
         if (i > 0) close(a);
@@ -142,46 +131,55 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
     }
     close(loop[0]);
   }
-  const Vec2 size = all.hi - all.lo;
-  const double extent = std::max(size.x(), size.y());
-  if (!(extent > 0) || !std::isfinite(extent)) return true;
-  // Orientation values below this (mm^2) are treated as zero: near-touching counts as touching.
-  const double eps = 1e-12 * extent * extent;
-  const double margin = 1e-9 * extent;
-  auto orient = [&](const Vec2& o, const Vec2& a, const Vec2& b) {
-    const double c = (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-    return c > eps ? 1 : (c < -eps ? -1 : 0);
-  };
-  // Two segments meet: their boxes come within the margin and neither has both ends strictly on
-  // one side of the other (neighbours of one loop share their common point: not tested).
-  auto meet = [&](const Seg& s, const Seg& t) {
+  return true;
+}
+
+// Whether segments of the chains meet, near-touching counting as touching: orientation values
+// below `eps` (mm^2) are zero, boxes within `margin` (mm) meet.
+class SegmentMeeting {
+ public:
+  SegmentMeeting(const std::vector<const std::vector<Vec2>*>& loops,
+                 const std::vector<LoopSegment>& segs, double extent)
+      : loops_(loops), segs_(segs), eps_(1e-12 * extent * extent), margin_(1e-9 * extent) {}
+
+  double margin() const { return margin_; }
+
+  // Two segments meet: their boxes come within the margin and neither has both ends strictly
+  // on one side of the other (neighbours of one loop share their common point: not tested).
+  bool meet(const LoopSegment& s, const LoopSegment& t) const {
+    const double margin = margin_;
     if (s.ylo > t.yhi + margin || t.ylo > s.yhi + margin || s.xlo > t.xhi + margin ||
         t.xlo > s.xhi + margin)
       return false;
     if (s.loop == t.loop) {
       const std::uint32_t d = s.index > t.index ? s.index - t.index : t.index - s.index;
-      if (d == 1 || d + 1 == loops[s.loop]->size()) return false;
+      if (d == 1 || d + 1 == loops_[s.loop]->size()) return false;
     }
     const int d1 = orient(t.a, t.b, s.a), d2 = orient(t.a, t.b, s.b);
     const int d3 = orient(s.a, s.b, t.a), d4 = orient(s.a, s.b, t.b);
     return d1 * d2 <= 0 && d3 * d4 <= 0;
-  };
+  }
+
+  // Two segments of one chain meet (segment k + 1 is k's neighbour, and the later ones lie
+  // beyond it in x).
+  bool chain_meets_itself(const MonotoneChain& p) const {
+    const auto& segs = segs_;
+    for (std::uint32_t k = p.begin; k < p.end; ++k)
+      for (std::uint32_t j = k + 2; j < p.end && !(segs[j].xlo > segs[k].xhi + margin_); ++j)
+        if (meet(segs[k], segs[j])) return true;
+    return false;
+  }
+
   // Every pair of segments of two chains whose x-ranges meet within the margin: for each
   // segment of p, those of q form one run [j0, j1) that only moves forward.
-  // Both runs start by binary search at the first segment that reaches the other chain's box in
-  // x (a short chain against a long one would otherwise walk the long one from its start).
-  auto first_reaching = [&](const Chain& c, double x) {
-    return static_cast<std::uint32_t>(
-        std::partition_point(segs.begin() + c.begin, segs.begin() + c.end,
-                             [&](const Seg& t) { return x > t.xhi + margin; }) -
-        segs.begin());
-  };
-  auto chains_meet = [&](const Chain& p, const Chain& q) {
+  bool chains_meet(const MonotoneChain& p, const MonotoneChain& q) const {
+    const auto& segs = segs_;
+    const double margin = margin_;
     const std::uint32_t k0 = first_reaching(p, q.box.lo.x());
     if (k0 == p.end) return false;
     std::uint32_t j0 = first_reaching(q, segs[k0].xlo), j1 = j0;
     for (std::uint32_t k = k0; k < p.end; ++k) {
-      const Seg& s = segs[k];
+      const LoopSegment& s = segs[k];
       if (s.xlo > q.box.hi.x() + margin) break;  // this and later segments lie beyond q
       while (j0 < q.end && s.xlo > segs[j0].xhi + margin) ++j0;
       while (j1 < q.end && !(segs[j1].xlo > s.xhi + margin)) ++j1;
@@ -189,7 +187,51 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
         if (meet(s, segs[j])) return true;
     }
     return false;
-  };
+  }
+
+ private:
+  int orient(const Vec2& o, const Vec2& a, const Vec2& b) const {
+    const double c = (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+    return c > eps_ ? 1 : (c < -eps_ ? -1 : 0);
+  }
+  // The first segment of c that reaches x (binary search: a short chain against a long one
+  // would otherwise walk the long one from its start).
+  std::uint32_t first_reaching(const MonotoneChain& c, double x) const {
+    return static_cast<std::uint32_t>(
+        std::partition_point(segs_.begin() + c.begin, segs_.begin() + c.end,
+                             [&](const LoopSegment& t) { return x > t.xhi + margin_; }) -
+        segs_.begin());
+  }
+
+  const std::vector<const std::vector<Vec2>*>& loops_;
+  const std::vector<LoopSegment>& segs_;
+  double eps_, margin_;
+};
+
+// True when any two segments of the given loops (not two neighbours of one loop) cross, touch
+// or come within rounding distance of each other; then only a polygon clipper can say what the
+// non-zero winding of the loops is. Degenerate (zero-length) segments and loops of fewer than
+// three points count as touching. Each loop is split into x-monotone chains (runs of segments
+// going the same way in x); only chains whose boxes meet are compared, by a merge along x that
+// visits exactly the segment pairs whose x-ranges meet, so smooth loops cost about their number
+// of segments.
+bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
+  std::size_t m = 0;
+  for (const auto* loop : loops) {
+    if (loop->size() < 3) return true;
+    m += loop->size();
+  }
+  std::vector<LoopSegment> segs;
+  segs.reserve(m);
+  std::vector<MonotoneChain> chains;
+  chains.reserve(4 * loops.size() + 16);
+  Box2 all;
+  if (!split_monotone_chains(loops, segs, chains, all)) return true;
+  const Vec2 size = all.hi - all.lo;
+  const double extent = std::max(size.x(), size.y());
+  if (!(extent > 0) || !std::isfinite(extent)) return true;
+  const SegmentMeeting meeting(loops, segs, extent);
+  const double margin = meeting.margin();
   // Chain pairs whose boxes meet within the margin, by a sweep over the chains sorted by x.
   std::vector<std::uint32_t> order(chains.size());
   for (std::uint32_t c = 0; c < order.size(); ++c) order[c] = c;
@@ -197,16 +239,13 @@ bool loops_may_cross(const std::vector<const std::vector<Vec2>*>& loops) {
     return chains[a].box.lo.x() < chains[b].box.lo.x();
   });
   for (std::size_t i = 0; i < order.size(); ++i) {
-    const Chain& p = chains[order[i]];
-    // Within a chain, segment k + 1 is k's neighbour, and the later ones lie beyond it in x.
-    for (std::uint32_t k = p.begin; k < p.end; ++k)
-      for (std::uint32_t j = k + 2; j < p.end && !(segs[j].xlo > segs[k].xhi + margin); ++j)
-        if (meet(segs[k], segs[j])) return true;
+    const MonotoneChain& p = chains[order[i]];
+    if (meeting.chain_meets_itself(p)) return true;
     for (std::size_t j = i + 1; j < order.size(); ++j) {
-      const Chain& q = chains[order[j]];
+      const MonotoneChain& q = chains[order[j]];
       if (q.box.lo.x() > p.box.hi.x() + margin) break;
       if (p.box.lo.y() > q.box.hi.y() + margin || q.box.lo.y() > p.box.hi.y() + margin) continue;
-      if (chains_meet(p, q)) return true;
+      if (meeting.chains_meet(p, q)) return true;
     }
   }
   return false;
