@@ -15,6 +15,8 @@ import sys
 
 import numpy as np
 
+from .errors import OsteonError
+
 # --------------------------------------------------------------------------- units
 
 SCALING_MODES = (
@@ -112,10 +114,6 @@ def stress_colors(vertex_stress: np.ndarray, allowable_mpa: float,
 # --------------------------------------------------------------------------- engine
 
 
-class OsteonError(Exception):
-    """A user-facing problem: its message is shown by report() / printed by batch."""
-
-
 _VENDOR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_vendor")
 
 
@@ -138,6 +136,31 @@ def import_engine():
     ) from error
 
 
+PYGEL3D_MISSING = (
+    "Make skeleton needs the Python package 'pygel3d', which this Blender cannot import ({why}). "
+    "The osteon zips for Linux (x64, arm64), Windows x64 and macOS 11+ carry it: install the "
+    "zip made for this computer. Otherwise, in Blender's Python Console (Scripting tab) run: "
+    "import subprocess, sys; subprocess.check_call([sys.executable, '-m', 'pip', 'install', "
+    "'--user', 'pygel3d']) and restart Blender")
+
+
+def import_pygel3d():
+    """Import ``pygel3d`` (osteon.auto_skeleton's curve skeleton): the extension installs its
+    bundled wheel, the legacy zip carries it unpacked in ``_vendor/`` (scripts/build_addon.py);
+    OsteonError telling a zip user what to do in Blender when neither is there."""
+    error: ImportError | None = None
+    for attempt in range(2):
+        if attempt == 1:
+            if not os.path.isdir(_VENDOR) or _VENDOR in sys.path:
+                break
+            sys.path.append(_VENDOR)   # after the user's own packages
+        try:
+            return importlib.import_module("pygel3d")
+        except (ImportError, OSError) as e:   # OSError: its shared library does not load
+            error = e if isinstance(e, ImportError) else ImportError(str(e))
+    raise OsteonError(PYGEL3D_MISSING.format(why=error))
+
+
 # --------------------------------------------------------------------------- the wheel's facts
 
 # Materials, allowable stress, the per-bone table and the report schema are the wheel's
@@ -145,6 +168,8 @@ def import_engine():
 import_engine()
 from osteon import materials, report
 from osteon.settings import Settings, engine_arguments, min_thickness_mm  # noqa: F401 (service)
+
+from . import printdir  # after import_engine: it reads osteon.settings
 
 MATERIALS = materials.MATERIALS
 MATERIAL_BY_KEY = {m.key: m for m in MATERIALS}
@@ -179,14 +204,13 @@ def _preset_exact(s, ratio: float) -> float:
     return ratio
 
 
-def settings_of(s) -> Settings:
+def settings_of(s, orientation: dict | None = None) -> Settings:
     """``scene.osteon`` as the wheel's :class:`osteon.settings.Settings` (the build direction
     from the "Print direction" setting, the layer ratio from "Layer strength", ``junctions``
-    from "Junction cores")."""
-    from . import printdir
-
+    from "Junction cores"); ``orientation``: the scene's "Find best orientation" result
+    (``state.SceneState.orientation``), which Print direction "Best found" reads)."""
     return Settings(
-        build_direction=printdir.build_direction(s),
+        build_direction=printdir.build_direction(s, orientation),
         layer_strength_ratio=_preset_exact(s, float(getattr(s, "layer_strength_ratio", 1.0))),
         force_n=float(s.force_n), interval_mm=float(s.interval_mm), material=s.material,
         strength_mpa=float(s.strength_mpa), safety_factor=float(s.safety_factor),
@@ -196,10 +220,12 @@ def settings_of(s) -> Settings:
         junctions=bool(getattr(s, "junction_cores", True)))
 
 
-def engine_params(s, arm, bone_names, correct: bool = False) -> dict:
-    """The engine's keyword arguments from ``scene.osteon`` (checked once, in the wheel)."""
+def engine_params(s, arm, bone_names, correct: bool = False,
+                  orientation: dict | None = None) -> dict:
+    """The engine's keyword arguments from ``scene.osteon`` (checked once, in the wheel);
+    ``orientation`` as in :func:`settings_of`."""
     try:
-        return engine_arguments(settings_of(s), bone_names, correct=correct)
+        return engine_arguments(settings_of(s, orientation), bone_names, correct=correct)
     except ValueError as e:
         msg = str(e)
         if msg.startswith("Held bone"):

@@ -42,7 +42,8 @@ def gather(context, use_weight_cache: bool = False, mm_per_unit: float | None = 
     t0 = time.perf_counter()
     obj, arm = bridge.find_target(context)
     sk = bridge.skeleton_arrays(arm)
-    params = core.engine_params(s, arm, sk.names)
+    params = core.engine_params(s, arm, sk.names,
+                                orientation=state.of(context.scene).orientation)
     csr = (state.of(context.scene).weights.get(obj, sk.names) if use_weight_cache
            else bridge.vertex_weights_csr(obj, sk.names))
     t1 = time.perf_counter()
@@ -169,7 +170,8 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
         object_name=inp.obj.name, armature_name=inp.arm.name, bone_names=inp.skeleton.names,
         analysis=first_analysis if first_analysis is not None else analysis,
         corrected_analysis=analysis if correction is not None else None,
-        allowable_mpa=allowable, settings=core.settings_of(s).as_dict(), mm_per_unit=inp.mm_per_unit,
+        allowable_mpa=allowable, settings=core.settings_of(
+            s, state.of(context.scene).orientation).as_dict(), mm_per_unit=inp.mm_per_unit,
         correction=correction, vertices=len(inp.vertices_mm), faces=len(inp.faces))
     s.weak_bones.clear()
     for row in report["weak_bones"]:
@@ -293,7 +295,8 @@ def correct_steps(job: Job):
         inp = gather(context)
         skeleton = engine_skeleton(osteon, inp)
         check_sections(osteon, inp, skeleton, job.max_sections)
-        params = core.engine_params(s, arm, inp.skeleton.names, correct=True)
+        params = core.engine_params(s, arm, inp.skeleton.names, correct=True,
+                                    orientation=state.of(context.scene).orientation)
 
         def engine_correct():
             try:
@@ -395,13 +398,7 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
         raise OsteonError("Make skeleton: select the mesh to rig (the active object is not a mesh)")
     if bridge.armature_of(obj) is not None:
         raise OsteonError(f"Mesh '{obj.name}' already has an Armature modifier")
-    try:
-        import pygel3d  # noqa: F401  (auto_skeleton imports it lazily)
-    except ImportError:
-        raise OsteonError(
-            "Make skeleton needs the Python package 'pygel3d', which this Blender cannot import; "
-            "install it into Blender's Python (scripts/blender_setup.sh does: "
-            "pip install --target <Blender's site-packages> pygel3d)") from None
+    core.import_pygel3d()  # auto_skeleton imports it lazily: check first, say what to do
     s = context.scene.osteon
     verts = bridge.world_rest_positions(obj)
     faces = bridge.triangles(obj.data)
@@ -416,7 +413,8 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
     t0 = time.perf_counter()
     try:
         sk, w = osteon.auto_skeleton(verts * k, faces, root=root,
-                                     min_thickness=min_thickness_mm(core.settings_of(s)))
+                                     min_thickness=min_thickness_mm(
+                                         core.settings_of(s, state.of(context.scene).orientation)))
     except ValueError as e:
         raise OsteonError(f"Make skeleton: {e}") from e
     progress(0.7)

@@ -129,7 +129,7 @@ def _settings_key(scene) -> tuple:
     setting is covered without listing it here) and the scene's unit scale."""
     s = scene.osteon
     try:
-        settings = core.settings_of(s)
+        settings = core.settings_of(s, state.of(scene).orientation)
         settings = dataclasses.replace(
             settings, build_direction=tuple(float(x) for x in settings.build_direction))
     except (OsteonError, ValueError, TypeError) as e:  # read_inputs reports it to the user
@@ -170,7 +170,7 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
         depsgraph = bpy.context.evaluated_depsgraph_get()
     s = scene.osteon
     sk = bridge.skeleton_arrays(arm)
-    params = core.engine_params(s, arm, sk.names)
+    params = core.engine_params(s, arm, sk.names, orientation=state.of(scene).orientation)
     co, matrix = bridge.evaluated_positions_into(obj, depsgraph)
     settings = _settings_key(scene)
     want = _want_outlines(scene)

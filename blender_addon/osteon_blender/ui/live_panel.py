@@ -5,6 +5,7 @@ stress and allowable stress in MPa, the weakest bone)."""
 import bpy
 
 from .. import live
+from .widgets import wrapped_label
 
 
 class OSTEON_PT_live(bpy.types.Panel):
@@ -33,8 +34,6 @@ class OSTEON_PT_live(bpy.types.Panel):
         box = layout.box()
         col = box.column(align=True)
         if r.status.startswith(("error", "paused")):
-            from .panel import wrapped_label
-
             wrapped_label(col, context, r.status,
                           "ERROR" if r.status.startswith("error") else "PAUSE")
         if r.updates == 0:
