@@ -12,7 +12,7 @@ from __future__ import annotations
 import bpy
 
 from .. import bridge, core, state
-from . import doubt_ui, print_panel
+from . import doubt_ui, print_panel, widgets
 from .widgets import BOX_INSET, labelled, wrapped_label
 
 LOOSE_OP = "OSTEON_OT_select_loose_pieces"   # from branch i12c (ops/loose.py), when present
@@ -39,29 +39,60 @@ class _Sub:
     bl_parent_id = "OSTEON_PT_main"
 
 
-class OSTEON_UL_weak_bones(bpy.types.UIList):
-    """Result rows: bone (a button that shows it; its tooltip has the full name and numbers),
-    stress / allowable, and the cross-section scale Correct gave it."""
+#: px at UI scale 1 of each number column of the result rows ("2.08", "33.6", "1.45"); a
+#: UIList row loses LIST_MARGIN px to the list's box and scroll bar (scripts/ui_fit.py)
+NUMBER_COLUMN = 38
+LIST_MARGIN = 26
+SUBPANEL_INSET = 4    # px at UI scale 1: a sub-panel's layout is this much narrower
 
-    COLUMNS = (0.46,)   # the bone's share; the ratio and the scale share the rest
+
+def _scaled_rows(s) -> bool:
+    return any(abs(r.scale - 1.0) > 1e-6 for r in s.weak_bones)
+
+
+def row_columns(context, s) -> tuple[float, float, int]:
+    """(name share of a result row, its width in px, number of number columns): the name
+    gets what the fixed narrow number columns leave (stress / allowable, and the scale once
+    Correct has scaled a bone)."""
+    scale = widgets._scale(context)
+    width = widgets.text_width_px(context) - LIST_MARGIN * scale
+    ncols = 2 if _scaled_rows(s) else 1
+    numbers = ncols * NUMBER_COLUMN * scale
+    share = max(0.3, min(0.85, 1.0 - numbers / max(width, 1.0)))
+    return share, width * share, ncols
+
+
+def _ratio_text(ratio: float) -> str:
+    """At most four characters: 0.99, 2.08, 33.6, 336."""
+    return f"{ratio:.2f}" if ratio < 9.995 else f"{ratio:.1f}" if ratio < 99.95 else f"{ratio:.0f}"
+
+
+class OSTEON_UL_weak_bones(bpy.types.UIList):
+    """Result rows: the bone's name first (a button that shows it; its tooltip has the full
+    name, the stress and the allowable that governs), then fixed narrow columns: stress /
+    allowable at its governing section and, after Correct, the cross-section scale."""
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index):
-        split = layout.split(factor=OSTEON_UL_weak_bones.COLUMNS[0], align=True)
+        share, name_px, ncols = row_columns(context, data)
+        split = layout.split(factor=share, align=True)
         uncut = item.status == "not analysed"
-        icon = "QUESTION" if uncut else "ERROR" if item.weak else "CHECKMARK"
         cell = split.row()
         cell.alignment = "LEFT"            # the name reads from the left, like a label
-        op = cell.operator("osteon.select_bone", text=item.name, icon=icon, emboss=False)
+        name = widgets.fit_text(item.name, name_px, widgets._scale(context))
+        op = cell.operator("osteon.select_bone", text=name, emboss=False)
         op.bone = item.name
+        nums = split.split(factor=1.0 / ncols, align=True) if ncols > 1 else split.row()
         if uncut:
-            split.label(text="?")
-            split.label(text="")
+            nums.label(text="?", icon="NONE")
+            if ncols > 1:
+                nums.label(text="")
             return
-        col = split.row()
+        col = nums.row()
         col.alert = item.weak
-        col.label(text=f"{item.ratio:.2f}")
-        scaled = abs(item.scale - 1.0) > 1e-6
-        split.label(text=f"{item.scale:.2f}" if scaled else "-")
+        col.label(text=_ratio_text(item.ratio))
+        if ncols > 1:
+            scaled = abs(item.scale - 1.0) > 1e-6
+            nums.label(text=f"{item.scale:.2f}" if scaled else "-")
 
 
 class OSTEON_PT_main(bpy.types.Panel):
@@ -103,10 +134,13 @@ class OSTEON_PT_results(_Sub, bpy.types.Panel):
         if not len(s.weak_bones):
             layout.label(text="No bone over the limit" if s.has_result else "No result yet")
             return
-        head = layout.split(factor=OSTEON_UL_weak_bones.COLUMNS[0], align=True)
+        share, _px, ncols = row_columns(context, s)
+        head = layout.split(factor=share, align=True)
         head.label(text="Bone")
-        head.label(text="σ/[σ]")
-        head.label(text="Scale")
+        nums = head.split(factor=1.0 / ncols, align=True) if ncols > 1 else head.row()
+        nums.label(text="σ/[σ]")
+        if ncols > 1:
+            nums.label(text="Scale")
         layout.template_list("OSTEON_UL_weak_bones", "", s, "weak_bones", s, "weak_bones_index",
                              rows=4)
         row = layout.row(align=True)
@@ -115,6 +149,18 @@ class OSTEON_PT_results(_Sub, bpy.types.Panel):
         rep = st.last["report"] if st is not None and st.last else None
         if rep and rep.get("loose_pieces") and hasattr(bpy.types, LOOSE_OP):
             layout.operator("osteon.select_loose_pieces", icon="STICKY_UVS_DISABLE")
+
+
+class OSTEON_PT_colours(_Sub, bpy.types.Panel):
+    """What the stress colours on the mesh mean: stress / allowable at each part (the same
+    ratio as the summary and the rows), grey and magenta"""
+
+    bl_label = "Colour scale"
+
+    def draw(self, context):
+        col = self.layout.column(align=True)
+        for _rgba, icon, text in core.LEGEND:
+            wrapped_label(col, context, text, icon, inset=SUBPANEL_INSET)
 
 
 class OSTEON_PT_material(_Sub, bpy.types.Panel):
@@ -185,5 +231,5 @@ class OSTEON_PT_correction(_Sub, bpy.types.Panel):
         col.prop(s, "max_rounds")
 
 
-classes = (OSTEON_UL_weak_bones, OSTEON_PT_main, OSTEON_PT_results, OSTEON_PT_material,
-           OSTEON_PT_load, OSTEON_PT_print, OSTEON_PT_correction)
+classes = (OSTEON_UL_weak_bones, OSTEON_PT_main, OSTEON_PT_results, OSTEON_PT_colours,
+           OSTEON_PT_material, OSTEON_PT_load, OSTEON_PT_print, OSTEON_PT_correction)

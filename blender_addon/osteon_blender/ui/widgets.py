@@ -60,3 +60,31 @@ def wrapped_label(layout, context, text: str, icon: str = "NONE", inset: float =
     room = text_width_px(context) - inset * _scale(context)
     for i, line in enumerate(wrap(text, room, _scale(context), has_icon)):
         col.label(text=line, icon=icon if i == 0 else ("BLANK1" if has_icon else "NONE"))
+
+
+ELLIPSIS = "…"
+
+
+def fit_text(text: str, width_px: float, scale: float, keep_end: int = 6) -> str:
+    """``text`` as it fits ``width_px`` in the UI font (a button's text margins included):
+    itself, or its start, an ellipsis and its last ``keep_end`` characters -- where names of
+    one rig differ ("auto_07", "upper_arm.L.001") -- rather than Blender's cut at the end."""
+    import blf
+
+    blf.size(0, 11.0 * scale)
+    room = width_px - 10.0 * scale
+
+    def width(t: str) -> float:
+        return blf.dimensions(0, t)[0]
+
+    if width(text) <= room:
+        return text
+    tail = text[-keep_end:] if len(text) > keep_end else text
+    head = text[: max(0, len(text) - len(tail))]
+    while len(head) > 2 and width(head + ELLIPSIS + tail) > room:
+        head = head[:-1]                 # the start goes first, down to two characters
+    while len(tail) > 3 and width(head + ELLIPSIS + tail) > room:
+        tail = tail[1:]                  # then the end, down to its last three
+    while head and width(head + ELLIPSIS + tail) > room:
+        head = head[:-1]
+    return head + ELLIPSIS + tail
