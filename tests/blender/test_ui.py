@@ -293,3 +293,22 @@ def test_colour_legend_is_the_scale_the_mesh_gets(addon):
         assert np.allclose(c[i], legend[key][0], atol=0.01), key
     text = " ".join(_draw("OSTEON_PT_colours"))
     assert "within the limit" in text and "surely safe" in text and "not analysed" in text
+
+
+def test_view_direction_avoids_what_hides_the_section(addon):
+    """The row click's view (issue 35): 30 degrees off the section's plane (the ring reads as
+    an ellipse), on the side no other part of the model stands in the way, else from above."""
+    d = sb.view_direction(np.zeros(3), (0.0, 0.0, 1.0), 1.0, np.zeros((0, 3)))
+    assert np.linalg.norm(d) == pytest.approx(1.0)
+    assert d[2] == pytest.approx(0.5)            # sin 30 degrees, from above
+    assert d[1] > 0.8                            # ... on the +y side, all else equal
+    g = np.linspace(-10.0, 10.0, 21)
+    wall = np.array([(x, y, z) for y in (3.0, 4.0, 6.0, 9.0) for x in g for z in g])
+    d = sb.view_direction(np.zeros(3), (0.0, 0.0, 1.0), 1.0, wall)
+    assert d[1] < 0.3 and d[2] == pytest.approx(0.5)  # a wall on +y: another side, from above
+    along = wall @ d
+    assert not np.any((along > 0) & (np.linalg.norm(wall - np.outer(along, d), axis=1) < 1.2))
+    # the section's own surroundings (within 2 radii) never count as in the way
+    ring = np.array([(np.cos(t), np.sin(t), 0.0) for t in np.linspace(0, 6.2, 50)]) * 1.5
+    d2 = sb.view_direction(np.zeros(3), (0.0, 0.0, 1.0), 1.0, np.vstack([wall, ring]))
+    assert np.allclose(d, d2)

@@ -89,10 +89,11 @@ CLIP_RATIO = 1.0e5
 
 def view_direction(centre, normal, radius: float, vertices) -> np.ndarray:
     """A unit direction (3,) from the section towards the eye that shows the section: among
-    directions oblique (45 degrees) and square to the section's normal, around it, the one
-    whose line of sight from the section passes by the fewest of the model's ``vertices``
-    (world, (V, 3)) -- the rest of the model does not hide it; ties go to the most upward
-    (the way one looks at a model on a table)."""
+    directions 30 degrees off the section's plane, on either side and all around (the ring
+    then reads as an ellipse half as wide as long), the one whose line of sight passes by
+    the fewest of the model's ``vertices`` (world, (V, 3)) beyond the section's own
+    surroundings -- no other part (a forearm before a tail root) hides it; ties go to the most
+    upward (the way one looks at a model on a table)."""
     n = np.asarray(normal, dtype=np.float64)
     n = n / (np.linalg.norm(n) or 1.0)
     helper = np.array([0.0, 0.0, 1.0]) if abs(n[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
@@ -100,16 +101,17 @@ def view_direction(centre, normal, radius: float, vertices) -> np.ndarray:
     u /= np.linalg.norm(u)
     v = np.cross(n, u)
     cands = []
-    for t in np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False):
+    for t in np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False):
         side = np.cos(t) * u + np.sin(t) * v
-        cands += [side, (side + n) / np.sqrt(2.0), (side - n) / np.sqrt(2.0)]
+        cands += [np.cos(np.pi / 6) * side + sign * np.sin(np.pi / 6) * n for sign in (1, -1)]
     cands = np.array(cands)
     p = np.asarray(vertices, dtype=np.float64) - np.asarray(centre, dtype=np.float64)
     if len(p) > 20000:                   # a sample is enough to tell the sides apart
         p = p[:: len(p) // 20000 + 1]
+    p = p[(p * p).sum(1) > (2.0 * radius) ** 2]          # the section's own surroundings
     along = p @ cands.T                                  # (V, C) distance along each sight line
     across2 = np.maximum((p * p).sum(1)[:, None] - along * along, 0.0)
-    blocked = (along > 1.5 * radius) & (across2 < (1.5 * radius) ** 2)
+    blocked = (along > 0.0) & (across2 < (1.2 * radius) ** 2)
     cost = blocked.sum(axis=0) - 1e-3 * cands[:, 2]      # fewest in the way; then from above
     return cands[int(np.argmin(cost))]
 
