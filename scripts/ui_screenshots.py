@@ -13,8 +13,14 @@ default width on the "Osteon" tab; then
    "Next weak bone" must move to the next weak row;
 3. Correct, screenshot (``sample_corrected``: the scale column); Reset must put back the
    viewport's Solid colour the user had (Analyze switched it to the attribute);
-4. the RigNet dog FBX from tests/data (an imported rig: joint names, cm units): Analyze,
-   screenshot (``dog``), a click on its first weak bone, screenshot (``dog_bone``).
+4. the RigNet dog FBX from tests/data (an imported rig: joint names, cm units, 1 cm tall in
+   scene units): Analyze, screenshot (``dog``), a click on its first weak bone in a
+   perspective view, screenshot (``dog_bone``).
+
+After each click the pixels where the section projects must not be the background and must
+hold its yellow outline (``check_section_shown``); with the sample's result and with Live on,
+the summary's worst line, the worst row and the Live box must show the same numbers
+(``check_numbers_agree``).
 
 Each step saves the window (``<step>_window.png``) and the sidebar cut out of it
 (``<step>_panel.png``) to the output folder, and checks, from the UI itself:
@@ -429,6 +435,9 @@ def s_dog():
 def s_dog_shot():
     check("dog")
     screenshot("dog")
+    # the user's view is perspective (Front made it orthographic): there a 1 cm model's
+    # section once fell inside the near clip (0.01) and the view went blank
+    view3d()[1].spaces.active.region_3d.view_perspective = "PERSP"
     select_first_weak()
 
 

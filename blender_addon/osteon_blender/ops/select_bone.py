@@ -81,8 +81,9 @@ def weakest_section(scene, name: str) -> dict | None:
     return out
 
 
-#: how far the view stands from the section, in section radii (the section fills ~1/4 of it)
-FRAME_RADII = 8.0
+#: how far the view stands from the section, in section radii (the section spans about a
+#: fifth of the view: the limb around it stays in sight)
+FRAME_RADII = 12.0
 #: the clip range kept when it has to move: end / start, Blender's default 1000 / 0.01
 CLIP_RATIO = 1.0e5
 
