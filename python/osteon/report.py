@@ -10,6 +10,7 @@ every key of the schema is present in every report (``null`` where it does not a
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -405,7 +406,10 @@ def to_json(report: dict, indent: int = 1) -> str:
     return json.dumps(report, indent=indent, allow_nan=False)
 
 
+@functools.lru_cache(maxsize=1)
 def _version() -> str:
+    """The installed osteon's version (read once: the metadata lookup costs ~20 ms, and the
+    Blender add-on's Live mode builds a report on every update)."""
     try:
         from importlib.metadata import version
 
