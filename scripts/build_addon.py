@@ -34,6 +34,19 @@ here with each ``--python`` interpreter (default: the running one) by ``pip whee
 Blender >= 4.2 binary (``blender --command extension validate``) or a Python with the ``bpy``
 wheel (the same validator, called through ``bl_pkg``).
 
+Both zips also carry pygel3d (``PYGEL3D``, the curve skeleton behind Make skeleton) for their
+platform where PyPI has a wheel: PyGEL3D 0.8.2 publishes py3-none wheels (ctypes + its own
+shared library, Python >= 3.11) for linux x86_64 and aarch64 (manylinux_2_28), win_amd64 and
+macOS 11+ (universal2, used for macos-x64 and macos-arm64); none for windows-arm64. The
+extension lists the wheel in its manifest (Blender installs it), the legacy zip unpacks it
+into ``_vendor/`` beside the engine. ``--pygel3d DIR`` takes the wheels from a folder,
+``--pygel3d download`` (default) fetches them with ``pip download`` into ``<out>/pygel3d/``
+(kept as a cache), ``--pygel3d none`` leaves them out; a platform without a wheel gets a zip
+without it, whose Make skeleton says what to do in Blender.
+
+Each zip also carries the user guide, ``docs/blender.md`` (the Preferences' Documentation
+button opens it).
+
 NumPy comes with Blender (Debian: ``python3-numpy``); SciPy is optional (the add-on passes
 its sparse weights without it).
 """
@@ -62,6 +75,16 @@ EXTENSIONS_FROM = (4, 2)  # the first Blender with extensions (blender_manifest.
 EXTENSION_PYTHONS = {py for v, py in BLENDER_PYTHON.items() if v >= EXTENSIONS_FROM}
 # Pythons of the legacy add-on: 3.10 (official 3.4-4.0), 3.11 (4.1, Debian's 3.4.1 build)
 LEGACY_PYTHONS = {(3, 10), (3, 11)}
+
+# pygel3d (Make skeleton): the pinned release and, per Blender platform, the pip --platform
+# tag that selects its wheel on PyPI (None: PyPI has none)
+PYGEL3D = "0.8.2"
+PYGEL3D_PLATFORMS = {
+    "linux-x64": "manylinux_2_28_x86_64", "linux-arm64": "manylinux_2_28_aarch64",
+    "windows-x64": "win_amd64", "windows-arm64": None,
+    "macos-x64": "macosx_11_0_x86_64", "macos-arm64": "macosx_11_0_arm64",
+}
+DOCS = ("docs/blender.md",)  # shipped inside the add-on (prefs.py opens it)
 
 # wheel platform tag (its architecture end) -> Blender extension platform
 _ARCH = {
@@ -141,6 +164,57 @@ def addon_files():
             yield full, os.path.relpath(full, ADDON).replace(os.sep, "/")
 
 
+def doc_files():
+    for rel in DOCS:
+        yield os.path.join(ROOT, *rel.split("/")), rel
+
+
+def pygel3d_platform(wheel: str) -> list[str]:
+    """The Blender platforms a (py3-none) pygel3d wheel serves; universal2: both macOS ones."""
+    out = []
+    for tag in os.path.basename(wheel)[:-4].split("-")[-1].lower().split("."):
+        if tag.endswith("_universal2") and tag.startswith("macosx"):
+            out += ["macos-x64", "macos-arm64"]
+        else:
+            try:
+                out.append(platform_of(f"x-{tag}.whl"))
+            except SystemExit:
+                continue
+    return sorted(set(out))
+
+
+def pygel3d_wheels(source: str, platforms: set[str], out: str) -> dict[str, str]:
+    """Blender platform -> pygel3d wheel, from a folder or ``pip download`` (module doc)."""
+    if source == "none":
+        return {}
+    folder = os.path.join(out, "pygel3d") if source == "download" else os.path.abspath(source)
+    found: dict[str, str] = {}
+
+    def scan():
+        for w in sorted(glob.glob(os.path.join(folder, "pygel3d-*.whl"))):
+            for plat in pygel3d_platform(w):
+                found.setdefault(plat, w)
+
+    scan()
+    if source == "download":
+        for plat in sorted(platforms - set(found)):
+            tag = PYGEL3D_PLATFORMS.get(plat)
+            if tag is None:
+                continue
+            cmd = [sys.executable, "-m", "pip", "download", "-q", "--no-deps",
+                   "--only-binary=:all:", f"PyGEL3D=={PYGEL3D}", "--platform", tag,
+                   "--python-version", "3.11", "-d", folder]
+            res = subprocess.run(cmd, capture_output=True, text=True, check=False, timeout=300)
+            if res.returncode != 0:
+                print(f"[build_addon] {plat}: no pygel3d {PYGEL3D} wheel "
+                      f"({(res.stderr.strip().splitlines() or ['pip failed'])[-1]})")
+            scan()
+    for plat in sorted(platforms - set(found)):
+        print(f"[build_addon] {plat}: no pygel3d wheel: its zips rig no mesh (Make skeleton "
+              "says what to do)")
+    return {p: w for p, w in found.items() if p in platforms}
+
+
 def _read_manifest() -> str:
     with open(os.path.join(ADDON, "blender_manifest.toml"), encoding="utf-8") as fh:
         return fh.read()
@@ -181,41 +255,45 @@ def blender_range(pythons: set[tuple[int, int]]) -> tuple[str, str | None]:
     return vmin, vmax
 
 
-def extension_manifest(wheels: list[str], platform: str) -> str:
+def extension_manifest(wheels: list[str], platform: str, extra_wheels: tuple = ()) -> str:
     pythons = {wheel_tags(w)[0] for w in wheels}
     vmin, vmax = blender_range(pythons)
     text = _read_manifest()
     text = _set_key(text, "blender_version_min", f'"{vmin}"')
     text = _set_key(text, "blender_version_max", f'"{vmax}"' if vmax else None)
     text = _set_key(text, "platforms", f'["{platform}"]')
-    listed = ", ".join(f'"./wheels/{os.path.basename(w)}"' for w in wheels)
+    listed = ", ".join(f'"./wheels/{os.path.basename(w)}"' for w in [*wheels, *extra_wheels])
     return _set_key(text, "wheels", f"[{listed}]")
 
 
-def build_extension(wheels: list[str], platform: str, out: str, version: str) -> str:
-    """The 4.2+ extension zip of one platform, carrying all its cp311/cp313 wheels."""
+def build_extension(wheels: list[str], platform: str, out: str, version: str,
+                    extra_wheels: tuple = ()) -> str:
+    """The 4.2+ extension zip of one platform, carrying all its cp311/cp313 wheels (and
+    ``extra_wheels``: pygel3d's)."""
     path = os.path.join(out, f"osteon_blender-{version}-{platform.replace('-', '_')}-extension.zip")
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
-        for full, rel in addon_files():
+        for full, rel in [*addon_files(), *doc_files()]:
             if rel == "blender_manifest.toml":
-                z.writestr(rel, extension_manifest(wheels, platform))
+                z.writestr(rel, extension_manifest(wheels, platform, extra_wheels))
             else:
                 z.write(full, rel)
-        for w in wheels:
+        for w in [*wheels, *extra_wheels]:
             z.write(w, f"wheels/{os.path.basename(w)}")
     return path
 
 
-def build_legacy(wheels: list[str], platform: str, out: str, version: str) -> str:
-    """The legacy (bl_info) zip of one platform: the engine of each wheel unpacked into
-    osteon_blender/_vendor (the pure-Python files are the same in every wheel)."""
+def build_legacy(wheels: list[str], platform: str, out: str, version: str,
+                 extra_wheels: tuple = ()) -> str:
+    """The legacy (bl_info) zip of one platform: the engine of each wheel (and the packages
+    of ``extra_wheels``: pygel3d) unpacked into osteon_blender/_vendor (the pure-Python files
+    are the same in every wheel)."""
     path = os.path.join(out, f"osteon_blender-{version}-{platform.replace('-', '_')}-legacy.zip")
     written: set[str] = set()
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
-        for full, rel in addon_files():
+        for full, rel in [*addon_files(), *doc_files()]:
             if rel != "blender_manifest.toml":  # a manifest would make 4.2+ treat it as extension
                 z.write(full, f"osteon_blender/{rel}")
-        for wheel in wheels:
+        for wheel in [*wheels, *extra_wheels]:
             with zipfile.ZipFile(wheel) as w:
                 for info in w.infolist():
                     top = info.filename.split("/", 1)[0]
@@ -253,6 +331,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="build a wheel with this interpreter (repeatable; default: this one "
                          "when no wheel is given)")
     ap.add_argument("--out", default=os.path.join(ROOT, "dist"), help="output folder")
+    ap.add_argument("--pygel3d", default="download", metavar="download|DIR|none",
+                    help="where the pygel3d wheels come from (default: pip download into "
+                         "<out>/pygel3d)")
     ap.add_argument("--validate-with", metavar="BLENDER_OR_PYTHON",
                     help="run Blender's extension validator on each extension zip")
     a = ap.parse_args(argv)
@@ -280,13 +361,15 @@ def main(argv: list[str] | None = None) -> int:
         py, plat = wheel_tags(w)
         chosen[(plat, py)] = w
     version = addon_version()
+    gel = pygel3d_wheels(a.pygel3d, {p for p, _ in chosen}, out)
     made = []
     failed = False
     for plat in sorted({p for p, _ in chosen}):
         mine = [chosen[k] for k in sorted(k for k in chosen if k[0] == plat)]
         ext_wheels = [w for w in mine if wheel_tags(w)[0] in EXTENSION_PYTHONS]
         if ext_wheels:
-            ext = build_extension(ext_wheels, plat, out, version)
+            extra = (gel[plat],) if plat in gel else ()
+            ext = build_extension(ext_wheels, plat, out, version, extra)
             made.append(ext)
             vmin, vmax = blender_range({wheel_tags(w)[0] for w in ext_wheels})
             upto = (f"up to (not incl.) {vmax}" if vmax else
@@ -299,7 +382,8 @@ def main(argv: list[str] | None = None) -> int:
                 failed |= not ok
         legacy_wheels = [w for w in mine if wheel_tags(w)[0] in LEGACY_PYTHONS]
         if legacy_wheels:
-            made.append(build_legacy(legacy_wheels, plat, out, version))
+            made.append(build_legacy(legacy_wheels, plat, out, version,
+                                     (gel[plat],) if plat in gel else ()))
         else:
             print(f"[build_addon] {plat}: no cp310/cp311 wheel, no legacy zip")
     for p in [*wheels, *made]:
