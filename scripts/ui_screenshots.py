@@ -7,7 +7,7 @@ that every text it draws fits at the default sidebar width (issue 20).
 (``scripts/ui_screenshots.sh`` runs exactly that.)  Factory settings, the sidebar opened at its
 default width on the "Osteon" tab; then
 
-1. the sample figurine (scripts/make_sample_rig.py): Analyze, screenshot (``sample``);
+1. the sample figurine (blender_addon/osteon_blender/sample.py): Analyze, screenshot (``sample``);
 2. a click on the first weak bone (osteon.select_bone, as the list's row does), screenshot
    (``sample_bone``: the bone and its weakest section outlined in yellow, framed);
    "Next weak bone" must move to the next weak row;
@@ -26,7 +26,7 @@ Each step saves the window (``<step>_window.png``) and the sidebar cut out of it
 (``<step>_panel.png``) to the output folder, and checks, from the UI itself:
 
 * every label, property and button text the panels draw fits its button at the sidebar's
-  real width and UI scale (``scripts/ui_fit.py``: ``blf.dimensions`` against the width
+  real width and UI scale (``tests/blender/ui_fit.py``: ``blf.dimensions`` against the width
   Blender's layout gives it);
 * the result summary's first words are the verdict ("N bones over the limit", "all within
   the limit", "not analysed: ...").
@@ -45,14 +45,15 @@ import traceback
 import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
+for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts"),
+          os.path.join(ROOT, "tests", "blender")):
     if p not in sys.path:
         sys.path.insert(0, p)
 
-import make_sample_rig
 import osteon_blender
 import ui_fit
 from blender_window import view3d
+from osteon_blender import sample as make_sample_rig
 
 argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
 ap = argparse.ArgumentParser()

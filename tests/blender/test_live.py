@@ -163,7 +163,7 @@ def test_file_load_and_unregister_end_live(live_sample, addon):
     assert live.handlers_installed()
     empty_scene()                                   # a new file: load_post ends the session
     assert not live.is_live() and not live.handlers_installed()
-    obj, _arm = __import__("make_sample_rig").build()
+    obj, _arm = __import__("osteon_blender.sample", fromlist=["build"]).build()
     activate(obj)
     bpy.context.scene.osteon_live.enabled = True
     assert live.handlers_installed()

@@ -29,6 +29,8 @@ except ImportError:  # Python 3.10 (official Blender 3.4-4.0): manifest checks n
     tomllib = None
 
 DIST = os.environ.get("OSTEON_DIST", os.path.join(ROOT, "dist"))
+#: the bundled sample figurine's builder, loaded by path in the child Blenders
+SAMPLE = os.path.join(ROOT, "blender_addon", "osteon_blender", "sample.py")
 PY = "cp{}{}".format(*sys.version_info[:2])
 LEGACY_PYTHONS = ("cp310", "cp311")  # official 3.4-4.0 / 4.1 and Debian's 3.4.1
 
@@ -83,8 +85,10 @@ sys.meta_path.insert(0, OnlyPackaged())
 
 
 _ANALYZE = """
-sys.path.insert(0, {scripts!r})
-import make_sample_rig
+import importlib.util
+_spec = importlib.util.spec_from_file_location("osteon_sample", {sample!r})
+make_sample_rig = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(make_sample_rig)
 make_sample_rig.build()
 result = bpy.ops.osteon.analyze()
 import osteon
@@ -103,7 +107,7 @@ def _result(out: str) -> tuple[str, int, float]:
 @pytest.fixture(scope="module")
 def reference(addon):
     """Analyze of the sample rig by the in-tree add-on: (sections, max stress in MPa)."""
-    import make_sample_rig
+    from osteon_blender import sample as make_sample_rig
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     make_sample_rig.build()
@@ -142,7 +146,7 @@ import bpy
 import addon_utils
 bpy.ops.preferences.addon_install(filepath={zip_path!r})
 addon_utils.enable("osteon_blender", default_set=True)
-""" + _ANALYZE.format(scripts=os.path.join(ROOT, "scripts")) + """
+""" + _ANALYZE.format(sample=SAMPLE) + """
 addon_utils.disable("osteon_blender")
 """
     out = _run(script, {"BLENDER_USER_SCRIPTS": str(scripts)}, tmp_path)
@@ -198,7 +202,7 @@ addon_utils.enable("osteon_blender", default_set=True)
 # --- the 4.2+ extension zip -------------------------------------------------------------------
 
 def test_extension_manifest_says_what_the_zip_carries():
-    import build_addon
+    import addon_build as build_addon
 
     zip_path = _zip("extension")
     m = _manifest(zip_path)
@@ -257,7 +261,7 @@ r = bpy.ops.extensions.package_install_files(filepath={zip_path!r}, repo="user_d
                                              enable_on_install=True)
 print("INSTALL", r)
 print("MODULE", bpy.types.OSTEON_OT_analyze.__module__)
-""" + _ANALYZE.format(scripts=os.path.join(ROOT, "scripts"))
+""" + _ANALYZE.format(sample=SAMPLE)
     out = _run(script, {"BLENDER_USER_RESOURCES": str(res)}, tmp_path)
     assert "INSTALL {'FINISHED'}" in out, out
     assert "MODULE bl_ext.user_default.osteon_blender" in out

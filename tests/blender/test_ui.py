@@ -2,7 +2,7 @@
 summary leads with the verdict, every text fits the default sidebar width, a result row
 shows where its bone is weakest, "Next weak bone" walks the weak bones, Apply's message.
 
-Drawn against a recording layout (``scripts/ui_fit.py``): background Blender has no window.
+Drawn against a recording layout (``tests/blender/ui_fit.py``): background Blender has no window.
 ``scripts/ui_screenshots.py`` draws the same panels in a real window (Xvfb) and saves
 screenshots."""
 

@@ -10,8 +10,8 @@ import zipfile
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-import build_addon
+sys.path.insert(0, os.path.join(ROOT, "blender_addon"))
+import addon_build as build_addon
 
 tomllib = pytest.importorskip("tomllib")
 

@@ -40,7 +40,7 @@ class _Sub:
 
 
 #: px at UI scale 1 of each number column of the result rows ("2.08", "33.6", "1.45"); a
-#: UIList row loses LIST_MARGIN px to the list's box and scroll bar (scripts/ui_fit.py)
+#: UIList row loses LIST_MARGIN px to the list's box and scroll bar (tests/blender/ui_fit.py)
 NUMBER_COLUMN = 38
 LIST_MARGIN = 26
 SUBPANEL_INSET = 4    # px at UI scale 1: a sub-panel's layout is this much narrower

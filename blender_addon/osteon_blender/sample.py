@@ -7,14 +7,14 @@ no bone-heat solver).  At osteon's default load (20 N, PLA, safety factor 2,
 printed height 120 mm) the antenna and the tail come out weak, the body safe.
 
 Run:
-    blender -b --factory-startup --python scripts/make_sample_rig.py -- \
+    blender -b --factory-startup --python blender_addon/osteon_blender/sample.py -- \
         --out out/sample_rig.blend [--levels 2] [--cuts 0]
 
 ``--levels L`` (Catmull-Clark levels of the skin, default 2: 2987 vertices) and
 ``--cuts C`` (extra edge cuts per quad edge, x(C+1)^2 faces) make denser copies of the
 same shape: ``--levels 3 --cuts 2`` gives ~107k vertices for the benchmark.  Weights
 are computed from the final geometry.  Works in Blender 3.4+ and in the ``bpy``
-wheel (``python scripts/make_sample_rig.py -- --out ...``).
+wheel (``python blender_addon/osteon_blender/sample.py -- --out ...``).
 """
 
 from __future__ import annotations
