@@ -78,12 +78,12 @@ struct Moments {
   double area = 0.0;
   Vec2 first = Vec2::Zero();
   Mat2 second = Mat2::Zero();
-  void add(const SectionProperties& p, const Vec2& c) {
+  void add(const SectionProperties& p, const Vec2& c, double sign = 1.0) {
     if (!(p.area > 0)) return;
     const Vec2 d = p.centroid - c;
-    area += p.area;
-    first += p.area * d;
-    second += p.second_moment + p.area * d * d.transpose();
+    area += sign * p.area;
+    first += sign * p.area * d;
+    second += sign * (p.second_moment + p.area * d * d.transpose());
   }
 };
 
@@ -203,13 +203,39 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
                       Clipper2Lib::EndType::Polygon, 2.0, std::max(0.005 * kScale, 0.01 * delta)),
                   1.0 / stretch);
   }
+  const auto shift =
+      static_cast<std::int64_t>(std::llround(options.skin_depth * sin_theta * kScale));
+  const bool skins = layered && shift > 0;
+  const double layer_per_section = layered ? 1.0 / std::max(c, kMinCos) : 1.0;
+  const double min_area = layered ? options.solid_infill_below_area : 0.0;
+  const double eroded_area = std::min(area_mm2(eroded), solid.area);
+  out.infill_eta = layered ? infill_stiffness(c, options.infill_build, options.infill_layer)
+                           : std::clamp(options.infill_build, 0.0, 1.0);
+  out.wall_area = solid.area - eroded_area;
+  std::vector<SectionPolygon> islands;
+  Moments sparse;
+  const auto outers = std::count_if(eroded.begin(), eroded.end(),
+                                    [](const Path64& p) { return Clipper2Lib::Area(p) > 0; });
+  if (!skins && (outers <= 1 || !(min_area > 0))) {
+    // The inset is the sparse region (one island, or no small-area rule): its loops as they
+    // are (outer boundaries positive, holes negative), no Clipper pass more.
+    if (!(outers == 1 && eroded_area * layer_per_section < min_area))
+      for (const Path64& path : eroded) {
+        SectionPolygon loop{to_plane(path, es, et), {}};
+        sparse.add(section_properties(loop), solid.centroid,
+                   Clipper2Lib::Area(path) > 0 ? 1.0 : -1.0);
+        if (keep_sparse) out.sparse.push_back(std::move(loop.outer));
+      }
+    out.infill_area = std::clamp(sparse.area, 0.0, eroded_area);
+    out.skin_area = eroded_area - out.infill_area;
+    out.modulus = transformed_modulus(cut, solid, sparse, out.infill_eta);
+    out.valid = out.modulus > 0 && std::isfinite(out.modulus);
+    return out;
+  }
   // Skins: where the layers within skin_depth above and below (the cut shifted by
   // +-skin_depth sin(theta) along s) do not both cover the point.
   Clipper2Lib::Clipper64 clipper;
   clipper.AddSubject(eroded);
-  const auto shift =
-      static_cast<std::int64_t>(std::llround(options.skin_depth * sin_theta * kScale));
-  const bool skins = layered && shift > 0;
   const bool all_slopes = options.skin_max_slope >= M_PI / 2;
   if (skins && all_slopes)
     clipper.AddClip(Clipper2Lib::Intersect(Clipper2Lib::TranslatePaths(section, shift, 0),
@@ -224,18 +250,11 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
                                : Clipper2Lib::ClipType::Difference;
   clipper.Execute(op, Clipper2Lib::FillRule::NonZero, tree);
   // Small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
-  std::vector<SectionPolygon> islands;
-  collect_islands(tree, layered ? 1.0 / std::max(c, kMinCos) : 1.0,
-                  layered ? options.solid_infill_below_area : 0.0, es, et, islands);
-  Moments sparse;
+  collect_islands(tree, layer_per_section, min_area, es, et, islands);
   for (const SectionPolygon& island : islands)
     sparse.add(section_properties(island), solid.centroid);
-  const double eroded_area = std::min(area_mm2(eroded), solid.area);
   out.infill_area = std::min(sparse.area, eroded_area);
-  out.wall_area = solid.area - eroded_area;
   out.skin_area = eroded_area - out.infill_area;
-  out.infill_eta = layered ? infill_stiffness(c, options.infill_build, options.infill_layer)
-                           : std::clamp(options.infill_build, 0.0, 1.0);
   out.modulus = transformed_modulus(cut, solid, sparse, out.infill_eta);
   out.valid = out.modulus > 0 && std::isfinite(out.modulus);
   if (keep_sparse)
