@@ -331,7 +331,38 @@ PYBIND11_MODULE(_core, m) {
           },
           "FDM build direction (3,), model frame")
       .def_readwrite("layer_strength_ratio", &AnalysisOptions::layer_strength_ratio,
-                     "layer / in-plane strength (1 = isotropic)");
+                     "layer / in-plane strength (1 = isotropic)")
+      // The printed section (osteon/printed_section.hpp), set from a PrintProfile by
+      // osteon.printed.engine_print_options.
+      .def_property(
+          "print_kind", [](const AnalysisOptions& o) { return o.print.kind; },
+          [](AnalysisOptions& o, int k) { o.print.kind = k; },
+          "0 solid, 1 FDM (walls, skins, infill), 2 hollow shell (resin)")
+      .def_property(
+          "print_wall_depth", [](const AnalysisOptions& o) { return o.print.wall_depth; },
+          [](AnalysisOptions& o, double v) { o.print.wall_depth = v; },
+          "mm: FDM perimeters' depth in the layer plane, or the resin shell")
+      .def_property(
+          "print_skin_depth", [](const AnalysisOptions& o) { return o.print.skin_depth; },
+          [](AnalysisOptions& o, double v) { o.print.skin_depth = v; },
+          "mm: solid top/bottom skins along the build direction")
+      .def_property(
+          "print_infill_build", [](const AnalysisOptions& o) { return o.print.infill_build; },
+          [](AnalysisOptions& o, double v) { o.print.infill_build = v; },
+          "infill stiffness fraction for stress along the build direction")
+      .def_property(
+          "print_infill_layer", [](const AnalysisOptions& o) { return o.print.infill_layer; },
+          [](AnalysisOptions& o, double v) { o.print.infill_layer = v; },
+          "infill stiffness fraction for stress in the layer plane")
+      .def_property(
+          "print_solid_infill_below_area",
+          [](const AnalysisOptions& o) { return o.print.solid_infill_below_area; },
+          [](AnalysisOptions& o, double v) { o.print.solid_infill_below_area = v; },
+          "mm^2: a layer's infill island under this area is filled solid")
+      .def_property(
+          "print_skin_max_slope", [](const AnalysisOptions& o) { return o.print.skin_max_slope; },
+          [](AnalysisOptions& o, double v) { o.print.skin_max_slope = v; },
+          "radians from the layer plane: skins only under surfaces this flat (pi/2: all)");
 
   py::class_<CorrectionOptions>(m, "CorrectionOptions", "Limits of the correction loop.")
       .def(py::init<>())

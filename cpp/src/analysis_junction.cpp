@@ -115,9 +115,9 @@ bool reaches_beyond(const SectionPolygon& cut, const SectionPolygon& core, doubl
 }
 
 // Back to the whole cut (a section that was a junction core but is no longer a candidate).
-void restore_whole(SectionState& st, bool keep) {
+void restore_whole(SectionState& st, const RegionOptions& ro) {
   if (!(st.flags & kFlagJunction)) return;
-  set_section_region(st, st.frame, st.cut, keep);
+  set_section_region(st, st.frame, st.cut, ro);
   st.flags &= ~kFlagJunction;
   st.cut_loops.clear();
 }
@@ -126,10 +126,10 @@ void restore_whole(SectionState& st, bool keep) {
 
 void Analyzer::Impl::find_junction_cores(RunState& run) {
   const int ns = static_cast<int>(specs.size());
-  const bool keep = options.keep_outlines;
+  const RegionOptions ro(options);
   if (!options.junctions) {
     for (SectionState& st : states) {
-      restore_whole(st, keep);
+      restore_whole(st, ro);
       st.junction_delta = 0.0;
     }
     return;
@@ -201,7 +201,7 @@ std::vector<int> Analyzer::Impl::junction_candidates(RunState& run,
                                                      const std::vector<double>& delta,
                                                      const std::vector<double>& median) {
   const int ns = static_cast<int>(specs.size());
-  const bool keep = options.keep_outlines;
+  const RegionOptions ro(options);
   std::vector<int> todo;
   for (int i = 0; i < ns; ++i) {
     SectionState& st = states[i];
@@ -210,7 +210,7 @@ std::vector<int> Analyzer::Impl::junction_candidates(RunState& run,
     const bool candidate =
         !(st.flags & kFlagOutside) && delta[b] > 0 && st.cut_area > kCandidateArea * median[b];
     if (!candidate) {
-      restore_whole(st, keep);
+      restore_whole(st, ro);
       st.junction_delta = 0.0;
       continue;
     }
@@ -279,9 +279,9 @@ bool Analyzer::Impl::cut_neighbour_planes(RunState& run, int i, double delta,
 void Analyzer::Impl::check_junction(RunState& run, int i, double delta, double median,
                                     const std::vector<std::uint8_t>& neighbour_ok,
                                     std::vector<CutSegment>& scratch) {
-  const bool keep = options.keep_outlines;
+  const RegionOptions ro(options);
   SectionState& st = states[i];
-  restore_whole(st, keep);
+  restore_whole(st, ro);
   st.junction_delta = delta;
   SectionPolygon regions[2];
   std::vector<const SectionPolygon*> neighbours;
@@ -344,8 +344,8 @@ void Analyzer::Impl::check_junction(RunState& run, int i, double delta, double m
   // a taper, a bulge) is the bone's own: by Saint-Venant a feature of depth t is engaged within
   // about t of the plane, inside the slab, so the whole cut carries the load.
   if (!reaches_beyond(st.cut, core.polygon, kReach * std::sqrt(props.area / M_PI))) return;
-  if (keep) st.cut_loops = st.loops;
-  if (set_section_region(st, st.frame, core.polygon, keep)) st.flags |= kFlagJunction;
+  if (ro.keep) st.cut_loops = st.loops;
+  if (set_section_region(st, st.frame, core.polygon, ro)) st.flags |= kFlagJunction;
 }
 
 }  // namespace osteon

@@ -27,6 +27,7 @@ from ._api import (
 )
 from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
+from .profiles import PrintProfile, print_profiles
 
 __version__ = "0.1.0"
 
@@ -43,6 +44,7 @@ __all__ = [
     "Cancelled",
     "Correction",
     "Orientation",
+    "PrintProfile",
     "Progress",
     "Skeleton",
     "analyze",
@@ -50,6 +52,7 @@ __all__ = [
     "best_orientation",
     "correct",
     "estimate_sections",
+    "print_profiles",
     "section_properties",
     "skin",
     "slice_section",

@@ -285,12 +285,14 @@ RESULT_FIELDS = tuple(_core.result_fields())
 #: outlines default to ``None`` (no ``keep_outlines``); every other result field is required.
 _RESULT_DEFAULTS = {"section_allowable": None, "stress_ratio": None, "across_layers": None,
                     "max_stress_ratio": 0.0, "loose_pieces": list, "section_cut_area": None,
-                    "section_cut_modulus": None}
+                    "section_cut_modulus": None, "section_solid_modulus": None,
+                    "section_wall_area": None, "section_skin_area": None,
+                    "section_infill_area": None}
 _OUTLINE_SHAPES = ("(P,3)", "(L+1,)", "(S+1,)")
 
 #: The settings an :class:`Analysis` records (fields of the same name of :class:`AnalysisOptions`).
 _RECORDED_OPTIONS = ("allowable_stress", "force", "interval", "build_direction",
-                     "layer_strength_ratio", "min_thickness")
+                     "layer_strength_ratio", "min_thickness", "print_profile")
 
 
 def _field_line(name: str, shape: str, unit: str, doc: str) -> str:
@@ -315,7 +317,8 @@ def _result_dataclass(cls: type) -> type:
     lines += ["Settings of the run (:class:`AnalysisOptions`):", ""]
     defaults, docs = AnalysisOptions(), {n: (u, d) for n, u, d in option_docs()}
     for name in _RECORDED_OPTIONS:
-        annotations[name] = "np.ndarray" if name == "build_direction" else "float"
+        annotations[name] = {"build_direction": "np.ndarray",
+                             "print_profile": "PrintProfile"}.get(name, "float")
         value = getattr(defaults, name)
         setattr(cls, name, field(default_factory=lambda v=value: np.array(v, dtype=float))
                 if isinstance(value, tuple) else value)
@@ -368,6 +371,12 @@ class Analysis:
             self.section_cut_area = np.asarray(self.section_area, dtype=float).copy()
         if self.section_cut_modulus is None:
             self.section_cut_modulus = np.asarray(self.section_modulus, dtype=float).copy()
+        # ... and without the printed-section fields: a solid part.
+        if self.section_solid_modulus is None:
+            self.section_solid_modulus = np.asarray(self.section_modulus, dtype=float).copy()
+        for name in ("section_wall_area", "section_skin_area", "section_infill_area"):
+            if getattr(self, name) is None:
+                setattr(self, name, np.zeros(len(self.stress)))
 
     @property
     def num_sections(self) -> int:
@@ -397,6 +406,19 @@ class Analysis:
             return None
         pts, ls = self.cut_outline_points, self.cut_outline_loop_start
         ss = self.cut_outline_section_start
+        return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
+                for s in range(len(ss) - 1)]
+
+    @property
+    def infill_loops(self) -> list[list[np.ndarray]] | None:
+        """With ``keep_outlines=True``: per section (S), the loops of its sparse infill (FDM) or
+        hollow (resin) region (``print_profile``), each (N,3) mm on the section plane (outer
+        boundaries and holes, as the orientation tells); ``[]`` where it is all solid (every
+        section of a solid print). ``None`` without outlines. Packed as ``infill_outline_*``."""
+        if self.infill_outline_section_start is None:
+            return None
+        pts, ls = self.infill_outline_points, self.infill_outline_loop_start
+        ss = self.infill_outline_section_start
         return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
                 for s in range(len(ss) - 1)]
 
