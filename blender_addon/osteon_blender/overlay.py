@@ -158,43 +158,52 @@ def highlight_lines(where: dict) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(segs))
 
 
-def _dashed_cuts(analysis, rgba, k):
-    """Every other segment of the whole-cut loops of junction sections (``cut_outline_*``),
-    in the section's colour at CUT_ALPHA."""
-    ss = getattr(analysis, "cut_outline_section_start", None)
+def _packed_loops(analysis, prefix: str):
+    """(points (P,3), next point of each point's loop (P,), loop start of each point (P,),
+    section of each point (P,)) of loops packed like ``outline_*`` under ``prefix``
+    (``cut_outline``, ``infill_outline``); None when the analysis has none."""
+    ss = getattr(analysis, f"{prefix}_section_start", None)
     if ss is None or len(ss) < 2 or ss[-1] == 0:
-        return np.empty((0, 3), np.float32), np.empty((0, 4), np.float32)
-    pts = np.asarray(analysis.cut_outline_points, dtype=np.float64)
-    ls = np.asarray(analysis.cut_outline_loop_start, dtype=np.int64)
+        return None
+    pts = np.asarray(getattr(analysis, f"{prefix}_points"), dtype=np.float64)
+    ls = np.asarray(getattr(analysis, f"{prefix}_loop_start"), dtype=np.int64)
     nxt = np.arange(1, len(pts) + 1)
     nxt[ls[1:] - 1] = ls[:-1]
     loop_of = np.repeat(np.arange(len(ls) - 1), np.diff(ls))
-    sel = np.flatnonzero((np.arange(len(pts)) - ls[loop_of]) % 2 == 0)
+    section_of = np.repeat(np.repeat(np.arange(len(ss) - 1), np.diff(ss)), np.diff(ls))
+    return pts, nxt, ls[loop_of], section_of
+
+
+def _loop_segments(packed, sel, rgba, alpha, k):
+    """LINES segments from the points ``sel`` of ``packed`` to their next ones, in their
+    section's colour at ``alpha``, world space."""
+    pts, nxt, _first, section_of = packed
     seg = np.empty((2 * len(sel), 3), dtype=np.float32)
     seg[0::2], seg[1::2] = pts[sel], pts[nxt[sel]]
-    section_of = np.repeat(np.repeat(np.arange(len(ss) - 1), np.diff(ss)), np.diff(ls))
     colors = np.repeat(rgba[section_of[sel]], 2, axis=0)
-    colors[:, 3] = CUT_ALPHA
+    colors[:, 3] = alpha
     return np.ascontiguousarray(seg / k), np.ascontiguousarray(colors)
+
+
+def _dashed_cuts(analysis, rgba, k):
+    """Every other segment of the whole-cut loops of junction sections (``cut_outline_*``),
+    in the section's colour at CUT_ALPHA."""
+    packed = _packed_loops(analysis, "cut_outline")
+    if packed is None:
+        return np.empty((0, 3), np.float32), np.empty((0, 4), np.float32)
+    sel = np.flatnonzero((np.arange(len(packed[0])) - packed[2]) % 2 == 0)
+    return _loop_segments(packed, sel, rgba, CUT_ALPHA, k)
 
 
 def _infill_loops(analysis, rgba, k, sections):
-    """Segments and colours (INFILL_ALPHA) of the sparse-infill loops (``infill_outline_*``,
-    packed like ``outline_*``) of the ``sections`` (S,) bool mask; empty without them."""
-    ss = getattr(analysis, "infill_outline_section_start", None)
-    if ss is None or len(ss) < 2 or ss[-1] == 0:
+    """Segments and colours (INFILL_ALPHA) of the sparse-infill loops of printed sections
+    (``infill_outline_*``, a print profile) among the ``sections`` (S,) bool mask; empty
+    without them."""
+    packed = _packed_loops(analysis, "infill_outline")
+    if packed is None:
         return np.empty((0, 3), np.float32), np.empty((0, 4), np.float32)
-    pts = np.asarray(analysis.infill_outline_points, dtype=np.float64)
-    ls = np.asarray(analysis.infill_outline_loop_start, dtype=np.int64)
-    nxt = np.arange(1, len(pts) + 1)
-    nxt[ls[1:] - 1] = ls[:-1]
-    section_of = np.repeat(np.repeat(np.arange(len(ss) - 1), np.diff(ss)), np.diff(ls))
-    sel = np.flatnonzero(np.asarray(sections, dtype=bool)[section_of])
-    seg = np.empty((2 * len(sel), 3), dtype=np.float32)
-    seg[0::2], seg[1::2] = pts[sel], pts[nxt[sel]]
-    colors = np.repeat(rgba[section_of[sel]], 2, axis=0)
-    colors[:, 3] = INFILL_ALPHA
-    return np.ascontiguousarray(seg / k), np.ascontiguousarray(colors)
+    sel = np.flatnonzero(np.asarray(sections, dtype=bool)[packed[3]])
+    return _loop_segments(packed, sel, rgba, INFILL_ALPHA, k)
 
 
 # --------------------------------------------------------------------------- state

@@ -54,11 +54,13 @@ class OSTEON_PT_print_settings(bpy.types.Panel):
         layout = self.layout
         s = context.scene.osteon
         ps = s.print_settings
+        from .panel import wrapped_label
+
         layout.prop(ps, "profile", text="")
-        layout.label(text=printprofile.summary(ps.profile))
+        wrapped_label(layout, context, printprofile.summary(ps.profile))
         hint = printprofile.suggested(s.material)
         if hint and hint != ps.profile:
-            layout.label(text=f"{s.material} suggests: {hint}", icon="INFO")
+            wrapped_label(layout, context, f"{s.material} suggests: {hint}")
         kind = printprofile.profiles.get_profile(ps.profile).kind
         if kind == "solid":
             return
