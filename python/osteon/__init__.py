@@ -25,6 +25,7 @@ from ._api import (
 )
 from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
+from .profiles import PrintProfile, get_profile, print_profiles
 
 __version__ = "0.1.0"
 
@@ -39,6 +40,7 @@ __all__ = [
     "Cancelled",
     "Correction",
     "Orientation",
+    "PrintProfile",
     "Progress",
     "Skeleton",
     "analyze",
@@ -46,6 +48,8 @@ __all__ = [
     "best_orientation",
     "correct",
     "estimate_sections",
+    "get_profile",
+    "print_profiles",
     "section_properties",
     "skin",
     "slice_section",
