@@ -25,7 +25,7 @@ from ._api import (
 )
 from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
-from .profiles import PrintProfile, get_profile, print_profiles
+from .profiles import PrintProfile, print_profiles
 
 __version__ = "0.1.0"
 
@@ -48,7 +48,6 @@ __all__ = [
     "best_orientation",
     "correct",
     "estimate_sections",
-    "get_profile",
     "print_profiles",
     "section_properties",
     "skin",

@@ -282,8 +282,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     lists every bone weak before or after, with its ``scale``, its stress now and before.
     ``settings``: :meth:`osteon.settings.Settings.as_dict` (or the front end's own dict);
     ``mm_per_unit``: mm of the print per model unit (file unit or Blender unit);
-    ``print_profile``: the :class:`osteon.profiles.PrintProfile` analysed with (default: the one
-    ``settings`` names, :func:`osteon.settings.profile_of`), echoed as ``print_profile``.
+    ``print_profile``: the :class:`osteon.profiles.PrintProfile` analysed with (default: the
+    analysis's own ``print_profile``, else the one ``settings`` names,
+    :func:`osteon.settings.profile_of`), echoed as ``print_profile``.
     """
     if correction is not None and corrected_analysis is None:
         corrected_analysis = correction.after
@@ -332,7 +333,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         "layer_strength_ratio": float(getattr(shown, "layer_strength_ratio", 1.0)),
         # how the part is printed (walls, skins, infill; docs/printing.md): the profile whose
         # printed sections the moduli and stresses below are
-        "print_profile": _profile_dict(settings, print_profile),
+        "print_profile": _profile_dict(settings, print_profile
+                                       if print_profile is not None
+                                       else getattr(shown, "print_profile", None)),
         "safe_modulus_mm3": finite(shown.safe_modulus),
         "sections": len(shown.stress),
         "weak_sections": int(np.count_nonzero(shown.weak)),
