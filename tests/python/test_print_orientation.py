@@ -32,7 +32,7 @@ def test_rescoring_keeps_the_direction_its_own_analysis_ranks_best(l_rod, monkey
     calls = []
 
     def printed_stand_in(*args, print_profile=None, build_direction=(0, 0, 1), **kw):
-        assert print_profile == osteon.get_profile("prusaslicer")
+        assert print_profile == osteon.profiles.get_profile("prusaslicer")
         d = np.asarray(build_direction, float)
         calls.append(d / np.linalg.norm(d))
         a = real(*args, build_direction=d, **kw)
