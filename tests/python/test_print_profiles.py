@@ -168,6 +168,13 @@ def test_bad_print_flags_give_one_line(rod_files, extra, needle, capsys):
     assert len(errors) == 1
 
 
+@needs_printed_engine
+def test_validate_fem_refuses_a_printed_profile(rod_files, capsys):
+    rc = main(["validate", str(rod_files), "--fem", "--profile", "cura", "-q"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--fem checks the solid part" in err and len(err.strip().splitlines()) == 1
+
+
 def test_list_profiles_names_every_preset_and_its_source(capsys):
     with pytest.raises(SystemExit) as e:
         main(["--list-profiles"])
