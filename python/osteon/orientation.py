@@ -237,13 +237,18 @@ def _rescore_printed(analysis, cands, ref, r, print_profile, model, rescore, eng
 
     profile = get_profile(print_profile)
     vertices, faces, skeleton, weights = _model_parts(model)
-    picked = [c for c in cands if not np.array_equal(c["direction"], ref)][:max(0, int(rescore))]
-    extra = [ref, *np.eye(3)]
-    dirs = [c["direction"] for c in picked]
-    for d in extra:  # the current direction and the axes, where not already picked
-        if allowed(np.asarray(d)[None])[0] and not any(
-                abs(float(d @ e)) > 1 - 1e-9 if symmetric else float(d @ e) > 1 - 1e-9
-                for e in dirs):
+    same = math.cos(math.radians(2.0))  # directions closer than 2° are analysed once
+
+    def new(d, dirs):
+        return not any((abs(float(d @ e)) if symmetric else float(d @ e)) > same for e in dirs)
+
+    dirs: list = []
+    for c in cands:  # the sphere search's best distinct directions
+        if len(dirs) < max(0, int(rescore)) and not np.array_equal(c["direction"], ref) \
+                and new(c["direction"], dirs):
+            dirs.append(c["direction"])
+    for d in (ref, *np.eye(3)):  # the current direction (first) and the axes
+        if allowed(np.asarray(d)[None])[0] and (d is ref or new(d, dirs)):
             dirs.append(np.asarray(d, float))
     kw = {"force": analysis.force, "allowable_stress": analysis.allowable_stress,
           "interval": analysis.interval, "root": int(analysis.held_bone),
