@@ -230,7 +230,8 @@ def _model_parts(model):
 def _rescore_printed(analysis, cands, ref, r, print_profile, model, rescore, engine_options,
                      symmetric, allowed):
     """The candidates re-ranked by the worst stress ratio of the printed part analysed at each
-    direction (see :func:`best_orientation`); each gets ``solid_ratio`` (the sphere search's)
+    direction (see :func:`best_orientation`); each gets ``search_ratio`` (the sphere search's:
+    ``analysis``'s own sections turned there, solid when ``analysis`` was)
     and ``worst_ratio`` / ``worst_section`` of its own printed analysis."""
     from ._api import analyze
     from .profiles import get_profile
@@ -259,9 +260,9 @@ def _rescore_printed(analysis, cands, ref, r, print_profile, model, rescore, eng
         a = analyze(vertices, faces, skeleton, weights, build_direction=d,
                     print_profile=profile, **kw)
         f, w = _worst(_section_terms(a), d[None], r)
-        solid = float(_worst(_section_terms(analysis), d[None], r)[0][0])
+        search = float(_worst(_section_terms(analysis), d[None], r)[0][0])
         out.append({"direction": d, "rotation": rotation_to_z(d), "worst_ratio": float(f[0]),
-                    "worst_section": int(w[0]), "solid_ratio": solid,
+                    "worst_section": int(w[0]), "search_ratio": search,
                     "across_layers": _across(a, int(w[0]), d, r) if w[0] >= 0 else False})
     lo = min(c["worst_ratio"] for c in out)
 

@@ -97,3 +97,18 @@ def test_analyze_with_a_print_profile(bar):
     assert printed["settings"]["print_profile"] == "prusaslicer"
     # walls and skins only: the printed W below the solid W, the stress above
     assert printed["max_stress_mpa"] > 1.2 * solid["max_stress_mpa"]
+
+
+@needs_printed_engine
+def test_find_orientation_analyses_the_candidates_as_printed(bar):
+    s = bpy.context.scene.osteon
+    s.print_settings.profile = "prusaslicer"
+    assert bpy.ops.osteon.find_orientation() == {"FINISHED"}
+    res = state.get(bpy.context.scene).orientation["result"]
+    # each candidate carries its own printed analysis's ratio next to the search's; the last
+    # analysis was made with the profile at +Z, so at +Z (the current direction, analysed
+    # again) the two agree, and the best is at most that
+    assert all("search_ratio" in c for c in res.candidates)
+    at_z = [c for c in res.candidates if abs(c["direction"][2]) > 1 - 1e-9]
+    assert at_z and at_z[0]["worst_ratio"] == pytest.approx(at_z[0]["search_ratio"], rel=1e-9)
+    assert res.worst_ratio <= at_z[0]["worst_ratio"] * (1 + 1e-9)
