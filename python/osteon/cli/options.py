@@ -4,6 +4,7 @@ kept apart so that no command module imports another's parser. Units: mm, N, MPa
 from __future__ import annotations
 
 import argparse
+import textwrap
 
 from .. import materials, profiles
 
@@ -31,7 +32,8 @@ def profile_list() -> str:
     lines = ["print profiles (--profile NAME; docs/printing.md):"]
     for key, prof in profiles.print_profiles().items():
         lines.append(f"  {key:<13} {prof.name}")
-        lines.append(f"  {'':<13} source: {prof.source}")
+        lines.append(textwrap.fill(f"source: {prof.source}", 96, initial_indent=" " * 16,
+                                   subsequent_indent=" " * 16))
     mats = ", ".join(f"{m.key} → {m.default_profile}" for m in materials.MATERIALS)
     lines.append(f"suggested per material: {mats}")
     return "\n".join(lines)
@@ -71,7 +73,7 @@ def add_print_options(p) -> None:
         "print profile (walls, skins, infill; docs/printing.md)",
         "By default every section is analysed solid (the numbers of earlier versions). To "
         "analyse the part as a slicer prints it, give --profile (e.g. --profile prusaslicer: 2 "
-        "perimeters, 15 %% gyroid); the other options change one setting of it. "
+        "perimeters, 15 % gyroid); the other options change one setting of it. "
         "--list-profiles lists the presets and their sources.")
     g.add_argument("--profile", choices=keys, default="solid", metavar="NAME",
                    help=f"print profile preset: {', '.join(keys)} (default solid)")
