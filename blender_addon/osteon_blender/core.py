@@ -197,7 +197,7 @@ import_engine()
 from osteon import materials, report
 from osteon.settings import Settings, engine_arguments, min_thickness_mm  # noqa: F401 (service)
 
-from . import printdir  # after import_engine: it reads osteon.settings
+from . import printdir, printprofile  # after import_engine: they read osteon's modules
 
 MATERIALS = materials.MATERIALS
 MATERIAL_BY_KEY = {m.key: m for m in MATERIALS}
@@ -235,8 +235,9 @@ def _preset_exact(s, ratio: float) -> float:
 def settings_of(s, orientation: dict | None = None) -> Settings:
     """``scene.osteon`` as the wheel's :class:`osteon.settings.Settings` (the build direction
     from the "Print direction" setting, the layer ratio from "Layer strength", ``junctions``
-    from "Junction cores"); ``orientation``: the scene's "Find best orientation" result
-    (``state.SceneState.orientation``), which Print direction "Best found" reads)."""
+    from "Junction cores", the print profile from "Print settings"); ``orientation``: the
+    scene's "Find best orientation" result (``state.SceneState.orientation``), which Print
+    direction "Best found" reads)."""
     return Settings(
         build_direction=printdir.build_direction(s, orientation),
         layer_strength_ratio=_preset_exact(s, float(getattr(s, "layer_strength_ratio", 1.0))),
@@ -245,7 +246,8 @@ def settings_of(s, orientation: dict | None = None) -> Settings:
         held_bone=s.held_bone or None, size_mode=s.size_mode,
         print_size_mm=float(s.print_size_mm), max_scale=float(s.max_scale),
         max_rounds=int(s.max_rounds), scaling=str(s.scaling),
-        junctions=bool(getattr(s, "junction_cores", True)))
+        junctions=bool(getattr(s, "junction_cores", True)),
+        **printprofile.settings_fields(s))  # "Print settings" (walls, skins, infill)
 
 
 def engine_params(s, arm, bone_names, correct: bool = False,

@@ -5,7 +5,13 @@ from __future__ import annotations
 import argparse
 
 from .. import materials
-from .options import DEFAULT_SAFETY_FACTOR, MATERIALS, add_junction_switch
+from .options import (
+    DEFAULT_SAFETY_FACTOR,
+    MATERIALS,
+    ListProfiles,
+    add_junction_switch,
+    add_print_options,
+)
 
 __all__ = ["DEFAULT_SAFETY_FACTOR", "EXAMPLES", "MATERIALS", "add_junction_switch",
            "build_parser"]
@@ -108,6 +114,7 @@ def _add_common(p: argparse.ArgumentParser):
         help="layer / in-plane strength (default: the material preset's, e.g. PLA 0.55; "
         "1 with --strength-mpa)",
     )
+    add_print_options(p)
     o = p.add_argument_group("output")
     o.add_argument("--json", metavar="FILE", help="write a JSON report")
     o.add_argument("--png", metavar="FILE", help="write a PNG of the stress map and chain plot")
@@ -130,6 +137,8 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"osteon {_version()}")
+    p.add_argument("--list-profiles", action=ListProfiles,
+                   help="list the print profiles (--profile) with their sources and exit")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     pa = sub.add_parser(
         "analyze",
