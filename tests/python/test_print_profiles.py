@@ -16,8 +16,6 @@ from osteon.io import write_mesh, write_tgf
 from osteon.settings import Settings, engine_arguments
 from shapes import cylinder_along
 
-
-
 # --------------------------------------------------------------------------- presets
 
 
