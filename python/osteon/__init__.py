@@ -25,6 +25,7 @@ from ._api import (
 )
 from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
+from .reinforcement import Reinforcement, reinforce
 
 __version__ = "0.1.0"
 
@@ -40,12 +41,14 @@ __all__ = [
     "Correction",
     "Orientation",
     "Progress",
+    "Reinforcement",
     "Skeleton",
     "analyze",
     "auto_skeleton",
     "best_orientation",
     "correct",
     "estimate_sections",
+    "reinforce",
     "section_properties",
     "skin",
     "slice_section",

@@ -8,7 +8,7 @@ import numpy as np
 import osteon
 import pytest
 import trimesh
-from osteon.reinforce import convex_volume, modifier_volume, weak_regions
+from osteon.reinforcement import convex_volume, modifier_volume, weak_regions
 from shapes import cylinder_along, merge
 
 

@@ -14,7 +14,7 @@ import gcode
 import numpy as np
 import pytest
 from osteon.profiles import PrintProfile
-from osteon.reinforce import convex_volume
+from osteon.reinforcement import convex_volume
 from osteon.slicer3mf import BED_CENTER, build_rotation, write_3mf
 from shapes import circle, prism
 
