@@ -616,7 +616,8 @@ class Correction:
     positions, mm; ``rounds`` list of ``(bone index, factor, max stress after MPa, axis)`` with
     axis 0 = both axes, 1 = x only, 2 = z only; ``converged``; ``reason``; ``unfixed_sections``
     (indices into ``after``); ``max_displacement`` mm; ``volume_change_percent``; ``before`` and
-    ``after`` :class:`Analysis`.
+    ``after`` :class:`Analysis`; ``reinforcement``: with ``reinforce_first=True`` the
+    :class:`osteon.Reinforcement` of the final shape (walls and infill per region), else None.
     """
 
     bone_scale: np.ndarray
@@ -632,6 +633,7 @@ class Correction:
     volume_change_percent: float
     before: Analysis
     after: Analysis
+    reinforcement: Any = None
 
     @property
     def num_rounds(self) -> int:

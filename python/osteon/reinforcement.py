@@ -335,3 +335,45 @@ def reinforce(vertices: Any, faces: Any, skeleton: Any, weights: Any = None, *, 
     return Reinforcement(regions=regions, before=before, after=after, unfixable=unfixable,
                          profile=profile, vertices=v, faces=f, build_direction=bdir,
                          analyses=len(search.cache))
+
+
+def reinforce_then_correct(vertices: Any, faces: Any, skeleton: Any, weights: Any = None, *,
+                           print_profile: Any, max_perimeters: int = 10, margin: float = 1.0,
+                           **correct_options: Any) -> Any:
+    """``correct(..., reinforce_first=True)``: reinforce (:func:`reinforce`), then thicken only
+    what reinforcement cannot fix, and return the :class:`osteon.Correction` with its
+    ``reinforcement``.
+
+    What solid cannot carry is exactly what a correction of the *solid* part thickens (a solid
+    section is the strongest any print of it can be), so the thickening runs on the solid part
+    (``osteon.correct`` without a print profile) and leaves alone every bone that walls or
+    infill can save; the thickened mesh is then reinforced again under ``print_profile`` (its
+    regions' settings follow the new shape). With nothing unfixable the mesh is not touched
+    (``bone_scale`` all 1). ``before`` is the part as printed with ``print_profile``; ``after``
+    the reinforced (and thickened) part, with each region's settings."""
+    from ._api import Correction, correct
+
+    keys = ("force", "allowable_stress", "interval", "root", "build_direction",
+            "layer_strength_ratio", "min_thickness", "junctions", "threads", "gap_tolerance")
+    analysis_options = {k: correct_options[k] for k in keys if k in correct_options}
+    first = reinforce(vertices, faces, skeleton, weights, print_profile=print_profile,
+                      max_perimeters=max_perimeters, margin=margin, **analysis_options)
+    if not first.unfixable:
+        nb = skeleton.num_bones
+        x_axes = np.tile([1.0, 0.0, 0.0], (nb, 1))
+        return Correction(
+            bone_scale=np.ones(nb), bone_scale_x=np.ones(nb), bone_scale_z=np.ones(nb),
+            bone_x_axis=x_axes, vertices=np.array(first.vertices, dtype=float), rounds=[],
+            converged=True, unfixed_sections=[], max_displacement=0.0,
+            volume_change_percent=0.0, before=first.before, after=first.after,
+            reason="reinforced: every weak region holds with more walls or denser infill; "
+                   "the shape is unchanged",
+            reinforcement=first)
+    thick = correct(vertices, faces, skeleton, weights, **correct_options)
+    second = reinforce(thick.vertices, faces, skeleton, weights, print_profile=print_profile,
+                       max_perimeters=max_perimeters, margin=margin, **analysis_options)
+    reason = (f"reinforced; {len(first.unfixable)} section(s) that even solid cannot carry "
+              f"thickened ({thick.reason})")
+    return dataclasses.replace(thick, before=first.before, after=second.after,
+                               converged=bool(thick.converged and not second.unfixable),
+                               reason=reason, reinforcement=second)
