@@ -183,7 +183,7 @@ def settings_of(s) -> Settings:
     """``scene.osteon`` as the wheel's :class:`osteon.settings.Settings` (the build direction
     from the "Print direction" setting, the layer ratio from "Layer strength", ``junctions``
     from "Junction cores")."""
-    from . import printdir
+    from . import printdir, printprofile
 
     return Settings(
         build_direction=printdir.build_direction(s),
@@ -193,7 +193,8 @@ def settings_of(s) -> Settings:
         held_bone=s.held_bone or None, size_mode=s.size_mode,
         print_size_mm=float(s.print_size_mm), max_scale=float(s.max_scale),
         max_rounds=int(s.max_rounds), scaling=str(s.scaling),
-        junctions=bool(getattr(s, "junction_cores", True)))
+        junctions=bool(getattr(s, "junction_cores", True)),
+        **printprofile.settings_fields(s))  # "Print settings" (walls, skins, infill)
 
 
 def engine_params(s, arm, bone_names, correct: bool = False) -> dict:

@@ -25,6 +25,7 @@ from ._api import (
 )
 from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
+from .profiles import PrintProfile, print_profiles
 from .reinforcement import Reinforcement, reinforce
 
 __version__ = "0.1.0"
@@ -40,6 +41,7 @@ __all__ = [
     "Cancelled",
     "Correction",
     "Orientation",
+    "PrintProfile",
     "Progress",
     "Reinforcement",
     "Skeleton",
@@ -48,6 +50,7 @@ __all__ = [
     "best_orientation",
     "correct",
     "estimate_sections",
+    "print_profiles",
     "reinforce",
     "section_properties",
     "skin",

@@ -16,8 +16,10 @@ import numpy as np
 
 from . import doubt
 
-#: bump when a key is renamed, removed or changes meaning (adding keys keeps the version)
-SCHEMA_VERSION = 1
+#: bump when a key is renamed, removed or changes meaning (adding keys keeps the version).
+#: 2 (issue 31): ``modulus_mm3`` / ``area_mm2`` of a section are the printed section's under a
+#: print profile (``print_profile``; solid: as before), ``solid_modulus_mm3`` the cut's.
+SCHEMA_VERSION = 2
 UNITS = {"length": "mm", "force": "N", "stress": "MPa"}
 
 
@@ -117,9 +119,20 @@ def _finite_list(x) -> list:
     return out
 
 
+#: report key -> ``Analysis`` field of the printed section (issue 31, docs/printing.md)
+PRINTED_SECTION_FIELDS = {"solid_modulus_mm3": "section_solid_modulus",
+                          "wall_area_mm2": "section_wall_area",
+                          "skin_area_mm2": "section_skin_area",
+                          "infill_area_mm2": "section_infill_area"}
+
+
 def section_rows(a, bone_names) -> list[dict]:
     """Every section of an ``osteon.Analysis``: bone, position (mm), area (mm²), modulus
-    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. At a ``junction``
+    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. Under a print profile
+    (docs/printing.md) ``modulus_mm3`` is the printed section's (what the stress uses),
+    ``solid_modulus_mm3`` the solid cut's, and ``wall_area_mm2`` / ``skin_area_mm2`` /
+    ``infill_area_mm2`` the printed section's perimeters, solid skins and sparse-infill region
+    (``null`` where the engine gives none; solid: ``solid_modulus_mm3`` = ``modulus_mm3``). At a ``junction``
     section area and modulus are the core's (the material that continues through the plane,
     docs/junctions.md) and ``cut_area_mm2`` / ``cut_modulus_mm3`` the whole cut's (elsewhere the
     same numbers). An object without section geometry (no ``section_center``) gives ``[]``."""
@@ -151,6 +164,13 @@ def section_rows(a, bone_names) -> list[dict]:
         "thickness_mm": _finite_list(a.section_thickness)
         if hasattr(a, "section_thickness") else none,
     }
+    # the printed section (issue 31): absent fields (an engine without print profiles) -> the
+    # solid modulus is the modulus, the areas null
+    printed = {key: _finite_list(getattr(a, field)) if getattr(a, field, None) is not None
+               else none for key, field in PRINTED_SECTION_FIELDS.items()}
+    if getattr(a, "section_solid_modulus", None) is None:
+        printed["solid_modulus_mm3"] = cols["modulus_mm3"]
+    cols.update(printed)
     culled = np.asarray(a.culled, dtype=bool).tolist()
     weak = np.asarray(a.weak, dtype=bool).tolist()
     limit = (none if across is None else
@@ -174,6 +194,10 @@ def section_rows(a, bone_names) -> list[dict]:
             "normal": cols["normal"][i],
             "area_mm2": cols["area_mm2"][i],
             "modulus_mm3": cols["modulus_mm3"][i],
+            "solid_modulus_mm3": cols["solid_modulus_mm3"][i],
+            "wall_area_mm2": cols["wall_area_mm2"][i],
+            "skin_area_mm2": cols["skin_area_mm2"][i],
+            "infill_area_mm2": cols["infill_area_mm2"][i],
             "cut_area_mm2": cols["cut_area_mm2"][i],
             "cut_modulus_mm3": cols["cut_modulus_mm3"][i],
             "moment_arm_mm": cols["moment_arm_mm"][i],
@@ -249,7 +273,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
                  armature_name: str | None = None, mm_per_unit: float = 1.0,
                  vertices: int | None = None, faces: int | None = None,
                  seconds: float | None = None, correction=None, corrected_analysis=None,
-                 output: str | None = None) -> dict:
+                 output: str | None = None, print_profile=None) -> dict:
     """The JSON report (schema :data:`SCHEMA_VERSION`) of an analysis or a correction.
 
     ``analysis``: the ``osteon.Analysis`` of the model as it was. With a correction
@@ -257,7 +281,10 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     ``correction.after``), which ``max_stress_mpa``, ``bones`` ... describe; ``weak_bones`` then
     lists every bone weak before or after, with its ``scale``, its stress now and before.
     ``settings``: :meth:`osteon.settings.Settings.as_dict` (or the front end's own dict);
-    ``mm_per_unit``: mm of the print per model unit (file unit or Blender unit).
+    ``mm_per_unit``: mm of the print per model unit (file unit or Blender unit);
+    ``print_profile``: the :class:`osteon.profiles.PrintProfile` analysed with (default: the
+    analysis's own ``print_profile``, else the one ``settings`` names,
+    :func:`osteon.settings.profile_of`), echoed as ``print_profile``.
     """
     if correction is not None and corrected_analysis is None:
         corrected_analysis = correction.after
@@ -304,6 +331,11 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         # in-plane strength; stress ratios use each section's angle to the build direction
         "build_direction": [float(x) for x in getattr(shown, "build_direction", (0, 0, 1))],
         "layer_strength_ratio": float(getattr(shown, "layer_strength_ratio", 1.0)),
+        # how the part is printed (walls, skins, infill; docs/printing.md): the profile whose
+        # printed sections the moduli and stresses below are
+        "print_profile": _profile_dict(settings, print_profile
+                                       if print_profile is not None
+                                       else getattr(shown, "print_profile", None)),
         "safe_modulus_mm3": finite(shown.safe_modulus),
         "sections": len(shown.stress),
         "weak_sections": int(np.count_nonzero(shown.weak)),
@@ -398,6 +430,14 @@ def reinforcement_section(reinforcement, slicer: str | None = None,
         "slicer": slicer,
         "slicer_project": None if project is None else str(project),
     }
+
+
+def _profile_dict(settings: dict, print_profile) -> dict:
+    if print_profile is None:
+        from .settings import profile_of  # settings imports this module
+
+        print_profile = profile_of(settings)
+    return print_profile.as_dict() if hasattr(print_profile, "as_dict") else dict(print_profile)
 
 
 def to_json(report: dict, indent: int = 1) -> str:

@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass
 
 from . import materials
 from ._api import _switch
+from .profiles import PrintProfile, get_profile
 from .report import allowable_stress
 
 
@@ -31,6 +32,14 @@ class Settings:
     preset's; docs/printing.md); ``junctions`` (default True): where a section cuts a side
     branch's stub, count only the core that continues through the plane (flag ``junction``,
     docs/junctions.md); False analyses whole cuts (faster, no junction stage).
+
+    Print profile (docs/printing.md, "Print profiles"): ``print_profile`` a preset key of
+    :func:`osteon.profiles.print_profiles` (default "solid": the section as cut, the numbers
+    before issue 31), with optional overrides (``None`` = the preset's): ``perimeters``
+    (count), ``infill`` (fraction 0…1), ``infill_pattern``, ``line_width_mm``,
+    ``layer_height_mm``, ``top_bottom_layers`` (count) for FDM presets, ``shell_mm`` for a
+    hollowed resin preset. :meth:`profile` resolves them into one checked
+    :class:`osteon.profiles.PrintProfile`.
     """
 
     force_n: float
@@ -47,6 +56,19 @@ class Settings:
     build_direction: tuple = (0.0, 0.0, 1.0)
     layer_strength_ratio: float | None = 1.0
     junctions: bool = True
+    print_profile: str = "solid"
+    perimeters: int | None = None
+    infill: float | None = None
+    infill_pattern: str | None = None
+    line_width_mm: float | None = None
+    layer_height_mm: float | None = None
+    top_bottom_layers: int | None = None
+    shell_mm: float | None = None
+
+    def profile(self) -> PrintProfile:
+        """The print profile: the preset with the overrides applied (``ValueError`` naming a bad
+        value or an override the preset's kind has no use for)."""
+        return resolve_profile(self.print_profile, {f: getattr(self, f) for f in OVERRIDES})
 
     def layer_ratio(self) -> float:
         """Layer / in-plane strength used: the given one; ``None``: the material preset's (1.0
@@ -84,7 +106,56 @@ class Settings:
         d["build_direction"] = [float(x) for x in self.build_direction]
         d["layer_strength_ratio"] = self.layer_ratio()
         d["junctions"] = _switch(self.junctions, "junctions")
+        d["print_profile"] = str(self.print_profile).strip().lower()
         return d
+
+
+#: Settings field -> PrintProfile field of the print-profile overrides, and the kinds that use it
+OVERRIDES = {"perimeters": ("perimeters", "fdm"), "infill": ("infill", "fdm"),
+             "infill_pattern": ("pattern", "fdm"), "line_width_mm": ("line_width", "fdm"),
+             "layer_height_mm": ("layer_height", "fdm"),
+             "top_bottom_layers": ("top_bottom_layers", "fdm"),
+             "shell_mm": ("shell", "resin_hollow")}
+
+
+def resolve_profile(key, overrides: dict | None = None) -> PrintProfile:
+    """The preset ``key`` with ``overrides`` ({Settings field: value or None}) applied and
+    checked; the name says what changed ("prusaslicer, perimeters 3"). The one resolution every
+    front end and the report use."""
+    base = get_profile(key if key not in (None, "") else "solid")
+    given = {k: v for k, v in (overrides or {}).items() if v is not None and v != ""}
+    unknown = sorted(set(given) - set(OVERRIDES))
+    if unknown:
+        raise ValueError(f"unknown print setting(s) {', '.join(unknown)}")
+    if not given:
+        return base
+    wrong = [k for k in given if OVERRIDES[k][1] != base.kind]
+    if wrong:
+        needs = {OVERRIDES[k][1] for k in wrong}
+        hint = ("an FDM profile (e.g. prusaslicer)" if needs == {"fdm"}
+                else "a resin profile (resin_hollow)")
+        raise ValueError(f"{wrong[0]} needs {hint}; print profile {key!r} is {base.kind}")
+    changes = {OVERRIDES[k][0]: v for k, v in given.items()}
+    label = ", ".join(f"{OVERRIDES[k][0]} {v:g}" if isinstance(v, (int, float)) else
+                      f"{OVERRIDES[k][0]} {v}" for k, v in given.items())
+    return base.with_changes(name=f"{base.name}, {label}", **changes)
+
+
+def profile_of(settings: dict) -> PrintProfile:
+    """The print profile of a settings dict (:meth:`Settings.as_dict` or a front end's own;
+    missing keys: the preset's, no key: solid)."""
+    return resolve_profile(settings.get("print_profile"),
+                           {k: settings.get(k) for k in OVERRIDES})
+
+
+def engine_takes_print_profile() -> bool:
+    """Whether this engine's ``osteon.analyze`` has the ``print_profile=`` argument (the
+    printed section, issue 31)."""
+    import inspect
+
+    from . import _api
+
+    return "print_profile" in inspect.signature(_api.analyze).parameters
 
 
 #: the axis choices of the front ends (Blender's "Print direction"), unit vectors in the
@@ -147,9 +218,9 @@ def min_thickness_mm(settings: Settings) -> float:
 def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> dict:
     """The keyword arguments of ``osteon.analyze`` / ``Analyzer`` (``force``,
     ``allowable_stress``, ``interval``, ``root``, ``build_direction``,
-    ``layer_strength_ratio``, ``min_thickness``, ``junctions``), plus ``max_scale``, ``max_rounds``,
-    ``scaling`` with ``correct=True`` for ``osteon.correct``. Raises ``ValueError`` naming the
-    bad setting."""
+    ``layer_strength_ratio``, ``min_thickness``, ``junctions``, and ``print_profile`` unless the
+    profile is solid), plus ``max_scale``, ``max_rounds``, ``scaling`` with ``correct=True`` for
+    ``osteon.correct``. Raises ``ValueError`` naming the bad setting."""
     kw = {
         "force": _positive(settings.force_n, "force", "N"),
         "allowable_stress": settings.allowable_stress_mpa(),
@@ -161,6 +232,12 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
         "min_thickness": min_thickness_mm(settings),
         "junctions": _switch(settings.junctions, "junctions"),
     }
+    profile = settings.profile()
+    if not profile.is_solid:  # solid: no argument, the engine's default (bit for bit)
+        if not engine_takes_print_profile():
+            raise ValueError(f"print profile {profile.name!r} needs the printed-section engine "
+                             "(issue 31), which this osteon build does not have; use solid")
+        kw["print_profile"] = profile
     if correct:
         if not (float(settings.max_scale) >= 1.0):
             raise ValueError(f"max scale must be >= 1, got {settings.max_scale}")

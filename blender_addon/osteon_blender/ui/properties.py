@@ -7,10 +7,12 @@ from bpy.props import (
     EnumProperty,
     FloatProperty,
     IntProperty,
+    PointerProperty,
     StringProperty,
 )
 
 from .. import core, printdir
+from .print_settings import OsteonPrintSettings
 
 _MATERIAL_ITEMS = core.MATERIAL_ITEMS
 _DEFAULT = core.materials.get(core.materials.DEFAULT_MATERIAL)
@@ -95,6 +97,8 @@ class OsteonSettings(bpy.types.PropertyGroup):
                                   description="Direction the layers stack along")
     print_axis: EnumProperty(name="Axis", items=printdir.AXIS_ITEMS, default="+Z",
                              description="Scene axis the layers stack along")
+    # walls, skins, infill (the "Print settings" sub-panel, ui/print_settings.py)
+    print_settings: PointerProperty(type=OsteonPrintSettings)
     # results of the last run
     weak_bones: CollectionProperty(type=OsteonBoneResult)
     weak_bones_index: IntProperty(default=-1, update=_on_bone_row)

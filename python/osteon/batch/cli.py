@@ -12,6 +12,7 @@ examples:
   osteon batch library/ --out report                   # all cores
   osteon batch 'scans/**/*.stl' figures/*.glb --out report --material PETG --force 10
   osteon batch library/ --out report --resume          # after an interruption
+  osteon batch library/ --out report --profile prusaslicer   # as PrusaSlicer prints them
   osteon batch library/ --out report --dask local      # a local Dask cluster
   osteon batch library/ --out report --dask tcp://scheduler:8786
 """
@@ -20,7 +21,7 @@ examples:
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
-    from ..cli.parser import MATERIALS, add_junction_switch
+    from ..cli.parser import MATERIALS, add_junction_switch, add_print_options
 
     p = sub.add_parser(
         "batch",
@@ -56,6 +57,7 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--layer-ratio", type=float, metavar="R",
                    help="layer / in-plane strength (default: the material preset's)")
     add_junction_switch(p)
+    add_print_options(p)
     p.add_argument("--correct", action="store_true",
                    help="also thicken weak bones and write each corrected mesh")
     p.add_argument("--max-scale", type=float, default=3.0, metavar="S",

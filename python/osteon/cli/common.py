@@ -38,6 +38,14 @@ def settings_from_args(args) -> Settings:
         build_direction=_build_direction(getattr(args, "build_direction", "0,0,1")),
         layer_strength_ratio=getattr(args, "layer_ratio", None),  # None: the material preset's
         junctions=getattr(args, "junction_cores", True),  # --no-junction-cores
+        print_profile=getattr(args, "profile", "solid"),
+        perimeters=getattr(args, "perimeters", None),
+        infill=getattr(args, "infill", None),  # --infill is in percent, a fraction here
+        infill_pattern=getattr(args, "infill_pattern", None),
+        line_width_mm=getattr(args, "line_width", None),
+        layer_height_mm=getattr(args, "layer_height", None),
+        top_bottom_layers=getattr(args, "top_bottom_layers", None),
+        shell_mm=getattr(args, "shell", None),
     )
 
 
@@ -183,7 +191,13 @@ def format_table(rows, allowable, scales=False, layer_ratio=1.0):
 _OPTIONS = {"force": "--force", "section interval": "--interval",
             "material strength": "--strength-mpa", "safety factor": "--safety-factor",
             "max scale": "--max-scale", "max rounds": "--max-rounds", "Held bone": "--root",
-            "layer strength ratio": "--layer-ratio", "build direction": "--build-direction"}
+            "layer strength ratio": "--layer-ratio", "build direction": "--build-direction",
+            # print profile (osteon.settings.resolve_profile, osteon.profiles.PrintProfile)
+            "print profile": "--profile", "unknown print profile": "--profile",
+            "perimeters": "--perimeters", "infill_pattern": "--infill-pattern",
+            "infill": "--infill", "line_width": "--line-width",
+            "layer_height": "--layer-height", "top_bottom_layers": "--top-bottom-layers",
+            "shell": "--shell"}
 
 
 def _arguments(settings: Settings, bone_names, correct: bool) -> dict:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .. import materials
+from .. import materials, profiles
 
 #: preset -> strength in MPa, from the one table in :mod:`osteon.materials`
 MATERIALS = materials.strengths_mpa()
@@ -108,6 +108,7 @@ def _add_common(p: argparse.ArgumentParser):
         help="layer / in-plane strength (default: the material preset's, e.g. PLA 0.55; "
         "1 with --strength-mpa)",
     )
+    add_print_options(p)
     o = p.add_argument_group("output")
     o.add_argument("--json", metavar="FILE", help="write a JSON report")
     o.add_argument("--png", metavar="FILE", help="write a PNG of the stress map and chain plot")
@@ -119,6 +120,71 @@ def _add_common(p: argparse.ArgumentParser):
         help="bones listed in the terminal table (default 10)",
     )
     o.add_argument("-q", "--quiet", action="store_true", help="no table, no progress bars")
+
+
+def profile_list() -> str:
+    """The print-profile presets, one per line with what they are and where their numbers come
+    from (``--list-profiles``)."""
+    lines = ["print profiles (--profile NAME; docs/printing.md):"]
+    for key, prof in profiles.print_profiles().items():
+        lines.append(f"  {key:<13} {prof.name}")
+        lines.append(f"  {'':<13} source: {prof.source}")
+    mats = ", ".join(f"{m.key} → {m.default_profile}" for m in materials.MATERIALS)
+    lines.append(f"suggested per material: {mats}")
+    return "\n".join(lines)
+
+
+class _ListProfiles(argparse.Action):
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help=None):
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(profile_list())
+        parser.exit()
+
+
+def _percent(text) -> float:
+    """``--infill``: a percentage 0…100 ("15" or "15%"), returned as a fraction 0…1."""
+    raw = str(text).strip().rstrip("%").strip()
+    try:
+        v = float(raw)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a percentage 0-100, got {text!r}") from None
+    if not (0.0 <= v <= 100.0):
+        raise argparse.ArgumentTypeError(f"must be a percentage 0-100, got {text!r}")
+    if 0.0 < v < 1.0:  # 0.15 is 0.15 %, almost surely meant as 15 %
+        raise argparse.ArgumentTypeError(f"is a percentage: {text} means {v:g} %; "
+                                         f"give {v * 100:g} for {v * 100:g} %")
+    return v / 100.0
+
+
+def add_print_options(p) -> None:
+    """The print profile options (``Settings.print_profile`` and its overrides) on a command."""
+    keys = list(profiles.print_profiles())
+    g = p.add_argument_group(
+        "print profile (walls, skins, infill; docs/printing.md)",
+        "By default every section is analysed solid (the numbers of earlier versions). To "
+        "analyse the part as a slicer prints it, give --profile (e.g. --profile prusaslicer: 2 "
+        "perimeters, 15 %% gyroid); the other options change one setting of it. "
+        "--list-profiles lists the presets and their sources.")
+    g.add_argument("--profile", choices=keys, default="solid", metavar="NAME",
+                   help=f"print profile preset: {', '.join(keys)} (default solid)")
+    g.add_argument("--list-profiles", action=_ListProfiles,
+                   help="list the print profiles with their sources and exit")
+    g.add_argument("--perimeters", type=int, metavar="N",
+                   help="FDM: wall loops per layer (count)")
+    g.add_argument("--infill", type=_percent, metavar="PCT",
+                   help="FDM: sparse infill density in percent, 0-100 (15 = 15 %%)")
+    g.add_argument("--infill-pattern", choices=profiles.PATTERNS, metavar="NAME",
+                   help=f"FDM: infill pattern: {', '.join(profiles.PATTERNS)}")
+    g.add_argument("--line-width", type=float, metavar="MM",
+                   help="FDM: perimeter extrusion width, mm")
+    g.add_argument("--layer-height", type=float, metavar="MM", help="FDM: layer height, mm")
+    g.add_argument("--top-bottom-layers", type=int, metavar="N",
+                   help="FDM: solid layers at the top and bottom surfaces (count)")
+    g.add_argument("--shell", type=float, metavar="MM",
+                   help="hollowed resin (--profile resin_hollow): shell thickness, mm")
 
 
 def add_junction_switch(p) -> None:
@@ -143,6 +209,8 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"osteon {_version()}")
+    p.add_argument("--list-profiles", action=_ListProfiles,
+                   help="list the print profiles (--profile) with their sources and exit")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     pa = sub.add_parser(
         "analyze",

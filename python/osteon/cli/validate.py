@@ -18,6 +18,10 @@ def cmd_validate(args, out):
     try:
         settings = common.settings_from_args(args)
         common.check(settings)
+        if args.fem and not settings.profile().is_solid:
+            # the FEM mesh is the solid part: its stresses are not those of printed walls
+            raise ValueError("--fem checks the solid part against FEM: use it without "
+                             "--profile (or --profile solid)")
         allowable = settings.allowable_stress_mpa()
         model = common.load_model_of(args)
         checks = model_checks(model)
