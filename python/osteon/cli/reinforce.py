@@ -48,7 +48,7 @@ def _profile(args, settings, keyword):
     profile = resolve() if resolve is not None else get_profile(args.profile)
     if profile.kind != "fdm":
         raise ValueError(f"--profile: reinforce needs an FDM profile (walls and infill), "
-                         f"{profile.name!r} is {profile.kind}")
+                         f"{profile.name!r} is {profile.kind}; e.g. --profile prusaslicer")
     return profile
 
 
@@ -78,6 +78,10 @@ def cmd_reinforce(args: argparse.Namespace, out) -> int:
                                    output=args.out)
             rep["reinforcement"] = reinforcement_section(r, args.slicer, args.out)
             common.write_json(args.json, rep)
+        if args.png:
+            common.save_png(args, model, r.after, settings.allowable_stress_mpa(),
+                            before=r.before, title=f"{Path(args.model).name} reinforced: "
+                            f"{len(r.regions)} region(s), {profile.name}")
         prog.next()
     finally:
         prog.close()
