@@ -166,6 +166,10 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["section_thickness"] = to_numpy(std::move(r.section_thickness));
   d["section_cut_area"] = to_numpy(std::move(r.section_cut_area));
   d["section_cut_modulus"] = to_numpy(std::move(r.section_cut_modulus));
+  d["section_solid_modulus"] = to_numpy(std::move(r.section_solid_modulus));
+  d["section_wall_area"] = to_numpy(std::move(r.section_wall_area));
+  d["section_skin_area"] = to_numpy(std::move(r.section_skin_area));
+  d["section_infill_area"] = to_numpy(std::move(r.section_infill_area));
   d["moment_arm"] = to_numpy(std::move(r.moment_arm));
   d["moment"] = to_numpy(std::move(r.moment));
   d["stress"] = to_numpy(std::move(r.stress));
@@ -190,6 +194,9 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["cut_outline_points"] = to_numpy(std::move(r.cut_outline_points));
   d["cut_outline_loop_start"] = to_numpy(std::move(r.cut_outline_loop_start));
   d["cut_outline_section_start"] = to_numpy(std::move(r.cut_outline_section_start));
+  d["infill_outline_points"] = to_numpy(std::move(r.infill_outline_points));
+  d["infill_outline_loop_start"] = to_numpy(std::move(r.infill_outline_loop_start));
+  d["infill_outline_section_start"] = to_numpy(std::move(r.infill_outline_section_start));
   py::list loose;
   for (auto& piece : r.loose_pieces) loose.append(to_numpy(std::move(piece)));
   d["loose_pieces"] = loose;
@@ -334,7 +341,34 @@ PYBIND11_MODULE(_core, m) {
           },
           "FDM build direction (3,), model frame")
       .def_readwrite("layer_strength_ratio", &AnalysisOptions::layer_strength_ratio,
-                     "layer / in-plane strength (1 = isotropic)");
+                     "layer / in-plane strength (1 = isotropic)")
+      // The printed section (osteon/printed_section.hpp), set from a PrintProfile by
+      // osteon.printed.engine_print_options.
+      .def_property(
+          "print_kind", [](const AnalysisOptions& o) { return o.print.kind; },
+          [](AnalysisOptions& o, int k) { o.print.kind = k; },
+          "0 solid, 1 FDM (walls, skins, infill), 2 hollow shell (resin)")
+      .def_property(
+          "print_wall_depth", [](const AnalysisOptions& o) { return o.print.wall_depth; },
+          [](AnalysisOptions& o, double v) { o.print.wall_depth = v; },
+          "mm: FDM perimeters' depth in the layer plane, or the resin shell")
+      .def_property(
+          "print_skin_depth", [](const AnalysisOptions& o) { return o.print.skin_depth; },
+          [](AnalysisOptions& o, double v) { o.print.skin_depth = v; },
+          "mm: solid top/bottom skins along the build direction")
+      .def_property(
+          "print_infill_build", [](const AnalysisOptions& o) { return o.print.infill_build; },
+          [](AnalysisOptions& o, double v) { o.print.infill_build = v; },
+          "infill stiffness fraction for stress along the build direction")
+      .def_property(
+          "print_infill_layer", [](const AnalysisOptions& o) { return o.print.infill_layer; },
+          [](AnalysisOptions& o, double v) { o.print.infill_layer = v; },
+          "infill stiffness fraction for stress in the layer plane")
+      .def_property(
+          "print_solid_infill_below_area",
+          [](const AnalysisOptions& o) { return o.print.solid_infill_below_area; },
+          [](AnalysisOptions& o, double v) { o.print.solid_infill_below_area = v; },
+          "mm^2: a layer's infill island under this area is filled solid");
 
   py::class_<CorrectionOptions>(m, "CorrectionOptions", "Limits of the correction loop.")
       .def(py::init<>())

@@ -53,13 +53,13 @@ bool local_ok(RunState& run, const PlaneCut& cut, const SectionGeometry& geom, b
 // Section state of a found (or skipped) section geometry; region null: the whole plane was cut.
 // With `keep`, the region's loops are kept in 3D (AnalysisOptions::keep_outlines).
 SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const CutRegion* region,
-                    bool keep) {
+                    const RegionOptions& ro) {
   SectionState st;
   st.flags = geom.flags;
   st.whole_plane = region == nullptr;
   if (region != nullptr) st.region = *region;
   if (geom.found) {
-    if (set_section_region(st, frame, geom.polygon, keep)) {
+    if (set_section_region(st, frame, geom.polygon, ro)) {
       st.found = true;
       st.frame = frame;
       st.cut = geom.polygon;
@@ -75,21 +75,32 @@ SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const 
 // The whole-plane section from all of a plane's segments (gaps closed: nothing is clipped). A
 // bone outside the mesh takes the region cut from its own skinning domain (vertex_bone, #V).
 SectionState finish_whole(const PlaneFrame& frame, const std::vector<CutSegment>& segs, double gap,
-                          const int* vertex_bone, int bone, bool keep) {
+                          const int* vertex_bone, int bone, const RegionOptions& ro) {
   const BoneDomain domain{&segs, vertex_bone, bone};
   SectionGeometry geom = select_region(assemble_loops(segs, gap), &domain);
   if (segs.empty()) geom.flags |= kFlagEmpty;
-  return finish(frame, geom, nullptr, keep);
+  return finish(frame, geom, nullptr, ro);
 }
 
 }  // namespace
 
 bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
-                        bool keep) {
+                        const RegionOptions& ro) {
   const SectionProperties props = section_properties(polygon);
   if (!props.valid) return false;
+  PrintedSection printed;
+  if (ro.print != nullptr) {
+    const Vec2 build(ro.build.dot(frame.u), ro.build.dot(frame.v));
+    printed =
+        printed_section(polygon, props, build, ro.build.dot(frame.normal), *ro.print, ro.keep);
+    if (!printed.valid) return false;
+  }
   st.area = props.area;
-  st.modulus = props.modulus;
+  st.solid_modulus = props.modulus;
+  st.modulus = ro.print != nullptr ? printed.modulus : props.modulus;
+  st.wall_area = printed.wall_area;
+  st.skin_area = printed.skin_area;
+  st.infill_area = printed.infill_area;
   st.center = frame.to_world(props.centroid);
   // Principal second moments: the smaller one is across the thinnest direction (a b x t
   // rectangle has b^3 t / 12 and b t^3 / 12, so the aspect is b / t).
@@ -103,7 +114,7 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
   st.thickness_bound = region_thickness_lower_bound(props.area, lo);
   st.analysed = std::make_shared<const SectionPolygon>(polygon);
   st.loops.clear();
-  if (keep) {
+  if (ro.keep) {
     auto to_world = [&](const std::vector<Vec2>& loop) {
       std::vector<Vec3> out(loop.size());
       for (std::size_t k = 0; k < loop.size(); ++k) out[k] = frame.to_world(loop[k]);
@@ -111,6 +122,8 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
     };
     st.loops.push_back(to_world(polygon.outer));
     for (const auto& hole : polygon.holes) st.loops.push_back(to_world(hole));
+    st.infill_loops.clear();
+    for (const auto& loop : printed.sparse) st.infill_loops.push_back(to_world(loop));
   }
   return true;
 }
@@ -163,7 +176,7 @@ void Analyzer::Impl::cut_local(RunState& run) {
   const Skeleton& sk = run.sk;
   const double h = options.interval;
   const long jobs = static_cast<long>(job_bone.size());
-  const bool keep = options.keep_outlines;
+  const RegionOptions ro(options);
   // Phase 1 (parallel over bones and joints): one local cut per family of parallel planes.
   // Sections whose local cut is not provably right, and all joints, are queued for phase 2.
   detail::parallel_for(jobs, options.threads, [&](long job, int worker) {
@@ -203,14 +216,14 @@ void Analyzer::Impl::cut_local(RunState& run) {
       PlaneFrame frame = base;
       frame.origin = specs[si].point;
       if (!local) {
-        states[si] = finish_whole(frame, segs[k - 1], run.gap, run.vertex_bone.data(), b, keep);
+        states[si] = finish_whole(frame, segs[k - 1], run.gap, run.vertex_bone.data(), b, ro);
         run.sections_done();
         continue;
       }
       const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
       const SectionGeometry geom = select_region(cut, nullptr);
       if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
-        states[si] = finish(frame, geom, &region, keep);
+        states[si] = finish(frame, geom, &region, ro);
         run.sections_done();
         continue;
       }
@@ -228,7 +241,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
   const long jobs = static_cast<long>(job_bone.size());
   const std::vector<std::uint8_t>& retry = run.retry;
   const std::vector<double>& reach = run.reach;
-  const bool keep = options.keep_outlines;
+  const RegionOptions ro(options);
   // Phase 2 units: a family's queued planes are re-cut together in masked passes (a cylinder
   // three times wider, then the whole plane); a joint grows a ball around its point, then cuts
   // the whole plane. Families first: they are the larger units, joints balance the cores last.
@@ -294,7 +307,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
               previous = ball;
               done = &previous;
               if (local_ok(run, cut, geom, inside)) {
-                states[first] = finish(frame, geom, &ball, keep);
+                states[first] = finish(frame, geom, &ball, ro);
                 run.sections_done();
                 return;
               }
@@ -302,7 +315,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             }
           }
           cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
-          states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, keep);
+          states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, ro);
           run.sections_done();
           return;
         }
@@ -336,7 +349,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
             const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
             const SectionGeometry geom = select_region(cut, nullptr);
             if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
-              states[first + k - 1] = finish(frame_of(k), geom, &wide, keep);
+              states[first + k - 1] = finish(frame_of(k), geom, &wide, ro);
               run.sections_done();
               wanted[k - 1] = 0;
             }
@@ -349,7 +362,7 @@ void Analyzer::Impl::cut_retries(RunState& run) {
           run.check_cancel();
           add_kept(k);
           states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap,
-                                               run.vertex_bone.data(), b, keep);
+                                               run.vertex_bone.data(), b, ro);
           run.sections_done();
         }
       });

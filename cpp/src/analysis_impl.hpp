@@ -25,6 +25,7 @@
 
 #include "osteon/analysis.hpp"
 #include "osteon/loads.hpp"
+#include "osteon/printed_section.hpp"
 #include "osteon/regions.hpp"
 #include "osteon/slicer.hpp"
 
@@ -99,14 +100,32 @@ struct SectionState {
   double cut_modulus = 0.0;   // mm^3
   double junction_delta = 0;  // > 0: junction check made with neighbour planes at +-delta, mm
   std::vector<std::vector<Vec3>> cut_loops;  // keep_outlines, junction only: the whole cut's loops
+  // The printed section (AnalysisOptions::print; solid: modulus is the solid one, areas 0).
+  double solid_modulus = 0.0;  // W of the region as cut, mm^3 (modulus: as printed)
+  double wall_area = 0.0;      // mm^2
+  double skin_area = 0.0;      // mm^2
+  double infill_area = 0.0;    // mm^2
+  std::vector<std::vector<Vec3>> infill_loops;  // keep_outlines: the sparse region's loops, 3D mm
+};
+
+/// What set_section_region needs of the options: keep the loops, and how the part is printed.
+struct RegionOptions {
+  explicit RegionOptions(const AnalysisOptions& options)
+      : keep(options.keep_outlines),
+        print(options.print.kind == PrintOptions::kSolid ? nullptr : &options.print),
+        build(options.build_direction.normalized()) {}
+  bool keep = false;
+  const PrintOptions* print = nullptr;  // null: solid (the section as cut, no print code runs)
+  Vec3 build = Vec3::UnitZ();           // unit build direction
 };
 
 /// Sets a found section's properties (area, W, centroid, thin axis, aspect, thickness and, with
-/// `keep`, its 3D loops) from a region in `frame`'s plane coordinates; false (nothing changed)
+/// `ro.keep`, its 3D loops) from a region in `frame`'s plane coordinates; false (nothing changed)
 /// when the region is degenerate. The thickness is left NaN (the region and a lower bound of
-/// its thickness are kept): section_thickness_at computes it when it is needed.
+/// its thickness are kept): section_thickness_at computes it when it is needed. With a print
+/// (`ro.print`), W is the printed section's (printed_section.hpp), solid_modulus the cut's.
 bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
-                        bool keep);
+                        const RegionOptions& ro);
 
 /// The section's thickness (mm), computed from its kept region on first need.
 double section_thickness_at(SectionState& st);

@@ -114,9 +114,9 @@ bool reaches_beyond(const SectionPolygon& cut, const SectionPolygon& core, doubl
 }
 
 // Back to the whole cut (a section that was a junction core but is no longer a candidate).
-void restore_whole(SectionState& st, bool keep) {
+void restore_whole(SectionState& st, const RegionOptions& ro) {
   if (!(st.flags & kFlagJunction)) return;
-  set_section_region(st, st.frame, st.cut, keep);
+  set_section_region(st, st.frame, st.cut, ro);
   st.flags &= ~kFlagJunction;
   st.cut_loops.clear();
 }
@@ -125,10 +125,10 @@ void restore_whole(SectionState& st, bool keep) {
 
 void Analyzer::Impl::find_junction_cores(RunState& run) {
   const int ns = static_cast<int>(specs.size());
-  const bool keep = options.keep_outlines;
+  const RegionOptions ro(options);
   if (!options.junctions) {
     for (SectionState& st : states) {
-      restore_whole(st, keep);
+      restore_whole(st, ro);
       st.junction_delta = 0.0;
     }
     return;
@@ -171,7 +171,7 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     const bool candidate =
         !(st.flags & kFlagOutside) && delta[b] > 0 && st.cut_area > kCandidateArea * median[b];
     if (!candidate) {
-      restore_whole(st, keep);
+      restore_whole(st, ro);
       st.junction_delta = 0.0;
       continue;
     }
@@ -208,7 +208,7 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     const int i = todo[t];
     SectionState& st = states[i];
     const int b = specs[i].bone;
-    restore_whole(st, keep);
+    restore_whole(st, ro);
     st.junction_delta = delta[b];
     // The regions around the bone point on the planes at -delta and +delta; a side with no
     // region of its own there (past a free end, bone outside the mesh, open cut) is left out.
@@ -301,8 +301,8 @@ void Analyzer::Impl::find_junction_cores(RunState& run) {
     // a taper, a bulge) is the bone's own: by Saint-Venant a feature of depth t is engaged within
     // about t of the plane, inside the slab, so the whole cut carries the load.
     if (!reaches_beyond(st.cut, core.polygon, kReach * std::sqrt(props.area / M_PI))) return;
-    if (keep) st.cut_loops = st.loops;
-    if (set_section_region(st, st.frame, core.polygon, keep)) st.flags |= kFlagJunction;
+    if (ro.keep) st.cut_loops = st.loops;
+    if (set_section_region(st, st.frame, core.polygon, ro)) st.flags |= kFlagJunction;
   });
   if (run.timer.on) std::fprintf(stderr, "junction checks %ld\n", run.junction_checks);
 }

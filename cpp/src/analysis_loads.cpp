@@ -9,6 +9,31 @@
 #include "parallel.hpp"
 
 namespace osteon {
+namespace {
+
+// Packs the loops `member` of the sections that `take` (AnalysisResult's outline_* layout):
+// section i owns loops section_start[i] .. section_start[i + 1], loop l the points
+// loop_start[l] .. loop_start[l + 1].
+template <class Take>
+void pack_loops(const std::vector<SectionState>& states,
+                std::vector<std::vector<Vec3>> SectionState::*member, const Take& take,
+                std::vector<Vec3>& points, std::vector<std::int64_t>& loop_start,
+                std::vector<std::int64_t>& section_start) {
+  const int ns = static_cast<int>(states.size());
+  section_start.reserve(ns + 1);
+  loop_start.push_back(0);
+  for (int i = 0; i < ns; ++i) {
+    section_start.push_back(static_cast<std::int64_t>(loop_start.size()) - 1);
+    if (!take(i)) continue;
+    for (const auto& loop : states[i].*member) {
+      points.insert(points.end(), loop.begin(), loop.end());
+      loop_start.push_back(static_cast<std::int64_t>(points.size()));
+    }
+  }
+  section_start.push_back(static_cast<std::int64_t>(loop_start.size()) - 1);
+}
+
+}  // namespace
 
 AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -31,6 +56,10 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   r.section_thickness.resize(ns);
   r.section_cut_area.resize(ns);
   r.section_cut_modulus.resize(ns);
+  r.section_solid_modulus.resize(ns);
+  r.section_wall_area.resize(ns);
+  r.section_skin_area.resize(ns);
+  r.section_infill_area.resize(ns);
   r.moment_arm.resize(ns);
   r.moment.resize(ns);
   r.stress.resize(ns);
@@ -65,6 +94,10 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       r.section_thickness[i] = st.found ? st.thickness : kNaN;
       r.section_cut_area[i] = st.found ? st.cut_area : 0.0;
       r.section_cut_modulus[i] = st.found ? st.cut_modulus : kNaN;
+      r.section_solid_modulus[i] = st.found ? st.solid_modulus : kNaN;
+      r.section_wall_area[i] = st.found ? st.wall_area : 0.0;
+      r.section_skin_area[i] = st.found ? st.skin_area : 0.0;
+      r.section_infill_area[i] = st.found ? st.infill_area : 0.0;
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
@@ -97,7 +130,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       if ((flags & kFlagOutside) && states[i].area < 0.1 * median[specs[i].bone]) {
         flags |= kFlagUnreliable;
         r.section_area[i] = r.section_cut_area[i] = 0.0;
-        r.section_cut_modulus[i] = kNaN;
+        r.section_cut_modulus[i] = r.section_solid_modulus[i] = kNaN;
+        r.section_wall_area[i] = r.section_skin_area[i] = r.section_infill_area[i] = 0.0;
         r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
         r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
         continue;
@@ -146,31 +180,19 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   }
   run.check_cancel();
   if (options.keep_outlines) {
-    r.outline_section_start.reserve(ns + 1);
-    r.outline_loop_start.push_back(0);
-    for (int i = 0; i < ns; ++i) {
-      r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
-      // Only regions analysed: not an unreliable sliver (no number, no outline).
-      if (!states[i].found || (r.section_flags[i] & kFlagUnreliable)) continue;
-      for (const auto& loop : states[i].loops) {
-        r.outline_points.insert(r.outline_points.end(), loop.begin(), loop.end());
-        r.outline_loop_start.push_back(static_cast<std::int64_t>(r.outline_points.size()));
-      }
-    }
-    r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
-    r.cut_outline_section_start.reserve(ns + 1);
-    r.cut_outline_loop_start.push_back(0);
-    for (int i = 0; i < ns; ++i) {
-      r.cut_outline_section_start.push_back(
-          static_cast<std::int64_t>(r.cut_outline_loop_start.size()) - 1);
-      if (!states[i].found || !(r.section_flags[i] & kFlagJunction)) continue;
-      for (const auto& loop : states[i].cut_loops) {
-        r.cut_outline_points.insert(r.cut_outline_points.end(), loop.begin(), loop.end());
-        r.cut_outline_loop_start.push_back(static_cast<std::int64_t>(r.cut_outline_points.size()));
-      }
-    }
-    r.cut_outline_section_start.push_back(
-        static_cast<std::int64_t>(r.cut_outline_loop_start.size()) - 1);
+    // Only regions analysed: not an unreliable sliver (no number, no outline).
+    auto analysed = [&](int i) {
+      return states[i].found && !(r.section_flags[i] & kFlagUnreliable);
+    };
+    pack_loops(states, &SectionState::loops, analysed, r.outline_points, r.outline_loop_start,
+               r.outline_section_start);
+    pack_loops(
+        states, &SectionState::cut_loops,
+        [&](int i) { return states[i].found && (r.section_flags[i] & kFlagJunction); },
+        r.cut_outline_points, r.cut_outline_loop_start, r.cut_outline_section_start);
+    if (options.print.kind != PrintOptions::kSolid)
+      pack_loops(states, &SectionState::infill_loops, analysed, r.infill_outline_points,
+                 r.infill_outline_loop_start, r.infill_outline_section_start);
   }
   return r;
 }

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from .printed import engine_print_options
+from .profiles import PrintProfile, get_profile
 
 __all__ = [
     "DEFAULT_MIN_THICKNESS",
@@ -421,17 +423,36 @@ class Analysis:
     cut_outline_points: np.ndarray | None = None
     cut_outline_loop_start: np.ndarray | None = None
     cut_outline_section_start: np.ndarray | None = None
+    #: The printed section (``print_profile``, docs/printing.md): ``section_modulus`` is the
+    #: printed W (what the stress uses), ``section_solid_modulus`` (S,) mm³ the same region's W
+    #: solid; ``section_wall_area``, ``section_skin_area`` (solid infill: skins and small islands
+    #: filled solid) and ``section_infill_area`` (sparse or hollow) (S,) mm², 0 when solid.
+    section_solid_modulus: np.ndarray | None = None
+    section_wall_area: np.ndarray | None = None
+    section_skin_area: np.ndarray | None = None
+    section_infill_area: np.ndarray | None = None
+    #: With ``keep_outlines`` and a print profile: the sparse / hollow region's loops, packed
+    #: like ``outline_*`` (:attr:`infill_loops`)
+    infill_outline_points: np.ndarray | None = None
+    infill_outline_loop_start: np.ndarray | None = None
+    infill_outline_section_start: np.ndarray | None = None
+    print_profile: PrintProfile = field(default_factory=PrintProfile.solid)
 
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
                    interval: float, build_direction: Any = (0.0, 0.0, 1.0),
                    layer_strength_ratio: float = 1.0,
-                   min_thickness: float = DEFAULT_MIN_THICKNESS) -> Analysis:
+                   min_thickness: float = DEFAULT_MIN_THICKNESS,
+                   print_profile: PrintProfile | None = None) -> Analysis:
         if len(d["outline_section_start"]) == 0:  # outlines not asked for
             d["outline_points"] = d["outline_loop_start"] = d["outline_section_start"] = None
             d["cut_outline_points"] = d["cut_outline_loop_start"] = None
             d["cut_outline_section_start"] = None
+        if len(d["infill_outline_section_start"]) == 0:  # no outlines or a solid print
+            d["infill_outline_points"] = d["infill_outline_loop_start"] = None
+            d["infill_outline_section_start"] = None
         return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
+                   print_profile=get_profile(print_profile),
                    bone_names=list(skeleton.names),
                    build_direction=np.array(build_direction, dtype=float),
                    layer_strength_ratio=float(layer_strength_ratio),
@@ -449,6 +470,11 @@ class Analysis:
             self.section_cut_area = np.asarray(self.section_area, dtype=float).copy()
         if self.section_cut_modulus is None:
             self.section_cut_modulus = np.asarray(self.section_modulus, dtype=float).copy()
+        if self.section_solid_modulus is None:
+            self.section_solid_modulus = np.asarray(self.section_modulus, dtype=float).copy()
+        for name in ("section_wall_area", "section_skin_area", "section_infill_area"):
+            if getattr(self, name) is None:
+                setattr(self, name, np.zeros(len(self.stress)))
 
     @property
     def num_sections(self) -> int:
@@ -478,6 +504,19 @@ class Analysis:
             return None
         pts, ls = self.cut_outline_points, self.cut_outline_loop_start
         ss = self.cut_outline_section_start
+        return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
+                for s in range(len(ss) - 1)]
+
+    @property
+    def infill_loops(self) -> list[list[np.ndarray]] | None:
+        """With ``keep_outlines=True`` and a print profile: per section (S), the loops of its
+        sparse infill (FDM) or hollow (resin) region, each (N,3) mm on the section plane (outer
+        boundaries and holes, as the orientation tells); ``[]`` where it is all solid. ``None``
+        without outlines or for a solid print. Packed as ``infill_outline_*``."""
+        if self.infill_outline_section_start is None:
+            return None
+        pts, ls = self.infill_outline_points, self.infill_outline_loop_start
+        ss = self.infill_outline_section_start
         return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
                 for s in range(len(ss) - 1)]
 
@@ -687,6 +726,7 @@ class Analyzer:
         keep_outlines: bool = False,
         min_thickness: float | None = None,
         junctions: bool = True,
+        print_profile: PrintProfile | str | None = None,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -711,6 +751,8 @@ class Analyzer:
         options.keep_outlines = bool(keep_outlines)
         options.min_thickness = self.min_thickness
         options.junctions = _switch(junctions, "junctions")
+        self.print_profile = get_profile(print_profile)
+        engine_print_options(options, self.print_profile)
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
                                     options)
 
@@ -738,7 +780,8 @@ class Analyzer:
                                    force=self.force, interval=self.interval,
                                    build_direction=self.build_direction,
                                    layer_strength_ratio=self.layer_strength_ratio,
-                                   min_thickness=self.min_thickness)
+                                   min_thickness=self.min_thickness,
+                                   print_profile=self.print_profile)
 
 
 def analyze(
@@ -760,6 +803,7 @@ def analyze(
     min_thickness: float | None = None,
     progress: Progress | None = None,
     junctions: bool = True,
+    print_profile: PrintProfile | str | None = None,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -778,7 +822,11 @@ def analyze(
     where a section cuts a side branch's stub (flag ``junction``, docs/junctions.md); False
     analyses whole cuts. ``progress``: a :class:`Progress` to follow the run from another
     thread or cancel it (then :class:`Cancelled` is raised); :func:`estimate_sections` tells
-    the section count beforehand. Raises ValueError on bad input.
+    the section count beforehand. ``print_profile``: a :class:`PrintProfile` or a preset's name
+    (:func:`osteon.print_profiles`; default solid): each section becomes what that print makes
+    of it (walls, skins, sparse infill in the frame of ``build_direction``, or a resin shell;
+    docs/printing.md): ``section_modulus`` and the stress are the printed section's,
+    ``section_solid_modulus`` the solid one's. Raises ValueError on bad input.
     """
     progress = _progress(progress)
     v = _float_rows(vertices, "vertices")
@@ -789,7 +837,8 @@ def analyze(
                         gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
                         build_direction=build_direction,
                         layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines,
-                        min_thickness=min_thickness, junctions=junctions)
+                        min_thickness=min_thickness, junctions=junctions,
+                        print_profile=print_profile)
     return analyzer.run(v, progress=progress)
 
 
@@ -818,6 +867,7 @@ def correct(
     min_thickness: float | None = None,
     progress: Progress | None = None,
     junctions: bool = True,
+    print_profile: PrintProfile | str | None = None,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -844,6 +894,7 @@ def correct(
     (the stub of a side branch not counted, docs/junctions.md), False by the whole cuts.
     ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
     round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
+    ``print_profile`` as in :func:`analyze`: the loop is driven by the printed sections.
     """
     progress = _progress(progress)
     if scaling not in ("uniform", "thin"):
@@ -887,6 +938,8 @@ def correct(
     options.keep_outlines = bool(keep_outlines)
     options.min_thickness = _min_thickness(min_thickness)
     options.junctions = _switch(junctions, "junctions")
+    print_profile = get_profile(print_profile)
+    engine_print_options(options, print_profile)
     co = _core.CorrectionOptions()
     co.max_scale, co.max_rounds = float(max_scale), max_rounds
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"
@@ -896,7 +949,7 @@ def correct(
     kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
           "interval": interval, "build_direction": build_direction,
           "layer_strength_ratio": layer_strength_ratio,
-          "min_thickness": _min_thickness(min_thickness)}
+          "min_thickness": _min_thickness(min_thickness), "print_profile": print_profile}
     d["before"] = Analysis._from_core(d["before"], **kw)
     d["after"] = Analysis._from_core(d["after"], **kw)
     return Correction(**d)

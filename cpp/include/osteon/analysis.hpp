@@ -8,6 +8,7 @@
 
 #include "osteon/layers.hpp"
 #include "osteon/mesh.hpp"
+#include "osteon/printed_section.hpp"
 #include "osteon/progress.hpp"
 #include "osteon/section.hpp"
 #include "osteon/skeleton.hpp"
@@ -40,6 +41,10 @@ struct AnalysisOptions {
   /// AnalysisResult::thickness_pending for complete_section_thickness(). Python reads them on
   /// first use of Analysis.section_thickness.
   bool defer_thickness = false;
+  /// How the part is printed (osteon/printed_section.hpp, docs/printing.md): walls, skins and
+  /// sparse infill (FDM, in the frame of build_direction) or a hollow shell (resin); W becomes
+  /// the printed section's. Default kind solid: the section as cut.
+  PrintOptions print;
 };
 
 /// Where a section sits on its bone.
@@ -72,6 +77,14 @@ struct AnalysisResult {
   /// core's (the material that continues through the plane, docs/junctions.md). 0 / NaN: skipped.
   std::vector<double> section_cut_area;
   std::vector<double> section_cut_modulus;
+  /// S the printed section (AnalysisOptions::print): section_modulus is the printed W (what the
+  /// stress uses), section_solid_modulus the W of the same region solid (equal when solid),
+  /// mm^3; the region's wall, skin (solid infill) and sparse infill areas, mm^2 (their sum is
+  /// section_area; all three 0 when the part is solid). NaN / 0: skipped.
+  std::vector<double> section_solid_modulus;
+  std::vector<double> section_wall_area;
+  std::vector<double> section_skin_area;
+  std::vector<double> section_infill_area;
   std::vector<double> moment_arm;  ///< S distance centroid -> load point d, mm
   std::vector<double> moment;      ///< S bending moment M = F d, N mm
   std::vector<double> stress;  ///< S peak bending stress M / W, MPa (NaN when skipped/unreliable)
@@ -106,6 +119,11 @@ struct AnalysisResult {
   std::vector<Vec3> cut_outline_points;                 ///< loop points, mm
   std::vector<std::int64_t> cut_outline_loop_start;     ///< first point of each loop (+1 entry)
   std::vector<std::int64_t> cut_outline_section_start;  ///< S+1 first loop of each section
+  /// The sparse infill (FDM) or hollow (resin) region of each section, packed the same way
+  /// (only with keep_outlines and a print profile; empty loops for a solid one).
+  std::vector<Vec3> infill_outline_points;                 ///< loop points, mm
+  std::vector<std::int64_t> infill_outline_loop_start;     ///< first point of each loop (+1 entry)
+  std::vector<std::int64_t> infill_outline_section_start;  ///< S+1 first loop of each section
   /// Vertex indices of each loose piece: a shell that neither touches nor overlaps the held piece
   /// (it would fall off the print). Its vertices are no load point of any section and keep
   /// vertex_stress 0 (it carries no load); sections along its bones are still cut.
