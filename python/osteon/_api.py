@@ -868,6 +868,7 @@ def correct(
     progress: Progress | None = None,
     junctions: bool = True,
     print_profile: PrintProfile | str | None = None,
+    reinforce_first: bool = False,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -895,7 +896,22 @@ def correct(
     ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
     round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
     ``print_profile`` as in :func:`analyze`: the loop is driven by the printed sections.
+    ``reinforce_first`` (with an FDM ``print_profile``): reinforce first (more walls, denser
+    infill where weak: :func:`osteon.reinforce`) and thicken only what even solid cannot carry;
+    the result's ``reinforcement`` has the regions (docs/correction.md).
     """
+    if _switch(reinforce_first, "reinforce_first"):
+        from .reinforcement import reinforce_then_correct
+
+        return reinforce_then_correct(
+            vertices, faces, skeleton, weights, print_profile=print_profile, force=force,
+            allowable_stress=allowable_stress, interval=interval, root=root,
+            max_scale=max_scale, max_rounds=max_rounds, target_ratio=target_ratio,
+            gap_tolerance=gap_tolerance, threads=threads, scaling=scaling,
+            flat_aspect=flat_aspect, bone_x_axes=bone_x_axes, bone_long_axes=bone_long_axes,
+            build_direction=build_direction, layer_strength_ratio=layer_strength_ratio,
+            keep_outlines=keep_outlines, min_thickness=min_thickness, progress=progress,
+            junctions=junctions)
     progress = _progress(progress)
     if scaling not in ("uniform", "thin"):
         raise ValueError(f"scaling must be 'uniform' or 'thin', got {scaling!r}")
