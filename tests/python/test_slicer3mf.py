@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from osteon.profiles import PrintProfile
 from osteon.reinforcement import convex_volume
+from osteon.settings import engine_takes_print_profile
 from osteon.slicer3mf import BED_CENTER, build_rotation, write_3mf
 from shapes import circle, prism
 
@@ -179,3 +180,37 @@ def test_bad_input_names_the_problem(tmp_path):
     with pytest.raises(ValueError, match="build_direction"):
         write_3mf(tmp_path / "x.3mf", v, f, [], PROFILE, build_direction=(0, 0, 0))
     assert not list(tmp_path.iterdir())  # nothing half-written
+
+
+@pytest.mark.skipif(shutil.which("prusa-slicer") is None,
+                    reason="prusa-slicer is not installed (apt-get install prusa-slicer)")
+@pytest.mark.skipif(not engine_takes_print_profile(),
+                    reason="this engine has no printed section (print_profile=)")
+def test_a_reinforced_rod_prints_the_walls_osteon_asked_for(tmp_path):
+    """osteon.reinforce on a standing rod r = 5 (bone z 0..40, 10 N) that needs 5 walls at the
+    allowable (test_reinforce's closed form), exported and sliced: the layers inside the
+    modifier have the region's walls, the others the profile's 2."""
+    import osteon
+    from test_reinforce import KW, _fdm, _rod, _tube_w
+
+    v, f, sk = _rod()
+    probe = osteon.analyze(v, f, sk, allowable_stress=30, print_profile=_fdm(2), **KW)
+    m = np.max(np.abs(probe.moment[probe.valid]))
+    allowable = 0.5 * (m / _tube_w(4) + m / _tube_w(5))
+    r = osteon.reinforce(v, f, sk, allowable_stress=allowable, print_profile=_fdm(2), **KW)
+    (g,) = r.regions
+    assert g["perimeters"] == 5
+    path = tmp_path / "rod.3mf"
+    place = r.write_3mf(path)
+    out = tmp_path / "rod.gcode"
+    run = subprocess.run(["prusa-slicer", "--export-gcode", str(path), "-o", str(out)],
+                         check=False, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    layers = gcode.layers(out)
+    z0, z1 = np.asarray(g["z_range"]) + place["translation"][2]  # the modifier on the bed
+    inside = [gcode.wall_loops_round(layers[z]) for z in layers if z0 + 0.5 <= z <= z1 - 0.5]
+    outside = [gcode.wall_loops_round(layers[z]) for z in layers
+               if z1 + 0.5 <= z <= 48.0 - 1.5]  # above the modifier, below the top skins
+    assert len(inside) > 20 and len(outside) > 20
+    assert inside == [5] * len(inside)
+    assert outside == [2] * len(outside)
