@@ -197,8 +197,44 @@ _SECTION_FIELDS = ("section_modulus", "stress", "stress_ratio", "weak", "culled"
                    "section_infill_area")
 
 
-def _combine(before: Any, picks: list[tuple[np.ndarray, Any]]) -> Any:
-    """``before`` with each region's sections taken from its chosen analysis."""
+def vertex_stress(analysis: Any, vertices: np.ndarray, bones, base: np.ndarray) -> np.ndarray:
+    """(V,) MPa: ``base`` with the vertices of ``bones`` given the stress of ``analysis``'s
+    sections as the engine does (analysis_vertex_stress.cpp): along its bone, linear between the
+    neighbouring sections, the end ones beyond them; unreliable and too-thin sections left out,
+    several at one place the worst; loose pieces stay 0. The bone's frame (head, unit axis) comes
+    from the sections' own ``section_point`` and ``section_param``."""
+    from ._api import SECTION_FLAGS
+
+    out = np.array(base, dtype=float, copy=True)
+    v = np.asarray(vertices, dtype=float)
+    skip = SECTION_FLAGS["unreliable"] | SECTION_FLAGS["too_thin"]
+    loose = np.zeros(len(v), bool)
+    for piece in analysis.loose_pieces:
+        loose[np.asarray(piece, dtype=np.int64)] = True
+    for b in bones:
+        idx = np.flatnonzero((analysis.section_bone == b) & analysis.valid
+                             & ((analysis.section_flags & skip) == 0))
+        if len(idx) == 0:
+            continue
+        idx = idx[np.argsort(analysis.section_param[idx], kind="stable")]
+        p, st = analysis.section_param[idx], analysis.stress[idx]
+        lo, hi = idx[0], idx[-1]
+        if p[-1] - p[0] <= 0.0:
+            continue  # one place only: the frame is unknown, keep the base
+        axis = (analysis.section_point[hi] - analysis.section_point[lo]) / (p[-1] - p[0])
+        head = analysis.section_point[lo] - p[0] * axis
+        keep = np.r_[True, np.diff(p) > 1e-9 * (1.0 + np.abs(p[1:]))]
+        groups = np.cumsum(keep) - 1
+        worst = np.full(int(groups[-1]) + 1, -np.inf)
+        np.maximum.at(worst, groups, st)
+        sel = np.flatnonzero((analysis.vertex_bone == b) & ~loose)
+        out[sel] = np.interp((v[sel] - head) @ axis, p[keep], worst)
+    return out
+
+
+def _combine(before: Any, picks: list[tuple[np.ndarray, Any]], vertices: np.ndarray) -> Any:
+    """``before`` with each region's sections taken from its chosen analysis (and the
+    vertices of the regions' bones coloured by them)."""
     changes = {}
     for name in _SECTION_FIELDS:
         arr = getattr(before, name, None)
@@ -208,6 +244,9 @@ def _combine(before: Any, picks: list[tuple[np.ndarray, Any]]) -> Any:
         for idx, a in picks:
             arr[idx] = getattr(a, name)[idx]
         changes[name] = arr
+    bones = sorted({int(before.section_bone[idx[0]]) for idx, _ in picks})
+    changes["vertex_stress"] = vertex_stress(
+        dataclasses.replace(before, **changes), vertices, bones, before.vertex_stress)
     after = dataclasses.replace(before, **changes)
     ok = np.flatnonzero(after.valid & ~after.too_thin)
     if len(ok):
@@ -331,7 +370,7 @@ def reinforce(vertices: Any, faces: Any, skeleton: Any, weights: Any = None, *, 
                            "stress_mpa": float(chosen.stress[s]),
                            "ratio": float(chosen.stress_ratio[s])}
                           for s in idx if chosen.weak[s]]
-    after = _combine(before, picks)
+    after = _combine(before, picks, v)
     return Reinforcement(regions=regions, before=before, after=after, unfixable=unfixable,
                          profile=profile, vertices=v, faces=f, build_direction=bdir,
                          analyses=len(search.cache))

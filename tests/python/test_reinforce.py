@@ -8,7 +8,7 @@ import numpy as np
 import osteon
 import pytest
 import trimesh
-from osteon.reinforcement import convex_volume, modifier_volume, weak_regions
+from osteon.reinforcement import convex_volume, modifier_volume, vertex_stress, weak_regions
 from osteon.settings import engine_takes_print_profile
 from shapes import cylinder_along, merge
 
@@ -143,6 +143,10 @@ def test_a_rod_that_needs_n_perimeters_gets_n(n):
     np.testing.assert_array_equal(np.sort(g["sections"]),
                                   np.flatnonzero(ok & (probe.stress > allowable)))
     assert not r.after.weak.any() and r.after.max_stress <= allowable
+    # the colours follow: no vertex over the allowable after, the engine's rule before
+    assert r.after.vertex_stress.max() <= allowable
+    np.testing.assert_allclose(vertex_stress(r.before, v, [0], np.zeros(len(v))),
+                               r.before.vertex_stress, rtol=2e-6)  # the engine stores float32
     # re-analysed with the region's settings: under the allowable in every section
     check = osteon.analyze(v, f, sk, allowable_stress=allowable, print_profile=_fdm(n), **KW)
     assert np.all(check.stress[g["sections"]] <= allowable)
