@@ -26,6 +26,7 @@ def test_export_for_slicer_shows_the_modifiers_and_writes_them(sample, tmp_path)
     s = bpy.context.scene.osteon
     s.material = "PLA"
     s.force_n = 60.0  # weak somewhere once printed with walls and sparse infill
+    s.print_settings.profile = "prusaslicer"
     path = tmp_path / "sample.3mf"
     assert bpy.ops.osteon.export_slicer(filepath=str(path), slicer="prusaslicer") == {"FINISHED"}
     shown = list(bpy.data.collections[slicer_export.COLLECTION].objects)
@@ -47,3 +48,24 @@ def test_export_for_slicer_shows_the_modifiers_and_writes_them(sample, tmp_path)
     olo, ohi = np.array(obj.bound_box).min(0), np.array(obj.bound_box).max(0)
     size = float(np.max(ohi - olo))
     assert np.all(lo > olo - 0.2 * size) and np.all(hi < ohi + 0.2 * size)
+
+
+def test_correct_reinforce_first_keeps_the_shape_where_walls_suffice(sample):
+    s = bpy.context.scene.osteon
+    s.material = "PLA"
+    s.force_n = 60.0
+    s.print_settings.profile = "prusaslicer"
+    s.reinforce_first = True
+    assert bpy.ops.osteon.correct() == {"FINISHED"}
+    from osteon_blender import state
+
+    report = state.of(bpy.context.scene).last["report"]
+    block = report["reinforcement"]
+    assert block["regions"]
+    fixed = {r["bone"] for r in block["regions"] if r["fixed"]}
+    scaled = set(report["correction"]["bone_scale"])
+    # a bone whose regions all hold with walls / infill is not thickened
+    held = {r["bone"] for r in block["regions"]} - {u["bone"] for u in block["unfixable"]}
+    assert fixed and not (held & scaled)
+    shown = bpy.data.collections[slicer_export.COLLECTION].objects
+    assert len(shown) == len(block["regions"])
