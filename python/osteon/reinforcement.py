@@ -385,8 +385,9 @@ def reinforce_then_correct(vertices: Any, faces: Any, skeleton: Any, weights: An
 
     What solid cannot carry is exactly what a correction of the *solid* part thickens (a solid
     section is the strongest any print of it can be), so the thickening runs on the solid part
-    (``osteon.correct`` without a print profile) and leaves alone every bone that walls or
-    infill can save; the thickened mesh is then reinforced again under ``print_profile`` (its
+    (``osteon.correct`` without a print profile) and leaves alone the bones that walls or
+    infill can save (except where re-skinning a thickened bone changes a neighbour's junction
+    sections enough for the loop to scale it too); the thickened mesh is then reinforced again under ``print_profile`` (its
     regions' settings follow the new shape). With nothing unfixable the mesh is not touched
     (``bone_scale`` all 1). ``before`` is the part as printed with ``print_profile``; ``after``
     the reinforced (and thickened) part, with each region's settings."""
