@@ -368,7 +368,11 @@ PYBIND11_MODULE(_core, m) {
           "print_solid_infill_below_area",
           [](const AnalysisOptions& o) { return o.print.solid_infill_below_area; },
           [](AnalysisOptions& o, double v) { o.print.solid_infill_below_area = v; },
-          "mm^2: a layer's infill island under this area is filled solid");
+          "mm^2: a layer's infill island under this area is filled solid")
+      .def_property(
+          "print_skin_max_slope", [](const AnalysisOptions& o) { return o.print.skin_max_slope; },
+          [](AnalysisOptions& o, double v) { o.print.skin_max_slope = v; },
+          "radians from the layer plane: skins only under surfaces this flat (pi/2: all)");
 
   py::class_<CorrectionOptions>(m, "CorrectionOptions", "Limits of the correction loop.")
       .def(py::init<>())

@@ -103,6 +103,29 @@ void collect_islands(const PolyPath64& node, double layer_per_section, double mi
   }
 }
 
+// Skins under the surfaces at most `max_slope` steep from the layer plane: each such boundary
+// edge swept `depth` into the section along the in-plane build axis s (Clipper units, s not
+// stretched). The surface's slope follows from its in-plane normal w: |w.b| = |w_s| sin(theta).
+Paths64 flat_skins(const Paths64& section, double depth, double sin_theta, double max_slope) {
+  Paths64 quads;
+  const double min_cos = std::cos(max_slope);
+  for (const Path64& loop : section) {
+    // Outer loops run counter-clockwise and holes clockwise: the material is on the left.
+    for (std::size_t k = 0; k < loop.size(); ++k) {
+      const auto& p = loop[k];
+      const auto& q = loop[k + 1 == loop.size() ? 0 : k + 1];
+      const double dx = static_cast<double>(q.x - p.x), dy = static_cast<double>(q.y - p.y);
+      const double len = std::hypot(dx, dy);
+      if (!(len > 0)) continue;
+      const double ws = dy / len;  // outward normal (dy, -dx) / len, its s component
+      if (std::abs(ws) * sin_theta < min_cos) continue;
+      const auto shift = static_cast<std::int64_t>(std::llround(ws > 0 ? -depth : depth));
+      quads.push_back({p, q, {q.x + shift, q.y}, {p.x + shift, p.y}});
+    }
+  }
+  return Clipper2Lib::Union(quads, Clipper2Lib::FillRule::NonZero);
+}
+
 // W of the transformed section (whole cut minus (1 - eta) x the sparse islands) at the cut's
 // own boundary points (the solid fibres); 0 when degenerate.
 double transformed_modulus(const SectionPolygon& cut, const SectionProperties& solid,
@@ -138,6 +161,7 @@ void validate_print_options(const PrintOptions& o) {
   length(o.wall_depth, "print wall depth (mm)");
   length(o.skin_depth, "print skin depth (mm)");
   length(o.solid_infill_below_area, "print solid_infill_below_area (mm^2)");
+  length(o.skin_max_slope, "print skin_max_slope (radians)");
   if (!(o.infill_build >= 0 && o.infill_build <= 1) ||
       !(o.infill_layer >= 0 && o.infill_layer <= 1))
     throw std::invalid_argument("print infill stiffness fractions must be within 0..1");
@@ -181,13 +205,19 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   const auto shift =
       static_cast<std::int64_t>(std::llround(options.skin_depth * sin_theta * kScale));
   const bool skins = layered && shift > 0;
-  if (skins)
+  const bool all_slopes = options.skin_max_slope >= M_PI / 2;
+  if (skins && all_slopes)
     clipper.AddClip(Clipper2Lib::Intersect(Clipper2Lib::TranslatePaths(section, shift, 0),
                                            Clipper2Lib::TranslatePaths(section, -shift, 0),
                                            Clipper2Lib::FillRule::NonZero));
+  else if (skins)
+    clipper.AddClip(
+        flat_skins(section, static_cast<double>(shift), sin_theta, options.skin_max_slope));
   Clipper2Lib::PolyTree64 tree;
-  clipper.Execute(skins ? Clipper2Lib::ClipType::Intersection : Clipper2Lib::ClipType::Union,
-                  Clipper2Lib::FillRule::NonZero, tree);
+  const auto op = !skins       ? Clipper2Lib::ClipType::Union
+                  : all_slopes ? Clipper2Lib::ClipType::Intersection
+                               : Clipper2Lib::ClipType::Difference;
+  clipper.Execute(op, Clipper2Lib::FillRule::NonZero, tree);
   // Small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
   std::vector<SectionPolygon> islands;
   collect_islands(tree, layered ? 1.0 / std::max(c, kMinCos) : 1.0,

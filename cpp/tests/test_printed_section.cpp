@@ -142,3 +142,22 @@ TEST(PrintedSection, BadOptionsThrow) {
   o.kind = 7;
   EXPECT_THROW(validate_print_options(o), std::invalid_argument);
 }
+
+TEST(PrintedSection, HollowPrintSkinsOnlyUnderFlatSurfaces) {
+  // Lying (theta = 90 deg, build along u): a rectangle's top and bottom are flat, so limiting
+  // skins to flat surfaces changes nothing; a diamond whose sides are 30 deg steep has skins
+  // under them (0.8 mm below, deeper than the walls) only while 30 deg counts as flat.
+  PrintOptions all = fdm(kWall, 0.8, 0.0, 0.0, 0.0), flat = all;
+  flat.skin_max_slope = 0.4;  // radians
+  const SectionPolygon rect{rectangle(12.0, 8.0), {}};
+  const SectionProperties rp = section_properties(rect);
+  const PrintedSection a = printed_section(rect, rp, Vec2(1, 0), 0.0, all, false);
+  const PrintedSection b = printed_section(rect, rp, Vec2(1, 0), 0.0, flat, false);
+  EXPECT_NEAR(a.skin_area, b.skin_area, 1e-6);
+  EXPECT_NEAR(a.modulus, b.modulus, 1e-9 * a.modulus);
+  const double d = 6 * std::tan(M_PI / 6);  // along u, the build direction
+  const SectionPolygon diamond{{{-d, 0}, {0, -6}, {d, 0}, {0, 6}}, {}};
+  const SectionProperties dp = section_properties(diamond);
+  EXPECT_GT(printed_section(diamond, dp, Vec2(1, 0), 0.0, all, false).skin_area, 1.0);
+  EXPECT_NEAR(printed_section(diamond, dp, Vec2(1, 0), 0.0, flat, false).skin_area, 0.0, 1e-6);
+}

@@ -230,20 +230,26 @@ def _model_parts(model):
 def _rescore_printed(analysis, cands, ref, r, print_profile, model, rescore, engine_options,
                      symmetric, allowed):
     """The candidates re-ranked by the worst stress ratio of the printed part analysed at each
-    direction (see :func:`best_orientation`); each gets ``solid_ratio`` (the sphere search's)
+    direction (see :func:`best_orientation`); each gets ``search_ratio`` (the sphere search's:
+    ``analysis``'s own sections turned there, solid when ``analysis`` was)
     and ``worst_ratio`` / ``worst_section`` of its own printed analysis."""
     from ._api import analyze
     from .profiles import get_profile
 
     profile = get_profile(print_profile)
     vertices, faces, skeleton, weights = _model_parts(model)
-    picked = [c for c in cands if not np.array_equal(c["direction"], ref)][:max(0, int(rescore))]
-    extra = [ref, *np.eye(3)]
-    dirs = [c["direction"] for c in picked]
-    for d in extra:  # the current direction and the axes, where not already picked
-        if allowed(np.asarray(d)[None])[0] and not any(
-                abs(float(d @ e)) > 1 - 1e-9 if symmetric else float(d @ e) > 1 - 1e-9
-                for e in dirs):
+    same = math.cos(math.radians(2.0))  # directions closer than 2° are analysed once
+
+    def new(d, dirs):
+        return not any((abs(float(d @ e)) if symmetric else float(d @ e)) > same for e in dirs)
+
+    dirs: list = []
+    for c in cands:  # the sphere search's best distinct directions
+        if len(dirs) < max(0, int(rescore)) and not np.array_equal(c["direction"], ref) \
+                and new(c["direction"], dirs):
+            dirs.append(c["direction"])
+    for d in (ref, *np.eye(3)):  # the current direction (first) and the axes
+        if allowed(np.asarray(d)[None])[0] and (d is ref or new(d, dirs)):
             dirs.append(np.asarray(d, float))
     kw = {"force": analysis.force, "allowable_stress": analysis.allowable_stress,
           "interval": analysis.interval, "root": int(analysis.held_bone),
@@ -254,9 +260,9 @@ def _rescore_printed(analysis, cands, ref, r, print_profile, model, rescore, eng
         a = analyze(vertices, faces, skeleton, weights, build_direction=d,
                     print_profile=profile, **kw)
         f, w = _worst(_section_terms(a), d[None], r)
-        solid = float(_worst(_section_terms(analysis), d[None], r)[0][0])
+        search = float(_worst(_section_terms(analysis), d[None], r)[0][0])
         out.append({"direction": d, "rotation": rotation_to_z(d), "worst_ratio": float(f[0]),
-                    "worst_section": int(w[0]), "solid_ratio": solid,
+                    "worst_section": int(w[0]), "search_ratio": search,
                     "across_layers": _across(a, int(w[0]), d, r) if w[0] >= 0 else False})
     lo = min(c["worst_ratio"] for c in out)
 

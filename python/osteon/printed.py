@@ -22,6 +22,16 @@ Skins (FDM)
     solid layers: a layer is solid where the layers within that many above or below do not cover
     it).
 
+    A hollow print (0 % infill) keeps only the skins under the flatter surfaces: PrusaSlicer
+    (PrintObject::discover_horizontal_shells) drops, at 0 % infill, the solid strips thinner
+    than two external perimeter widths ("probably just crossing a sloping wall"). Under a
+    surface at angle α to the layer plane each layer's top strip is ``h / tan α`` wide; the N
+    skin layers' strips together ``N h / tan α``, of which the walls of the layers below cover
+    ``t_w``: a skin survives where ``N h / tan α − t_w ≥ 2w``, i.e. under surfaces with
+    ``tan α ≤ N h / (2w + t_w)`` (24.7° for 4 × 0.2 mm, 0.45 mm lines, t_w = 0.84 mm). This is
+    our reading of that rule, checked against PrusaSlicer's G-code (lying rods, docs/printing.md).
+    With sparse infill PrusaSlicer grows those strips instead, and every slope has its skin.
+
 Infill stiffness (FDM)
     The sparse infill counts with a fraction η of the solid's modulus (a transformed section),
     from Gibson & Ashby, *Cellular Solids*, 2nd ed., Cambridge University Press 1997:
@@ -86,6 +96,14 @@ def skin_depth(profile: PrintProfile) -> float:
     return profile.top_bottom_layers * profile.layer_height
 
 
+def skin_max_slope(profile: PrintProfile) -> float:
+    """Steepest surface (radians from the layer plane) with a skin under it: all (π/2) with
+    sparse infill; ``atan(N h / (2w + t_w))`` for a hollow (0 %) print."""
+    if profile.infill > 0 or profile.top_bottom_layers == 0:
+        return math.pi / 2
+    return math.atan(skin_depth(profile) / (2.0 * profile.line_width + wall_depth(profile)))
+
+
 def infill_stiffness(pattern: str, density: float) -> tuple[float, float]:
     """(η along the build direction, η in the layer plane) of sparse infill of ``pattern`` at
     ``density`` (fraction 0…1): the stiffness fraction of the solid (module docstring)."""
@@ -113,6 +131,7 @@ def engine_print_options(options, profile: PrintProfile | str | None) -> None:
     if profile.kind == "fdm":
         options.print_wall_depth = wall_depth(profile)
         options.print_skin_depth = skin_depth(profile)
+        options.print_skin_max_slope = skin_max_slope(profile)
         along, across = infill_stiffness(profile.pattern, profile.infill)
         options.print_infill_build, options.print_infill_layer = along, across
         # PrusaSlicer fills small islands solid only when there is sparse infill at all.
@@ -121,5 +140,6 @@ def engine_print_options(options, profile: PrintProfile | str | None) -> None:
     else:
         options.print_wall_depth = profile.shell
         options.print_skin_depth = 0.0
+        options.print_skin_max_slope = math.pi / 2
         options.print_infill_build = options.print_infill_layer = 0.0
         options.print_solid_infill_below_area = 0.0

@@ -229,3 +229,42 @@ def get_profile(name: str | PrintProfile | None) -> PrintProfile:
     if key not in presets:
         raise ValueError(f"unknown print profile {name!r}; choose one of {', '.join(presets)}")
     return presets[key]
+
+
+#: The overrides of a preset, by their ``osteon.settings.Settings`` field: (the PrintProfile
+#: field, the kind that uses it)
+OVERRIDES = {"perimeters": ("perimeters", "fdm"), "infill": ("infill", "fdm"),
+             "infill_pattern": ("pattern", "fdm"), "line_width_mm": ("line_width", "fdm"),
+             "layer_height_mm": ("layer_height", "fdm"),
+             "top_bottom_layers": ("top_bottom_layers", "fdm"),
+             "shell_mm": ("shell", "resin_hollow")}
+
+
+def resolve_profile(key, overrides: dict | None = None) -> PrintProfile:
+    """The preset ``key`` with ``overrides`` ({Settings field: value or None}) applied and
+    checked; the name says what changed ("prusaslicer, perimeters 3"). The one resolution every
+    front end and the report use."""
+    base = get_profile(key if key not in (None, "") else "solid")
+    given = {k: v for k, v in (overrides or {}).items() if v is not None and v != ""}
+    unknown = sorted(set(given) - set(OVERRIDES))
+    if unknown:
+        raise ValueError(f"unknown print setting(s) {', '.join(unknown)}")
+    if not given:
+        return base
+    wrong = [k for k in given if OVERRIDES[k][1] != base.kind]
+    if wrong:
+        needs = {OVERRIDES[k][1] for k in wrong}
+        hint = ("an FDM profile (e.g. prusaslicer)" if needs == {"fdm"}
+                else "a resin profile (resin_hollow)")
+        raise ValueError(f"{wrong[0]} needs {hint}; print profile {key!r} is {base.kind}")
+    changes = {OVERRIDES[k][0]: v for k, v in given.items()}
+    label = ", ".join(f"{OVERRIDES[k][0]} {v:g}" if isinstance(v, (int, float)) else
+                      f"{OVERRIDES[k][0]} {v}" for k, v in given.items())
+    return base.with_changes(name=f"{base.name}, {label}", **changes)
+
+
+def profile_of(settings: dict) -> PrintProfile:
+    """The print profile of a settings dict (:meth:`osteon.settings.Settings.as_dict` or a
+    front end's own; missing keys: the preset's, no key: solid)."""
+    return resolve_profile(settings.get("print_profile"),
+                           {k: settings.get(k) for k in OVERRIDES})

@@ -284,7 +284,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     ``mm_per_unit``: mm of the print per model unit (file unit or Blender unit);
     ``print_profile``: the :class:`osteon.profiles.PrintProfile` analysed with (default: the
     analysis's own ``print_profile``, else the one ``settings`` names,
-    :func:`osteon.settings.profile_of`), echoed as ``print_profile``.
+    :func:`osteon.profiles.profile_of`), echoed as ``print_profile``.
     """
     if correction is not None and corrected_analysis is None:
         corrected_analysis = correction.after
@@ -434,7 +434,7 @@ def reinforcement_section(reinforcement, slicer: str | None = None,
 
 def _profile_dict(settings: dict, print_profile) -> dict:
     if print_profile is None:
-        from .settings import profile_of  # settings imports this module
+        from .profiles import profile_of
 
         print_profile = profile_of(settings)
     return print_profile.as_dict() if hasattr(print_profile, "as_dict") else dict(print_profile)

@@ -10,9 +10,9 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-from . import materials
+from . import materials, profiles
 from ._api import _switch
-from .profiles import PrintProfile, get_profile
+from .profiles import PrintProfile, resolve_profile
 from .report import allowable_stress
 
 
@@ -68,7 +68,8 @@ class Settings:
     def profile(self) -> PrintProfile:
         """The print profile: the preset with the overrides applied (``ValueError`` naming a bad
         value or an override the preset's kind has no use for)."""
-        return resolve_profile(self.print_profile, {f: getattr(self, f) for f in OVERRIDES})
+        return resolve_profile(self.print_profile,
+                               {f: getattr(self, f) for f in profiles.OVERRIDES})
 
     def layer_ratio(self) -> float:
         """Layer / in-plane strength used: the given one; ``None``: the material preset's (1.0
@@ -108,44 +109,6 @@ class Settings:
         d["junctions"] = _switch(self.junctions, "junctions")
         d["print_profile"] = str(self.print_profile).strip().lower()
         return d
-
-
-#: Settings field -> PrintProfile field of the print-profile overrides, and the kinds that use it
-OVERRIDES = {"perimeters": ("perimeters", "fdm"), "infill": ("infill", "fdm"),
-             "infill_pattern": ("pattern", "fdm"), "line_width_mm": ("line_width", "fdm"),
-             "layer_height_mm": ("layer_height", "fdm"),
-             "top_bottom_layers": ("top_bottom_layers", "fdm"),
-             "shell_mm": ("shell", "resin_hollow")}
-
-
-def resolve_profile(key, overrides: dict | None = None) -> PrintProfile:
-    """The preset ``key`` with ``overrides`` ({Settings field: value or None}) applied and
-    checked; the name says what changed ("prusaslicer, perimeters 3"). The one resolution every
-    front end and the report use."""
-    base = get_profile(key if key not in (None, "") else "solid")
-    given = {k: v for k, v in (overrides or {}).items() if v is not None and v != ""}
-    unknown = sorted(set(given) - set(OVERRIDES))
-    if unknown:
-        raise ValueError(f"unknown print setting(s) {', '.join(unknown)}")
-    if not given:
-        return base
-    wrong = [k for k in given if OVERRIDES[k][1] != base.kind]
-    if wrong:
-        needs = {OVERRIDES[k][1] for k in wrong}
-        hint = ("an FDM profile (e.g. prusaslicer)" if needs == {"fdm"}
-                else "a resin profile (resin_hollow)")
-        raise ValueError(f"{wrong[0]} needs {hint}; print profile {key!r} is {base.kind}")
-    changes = {OVERRIDES[k][0]: v for k, v in given.items()}
-    label = ", ".join(f"{OVERRIDES[k][0]} {v:g}" if isinstance(v, (int, float)) else
-                      f"{OVERRIDES[k][0]} {v}" for k, v in given.items())
-    return base.with_changes(name=f"{base.name}, {label}", **changes)
-
-
-def profile_of(settings: dict) -> PrintProfile:
-    """The print profile of a settings dict (:meth:`Settings.as_dict` or a front end's own;
-    missing keys: the preset's, no key: solid)."""
-    return resolve_profile(settings.get("print_profile"),
-                           {k: settings.get(k) for k in OVERRIDES})
 
 
 def engine_takes_print_profile() -> bool:

@@ -57,8 +57,10 @@ def test_overlay_draws_the_infill_loops_inside_the_outline(engine):
 
     v, f = _closed_cylinder([0, 0, 0], [40, 0, 0], 6.0, stations=21)
     sk = osteon.Skeleton([[0, 0, 0]], [[40, 0, 0]], [-1])
-    a = osteon.analyze(v, f, sk, interval=4.0, keep_outlines=True)
-    if getattr(a, "infill_outline_section_start", None) is None:
+    printed = {"print_profile": "prusaslicer"} if engine_takes_print_profile() else {}
+    a = osteon.analyze(v, f, sk, interval=4.0, keep_outlines=True, **printed)
+    assert (getattr(a, "infill_outline_section_start", None) is not None) == bool(printed)
+    if not printed:
         # an engine without printed sections: the loops packed as the printed engine packs
         # them (like outline_*), here each outline shrunk to half around its centre
         pts = np.asarray(a.outline_points, float).copy()
@@ -70,10 +72,14 @@ def test_overlay_draws_the_infill_loops_inside_the_outline(engine):
     out = overlay.compute_outlines(a, mm_per_unit=1.0)
     infill = np.concatenate([out.infill_lines, out.weak_infill_lines])
     assert len(infill) > 0 and np.allclose(out.infill_colors[:, 3], overlay.INFILL_ALPHA)
-    r_infill = np.hypot(infill[:, 1], infill[:, 2])
-    r_outline = np.hypot(out.lines[:, 1], out.lines[:, 2]) if len(out.lines) else \
-        np.hypot(out.weak_lines[:, 1], out.weak_lines[:, 2])
-    assert r_infill.max() < r_outline.max() - 0.4  # inside the walls (>= 1 line width)
+    r_outline = np.hypot(*np.concatenate([out.lines, out.weak_lines])[:, 1:].T).max()
+    assert r_outline == pytest.approx(6.0, abs=1e-4)
+    # inside the walls and skins: the bar lies (build +Z), so 2 perimeters (0.84 mm deep,
+    # print-core's rule) at its sides (y) and 4 × 0.2 mm skins above and below (z); the
+    # stand-in loops lie at half the radius
+    y, z = np.abs(infill[:, 1]), np.abs(infill[:, 2])
+    assert y[z < 0.5].max() < 6.0 - 0.8 and z[y < 0.5].max() < 6.0 - 0.75
+    assert np.hypot(y, z).max() < 6.0 - 0.5
 
 
 @needs_printed_engine
@@ -91,3 +97,18 @@ def test_analyze_with_a_print_profile(bar):
     assert printed["settings"]["print_profile"] == "prusaslicer"
     # walls and skins only: the printed W below the solid W, the stress above
     assert printed["max_stress_mpa"] > 1.2 * solid["max_stress_mpa"]
+
+
+@needs_printed_engine
+def test_find_orientation_analyses_the_candidates_as_printed(bar):
+    s = bpy.context.scene.osteon
+    s.print_settings.profile = "prusaslicer"
+    assert bpy.ops.osteon.find_orientation() == {"FINISHED"}
+    res = state.get(bpy.context.scene).orientation["result"]
+    # each candidate carries its own printed analysis's ratio next to the search's; the last
+    # analysis was made with the profile at +Z, so at +Z (the current direction, analysed
+    # again) the two agree, and the best is at most that
+    assert all("search_ratio" in c for c in res.candidates)
+    at_z = [c for c in res.candidates if abs(c["direction"][2]) > 1 - 1e-9]
+    assert at_z and at_z[0]["worst_ratio"] == pytest.approx(at_z[0]["search_ratio"], rel=1e-9)
+    assert res.worst_ratio <= at_z[0]["worst_ratio"] * (1 + 1e-9)

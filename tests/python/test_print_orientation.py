@@ -49,7 +49,7 @@ def test_rescoring_keeps_the_direction_its_own_analysis_ranks_best(l_rod, monkey
     assert abs(o.direction[2]) < 1e-6  # stood up is the weakest; lying wins
     assert o.worst_ratio == pytest.approx(base.max_stress / base.allowable_stress, rel=1e-9)
     assert o.reference_ratio == pytest.approx(2 * o.worst_ratio, rel=1e-9)  # +Z: twice
-    assert all(c["worst_ratio"] >= c["solid_ratio"] * (1 - 1e-12) for c in o.candidates)
+    assert all(c["worst_ratio"] >= c["search_ratio"] * (1 - 1e-12) for c in o.candidates)
 
 
 def test_a_profile_needs_the_model(l_rod):
@@ -71,5 +71,5 @@ def test_printed_orientation_on_the_real_engine(l_rod):
     o = osteon.best_orientation(a, samples=500, print_profile="prusaslicer",
                                 model=(v, f, sk, None), rescore=3)
     # printed sections are never stronger than solid ones, and the best is at most the current
-    assert all(c["worst_ratio"] >= c["solid_ratio"] * (1 - 1e-9) for c in o.candidates)
+    assert all(c["worst_ratio"] >= c["search_ratio"] * (1 - 1e-9) for c in o.candidates)
     assert o.worst_ratio <= o.reference_ratio * (1 + 1e-9)

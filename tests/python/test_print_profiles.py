@@ -216,3 +216,26 @@ def test_profile_flags_reach_the_engine(rod_files, tmp_path, extra):
     rows = [r for r in p["section_table"] if r["modulus_mm3"] is not None]
     assert all(r["modulus_mm3"] <= r["solid_modulus_mm3"] * (1 + 1e-9) for r in rows)
     assert all(r["wall_area_mm2"] is not None and r["wall_area_mm2"] > 0 for r in rows)
+
+
+@needs_printed_engine
+def test_terminal_and_correction_follow_the_profile(rod_files, tmp_path, capsys):
+    """The terminal says how the sections were counted; ``correct`` with a profile thickens
+    the printed rod more than the solid one (its walls-and-skins W is the smaller)."""
+    def loud(*extra):  # without -q
+        return [a for a in _args(rod_files, *extra) if a != "-q"]
+
+    assert main(loud()) == 0
+    assert "sections as cut (solid)" in capsys.readouterr().out
+    assert main(loud("--profile", "prusaslicer")) == 0
+    assert "sections as printed: PrusaSlicer" in capsys.readouterr().out
+    scales = {}
+    for name, extra in (("solid", []), ("printed", ["--profile", "prusaslicer", "--infill", "0"])):
+        js, out = tmp_path / f"{name}.json", tmp_path / f"{name}.obj"
+        argv = ["correct", str(rod_files), "--height-mm", "60", "--force", "60", "-q",
+                "--strength-mpa", "40", "--json", str(js), "--out", str(out), *extra]
+        assert main(argv) == 0
+        rep = json.loads(js.read_text())
+        assert rep["converged"] and rep["max_stress_before_mpa"] > rep["allowable_stress_mpa"]
+        scales[name] = rep["bone_scale"][0]
+    assert scales["printed"] > scales["solid"] > 1.0

@@ -3,6 +3,7 @@
 // "The printed section"). The print profile -> these scalars mapping is python/osteon/printed.py.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "osteon/section.hpp"
@@ -21,6 +22,9 @@ struct PrintOptions {
   double infill_build = 1.0;  ///< infill stiffness fraction eta for stress along the build dir
   double infill_layer = 1.0;  ///< infill stiffness fraction eta for stress in the layer plane
   double solid_infill_below_area = 0.0;  ///< a layer's infill island under this is solid, mm^2
+  /// FDM: skins lie only under surfaces at most this steep from the layer plane, radians
+  /// (pi/2: all; PrusaSlicer drops a hollow print's skin strips narrower than two lines).
+  double skin_max_slope = M_PI / 2;
 };
 
 /// A section as printed: the transformed section's properties and the sparse region.

@@ -60,6 +60,7 @@ def cmd_analyze(args, out):
             "culled (safe for sure)",
             file=out,
         )
+        print(common.profile_line(rep["print_profile"]), file=out)
         doubt_text = doubt.analysis_text(a, model.bone_names)
         if doubt_text:
             print(f"NOT A CLEAN RESULT: {doubt_text}", file=out)

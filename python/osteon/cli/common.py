@@ -49,6 +49,14 @@ def settings_from_args(args) -> Settings:
     )
 
 
+def profile_line(profile: dict) -> str:
+    """One line on the report's ``print_profile``: what the sections are."""
+    if profile["kind"] == "solid":
+        return ("sections as cut (solid); --profile NAME analyses them as printed "
+                "(--list-profiles)")
+    return f"sections as printed: {profile['name']}"
+
+
 def _build_direction(text) -> tuple:
     try:
         d = tuple(float(x) for x in str(text).split(","))

@@ -55,6 +55,7 @@ def cmd_correct(args, out):
             f"{status} in {1000 * secs:.1f} ms",
             file=out,
         )
+        print(common.profile_line(settings.profile().as_dict()), file=out)
         reason = fix.reason
         if reason and not fix.converged:
             print(f"why: {reason}", file=out)
