@@ -842,6 +842,12 @@ def analyze(
     return analyzer.run(v, progress=progress)
 
 
+#: ``correct(..., reinforce_first=True)``: :func:`osteon.reinforcement.reinforce_then_correct`,
+#: put here by that module when it is imported (``import osteon`` does), so that this module
+#: imports nothing of it (no import cycle: the reinforcement builds on this module).
+_REINFORCE_FIRST: list = []
+
+
 def correct(
     vertices: Any,
     faces: Any,
@@ -901,9 +907,7 @@ def correct(
     the result's ``reinforcement`` has the regions (docs/correction.md).
     """
     if _switch(reinforce_first, "reinforce_first"):
-        from .reinforcement import reinforce_then_correct
-
-        return reinforce_then_correct(
+        return _REINFORCE_FIRST[0](
             vertices, faces, skeleton, weights, print_profile=print_profile, force=force,
             allowable_stress=allowable_stress, interval=interval, root=root,
             max_scale=max_scale, max_rounds=max_rounds, target_ratio=target_ratio,

@@ -39,6 +39,8 @@ from typing import Any
 
 import numpy as np
 
+from . import _api
+from ._api import SECTION_FLAGS, Correction, analyze, correct
 from .profiles import PrintProfile, get_profile
 
 #: Infill densities tried (fractions) once walls alone are not enough; 1.0 is solid.
@@ -203,8 +205,6 @@ def vertex_stress(analysis: Any, vertices: np.ndarray, bones, base: np.ndarray) 
     neighbouring sections, the end ones beyond them; unreliable and too-thin sections left out,
     several at one place the worst; loose pieces stay 0. The bone's frame (head, unit axis) comes
     from the sections' own ``section_point`` and ``section_param``."""
-    from ._api import SECTION_FLAGS
-
     out = np.array(base, dtype=float, copy=True)
     v = np.asarray(vertices, dtype=float)
     skip = SECTION_FLAGS["unreliable"] | SECTION_FLAGS["too_thin"]
@@ -317,8 +317,6 @@ def reinforce(vertices: Any, faces: Any, skeleton: Any, weights: Any = None, *, 
     a region gets before its infill is raised; ``margin`` mm: how far each modifier volume
     reaches beyond its sections; ``options``: further :func:`osteon.analyze` keywords
     (``weights`` handling, ``layer_strength_ratio``, ``junctions``, ...)."""
-    from ._api import analyze
-
     profile = get_profile(print_profile)
     if profile.kind != "fdm":
         raise ValueError("reinforce needs an FDM print profile (walls and infill to change), "
@@ -391,8 +389,6 @@ def reinforce_then_correct(vertices: Any, faces: Any, skeleton: Any, weights: An
     regions' settings follow the new shape). With nothing unfixable the mesh is not touched
     (``bone_scale`` all 1). ``before`` is the part as printed with ``print_profile``; ``after``
     the reinforced (and thickened) part, with each region's settings."""
-    from ._api import Correction, correct
-
     keys = ("force", "allowable_stress", "interval", "root", "build_direction",
             "layer_strength_ratio", "min_thickness", "junctions", "threads", "gap_tolerance")
     analysis_options = {k: correct_options[k] for k in keys if k in correct_options}
@@ -417,3 +413,6 @@ def reinforce_then_correct(vertices: Any, faces: Any, skeleton: Any, weights: An
     return dataclasses.replace(thick, before=first.before, after=second.after,
                                converged=bool(thick.converged and not second.unfixable),
                                reason=reason, reinforcement=second)
+
+
+_api._REINFORCE_FIRST[:] = [reinforce_then_correct]  # correct(..., reinforce_first=True)

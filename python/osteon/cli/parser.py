@@ -246,7 +246,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     from .reinforce import add_parser as _add_reinforce
 
-    _add_reinforce(sub)
+    _add_reinforce(sub, _add_common)
     from .skeleton import add_parser as _add_skeleton
 
     _add_skeleton(sub)

@@ -10,8 +10,10 @@ from pathlib import Path
 from . import common
 
 
-def add_parser(sub) -> None:
-    from .parser import _add_common, add_junction_switch
+def add_parser(sub, add_common) -> None:
+    """The ``reinforce`` command on ``sub``; ``add_common``: the commands' shared options
+    (``parser._add_common``, passed in: this module does not import the parser)."""
+    from .options import add_junction_switch
 
     p = sub.add_parser(
         "reinforce",
@@ -20,7 +22,7 @@ def add_parser(sub) -> None:
         "fewest extra walls (then denser infill, up to solid) that make it hold, and write a "
         "3MF with the model and one modifier volume per region (docs/correction.md).",
     )
-    _add_common(p)
+    add_common(p)
     add_junction_switch(p)
     if "--profile" not in p._option_string_actions:  # the common print options add it
         p.add_argument("--profile", default="prusaslicer", metavar="NAME",
