@@ -23,6 +23,7 @@
 #include <utility>
 
 #include "clipper2/clipper.h"
+#include "simplify_path.hpp"
 
 namespace osteon {
 namespace {
@@ -35,18 +36,18 @@ constexpr double kScale = 1e4;  // Clipper units per mm (0.1 um)
 // Smallest cos(theta) used: a section nearly along the build direction erodes by an ellipse
 // 1000 times flatter than its walls (the walls' depth along e_s is then t_w / 1000).
 constexpr double kMinCos = 1e-3;
+constexpr double kSimplify = 0.005;  // mm: the outline is simplified within this before offsets
 
-// The section's loops in Clipper units of the (s, t) axes, s stretched by `stretch`; outer
-// boundary counter-clockwise, holes clockwise (what Clipper's offset expects).
-Paths64 to_clipper(const SectionPolygon& cut, const Vec2& es, const Vec2& et, double stretch) {
+// The section's loops in Clipper units of the (s, t) axes; outer boundary counter-clockwise,
+// holes clockwise (what Clipper's offset expects).
+Paths64 to_clipper(const SectionPolygon& cut, const Vec2& es, const Vec2& et) {
   Paths64 out;
   auto add = [&](const std::vector<Vec2>& loop, bool hole) {
     if (loop.size() < 3) return;
     Path64 path;
     path.reserve(loop.size());
     for (const Vec2& p : loop)
-      path.emplace_back(std::llround(p.dot(es) * stretch * kScale),
-                        std::llround(p.dot(et) * kScale));
+      path.emplace_back(std::llround(p.dot(es) * kScale), std::llround(p.dot(et) * kScale));
     if ((Clipper2Lib::Area(path) > 0) == hole) std::reverse(path.begin(), path.end());
     out.push_back(std::move(path));
   };
@@ -55,11 +56,12 @@ Paths64 to_clipper(const SectionPolygon& cut, const Vec2& es, const Vec2& et, do
   return out;
 }
 
-// Undoes the stretch of s (Clipper units).
-void unstretch(Paths64& paths, double stretch) {
-  if (stretch == 1.0) return;
-  for (Path64& path : paths)
-    for (auto& q : path) q.x = std::llround(static_cast<double>(q.x) / stretch);
+// Stretches s by `stretch` (Clipper units; 1 / stretch undoes it).
+Paths64 stretched(Paths64 paths, double stretch) {
+  if (stretch != 1.0)
+    for (Path64& path : paths)
+      for (auto& q : path) q.x = std::llround(static_cast<double>(q.x) * stretch);
+  return paths;
 }
 
 double area_mm2(const Paths64& paths) { return Clipper2Lib::Area(paths) / (kScale * kScale); }
@@ -186,17 +188,20 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   const Vec2 es = layered && b_len > 1e-12 ? Vec2(build_in_plane / b_len) : Vec2(1.0, 0.0);
   const Vec2 et(-es.y(), es.x());
   const double stretch = layered ? 1.0 / std::max(c, kMinCos) : 1.0;
-  const Paths64 section = to_clipper(cut, es, et, 1.0);
+  // The cut's outline within kSimplify of it (a mesh cut is finely faceted; the slicer
+  // itself simplifies its slices to ~0.01 mm): what the offsets cost scales with its vertices.
+  Paths64 section = to_clipper(cut, es, et);
+  for (Path64& path : section) path = detail::simplify_closed(path, kSimplify * kScale);
   // Walls: the cut eroded by the wall ellipse (FDM) or by the shell (resin), as an isotropic
   // inset in stretched coordinates; round joins within 0.005 mm or 1 % of the depth.
   Paths64 eroded = section;
   if (options.wall_depth > 0) {
     const double delta = options.wall_depth * kScale;
-    eroded = Clipper2Lib::InflatePaths(stretch == 1.0 ? section : to_clipper(cut, es, et, stretch),
-                                       -delta, Clipper2Lib::JoinType::Round,
-                                       Clipper2Lib::EndType::Polygon, 2.0,
-                                       std::max(0.005 * kScale, 0.01 * delta));
-    unstretch(eroded, stretch);
+    eroded =
+        stretched(Clipper2Lib::InflatePaths(
+                      stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
+                      Clipper2Lib::EndType::Polygon, 2.0, std::max(0.005 * kScale, 0.01 * delta)),
+                  1.0 / stretch);
   }
   // Skins: where the layers within skin_depth above and below (the cut shifted by
   // +-skin_depth sin(theta) along s) do not both cover the point.

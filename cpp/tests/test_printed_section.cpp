@@ -55,8 +55,9 @@ TEST(PrintedSection, LayerOfARodIsTheTubeOfTheWallDepth) {
   const double ri = r - kWall / std::cos(M_PI / n);
   std::vector<Vec2> hole = regular_polygon(ri, n);
   const SectionProperties tube = section_properties({regular_polygon(r, n), {hole}});
-  EXPECT_NEAR(p.modulus / tube.modulus, 1.0, 1e-4);
-  EXPECT_NEAR(p.wall_area / tube.area, 1.0, 1e-4);
+  // (the outline is simplified within 0.005 mm before the offsets: 0.1 % here)
+  EXPECT_NEAR(p.modulus / tube.modulus, 1.0, 2e-3);
+  EXPECT_NEAR(p.wall_area / tube.area, 1.0, 2e-3);
   EXPECT_NEAR(p.infill_area, solid.area - tube.area, 1e-3 * solid.area);
   EXPECT_NEAR(p.skin_area, 0.0, 1e-3);
   ASSERT_EQ(p.sparse.size(), 1u);
@@ -120,7 +121,7 @@ TEST(PrintedSection, ResinShellIsIsotropic) {
   for (double c : {1.0, 0.5, 0.0}) {
     const PrintedSection p =
         printed_section(cut, solid, Vec2(std::sqrt(1 - c * c), 0), c, o, false);
-    EXPECT_NEAR(p.modulus / tube.modulus, 1.0, 1e-4);
+    EXPECT_NEAR(p.modulus / tube.modulus, 1.0, 1e-3);
   }
 }
 
