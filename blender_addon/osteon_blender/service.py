@@ -261,10 +261,11 @@ def correct_steps(job: Job):
                 # The bones' own X axes: a thin-direction scale must be one Blender's pose
                 # scale X or Z can reproduce; on a joint rig, also the local axis each bone
                 # scales across (its segment is not its Y axis).
+                first = reinforce_first_params(s, params)
                 return osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
                                       bone_x_axes=inp.skeleton.x_axes,
                                       bone_long_axes=inp.skeleton.long_axes, keep_outlines=True,
-                                      progress=job.progress, **params)
+                                      progress=job.progress, **params, **first)
             except ValueError as e:
                 raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
 
@@ -278,6 +279,13 @@ def correct_steps(job: Job):
         job.stage = "Correct: analysing the result"
         after = yield lambda: analyze_inputs(osteon, after_inp, progress=job.progress)
         context = job.context
+        if fix.reinforcement is not None:
+            # printed with the regions' walls and infill: the engine's reinforced analysis
+            # (Blender's re-analysis knows only the profile); the modifiers shown
+            after = fix.after
+            from .ops.slicer_export import show_modifiers
+
+            show_modifiers(context, fix.reinforcement, inp.mm_per_unit)
     except Exception:  # leave the pose as it was before this call (errors, cancel)
         bridge.restore_pose(job.context, arm)
         if had_previous:
@@ -285,7 +293,23 @@ def correct_steps(job: Job):
         raise
     report = publish(context, after_inp, after, correction=fix, first_analysis=fix.before)
     report["warnings"] = correction_warnings(context, obj, arm)
+    if fix.reinforcement is not None:
+        from osteon.report import reinforcement_section
+
+        report["reinforcement"] = reinforcement_section(fix.reinforcement)
     return report
+
+
+def reinforce_first_params(s, params: dict) -> dict:
+    """``reinforce_first=True`` for ``osteon.correct`` when "Reinforce first (keep shape)" is
+    on (the print profile must be an FDM one: walls and infill to change)."""
+    if not getattr(s, "reinforce_first", False):
+        return {}
+    profile = params.get("print_profile")
+    if profile is None or getattr(profile, "kind", None) != "fdm":
+        raise OsteonError("Reinforce first needs an FDM print profile (walls and infill): "
+                          "choose one under Print settings")
+    return {"reinforce_first": True}
 
 
 def run_correct(context, progress=_no_progress, max_sections: int = 0) -> dict:

@@ -39,6 +39,9 @@ class SceneState:
     #: (osteon.Orientation), "before", "applied", "matrices" (name -> matrix_world before
     #: Apply), "preview" (name of the arrow empty)}`` (ops/orientation.py)
     orientation: dict | None = None
+    #: "Export for slicer (3MF)": ``{"object", "result" (osteon.Reinforcement)}`` between the
+    #: modifiers shown and the file written (ops/slicer_export.py)
+    slicer_export: dict | None = None
     #: the last analysis' loose pieces (shells that would fall off the print): ``{"object"
     #: (name of the analysed mesh), "vertices" (its vertex count then), "pieces" (list of (n,)
     #: int64 vertex-index arrays)}``, read by ``osteon.select_loose_pieces`` (ops/loose.py)

@@ -28,6 +28,7 @@ from ._api import (
 from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
 from .profiles import PrintProfile, print_profiles
+from .reinforcement import Reinforcement, reinforce
 
 __version__ = "0.1.0"
 
@@ -46,6 +47,7 @@ __all__ = [
     "Orientation",
     "PrintProfile",
     "Progress",
+    "Reinforcement",
     "Skeleton",
     "analyze",
     "auto_skeleton",
@@ -53,6 +55,7 @@ __all__ = [
     "correct",
     "estimate_sections",
     "print_profiles",
+    "reinforce",
     "section_properties",
     "skin",
     "slice_section",

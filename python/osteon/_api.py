@@ -22,6 +22,7 @@ from .options import (
     _count,
     _min_thickness,  # noqa: F401 -- imported from here by autoskeleton
     _positive,
+    _switch,
     engine_options,
     option_docs,
 )
@@ -557,7 +558,8 @@ class Correction:
     positions, mm; ``rounds`` list of ``(bone index, factor, max stress after MPa, axis)`` with
     axis 0 = both axes, 1 = x only, 2 = z only; ``converged``; ``reason``; ``unfixed_sections``
     (indices into ``after``); ``max_displacement`` mm; ``volume_change_percent``; ``before`` and
-    ``after`` :class:`Analysis`.
+    ``after`` :class:`Analysis`; ``reinforcement``: with ``reinforce_first=True`` the
+    :class:`osteon.Reinforcement` of the final shape (walls and infill per region), else None.
     """
 
     bone_scale: np.ndarray
@@ -573,6 +575,7 @@ class Correction:
     volume_change_percent: float
     before: Analysis
     after: Analysis
+    reinforcement: Any = None
 
     @property
     def num_rounds(self) -> int:
@@ -692,6 +695,12 @@ def analyze(vertices: Any, faces: Any, skeleton: Skeleton, weights: Any = None, 
     return analyzer.run(v, progress=progress)
 
 
+#: ``correct(..., reinforce_first=True)``: :func:`osteon.reinforcement.reinforce_then_correct`,
+#: put here by that module when it is imported (``import osteon`` does), so that this module
+#: imports nothing of it (no import cycle: the reinforcement builds on this module).
+_REINFORCE_FIRST: list = []
+
+
 @_takes_options
 def correct(
     vertices: Any,
@@ -708,6 +717,7 @@ def correct(
     bone_long_axes: Any = None,
     options: AnalysisOptions | None = None,
     progress: Progress | None = None,
+    reinforce_first: bool = False,
     **settings: Any,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
@@ -735,7 +745,20 @@ def correct(
     (:attr:`Analysis.section_loops`).
     ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
     round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
+    With a ``print_profile`` the loop is driven by the printed sections.
+    ``reinforce_first`` (with an FDM ``print_profile``): reinforce first (more walls, denser
+    infill where weak: :func:`osteon.reinforce`) and thicken only what even solid cannot carry;
+    the result's ``reinforcement`` has the regions (docs/correction.md).
     """
+    if _switch(reinforce_first, "reinforce_first"):
+        opts = AnalysisOptions.of(options, settings)
+        analysis = {name: getattr(opts, name) for name, _, _ in option_docs()}
+        profile = analysis.pop("print_profile", None)
+        return _REINFORCE_FIRST[0](
+            vertices, faces, skeleton, weights, print_profile=profile, max_scale=max_scale,
+            max_rounds=max_rounds, target_ratio=target_ratio, scaling=scaling,
+            flat_aspect=flat_aspect, bone_x_axes=bone_x_axes, bone_long_axes=bone_long_axes,
+            progress=progress, **analysis)
     progress = _progress(progress)
     if scaling not in ("uniform", "thin"):
         raise ValueError(f"scaling must be 'uniform' or 'thin', got {scaling!r}")

@@ -377,6 +377,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         "bone_scale": None,
         "bone_scale_xz": None,
         "warnings": [],
+        # reinforce instead of reshape (osteon.reinforce, docs/correction.md): filled by
+        # reinforcement_section when the run reinforced
+        "reinforcement": None,
     }
     # Printability, reported apart from the overloaded sections (issue 12).
     printable = printability(shown, bone_names)
@@ -429,6 +432,28 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
                        "bones": before_rows},
         }
     return report
+
+
+def reinforcement_section(reinforcement, slicer: str | None = None,
+                          project: str | None = None) -> dict:
+    """The report's ``reinforcement`` of an ``osteon.Reinforcement``: the profile of the rest of
+    the part, one row per region (bone, walls and infill before -> after, stress before ->
+    after MPa, extra extruded volume mm³, z range mm), the sections solid cannot carry, the
+    total extra volume and the slicer project written (``slicer``, ``project`` path)."""
+    r = reinforcement
+    return {
+        "print_profile": r.profile.as_dict(),
+        "regions": r.table(),
+        "unfixable": [{"section": u["section"], "bone": u["bone"],
+                       "stress_mpa": finite(u["stress_mpa"]), "ratio": finite(u["ratio"])}
+                      for u in r.unfixable],
+        "extra_volume_mm3": finite(r.extra_volume_mm3),
+        "max_stress_before_mpa": finite(r.before.max_stress),
+        "max_stress_after_mpa": finite(r.after.max_stress),
+        "analyses": int(r.analyses),
+        "slicer": slicer,
+        "slicer_project": None if project is None else str(project),
+    }
 
 
 def _profile_dict(settings: dict, print_profile) -> dict:

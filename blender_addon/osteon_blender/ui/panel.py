@@ -229,6 +229,7 @@ class OSTEON_PT_correction(_Sub, bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(s, "max_scale")
         col.prop(s, "max_rounds")
+        layout.prop(s, "reinforce_first")
 
 
 classes = (OSTEON_UL_weak_bones, OSTEON_PT_main, OSTEON_PT_results, OSTEON_PT_colours,

@@ -92,6 +92,11 @@ class OsteonSettings(bpy.types.PropertyGroup):
                             description="Largest number of correction rounds")
     scaling: EnumProperty(name="Scaling", items=core.SCALING_MODES, default="THIN",
                           description="How Correct thickens a weak part")
+    reinforce_first: BoolProperty(
+        name="Reinforce first (keep shape)", default=False,
+        description="Correct gives weak regions more walls / denser infill first (shown as "
+        "modifier volumes; Export for slicer writes them) and thickens only what even solid "
+        "cannot carry (needs an FDM print profile; docs/correction.md)")
     # print direction (FDM layers, docs/printing.md); the engine mapping is osteon.settings'
     layer_strength_ratio: FloatProperty(
         name="Layer strength", default=_DEFAULT.layer_strength_ratio, min=0.01, max=1.0,

@@ -29,7 +29,10 @@ class BatchSettings:
     limits). Batch only: ``correct`` (also run the correction and write the corrected mesh);
     ``png`` (render the contact-sheet picture, ``png_dpi``); ``allow_open`` (analyse open
     meshes too, flagged, instead of failing them); ``engine_threads`` (threads of the engine
-    inside one task: 1, since the batch runs models in parallel; 0 = all cores).
+    inside one task: 1, since the batch runs models in parallel; 0 = all cores);
+    ``slicer_project`` ("prusaslicer", "bambu", "orca" or None): also reinforce each model under
+    the settings' FDM print profile (:func:`osteon.reinforce`) and write ``ID.3mf`` for that
+    slicer, the report's ``reinforcement`` listing the regions.
     """
 
     settings: Settings = field(default_factory=_default_settings)
@@ -38,6 +41,7 @@ class BatchSettings:
     png_dpi: int = 60
     allow_open: bool = False
     engine_threads: int = 1
+    slicer_project: str | None = None
 
     @classmethod
     def from_any(cls, settings) -> BatchSettings:
@@ -99,5 +103,11 @@ class BatchSettings:
         h, _ = self.height_and_axis()
         if h is not None and not h > 0:
             raise ValueError(f"print size must be a positive number of mm, got {h}")
+        if self.slicer_project is not None:
+            from ..slicer3mf import SLICERS
+
+            if self.slicer_project not in SLICERS:
+                raise ValueError(f"slicer_project must be one of {', '.join(SLICERS)}, "
+                                 f"got {self.slicer_project!r}")
         if self.engine_threads < 0:
             raise ValueError(f"engine_threads must be >= 0, got {self.engine_threads}")

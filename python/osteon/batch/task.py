@@ -225,6 +225,8 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
             _write_mesh_bytes(write_mesh, tmp, fix.vertices, model.faces, ext)
             files[f"{rec['id']}_corrected{ext}"] = tmp.getvalue()
             rep["output"] = f"{rec['id']}_corrected{ext}"
+        if s.slicer_project:
+            files.update(_slicer_project(rec["id"], model, s, engine, rep))
         rec.update(rep)
         rec["flags"] = flags
         if s.png:
@@ -248,6 +250,36 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
     rec["seconds"] = time.perf_counter() - t0
     rec["_files"] = files
     return rec
+
+
+def _slicer_project(model_id: str, model, s: BatchSettings, engine: dict, rep: dict) -> dict:
+    """Reinforce the model under the settings' print profile (:func:`osteon.reinforce`); the
+    report's ``reinforcement`` and ``{ID.3mf: bytes}`` (the slicer project)."""
+    import os
+    import tempfile
+
+    import osteon
+
+    from ..report import reinforcement_section
+
+    kw = {k: v for k, v in engine.items() if k not in ("max_scale", "max_rounds", "scaling")}
+    profile = kw.pop("print_profile", None)
+    if profile is None:
+        profile = s.settings.profile() if hasattr(s.settings, "profile") else None
+    if profile is None or profile.kind != "fdm":
+        raise ValueError("slicer_project needs an FDM print profile (walls and infill)")
+    r = osteon.reinforce(model.vertices, model.faces, model.skeleton, model.weights,
+                         print_profile=profile, **kw)
+    name = f"{model_id}.3mf"
+    fd, tmp = tempfile.mkstemp(suffix=".3mf")
+    os.close(fd)
+    try:
+        r.write_3mf(tmp, slicer=s.slicer_project, name=model_id)
+        data = Path(tmp).read_bytes()
+    finally:
+        os.unlink(tmp)
+    rep["reinforcement"] = reinforcement_section(r, s.slicer_project, name)
+    return {name: data}
 
 
 def _write_mesh_bytes(write_mesh, buf, vertices, faces, ext):

@@ -1,7 +1,7 @@
 """The ``osteon`` command: analyse, correct and validate rigged models from files.
 
 One module per job: ``parser`` (options and help), ``common`` (settings, reading, engine,
-report, table, picture), ``analyze``, ``correct``, ``validate``, ``skeleton``. ``osteon.cli:main`` is the
+report, table, picture), ``analyze``, ``correct``, ``reinforce``, ``validate``, ``skeleton``. ``osteon.cli:main`` is the
 console entry point. Units everywhere: millimetres of the printed object, newtons, MPa.
 """
 
@@ -13,6 +13,7 @@ from .analyze import analyze_model, cmd_analyze
 from .common import CliError, bone_table, format_table
 from .correct import cmd_correct
 from .parser import DEFAULT_SAFETY_FACTOR, EXAMPLES, MATERIALS, build_parser
+from .reinforce import cmd_reinforce
 from .skeleton import cmd_skeleton
 from .validate import cmd_validate, format_fem_table, model_checks
 
@@ -26,6 +27,7 @@ __all__ = [
     "build_parser",
     "cmd_analyze",
     "cmd_correct",
+    "cmd_reinforce",
     "cmd_skeleton",
     "cmd_validate",
     "format_fem_table",
@@ -41,7 +43,7 @@ def main(argv=None) -> int:
     from .batch import cmd_batch
 
     handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate,
-               "skeleton": cmd_skeleton, "batch": cmd_batch}
+               "skeleton": cmd_skeleton, "batch": cmd_batch, "reinforce": cmd_reinforce}
     try:
         return handler[args.command](args, sys.stdout)
     except (ValueError, FileNotFoundError, RuntimeError) as e:

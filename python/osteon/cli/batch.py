@@ -66,6 +66,9 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
                    help="with --correct: most scaling rounds (default 100)")
     p.add_argument("--scaling", choices=("thin", "uniform"), default=None,
                    help="with --correct: thin (default) or uniform scaling")
+    p.add_argument("--slicer-project", choices=("prusaslicer", "bambu", "orca"), default=None,
+                   help="also reinforce each model under --profile (more walls / infill where "
+                   "weak) and write ID.3mf for this slicer (docs/correction.md)")
     p.add_argument("--allow-open", action="store_true",
                    help="analyse open meshes too (flagged) instead of failing them")
     p.add_argument("--no-png", action="store_true", help="no stress pictures (faster)")
@@ -89,7 +92,8 @@ def settings_from_args(args):
     shared = settings_from_args(args)
     check(shared, correct=args.correct)  # errors name the option
     return BatchSettings(settings=shared, correct=args.correct, png=not args.no_png,
-                         allow_open=args.allow_open)
+                         allow_open=args.allow_open,
+                         slicer_project=getattr(args, "slicer_project", None))
 
 
 def cmd_batch(args, out=sys.stdout) -> int:

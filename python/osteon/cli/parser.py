@@ -244,6 +244,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="threads for gmsh and CalculiX (default 2)",
     )
+    from .reinforce import add_parser as _add_reinforce
+
+    _add_reinforce(sub, _add_common)
     from .skeleton import add_parser as _add_skeleton
 
     _add_skeleton(sub)
