@@ -20,7 +20,8 @@ examples:
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
-    from ..cli.parser import MATERIALS, add_junction_switch
+    from ..cli.parser import MATERIALS, add_junction_switch, add_max_sections
+    from .settings import DEFAULT_MODEL_TIMEOUT_S
 
     p = sub.add_parser(
         "batch",
@@ -56,6 +57,10 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--layer-ratio", type=float, metavar="R",
                    help="layer / in-plane strength (default: the material preset's)")
     add_junction_switch(p)
+    add_max_sections(p)
+    p.add_argument("--model-timeout", type=float, default=DEFAULT_MODEL_TIMEOUT_S, metavar="S",
+                   help="seconds one model may take; over it the model fails with that reason "
+                   f"and its worker is stopped (default {DEFAULT_MODEL_TIMEOUT_S:g}; 0 = none)")
     p.add_argument("--correct", action="store_true",
                    help="also thicken weak bones and write each corrected mesh")
     p.add_argument("--max-scale", type=float, default=3.0, metavar="S",
@@ -81,13 +86,16 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
 def settings_from_args(args):
     """The batch settings: the shared Settings built as ``analyze`` builds them, plus the
     batch's own options."""
-    from ..cli.common import check, settings_from_args
+    from ..cli.common import check, max_sections_of, settings_from_args
     from .settings import BatchSettings
 
     shared = settings_from_args(args)
     check(shared, correct=args.correct)  # errors name the option
+    if not args.model_timeout >= 0:
+        raise ValueError(f"--model-timeout must be >= 0 s (0 = none), got {args.model_timeout}")
     return BatchSettings(settings=shared, correct=args.correct, png=not args.no_png,
-                         allow_open=args.allow_open)
+                         allow_open=args.allow_open, model_timeout_s=args.model_timeout,
+                         max_sections=max_sections_of(args))
 
 
 def cmd_batch(args, out=sys.stdout) -> int:

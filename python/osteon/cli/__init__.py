@@ -45,9 +45,33 @@ def main(argv=None) -> int:
     try:
         return handler[args.command](args, sys.stdout)
     except (ValueError, FileNotFoundError, RuntimeError) as e:
-        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        print(f"osteon: error: {msg}", file=sys.stderr)
+        _error(_first_line(e))
+        return 2
+    except OSError as e:  # a folder given as a file, a full disk, no permission
+        where = f"{e.filename}: " if e.filename else ""
+        _error(f"{where}{e.strerror or _first_line(e)}")
+        return 2
+    except ModuleNotFoundError as e:
+        _error(f"this needs the Python package {e.name!r} (pip install {e.name})")
+        return 2
+    except MemoryError:
+        _error("out of memory (a model read far too big? see --height-mm and --max-sections)")
         return 2
     except KeyboardInterrupt:
         print("osteon: interrupted", file=sys.stderr)
         return 130
+    except Exception as e:  # noqa: BLE001 - one line, not a traceback; a bug to report
+        _error(f"internal error ({type(e).__name__}: {_first_line(e)}); please report it "
+               "with the model")
+        return 3
+
+
+def _first_line(e: BaseException) -> str:
+    text = str(e).strip()
+    return text.splitlines()[0] if text else type(e).__name__
+
+
+def _error(msg: str) -> None:
+    from ..io.model import printable
+
+    print(f"osteon: error: {printable(msg)}", file=sys.stderr)

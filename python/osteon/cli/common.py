@@ -3,6 +3,7 @@ report, the terminal table, the picture, the progress bar. Units: mm, N, MPa."""
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from dataclasses import replace
@@ -11,6 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import materials
+from ..io.atomic import check_output_path, write_atomic
+from ..io.model import printable
 from ..report import bone_table as _bone_rows
 from ..report import build_report, to_json
 from ..settings import Settings, engine_arguments, min_thickness_mm
@@ -200,35 +203,63 @@ def check(settings: Settings, correct: bool = False) -> None:
     _arguments(replace(settings, held_bone=None), [], correct)
 
 
-def engine_args(settings: Settings, model, correct: bool = False) -> tuple[tuple, dict]:
+def engine_args(settings: Settings, model, correct: bool = False,
+                max_sections: int | None = None) -> tuple[tuple, dict]:
     """The model and settings every command passes to the engine: (positional, keyword).
-    Warns on stderr when they would make more than ``SECTION_LIMIT`` sections."""
+    Warns on stderr when they would make more than ``SECTION_LIMIT`` sections; refuses
+    (ValueError with the estimate) above ``max_sections`` for the whole model (default
+    :data:`osteon.settings.MAX_SECTIONS`)."""
     positional = (model.vertices, model.faces, model.skeleton, model.weights)
     keyword = _arguments(settings, model.bone_names, correct)
-    warn_many_sections(model, keyword["interval"])
+    warn_many_sections(model, keyword["interval"], max_sections)
     return positional, keyword
 
 
-def warn_many_sections(model, interval_mm: float) -> str | None:
-    """The section guard's warning (``osteon.settings.section_guard``) on stderr, if any."""
+def max_sections_of(args) -> int:
+    """``--max-sections`` (the global section budget), or the default."""
+    from ..settings import MAX_SECTIONS
+
+    n = getattr(args, "max_sections", None)
+    n = MAX_SECTIONS if n is None else int(n)
+    if n < 1:
+        raise ValueError(f"--max-sections must be >= 1, got {n}")
+    return n
+
+
+def print_warnings(model, args) -> None:
+    """The reader's warnings (repaired weights, bones without weight) on stderr."""
+    if getattr(args, "quiet", False):
+        return
+    for w in model.warnings:
+        print(f"osteon: warning: {printable(w)}", file=sys.stderr)
+
+
+def warn_many_sections(model, interval_mm: float, max_sections: int | None = None) -> str | None:
+    """The section guard's warning (``osteon.settings.section_guard``) on stderr, if any;
+    ValueError above the global budget (``osteon.settings.section_budget``)."""
     import numpy as np
 
     import osteon
-    from osteon.settings import section_guard
+    from osteon.settings import MAX_SECTIONS, section_budget, section_guard
 
     v = np.asarray(model.vertices)
     size = float(np.max(v.max(axis=0) - v.min(axis=0))) if len(v) else 0.0
-    msg = section_guard(osteon.estimate_sections(model.skeleton, interval_mm), interval_mm, size)
+    n = osteon.estimate_sections(model.skeleton, interval_mm)
+    over = section_budget(n, len(v), interval_mm, size,
+                          MAX_SECTIONS if max_sections is None else max_sections)
+    if over:
+        raise ValueError(f"{printable(model.source or 'model')}: refused: {over}")
+    msg = section_guard(n, interval_mm, size)
     if msg:
         print(f"osteon: warning: {msg}; this may take long (Ctrl+C stops it)", file=sys.stderr)
     return msg
 
 
-def run_analysis(settings: Settings, model):
+def run_analysis(settings: Settings, model, max_sections: int | None = None):
     """Run the analysis with the command's settings; returns (Analysis, seconds)."""
     import osteon
 
-    positional, keyword = engine_args(settings, model)
+    positional, keyword = engine_args(settings, model, max_sections=max_sections)
     t = time.perf_counter()
     a = osteon.analyze(*positional, **keyword)
     return a, time.perf_counter() - t
@@ -245,15 +276,31 @@ def report_of(source, model, settings: Settings, analysis, seconds, correction=N
 
 
 def write_json(path, data):
-    Path(path).write_text(to_json(data))
+    """The report as JSON, written atomically (a kill leaves the previous report whole)."""
+    write_atomic(path, to_json(data))
+
+
+def check_outputs(args, *options) -> None:
+    """Check the output paths of the given options (``"json"``, ``"png"``, ``"out"``…) before
+    the work: a folder, a missing folder or a read-only place is an error now, not after a
+    long analysis."""
+    for opt in options:
+        value = getattr(args, opt.replace("-", "_"), None)
+        if value:
+            check_output_path(value, "--" + opt)
+
+
+def display_name(path) -> str:
+    """A file's name for titles and messages, undecodable bytes shown as U+FFFD."""
+    return printable(Path(os.fspath(path)).name)
 
 
 def save_png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title="",
              orientation=None):
     from ..plots import save_stress_png
 
-    save_stress_png(
-        args.png,
+    write_atomic(args.png, writer=lambda tmp: save_stress_png(
+        tmp,
         model.vertices if vertices is None else vertices,
         model.faces,
         analysis,
@@ -262,9 +309,9 @@ def save_png(args, model, analysis, allowable, before=None, vertices=None, marks
         model.parents,
         model.bone_names,
         allowable,
-        title=title,
+        title=printable(title),
         before=before,
         marks=marks,
         orientation=orientation,
         bones=any("auto_skeleton" in n for n in model.notes),
-    )
+    ))

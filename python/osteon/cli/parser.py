@@ -94,6 +94,7 @@ def _add_common(p: argparse.ArgumentParser):
         metavar="BONE",
         help="bone (name or index) held at its head (default: the main root bone)",
     )
+    add_max_sections(a)
     pr = p.add_argument_group("print direction (FDM layers; docs/printing.md)")
     pr.add_argument(
         "--build-direction",
@@ -119,6 +120,20 @@ def _add_common(p: argparse.ArgumentParser):
         help="bones listed in the terminal table (default 10)",
     )
     o.add_argument("-q", "--quiet", action="store_true", help="no table, no progress bars")
+
+
+def add_max_sections(p) -> None:
+    """``--max-sections``: the global section budget (whole model, not per bone)."""
+    from ..settings import MAX_SECTIONS
+
+    p.add_argument(
+        "--max-sections",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"refuse a model that would make more than N sections in all (default "
+        f"{MAX_SECTIONS:,}, about 2 GB; the estimate and its memory are in the message)",
+    )
 
 
 def add_junction_switch(p) -> None:

@@ -18,7 +18,14 @@ import re
 
 import numpy as np
 
-from .model import bones_from_joint_tree, drop_unweighted_roots, joint_weights_to_bones
+from .model import (
+    bones_from_joint_tree,
+    check_tree,
+    clean_weights,
+    drop_unweighted_roots,
+    joint_weights_to_bones,
+    unweighted_bones,
+)
 
 _DUP = re.compile(r"_dup_\d+$")
 
@@ -52,6 +59,8 @@ def read_rignet_rig(path):
                 hier.append((t[1], t[2]))
             elif key == "skin":
                 v = int(t[1])
+                if not 0 <= v < 2**62:
+                    raise ValueError
                 if (len(t) - 2) % 2:
                     raise ValueError
                 for k in range(2, len(t), 2):
@@ -73,13 +82,7 @@ def read_rignet_rig(path):
         if parent[index[c]] >= 0:
             raise ValueError(f"{path}: joint {c!r} has two parents")
         parent[index[c]] = index[p]
-    for k in range(len(names)):  # cycle check
-        j, steps = k, 0
-        while j >= 0:
-            j = parent[j]
-            steps += 1
-            if steps > len(names):
-                raise ValueError(f"{path}: the joint hierarchy has a cycle")
+    check_tree(parent, path, "joint", names)
     if root is not None and root not in index:
         raise ValueError(f"{path}: root joint {root!r} is not declared")
     unknown = sorted({j for j in jn if j not in index})
@@ -96,23 +99,48 @@ def read_rignet_rig(path):
     }
 
 
-def rignet_skeleton(rig, vertices):
-    """Bones and (V, B) bone weights from a parsed rig and the mesh vertices."""
+def rignet_skeleton(rig, vertices, info: dict | None = None, source: str = "RigNet rig"):
+    """Bones and (V, B) bone weights from a parsed rig and the mesh vertices.
+
+    ``info`` (a dict, optional) receives ``warnings`` (repaired weights, bones without weight,
+    no skin at all), ``findings`` (:func:`osteon.io.model.weight_findings`) and ``notes``. A rig
+    without ``skin`` lines keeps all its bones and returns ``None`` weights (each vertex then
+    follows its nearest bone), with a warning: dropping unweighted bones would leave one."""
+    info = {} if info is None else info
+    info.setdefault("warnings", [])
+    info.setdefault("notes", [])
     names = rig["names"]
     dup = np.array([bool(_DUP.search(n)) for n in names])
     heads, tails, parents, bnames, targets = bones_from_joint_tree(
         rig["positions"], rig["parent"], names, degenerate=dup
     )
     if len(heads) == 0:
-        raise ValueError("RigNet rig has no bones (a single joint or only duplicated joints)")
+        raise ValueError(f"{source}: RigNet rig has no bones (a single joint or only duplicated "
+                         "joints)")
     V = len(vertices)
     r = rig["skin_rows"]
-    if len(r) and (r.min() < 0 or r.max() >= V):
+    if len(r) == 0:
+        info["warnings"].append(
+            f"{source}: no 'skin' lines: no weights for its {len(heads)} bones; each vertex "
+            "follows its nearest bone")
+        return heads, tails, parents, bnames, None
+    if r.min() < 0 or r.max() >= V:
         raise ValueError(
-            f"RigNet skin line refers to vertex {int(r.max())} but the mesh has {V} vertices"
+            f"{source}: skin line refers to vertex {int(r.max() if r.max() >= V else r.min())} "
+            f"but the mesh has {V} vertices"
         )
+    found, warns = clean_weights(r, rig["skin_values"], V, source)
+    info["findings"] = found
+    info["warnings"].extend(warns)
     w = joint_weights_to_bones(
         vertices, r, rig["skin_joints"], rig["skin_values"], targets, heads, tails, names
     )
-    heads, tails, parents, bnames, w, _ = drop_unweighted_roots(heads, tails, parents, bnames, w)
+    heads, tails, parents, bnames, w, dropped = drop_unweighted_roots(heads, tails, parents,
+                                                                      bnames, w)
+    if dropped:
+        info["notes"].append(f"root bones without weight left out: {', '.join(dropped)}")
+    bare = unweighted_bones(w, bnames)
+    if bare:
+        info["warnings"].append(f"{source}: {len(bare)} bone(s) without any weight (nothing of "
+                                f"the mesh follows them): {', '.join(bare[:10])}")
     return heads, tails, parents, bnames, w
