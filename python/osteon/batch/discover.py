@@ -82,7 +82,7 @@ def discover(inputs) -> list[ModelFile]:
     unique: list[tuple[str, str]] = []
     for f, rel in found:
         try:
-            key = str(f.resolve())
+            key = str(f.resolve()) if f.exists() else os.path.abspath(f)
         except (OSError, RuntimeError):  # a symlink loop: keep the name, the task fails it
             key = os.path.abspath(f)
         if key not in seen:

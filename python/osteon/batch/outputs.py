@@ -188,23 +188,22 @@ def _status_text(r) -> str:
 def write_csv(out, records) -> Path:
     path = Path(out) / "summary.csv"
     fh = io.StringIO(newline="")
-    if True:  # one block, as when the file was written row by row
-        w = csv.writer(fh)
-        w.writerow([c for c, _ in CSV_COLUMNS])
-        for r in _order(_printable(records)):
-            row = []
-            for col, key in CSV_COLUMNS:
-                v = r.get(key)
-                if col == "weak_bones":
-                    v = _weak_names(r)
-                elif col == "flags":
-                    v = ";".join(v or [])
-                elif col == "status":
-                    v = _status_text(r)
-                elif isinstance(v, float):
-                    v = f"{v:.6g}"
-                row.append("" if v is None else v)
-            w.writerow(row)
+    w = csv.writer(fh)
+    w.writerow([c for c, _ in CSV_COLUMNS])
+    for r in _order(_printable(records)):
+        row = []
+        for col, key in CSV_COLUMNS:
+            v = r.get(key)
+            if col == "weak_bones":
+                v = _weak_names(r)
+            elif col == "flags":
+                v = ";".join(v or [])
+            elif col == "status":
+                v = _status_text(r)
+            elif isinstance(v, float):
+                v = f"{v:.6g}"
+            row.append("" if v is None else v)
+        w.writerow(row)
     write_atomic(path, fh.getvalue())
     return path
 

@@ -218,6 +218,9 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
         else:
             analysis = osteon.analyze(*positional, **engine)
         times["analysis_seconds"] = time.perf_counter() - t
+        from ..cli.common import check_overflow
+
+        check_overflow(analysis if fix is None else fix.before, engine["force"])
         rep = _report(path, model, s, analysis, times["analysis_seconds"], fix)
         rep["bone_count"] = len(model.bone_names)
         for name, n in _section_flag_counts(analysis).items():

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from .. import doubt
 from . import common, orient
 
@@ -56,12 +54,7 @@ def cmd_analyze(args, out):
             f"faces, {model.n_bones} bones, size {args.height_mm:g} mm",
             file=out,
         )
-        print(
-            f"{len(a.stress)} sections in {1000 * secs:.1f} ms; max stress "
-            f"{a.max_stress:.2f} MPa; {int(np.sum(a.weak))} weak, {int(np.sum(a.culled))} "
-            "culled (safe for sure)",
-            file=out,
-        )
+        print(common.headline(a, secs), file=out)
         doubt_text = doubt.analysis_text(a, model.bone_names)
         if doubt_text:
             print(f"NOT A CLEAN RESULT: {doubt_text}", file=out)

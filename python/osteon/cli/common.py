@@ -152,7 +152,9 @@ def load_model_of(args):
 
 def bone_table(analysis, top=10, scales=None):
     """Rows (worst first) of per-bone results (:func:`osteon.report.bone_table`)."""
-    rows = _bone_rows(analysis.section_bone, analysis.stress, analysis.weak,
+    # too-thin sections are out of the max stress and the weak count: out of the rows too
+    stress = np.where(too_thin_mask(analysis), np.nan, np.asarray(analysis.stress, float))
+    rows = _bone_rows(analysis.section_bone, stress, analysis.weak,
                       analysis.bone_names, analysis.allowable_stress, scales,
                       analysis.stress_ratio, analysis.across_layers)
     return [r for r in rows if r["max_stress_mpa"] is not None][:top]
@@ -262,7 +264,47 @@ def run_analysis(settings: Settings, model, max_sections: int | None = None):
     positional, keyword = engine_args(settings, model, max_sections=max_sections)
     t = time.perf_counter()
     a = osteon.analyze(*positional, **keyword)
+    check_overflow(a, keyword["force"])
     return a, time.perf_counter() - t
+
+
+def check_overflow(analysis, force_n: float) -> None:
+    """ValueError when the stresses overflowed floating point (a force like 1e308 N): an
+    ``inf`` stress is no result, and reads as "could not be cut" further on."""
+    stress = np.asarray(analysis.stress, dtype=np.float64)
+    moment = np.asarray(analysis.moment, dtype=np.float64)
+    n = int(np.count_nonzero(np.isinf(stress) | np.isinf(moment)))
+    if n:
+        raise ValueError(f"--force {force_n:g} N: {n} of {len(stress)} section stresses overflow "
+                         "(inf); use a force a print can meet (newtons, e.g. 1 .. 1000)")
+
+
+def too_thin_mask(analysis) -> np.ndarray:
+    """(S,) bool: sections too thin to print; the engine leaves them out of the max stress and
+    the weak count, so the tables must too (they are listed on their own)."""
+    import osteon
+
+    flags = np.asarray(analysis.section_flags)
+    return (flags & osteon.SECTION_FLAGS["too_thin"]) != 0
+
+
+def headline(analysis, seconds: float) -> str:
+    """The summary line: sections, max stress, weak, culled; the too-thin sections counted
+    apart, so that it never contradicts the table."""
+    thin = int(np.count_nonzero(too_thin_mask(analysis)))
+    n = len(analysis.stress)
+    text = f"{n} sections in {1000 * seconds:.1f} ms; "
+    if thin == n and n:
+        text += "no printable section (all too thin): no max stress"
+    else:
+        text += f"max stress {analysis.max_stress:.2f} MPa"
+        if thin:
+            text += f" over the {n - thin} printable sections"
+    text += (f"; {int(np.sum(analysis.weak))} weak, {int(np.sum(analysis.culled))} culled "
+             "(safe for sure)")
+    if thin:
+        text += f"; {thin} too thin to print (not counted, listed below)"
+    return text
 
 
 def report_of(source, model, settings: Settings, analysis, seconds, correction=None, output=None):

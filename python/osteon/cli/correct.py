@@ -28,6 +28,7 @@ def cmd_correct(args, out):
                                                  max_sections=common.max_sections_of(args))
         t = time.perf_counter()
         fix = osteon.correct(*positional, **keyword)
+        common.check_overflow(fix.before, keyword["force"])
         secs = time.perf_counter() - t
         prog.next()
         write_mesh(args.out, fix.vertices, model.faces)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 
@@ -42,9 +43,10 @@ def read_mesh(path):
         raise ValueError(f"{p}: reading {ext} meshes needs the Python package 'trimesh' "
                          "(pip install trimesh)") from None
     try:
-        m = trimesh.load(
-            str(p), file_type=ext[1:], process=False, maintain_order=True, force="mesh"
-        )
+        with open(p, "rb") as fh:  # the bytes, not the name: any file name, UTF-8 or not
+            data = io.BytesIO(fh.read())
+        m = trimesh.load(data, file_type=ext[1:], process=False, maintain_order=True,
+                         force="mesh")
     except ModuleNotFoundError as e:  # an optional package of one trimesh loader
         raise ValueError(f"{p}: reading {ext} meshes needs the Python package {e.name!r} "
                          f"(pip install {e.name})") from None
