@@ -114,6 +114,8 @@ def test_non_utf8_model_name_with_png(tmp_path, capsys):
 
 def test_missing_optional_package_is_named(tmp_path, monkeypatch, capsys):
     path = rigged_bar(tmp_path, "bar")
+    with open(path, "a") as fh:  # a continued line: a layout left to trimesh
+        fh.write("# a comment \\\n continued\n")
     monkeypatch.setitem(sys.modules, "trimesh", None)  # import trimesh -> ModuleNotFoundError
     assert cli_main(["analyze", str(path)]) == 2
     err = capsys.readouterr().err

@@ -26,6 +26,9 @@ _CT = {
     5125: np.uint32,
     5126: np.float32,
 }
+#: most items of an accessor without a buffer view (all zeros; a guard against a count that
+#: would allocate gigabytes for nothing)
+_MAX_ZERO_ITEMS = 50_000_000
 _NC = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 
 
@@ -47,6 +50,14 @@ class _Reader:
             raise ValueError(f"{self.path}: cannot read glTF ({type(e).__name__}: {e})") from None
         if self.g is None:
             raise ValueError(f"{self.path}: cannot read glTF")
+        for kind in ("accessors", "bufferViews", "buffers", "meshes", "nodes", "skins"):
+            items = getattr(self.g, kind)
+            if items is not None and not isinstance(items, list):
+                raise ValueError(f"{self.path}: '{kind}' is not a list")
+            for k, x in enumerate(items or []):
+                if x is None or isinstance(x, (bool, int, float, str, list, dict)):
+                    raise ValueError(f"{self.path}: {kind}[{k}] is not a glTF object "
+                                     f"({type(x).__name__})")
         self._buffers = {}
 
     def item(self, kind: str, i, owner: str = ""):
@@ -97,7 +108,9 @@ class _Reader:
             raise ValueError(f"{what}: sparse glTF accessors are not supported")
         dt = np.dtype(_CT[a.componentType]).newbyteorder("<")
         nc = _NC[a.type]
-        out = np.zeros((a.count, nc), dtype=dt)
+        if a.bufferView is None and a.count > _MAX_ZERO_ITEMS:  # all zeros, and absurd
+            raise ValueError(f"{what}: {a.count} items without a buffer view")
+        out = np.zeros((a.count if a.bufferView is None else 0, nc), dtype=dt)
         if a.bufferView is not None and a.count:
             bv = self.item("bufferViews", a.bufferView, f"of accessor {i}")
             data = self.buffer(bv.buffer)
@@ -276,6 +289,9 @@ def read_gltf_joints(path) -> dict:
     for ni in nodes:
         mesh = r.item("meshes", g.nodes[ni].mesh, f"of node {ni}")
         for prim in mesh.primitives or []:
+            if not hasattr(prim, "attributes"):
+                raise ValueError(f"{r.path}: a primitive of mesh {g.nodes[ni].mesh} is not a "
+                                 "glTF object")
             if prim.mode not in (None, 4, 5, 6):
                 continue
             at = prim.attributes

@@ -7,11 +7,10 @@ import os
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
 from .atomic import write_atomic
 from .libigl import read_dmat, read_tgf
-from .model import RiggedModel, clean_weights, normalize_rows, unweighted_bones
+from .model import RiggedModel, dense_weights
 
 MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl")
 GLTF_EXTENSIONS = (".gltf", ".glb")
@@ -38,15 +37,24 @@ def read_mesh(path):
             + ", ".join(MESH_EXTENSIONS + GLTF_EXTENSIONS)
         )
     try:
+        with open(p, "rb") as fh:
+            raw = fh.read()
+    except OSError as e:
+        raise ValueError(f"{p}: cannot read ({e.strerror or e})") from None
+    from .fastmesh import parse_mesh
+
+    fast = parse_mesh(raw, ext, str(p))
+    if fast is not None:
+        return fast
+    try:
         import trimesh
     except ModuleNotFoundError:
         raise ValueError(f"{p}: reading {ext} meshes needs the Python package 'trimesh' "
                          "(pip install trimesh)") from None
     try:
-        with open(p, "rb") as fh:  # the bytes, not the name: any file name, UTF-8 or not
-            data = io.BytesIO(fh.read())
-        m = trimesh.load(data, file_type=ext[1:], process=False, maintain_order=True,
-                         force="mesh")
+        # the bytes, not the name: any file name, UTF-8 or not
+        m = trimesh.load(io.BytesIO(raw), file_type=ext[1:], process=False,
+                         maintain_order=True, force="mesh")
     except ModuleNotFoundError as e:  # an optional package of one trimesh loader
         raise ValueError(f"{p}: reading {ext} meshes needs the Python package {e.name!r} "
                          f"(pip install {e.name})") from None
@@ -172,16 +180,8 @@ def _load_model(path, skeleton, weights, height_mm, axis) -> RiggedModel:
                     f"{wp}: weights are {Wd.shape[0]} rows x {Wd.shape[1]} columns but the mesh "
                     f"has {len(V)} vertices and the skeleton {len(parents)} bones"
                 )
-            found, warns = clean_weights(np.repeat(np.arange(len(V)), Wd.shape[1]),
-                                         Wd.ravel(), len(V), str(wp))
-            info["findings"] = found
+            W, info["findings"], warns = dense_weights(Wd, str(wp), names)
             info["warnings"].extend(warns)
-            W = normalize_rows(sp.csr_matrix(np.where(np.isfinite(Wd), Wd, 0.0)))
-            bare = unweighted_bones(W, names)
-            if bare:
-                info["warnings"].append(
-                    f"{wp}: {len(bare)} bone(s) without any weight (nothing of the mesh "
-                    f"follows them): {', '.join(bare[:10])}")
     elif sname.endswith(".txt"):
         if weights is not None:
             raise ValueError(

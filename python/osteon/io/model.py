@@ -178,6 +178,38 @@ def clean_weights(rows, values, n_vertices: int, source: str):
     return found, weight_warnings(found, source)
 
 
+def dense_weights(w: np.ndarray, source: str, names):
+    """A dense (V, B) weight matrix from a file → ``(csr weights, findings, warnings)``:
+    NaN/inf/negative entries set to 0, non-empty rows rescaled to sum to 1 (as
+    :func:`normalize_rows`), what was found in words (:func:`weight_findings`), bones without
+    weight named. One pass over the dense array (no sparse round trips: the read of a 13 k-face
+    model's weights in ~1 ms)."""
+    w = np.asarray(w, dtype=np.float64)
+    V = w.shape[0]
+    finite = np.isfinite(w)
+    clean = np.where(finite & (w > 0), w, 0.0)
+    sums = clean.sum(axis=1)
+    has = sums > 0
+    far = has & (np.abs(sums - 1.0) > 1e-2)
+    found = {"nonfinite": int(w.size - np.count_nonzero(finite)),
+             "negative": int(np.count_nonzero(w < 0)),
+             "rows_far_from_1": int(np.count_nonzero(far)),
+             "unweighted_vertices": int(V - np.count_nonzero(has)), "vertices": int(V)}
+    if found["rows_far_from_1"]:
+        found["row_sum_min"] = float(sums[far].min())
+        found["row_sum_max"] = float(sums[far].max())
+    if V and not has.any() and w.size:
+        raise ValueError(f"{source}: weights hold no usable value ({found['nonfinite']} NaN/inf, "
+                         f"{found['negative']} negative, the rest 0)")
+    clean[has] /= sums[has, None]
+    warns = weight_warnings(found, source)
+    bare = [names[b] for b in np.flatnonzero(clean.sum(axis=0) == 0)]
+    if bare:
+        warns.append(f"{source}: {len(bare)} bone(s) without any weight (nothing of the mesh "
+                     f"follows them): {', '.join(bare[:10])}")
+    return sp.csr_matrix(clean), found, warns
+
+
 def validate_model(m: RiggedModel) -> None:
     """Raise ValueError naming the problem if the arrays do not fit together."""
     V, B = len(m.vertices), len(m.parents)

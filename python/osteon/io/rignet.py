@@ -30,19 +30,69 @@ from .model import (
 _DUP = re.compile(r"_dup_\d+$")
 
 
+def _skin_triplets(skin_lines, path):
+    """``skin VERTEX J1 W1 J2 W2 …`` lines → (rows, joint names, values) arrays, converted
+    together (one NumPy call per column instead of one float() per entry)."""
+    if not skin_lines:
+        return np.zeros(0, np.int64), np.zeros(0, dtype=str), np.zeros(0)
+    toks = [line.split() for _, line in skin_lines]
+    counts = np.fromiter((len(t) for t in toks), dtype=np.int64, count=len(toks))
+    bad = np.flatnonzero((counts < 4) | (counts % 2 == 1))
+    verts = None
+    if not len(bad):
+        try:
+            verts = np.array([t[1] for t in toks], dtype=np.int64)
+        except (ValueError, OverflowError):
+            bad = [k for k, t in enumerate(toks) if not _is_index(t[1])]
+    if len(bad):
+        ln, line = skin_lines[int(bad[0])]
+        raise ValueError(f"{path}:{ln}: not a RigNet skin line 'skin VERTEX JOINT WEIGHT …': "
+                         f"{line.strip()[:60]!r}")
+    pairs = [x for t in toks for x in t[2:]]
+    try:
+        vals = np.array(pairs[1::2], dtype=np.float64)
+    except ValueError:
+        k = next(i for i, t in enumerate(toks) if not all(_is_number(x) for x in t[3::2]))
+        ln, line = skin_lines[k]
+        raise ValueError(f"{path}:{ln}: a skin weight is not a number: "
+                         f"{line.strip()[:60]!r}") from None
+    rows = np.repeat(verts, (counts - 2) // 2)
+    if len(rows) and rows.min() < 0:
+        raise ValueError(f"{path}: a skin line has a negative vertex index {int(rows.min())}")
+    return rows, np.array(pairs[0::2]), vals
+
+
+def _is_index(text) -> bool:
+    try:
+        return 0 <= int(text) < 2**62
+    except ValueError:
+        return False
+
+
+def _is_number(text) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
 def read_rignet_rig(path):
     """Parse a RigNet rig file → dict with joint names, positions, parent per joint, root name and
     skin triplets (rows, joint indices, values)."""
     path = os.fspath(path)
     names, pos, hier, root = [], [], [], None
-    rows, jn, vals = [], [], []
     index: dict[str, int] = {}
     try:
         with open(path) as f:
             text = f.read()
     except (OSError, UnicodeDecodeError) as e:
         raise ValueError(f"{path}: cannot read rig file ({e})") from None
+    skin_lines = []
     for ln, line in enumerate(text.splitlines(), 1):
+        if line.startswith("skin "):  # most lines: parsed together below
+            skin_lines.append((ln, line))
+            continue
         t = line.split()
         if not t:
             continue
@@ -58,21 +108,14 @@ def read_rignet_rig(path):
             elif key == "hier":
                 hier.append((t[1], t[2]))
             elif key == "skin":
-                v = int(t[1])
-                if not 0 <= v < 2**62:
-                    raise ValueError
-                if (len(t) - 2) % 2:
-                    raise ValueError
-                for k in range(2, len(t), 2):
-                    rows.append(v)
-                    jn.append(t[k])
-                    vals.append(float(t[k + 1]))
+                skin_lines.append((ln, line))
             else:
                 raise ValueError
         except (ValueError, IndexError):
             raise ValueError(
                 f"{path}:{ln}: not a RigNet rig line (joints/root/hier/skin): {line.strip()[:60]!r}"
             ) from None
+    rows, jn, vals = _skin_triplets(skin_lines, path)
     if not names:
         raise ValueError(f"{path}: no 'joints' lines (not a RigNet _rig.txt file?)")
     parent = np.full(len(names), -1, dtype=np.int64)
@@ -85,17 +128,19 @@ def read_rignet_rig(path):
     check_tree(parent, path, "joint", names)
     if root is not None and root not in index:
         raise ValueError(f"{path}: root joint {root!r} is not declared")
-    unknown = sorted({j for j in jn if j not in index})
+    used, inverse = np.unique(jn, return_inverse=True)
+    unknown = [str(j) for j in used if j not in index]
     if unknown:
         raise ValueError(f"{path}: skin lines name undeclared joints {unknown[:5]}")
+    joint_of = np.array([index[str(j)] for j in used], dtype=np.int64)
     return {
         "names": names,
         "positions": np.asarray(pos, dtype=np.float64),
         "parent": parent,
         "root": root,
-        "skin_rows": np.asarray(rows, dtype=np.int64),
-        "skin_joints": np.asarray([index[j] for j in jn], dtype=np.int64),
-        "skin_values": np.asarray(vals, dtype=np.float64),
+        "skin_rows": rows,
+        "skin_joints": joint_of[inverse.ravel()] if len(jn) else np.zeros(0, np.int64),
+        "skin_values": vals,
     }
 
 
