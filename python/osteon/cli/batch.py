@@ -20,8 +20,8 @@ examples:
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
-    from ..cli.parser import MATERIALS, add_junction_switch, add_max_sections
-    from .settings import DEFAULT_MODEL_TIMEOUT_S
+    from ..batch.settings import DEFAULT_MODEL_TIMEOUT_S
+    from .options import MATERIALS, add_junction_switch, add_max_sections
 
     p = sub.add_parser(
         "batch",
@@ -86,8 +86,8 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
 def settings_from_args(args):
     """The batch settings: the shared Settings built as ``analyze`` builds them, plus the
     batch's own options."""
-    from ..cli.common import check, max_sections_of, settings_from_args
-    from .settings import BatchSettings
+    from ..batch.settings import BatchSettings
+    from .common import check, max_sections_of, settings_from_args
 
     shared = settings_from_args(args)
     check(shared, correct=args.correct)  # errors name the option
@@ -99,7 +99,7 @@ def settings_from_args(args):
 
 
 def cmd_batch(args, out=sys.stdout) -> int:
-    from .runner import dask_client, run
+    from ..batch.runner import dask_client, run
 
     settings = settings_from_args(args)
     settings.check()
