@@ -19,7 +19,6 @@ from batch_library import rigged_bar
 from osteon import batch
 from osteon.cli import main as cli_main
 from osteon.io import load_model
-from osteon.io.atomic import write_atomic
 
 HERE = Path(__file__).resolve().parent
 SETTINGS = {"force_n": 20.0, "material": "PLA", "png": False}
@@ -303,6 +302,8 @@ def test_batch_refuses_a_model_over_the_section_budget(tmp_path):
 # --- atomic outputs --------------------------------------------------------------------
 
 def test_a_failed_write_keeps_the_previous_file(tmp_path):
+    from osteon.io.atomic import write_atomic
+
     target = tmp_path / "report.json"
     write_atomic(target, '{"old": 1}')
 
