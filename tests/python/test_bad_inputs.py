@@ -342,3 +342,26 @@ def test_cli_json_is_written_whole(tmp_path):
     rep = json.loads(js.read_text())
     assert np.isfinite(rep["max_stress_mpa"])
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+@pytest.mark.parametrize("error, words", [
+    (np.linalg.LinAlgError("Singular matrix"), "a transform that cannot be inverted"),
+    (RuntimeError("QH6154 Qhull precision error: initial simplex is flat"),
+     "the points are flat or degenerate"),
+    (ValueError("cannot reshape array of size 5 into shape (3)"),
+     "the numbers do not fill whole rows"),
+])
+def test_cryptic_messages_in_plain_words_naming_the_file(error, words, tmp_path, monkeypatch,
+                                                         capsys):
+    import osteon
+
+    path = rigged_bar(tmp_path, "bar")
+
+    def fail(*a, **k):
+        raise error
+
+    monkeypatch.setattr(osteon, "analyze", fail)
+    assert cli_main(["analyze", str(path), "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"osteon: error: {path}: {words}" + err.split(words, 1)[1]
+    assert len(err.splitlines()) == 1

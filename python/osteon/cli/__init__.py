@@ -45,7 +45,7 @@ def main(argv=None) -> int:
     try:
         return handler[args.command](args, sys.stdout)
     except (ValueError, FileNotFoundError, RuntimeError) as e:
-        _error(_first_line(e))
+        _error(_named(_first_line(e), e, args))
         return 2
     except OSError as e:  # a folder given as a file, a full disk, no permission
         where = f"{e.filename}: " if e.filename else ""
@@ -61,14 +61,28 @@ def main(argv=None) -> int:
         print("osteon: interrupted", file=sys.stderr)
         return 130
     except Exception as e:  # noqa: BLE001 - one line, not a traceback; a bug to report
-        _error(f"internal error ({type(e).__name__}: {_first_line(e)}); please report it "
-               "with the model")
+        _error(_named(f"internal error ({type(e).__name__}: {_first_line(e)}); please report "
+                      "it with the model", e, args))
         return 3
 
 
+def _named(msg: str, e: BaseException, args) -> str:
+    """``msg`` naming the model file when a cryptic third-party message was put in plain
+    words (those name no file)."""
+    model = getattr(args, "model", None)
+    raw = str(e).strip().splitlines()[0] if str(e).strip() else ""
+    if model and raw and raw not in msg and str(model) not in msg:
+        from ..io.model import printable
+
+        return f"{printable(model)}: {msg}"
+    return msg
+
+
 def _first_line(e: BaseException) -> str:
+    from ..io.loader import plain_words
+
     text = str(e).strip()
-    return text.splitlines()[0] if text else type(e).__name__
+    return plain_words(text.splitlines()[0]) if text else type(e).__name__
 
 
 def _error(msg: str) -> None:

@@ -65,15 +65,25 @@ def read_mesh(path):
     return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int32)
 
 
+def plain_words(text: str) -> str:
+    """A third-party error message in plain words where it is one of the known cryptic ones
+    (NumPy's reshape, LinAlg's singular matrix, a Qhull code), else the message itself."""
+    low = text.lower()
+    if "cannot reshape array" in low:
+        return "the numbers do not fill whole rows (a truncated or malformed file)"
+    if "singular matrix" in low:
+        return "a transform that cannot be inverted (singular matrix)"
+    if text.startswith("QH") or "qhull" in low:
+        return "the points are flat or degenerate (convex hull failed)"
+    return text
+
+
 def _plain(e: Exception) -> str:
     """An exception of a third-party reader in plain words, one line."""
     text = str(e).strip().splitlines()[0] if str(e).strip() else ""
-    if "cannot reshape array" in text:
-        return "the numbers do not fill whole rows (a truncated or malformed file)"
-    if "Singular matrix" in text:
-        return "a transform that cannot be inverted (singular matrix)"
-    if text.startswith("QH") or "qhull" in text.lower():
-        return "the points are flat or degenerate (convex hull failed)"
+    plain = plain_words(text)
+    if plain != text:
+        return plain
     return f"{type(e).__name__}: {text}" if text else type(e).__name__
 
 
