@@ -187,12 +187,14 @@ def dense_weights(w: np.ndarray, source: str, names):
     w = np.asarray(w, dtype=np.float64)
     V = w.shape[0]
     finite = np.isfinite(w)
-    clean = np.where(finite & (w > 0), w, 0.0)
+    nonfinite = int(w.size - np.count_nonzero(finite))
+    negative = int(np.count_nonzero(w < 0))
+    # the usual file: nothing to clean, and the array is the reader's own (no copy)
+    clean = np.where(finite & (w > 0), w, 0.0) if nonfinite or negative else w
     sums = clean.sum(axis=1)
     has = sums > 0
     far = has & (np.abs(sums - 1.0) > 1e-2)
-    found = {"nonfinite": int(w.size - np.count_nonzero(finite)),
-             "negative": int(np.count_nonzero(w < 0)),
+    found = {"nonfinite": nonfinite, "negative": negative,
              "rows_far_from_1": int(np.count_nonzero(far)),
              "unweighted_vertices": int(V - np.count_nonzero(has)), "vertices": int(V)}
     if found["rows_far_from_1"]:
@@ -201,13 +203,18 @@ def dense_weights(w: np.ndarray, source: str, names):
     if V and not has.any() and w.size:
         raise ValueError(f"{source}: weights hold no usable value ({found['nonfinite']} NaN/inf, "
                          f"{found['negative']} negative, the rest 0)")
-    clean[has] /= sums[has, None]
     warns = weight_warnings(found, source)
-    bare = [names[b] for b in np.flatnonzero(clean.sum(axis=0) == 0)]
+    rows, cols = np.nonzero(clean)  # row-major: CSR order, no sort needed
+    data = clean[rows, cols] / sums[rows]
+    indptr = np.zeros(V + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=V), out=indptr[1:])
+    out = sp.csr_matrix((data, cols, indptr), shape=w.shape)
+    colsum = np.bincount(cols, data, minlength=w.shape[1])
+    bare = [names[b] for b in np.flatnonzero(colsum == 0)]
     if bare:
         warns.append(f"{source}: {len(bare)} bone(s) without any weight (nothing of the mesh "
                      f"follows them): {', '.join(bare[:10])}")
-    return sp.csr_matrix(clean), found, warns
+    return out, found, warns
 
 
 def validate_model(m: RiggedModel) -> None:
