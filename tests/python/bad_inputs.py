@@ -97,9 +97,10 @@ def _gltf(mutate):
 
 
 def _cycle_through_non_joint(doc, folder):
-    # tip -> (a non-joint node) -> root: the joint's parent chain loops
-    doc["nodes"].append({"name": "helper", "children": [1]})
-    doc["nodes"][3]["children"] = [4]
+    # root's parent chain runs into two non-joint nodes that are each other's parent: the old
+    # reader walked up from the joint for ever (one core at 100 %)
+    doc["nodes"].append({"name": "helper_a", "children": [1, 5]})
+    doc["nodes"].append({"name": "helper_b", "children": [4]})
 
 
 def _weights_nan(doc, folder):
