@@ -7,11 +7,10 @@ Units: mm, N, MPa.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
 from . import materials
-from ._api import _switch
+from .options import AnalysisOptions, _switch
 from .report import allowable_stress
 
 
@@ -101,21 +100,21 @@ def axis_direction(axis: str) -> tuple:
         raise ValueError(f"print axis must be one of {', '.join(AXES)}, got {axis!r}") from None
 
 
-def _positive(value, what: str, unit: str) -> float:
-    v = float(value)
-    if not (v > 0.0 and math.isfinite(v)):
-        raise ValueError(f"{what} must be a positive number of {unit}, got {value}")
-    return v
+#: The options' names as the front ends word them (the CLI maps these words to its flags).
+_FRONT_END_WORDS = {"interval": "section interval",
+                    "layer_strength_ratio": "layer strength ratio",
+                    "build_direction": "build direction"}
 
 
-def _direction(value) -> list[float]:
+def _checked(kw: dict) -> AnalysisOptions:
+    """The settings as checked :class:`osteon.AnalysisOptions` (the one place they are checked);
+    ``ValueError`` naming the setting as the front ends do."""
     try:
-        d = [float(x) for x in value]
-    except (TypeError, ValueError):
-        d = []
-    if len(d) != 3 or not all(math.isfinite(x) for x in d) or not any(d):
-        raise ValueError(f"build direction must be three finite numbers, not all 0, got {value!r}")
-    return d
+        return AnalysisOptions(**kw)
+    except ValueError as e:
+        msg = str(e)
+        name = msg.split(" ", 1)[0]
+        raise ValueError(_FRONT_END_WORDS.get(name, name) + msg[len(name):]) from None
 
 
 def held_bone_index(held_bone, bone_names) -> int | None:
@@ -151,16 +150,19 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
     ``scaling`` with ``correct=True`` for ``osteon.correct``. Raises ``ValueError`` naming the
     bad setting."""
     kw = {
-        "force": _positive(settings.force_n, "force", "N"),
+        "force": settings.force_n,
         "allowable_stress": settings.allowable_stress_mpa(),
-        "interval": _positive(settings.interval_mm, "section interval", "mm"),
+        "interval": settings.interval_mm,
         "root": held_bone_index(settings.held_bone, bone_names),
-        "build_direction": _direction(settings.build_direction),
-        "layer_strength_ratio": _positive(settings.layer_ratio(), "layer strength ratio",
-                                          "(layer / in-plane strength)"),
+        "build_direction": settings.build_direction,
+        "layer_strength_ratio": settings.layer_ratio(),
         "min_thickness": min_thickness_mm(settings),
-        "junctions": _switch(settings.junctions, "junctions"),
+        "junctions": settings.junctions,
     }
+    options = _checked(kw)
+    kw.update((name, getattr(options, name)) for name in kw)
+    # as given (analyze makes it a unit vector): the report shows the user's numbers
+    kw["build_direction"] = [float(x) for x in settings.build_direction]
     if correct:
         if not (float(settings.max_scale) >= 1.0):
             raise ValueError(f"max scale must be >= 1, got {settings.max_scale}")
