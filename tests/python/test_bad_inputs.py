@@ -365,3 +365,49 @@ def test_cryptic_messages_in_plain_words_naming_the_file(error, words, tmp_path,
     err = capsys.readouterr().err.strip()
     assert err == f"osteon: error: {path}: {words}" + err.split(words, 1)[1]
     assert len(err.splitlines()) == 1
+
+
+def _descendants(pid: int) -> list[int]:
+    """Every process below ``pid`` (by /proc parent links)."""
+    parent = {}
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                parent[int(d.name)] = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+    out, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        kids = [c for c, pp in parent.items() if pp == p]
+        out += kids
+        todo += kids
+    return out
+
+
+def test_cli_batch_killed_then_resumed_over_the_catalogue(tmp_path):
+    """``osteon batch`` over good files and the catalogue, killed (-9) while it works: no
+    process of it is left; ``--resume`` finishes, and the summary lists every file."""
+    expected = _library_with_catalogue(tmp_path / "lib")
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "osteon.cli", "batch", str(tmp_path / "lib"), "--out", str(out),
+           "-j", "2", "--no-png", "-q"]
+    proc = subprocess.Popen(cmd)
+    results = out / "results.jsonl"
+    end = time.monotonic() + 120
+    while time.monotonic() < end and not (results.exists() and results.read_text().count("\n")):
+        time.sleep(0.05)
+    below = _descendants(proc.pid)
+    assert below, "no worker started"
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert _wait_dead(below) == [], "a worker or the fork server survived the kill"
+    done = subprocess.run(cmd + ["--resume"], check=False, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    recs = {Path(r["model"]).name: r for r in batch.read_results(out)}
+    assert set(recs) == set(expected)
+    csv = (out / "summary.csv").read_text(encoding="utf-8")
+    for name, want in expected.items():
+        if want != "ok":
+            assert recs[name]["status"] == "failed" and re.search(want, recs[name]["reason"])
+        assert name.replace("\udcfe", "\ufffd") in csv
