@@ -63,8 +63,8 @@ struct AnalysisResult {
   std::vector<std::shared_ptr<const SectionPolygon>> thickness_pending;
 };
 
-/// Writes the thickness (mm, regions.hpp) of every region in `pending` (S, null: none) into
-/// `thickness` (S,); the regions stay (a second call writes the same).
+/// Writes the thickness (mm, cpp/src/thickness.hpp) of every region in `pending` (S, null: none)
+/// into `thickness` (S,); the regions stay (a second call writes the same).
 void fill_section_thickness(const std::vector<std::shared_ptr<const SectionPolygon>>& pending,
                             std::vector<double>& thickness);
 
