@@ -67,6 +67,16 @@ def test_rignet_without_skin_keeps_every_bone(tmp_path):
     assert m.n_bones == m_skin.n_bones == 2 and m.weights is None
 
 
+def test_json_report_keeps_the_readers_warnings(tmp_path):
+    import json
+
+    path = build(tmp_path, "dmat_bone_without_weight")
+    js = tmp_path / "r.json"
+    assert cli_main(["analyze", str(path), "--json", str(js), "-q"]) == 0
+    rep = json.loads(js.read_text())
+    assert any("without any weight" in w and "bone_1" in w for w in rep["warnings"])
+
+
 def test_validate_reports_what_the_weights_held(tmp_path, capsys):
     path = build(tmp_path, "dmat_nan_negative_7_3")
     assert cli_main(["validate", str(path)]) == 0
@@ -209,7 +219,7 @@ def test_batch_over_the_catalogue_finishes_and_names_every_bad_file(tmp_path):
             assert r["status"] == "ok", (name, r["reason"])
         else:
             assert r["status"] == "failed" and re.search(want, r["reason"]), (name, r["reason"])
-    assert got["dmat_nan_negative_7_3.obj"]["warnings"]  # repaired weights are reported
+    assert any("NaN/inf" in w for w in got["dmat_nan_negative_7_3.obj"]["warnings"])
     html = (out / "summary.html").read_text(encoding="utf-8")
     csv = (out / "summary.csv").read_text(encoding="utf-8")
     assert "odd\ufffd.obj" in html and "odd\ufffd.obj" in csv

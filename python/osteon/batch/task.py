@@ -237,7 +237,7 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
             rep["output"] = f"{rec['id']}_corrected{ext}"
         rec.update(rep)
         rec["flags"] = flags
-        rec["warnings"] = list(model.warnings)
+        rec["warnings"] = [*rec.get("warnings", []), *model.warnings]  # the report's + reader's
         if s.png:
             t = time.perf_counter()
             material = s.settings.material_and_strength()[0]

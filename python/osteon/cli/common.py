@@ -309,12 +309,16 @@ def headline(analysis, seconds: float) -> str:
 
 def report_of(source, model, settings: Settings, analysis, seconds, correction=None, output=None):
     """The one report (:func:`osteon.report.build_report`) of a model read from ``source``."""
-    return build_report(
+    rep = build_report(
         analysis=analysis, bone_names=model.bone_names,
         allowable_mpa=settings.allowable_stress_mpa(), settings=settings.as_dict(),
-        front_end="cli", model=str(source), mm_per_unit=model.scale,
+        front_end="cli", model=printable(source), mm_per_unit=model.scale,
         vertices=len(model.vertices), faces=len(model.faces), seconds=seconds,
         correction=correction, output=output)
+    # the reader's warnings (weights repaired, bones without weight, no skin) stay with the
+    # numbers they qualify
+    rep["warnings"] = [*rep.get("warnings", []), *(printable(w) for w in model.warnings)]
+    return rep
 
 
 def write_json(path, data):
