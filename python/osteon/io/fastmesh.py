@@ -97,7 +97,7 @@ def parse_off(data: bytes, where: str):
     else:
         return None  # colours per vertex: let trimesh sort them out
     fvals = _numbers(b" ".join(rest[nv:nv + nf]))
-    if fvals is None or not np.all(np.isfinite(fvals) & (fvals == np.round(fvals))):
+    if fvals is None or not np.all((np.abs(fvals) < 2**62) & (fvals == np.round(fvals))):
         raise ValueError(f"{where}: OFF face lines must hold integers")
     fvals = fvals.astype(np.int64)
     if len(fvals) == 4 * nf and np.all(fvals[::4] == 3):
@@ -119,7 +119,8 @@ def parse_stl(data: bytes, where: str):
         if len(data) == 84 + 50 * n:  # binary
             rec = np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
             tri = np.frombuffer(data, dtype=rec, count=n, offset=84)["v"]
-            V = tri.reshape(-1, 3).astype(np.float64)
+            with np.errstate(invalid="ignore"):  # a NaN is refused by the model's checks
+                V = tri.reshape(-1, 3).astype(np.float64)
             return V, np.arange(3 * n, dtype=np.int64).reshape(-1, 3)
     head = data[:512].lstrip().lower()
     if not head.startswith(b"solid"):
@@ -201,7 +202,7 @@ def parse_ply(data: bytes, where: str):
             V[:, k] = V[:, k].astype(_PLY_TYPES[vprops[k][0]]).astype(np.float64)
         fvals = _numbers(b" ".join(lines[nv:nv + nf]))
         if fvals is None or len(fvals) != 4 * nf or not np.all(fvals[::4] == 3) or \
-                not np.all(np.isfinite(fvals)):
+                not np.all(np.abs(fvals) < 2**62):
             return None
         F = fvals.reshape(nf, 4)[:, 1:].astype(np.int64)
     else:
