@@ -15,6 +15,7 @@
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
 #include "osteon/progress.hpp"
+#include "osteon/readers.hpp"
 #include "osteon/section.hpp"
 #include "osteon/skinning.hpp"
 #include "osteon/slicer.hpp"
@@ -237,6 +238,19 @@ class PyAnalyzer {
 
 }  // namespace
 
+// The bytes of a Python bytes object, without a copy (valid while the object lives).
+static std::string_view bytes_view(const py::bytes& b) {
+  char* data = nullptr;
+  Py_ssize_t size = 0;
+  PyBytes_AsStringAndSize(b.ptr(), &data, &size);
+  return {data, static_cast<std::size_t>(size)};
+}
+
+template <class T>
+py::array_t<T> to_array(const std::vector<T>& v) {
+  return py::array_t<T>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
 PYBIND11_MODULE(_core, m) {
   m.doc() = "osteon engine (C++): skeleton-sectional structural analysis; mm, N, MPa";
   // A cancelled run (Progress.cancel()) raises osteon._core.Cancelled, not a ValueError.
@@ -282,6 +296,34 @@ PYBIND11_MODULE(_core, m) {
         "(name, shape, dtype, unit, doc) of every field of an analysis result "
         "(cpp/include/osteon/result_fields.hpp), in order.");
 
+  m.def(
+      "parse_obj",
+      [](const py::bytes& text) {
+        const std::string_view view = bytes_view(text);
+        readers::ObjData d;
+        {
+          py::gil_scoped_release release;
+          d = readers::parse_obj(view);
+        }
+        return py::make_tuple(to_array(d.vertices), to_array(d.corners), to_array(d.counts),
+                              d.error, d.unsupported);
+      },
+      "OBJ bytes -> (xyz (3V,), corners (0-based), corners per face, error, unsupported)");
+  m.def(
+      "parse_numbers",
+      [](const py::bytes& text) {
+        const std::string_view view = bytes_view(text);
+        std::vector<double> out;
+        std::size_t bad = 0;
+        {
+          py::gil_scoped_release release;
+          bad = readers::parse_numbers(view, out);
+        }
+        return py::make_tuple(to_array(out), bad == std::string_view::npos
+                                                 ? py::ssize_t(-1)
+                                                 : static_cast<py::ssize_t>(bad));
+      },
+      "whitespace-separated numbers -> (values, offset of the first non-number or -1)");
   m.def(
       "count_sections",
       [](const Skeleton& s, double interval) { return count_sections(s, interval); },

@@ -13,6 +13,20 @@ MATERIALS = materials.strengths_mpa()
 DEFAULT_SAFETY_FACTOR = materials.DEFAULT_SAFETY_FACTOR
 
 
+def add_max_sections(p) -> None:
+    """``--max-sections``: the global section budget (whole model, not per bone)."""
+    from ..settings import MAX_SECTIONS
+
+    p.add_argument(
+        "--max-sections",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"refuse a model that would make more than N sections in all (default "
+        f"{MAX_SECTIONS:,}, about 2 GB; the estimate and its memory are in the message)",
+    )
+
+
 def add_junction_switch(p) -> None:
     """``--no-junction-cores`` (``Settings.junctions``) on a command or an option group."""
     p.add_argument(

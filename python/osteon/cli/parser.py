@@ -10,6 +10,7 @@ from .options import (
     MATERIALS,
     ListProfiles,
     add_junction_switch,
+    add_max_sections,
     add_print_options,
 )
 
@@ -100,6 +101,7 @@ def _add_common(p: argparse.ArgumentParser):
         metavar="BONE",
         help="bone (name or index) held at its head (default: the main root bone)",
     )
+    add_max_sections(a)
     pr = p.add_argument_group("print direction (FDM layers; docs/printing.md)")
     pr.add_argument(
         "--build-direction",
