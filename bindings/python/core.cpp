@@ -14,6 +14,7 @@
 
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
+#include "osteon/notch.hpp"
 #include "osteon/progress.hpp"
 #include "osteon/section.hpp"
 #include "osteon/skinning.hpp"
@@ -169,6 +170,10 @@ py::dict result_to_dict(AnalysisResult&& r) {
   d["moment_arm"] = to_numpy(std::move(r.moment_arm));
   d["moment"] = to_numpy(std::move(r.moment));
   d["stress"] = to_numpy(std::move(r.stress));
+  d["nominal_stress"] = to_numpy(std::move(r.nominal_stress));
+  d["stress_concentration"] = to_numpy(std::move(r.stress_concentration));
+  d["notch_radius"] = to_numpy(std::move(r.notch_radius));
+  d["notch_step"] = to_numpy(std::move(r.notch_step));
   d["culled"] = to_bool(r.culled);
   d["weak"] = to_bool(r.weak);
   d["section_allowable"] = to_numpy(std::move(r.section_allowable));
@@ -323,6 +328,10 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("junctions", &AnalysisOptions::junctions)
       .def_readwrite("min_thickness", &AnalysisOptions::min_thickness,
                      "mm; thinner sections are flagged too_thin (0 = no check)")
+      .def_readwrite("notch_sensitivity", &AnalysisOptions::notch_sensitivity,
+                     "q, 0..1: governing stress = (1 + q (Kt - 1)) x nominal")
+      .def_readwrite("min_notch_radius", &AnalysisOptions::min_notch_radius,
+                     "mm; corners sharper than this are taken at this radius")
       .def_property(
           "build_direction",
           [](const AnalysisOptions& o) {
@@ -530,4 +539,9 @@ PYBIND11_MODULE(_core, m) {
   m.attr("FLAG_UNRELIABLE") = static_cast<int>(kFlagUnreliable);
   m.attr("FLAG_TOO_THIN") = static_cast<int>(kFlagTooThin);
   m.attr("FLAG_JUNCTION") = static_cast<int>(kFlagJunction);
+  m.attr("FLAG_NOTCH") = static_cast<int>(kFlagNotch);
+  m.def("shoulder_fillet_kt", &shoulder_fillet_kt, py::arg("big_diameter"),
+        py::arg("small_diameter"), py::arg("radius"),
+        "Kt of a stepped round bar's shoulder fillet in bending (D, d, r in mm; Roark Table 17.1 "
+        "/ Peterson Chart 3.11; clamped on the safe side outside the fit, docs/notch.md)");
 }

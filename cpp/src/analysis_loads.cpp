@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
+#include "notch.hpp"
 #include "osteon/regions.hpp"
 #include "parallel.hpp"
 
@@ -68,6 +69,20 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
+  // Stress concentration at corners (notch.hpp, docs/notch.md): `stress` becomes the governing
+  // stress, the peak at the corner next to the section; the beam stress stays as nominal_stress.
+  run.timer.lap("loads");
+  r.nominal_stress = r.stress;
+  NotchField notch = find_notches(mesh, r, options.min_notch_radius, options.notch_sensitivity);
+  for (int i = 0; i < ns; ++i) {
+    if (!(notch.kt[i] > 1.0) || !std::isfinite(r.stress[i])) continue;
+    r.stress[i] *= notch.effective[i] * notch.arm_ratio[i];
+    r.section_flags[i] |= kFlagNotch;
+  }
+  r.stress_concentration = notch.kt;
+  r.notch_radius = notch.radius;
+  r.notch_step = notch.step;
+  run.timer.lap("notches");
   // Direction-dependent allowable (FDM layers, osteon/layers.hpp): exactly allowable_stress
   // when isotropic.
   section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
@@ -99,6 +114,9 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
         r.section_area[i] = r.section_cut_area[i] = 0.0;
         r.section_cut_modulus[i] = kNaN;
         r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
+        r.nominal_stress[i] = r.notch_radius[i] = r.notch_step[i] = kNaN;
+        r.stress_concentration[i] = notch.effective[i] = notch.arm_ratio[i] = 1.0;
+        flags &= ~static_cast<std::uint32_t>(kFlagNotch);
         r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
         continue;
       }
@@ -131,7 +149,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   }
   for (int i = 0; i < ns; ++i) {
     if (!usable[i]) continue;
-    r.max_moment = std::max(r.max_moment, r.moment[i]);
+    // The moment at a notch section's corner counts (the bound below stays a bound).
+    r.max_moment = std::max(r.max_moment, r.moment[i] * notch.arm_ratio[i]);
     r.max_stress = std::max(r.max_stress, r.stress[i]);
     if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
       r.max_stress_ratio = r.stress_ratio[i];
@@ -141,7 +160,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   r.safe_modulus = r.max_moment / options.allowable_stress;
   for (int i = 0; i < ns; ++i) {
     if (!usable[i]) continue;
-    r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
+    // Safe for sure even with its corner: (1 + q (Kt - 1)) M_max / W below the allowable.
+    r.culled[i] = r.section_modulus[i] > notch.effective[i] * r.max_moment / r.section_allowable[i];
     r.weak[i] = r.stress[i] > r.section_allowable[i];
   }
   run.check_cancel();

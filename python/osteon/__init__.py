@@ -20,6 +20,7 @@ from ._api import (
     correct,
     estimate_sections,
     section_properties,
+    shoulder_fillet_kt,
     skin,
     slice_section,
 )
@@ -47,6 +48,7 @@ __all__ = [
     "correct",
     "estimate_sections",
     "section_properties",
+    "shoulder_fillet_kt",
     "skin",
     "slice_section",
 ]

@@ -30,6 +30,7 @@ __all__ = [
     "correct",
     "estimate_sections",
     "section_properties",
+    "shoulder_fillet_kt",
     "skin",
     "slice_section",
 ]
@@ -80,6 +81,7 @@ SECTION_FLAGS = {
     "unreliable": _core.FLAG_UNRELIABLE,
     "too_thin": _core.FLAG_TOO_THIN,
     "junction": _core.FLAG_JUNCTION,
+    "notch": _core.FLAG_NOTCH,
 }
 
 #: Plain-language reason of each flag (``Analysis.flag_reasons``, the JSON ``sections`` rows).
@@ -95,7 +97,10 @@ FLAG_REASONS = {
                   "left out of every result",
     "too_thin": "too thin to print ({thickness} mm < {minimum} mm)",
     "junction": "a side branch is cut here: only the material that continues through the plane "
-                "counts ({area} of {cut_area} mm²)",
+                "counts ({area} of {cut_area} mm²); where the branch is a limb rooted in a "
+                "massive body this is conservative by design (docs/junctions.md)",
+    "notch": "corner radius {radius} mm at {bone}: peak {peak}× the beam stress (Kt {kt}, step "
+             "D/d {step}); a larger fillet or a thicker thin side lowers it",
 }
 #: Values of ``Analysis.section_kind``.
 SECTION_KINDS = {0: "interior", 1: "joint", 2: "end"}
@@ -289,6 +294,31 @@ def _layer_options(build_direction: Any, layer_strength_ratio: Any) -> tuple[np.
 
 #: Default minimum printable thickness, mm (FDM: two perimeters of a 0.4 mm nozzle).
 DEFAULT_MIN_THICKNESS = 0.8
+#: Default notch sensitivity q: the full elastic peak at a corner (brittle; the safe side).
+DEFAULT_NOTCH_SENSITIVITY = 1.0
+#: Default smallest corner radius a print makes, mm: half a 0.4 mm nozzle's line (docs/notch.md).
+DEFAULT_MIN_NOTCH_RADIUS = 0.2
+
+
+def _notch_sensitivity(value: Any) -> float:
+    """``notch_sensitivity`` q: None -> 1; must be a number from 0 to 1."""
+    if value is None:
+        return DEFAULT_NOTCH_SENSITIVITY
+    try:
+        q = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"notch_sensitivity must be a number from 0 to 1, got {value!r}"
+                         ) from None
+    if not 0.0 <= q <= 1.0:
+        raise ValueError(f"notch_sensitivity must be a number from 0 to 1, got {value!r}")
+    return q
+
+
+def _min_notch_radius(value: Any) -> float:
+    """``min_notch_radius`` in mm: None -> the default; must be a positive finite number."""
+    if value is None:
+        return DEFAULT_MIN_NOTCH_RADIUS
+    return _positive(value, "min_notch_radius", "mm")
 
 
 def _min_thickness(value: Any) -> float:
@@ -421,6 +451,15 @@ class Analysis:
     cut_outline_points: np.ndarray | None = None
     cut_outline_loop_start: np.ndarray | None = None
     cut_outline_section_start: np.ndarray | None = None
+    #: (S,) the beam stress M / W, MPa; ``stress`` is the governing stress: this times
+    #: 1 + q (Kt - 1) (and the moment at the corner over the section's) at ``notch`` sections
+    nominal_stress: np.ndarray | None = None
+    #: (S,) Kt of the corner next to the section (1 where none), docs/notch.md
+    stress_concentration: np.ndarray | None = None
+    #: (S,) corner radius Kt was computed with, mm (NaN where none); never below the print's
+    notch_radius: np.ndarray | None = None
+    #: (S,) step ratio D/d (big / small equivalent diameter) of that corner (NaN where none)
+    notch_step: np.ndarray | None = None
 
     @classmethod
     def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
@@ -449,6 +488,14 @@ class Analysis:
             self.section_cut_area = np.asarray(self.section_area, dtype=float).copy()
         if self.section_cut_modulus is None:
             self.section_cut_modulus = np.asarray(self.section_modulus, dtype=float).copy()
+        if self.nominal_stress is None:  # results built without the notch fields: no corner
+            self.nominal_stress = np.asarray(self.stress, dtype=float).copy()
+        if self.stress_concentration is None:
+            self.stress_concentration = np.ones(len(self.stress))
+        if self.notch_radius is None:
+            self.notch_radius = np.full(len(self.stress), np.nan)
+        if self.notch_step is None:
+            self.notch_step = np.full(len(self.stress), np.nan)
 
     @property
     def num_sections(self) -> int:
@@ -507,9 +554,24 @@ class Analysis:
         t = float(self.section_thickness[section])
         area = float(self.section_area[section])
         cut = float(self.section_cut_area[section])
+        nominal = float(self.nominal_stress[section])
+        peak = float(self.stress[section]) / nominal if nominal > 0 else float("nan")
+        b = int(self.section_bone[section])
+        bone = (f"the {self.bone_names[b]}" if b < len(self.bone_names) and self.bone_names[b]
+                else f"bone {b}")
         return [FLAG_REASONS[name].format(thickness=f"{t:.2g}", minimum=f"{self.min_thickness:g}",
-                                          area=f"{area:.3g}", cut_area=f"{cut:.3g}")
+                                          area=f"{area:.3g}", cut_area=f"{cut:.3g}",
+                                          radius=f"{float(self.notch_radius[section]):.2g}",
+                                          bone=bone, peak=f"{peak:.2g}",
+                                          kt=f"{float(self.stress_concentration[section]):.2f}",
+                                          step=f"{float(self.notch_step[section]):.2g}")
                 for name in self.flag_names(section)]
+
+    @property
+    def notch(self) -> np.ndarray:
+        """(S,) bool: sections next to a concave corner whose stress is the peak at it (Kt > 1,
+        :attr:`stress_concentration`, docs/notch.md)."""
+        return (self.section_flags & SECTION_FLAGS["notch"]) != 0
 
     @property
     def too_thin(self) -> np.ndarray:
@@ -685,6 +747,8 @@ class Analyzer:
         keep_outlines: bool = False,
         min_thickness: float | None = None,
         junctions: bool = True,
+        notch_sensitivity: float | None = None,
+        min_notch_radius: float | None = None,
     ) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
@@ -709,6 +773,8 @@ class Analyzer:
         options.keep_outlines = bool(keep_outlines)
         options.min_thickness = self.min_thickness
         options.junctions = _switch(junctions, "junctions")
+        options.notch_sensitivity = _notch_sensitivity(notch_sensitivity)
+        options.min_notch_radius = _min_notch_radius(min_notch_radius)
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
                                     options)
 
@@ -758,6 +824,8 @@ def analyze(
     min_thickness: float | None = None,
     progress: Progress | None = None,
     junctions: bool = True,
+    notch_sensitivity: float | None = None,
+    min_notch_radius: float | None = None,
 ) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
@@ -774,7 +842,12 @@ def analyze(
     flagged ``too_thin`` (None: 0.8 mm, FDM; the material presets carry their own; 0 = no
     check); ``junctions`` (default True) counts only the core that continues through the plane
     where a section cuts a side branch's stub (flag ``junction``, docs/junctions.md); False
-    analyses whole cuts. ``progress``: a :class:`Progress` to follow the run from another
+    analyses whole cuts. ``notch_sensitivity`` q (0…1, None: 1): at a section next to a concave
+    corner (flag ``notch``) the governing ``stress`` is (1 + q (Kt − 1)) × the beam stress
+    (``nominal_stress``; Kt in ``stress_concentration``, docs/notch.md); 1 (brittle) is the safe
+    side, the material presets carry their own. ``min_notch_radius`` mm (None: 0.2, half a
+    0.4 mm nozzle's line): corners sharper than this are taken at this radius (the print rounds
+    them). ``progress``: a :class:`Progress` to follow the run from another
     thread or cancel it (then :class:`Cancelled` is raised); :func:`estimate_sections` tells
     the section count beforehand. Raises ValueError on bad input.
     """
@@ -787,7 +860,8 @@ def analyze(
                         gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
                         build_direction=build_direction,
                         layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines,
-                        min_thickness=min_thickness, junctions=junctions)
+                        min_thickness=min_thickness, junctions=junctions,
+                        notch_sensitivity=notch_sensitivity, min_notch_radius=min_notch_radius)
     return analyzer.run(v, progress=progress)
 
 
@@ -816,6 +890,8 @@ def correct(
     min_thickness: float | None = None,
     progress: Progress | None = None,
     junctions: bool = True,
+    notch_sensitivity: float | None = None,
+    min_notch_radius: float | None = None,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -840,6 +916,10 @@ def correct(
     and ``after`` carry their sections' loops (:attr:`Analysis.section_loops`).
     ``junctions`` as in :func:`analyze`: True (default) drives the loop by the junction cores
     (the stub of a side branch not counted, docs/junctions.md), False by the whole cuts.
+    ``notch_sensitivity`` and ``min_notch_radius`` as in :func:`analyze`: the loop is driven by
+    the governing stress, so a ``notch`` section is thickened until its peak at the corner is
+    allowed (thickening the thin side lowers D/d and so Kt; a larger fillet in the model lowers
+    it more, which the loop cannot do: docs/notch.md).
     ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
     round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
     """
@@ -875,7 +955,8 @@ def correct(
 
         nearest = analyze(v, f, skeleton, None, force=force, allowable_stress=allowable_stress,
                           interval=interval, root=root, progress=progress,
-                          junctions=junctions).vertex_bone
+                          junctions=junctions, notch_sensitivity=notch_sensitivity,
+                          min_notch_radius=min_notch_radius).vertex_bone
         weights = sparse.csr_matrix(
             (np.ones(len(v)), (np.arange(len(v)), nearest)), shape=(len(v), skeleton.num_bones)
         )
@@ -885,6 +966,8 @@ def correct(
     options.keep_outlines = bool(keep_outlines)
     options.min_thickness = _min_thickness(min_thickness)
     options.junctions = _switch(junctions, "junctions")
+    options.notch_sensitivity = _notch_sensitivity(notch_sensitivity)
+    options.min_notch_radius = _min_notch_radius(min_notch_radius)
     co = _core.CorrectionOptions()
     co.max_scale, co.max_rounds = float(max_scale), max_rounds
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"
@@ -898,6 +981,17 @@ def correct(
     d["before"] = Analysis._from_core(d["before"], **kw)
     d["after"] = Analysis._from_core(d["after"], **kw)
     return Correction(**d)
+
+
+def shoulder_fillet_kt(big_diameter: float, small_diameter: float, radius: float) -> float:
+    """Kt of a stepped round bar's shoulder fillet in bending: big and small diameter D > d and
+    fillet radius r, mm (Roark's Formulas 7th ed. Table 17.1, the fit of Peterson's charts;
+    clamped on the safe side outside 0.25 <= h/r <= 20 and D/d <= 3; docs/notch.md). 1 when
+    D <= d. Raises ValueError for a non-positive or non-finite length."""
+    big = _positive(big_diameter, "big_diameter", "mm")
+    small = _positive(small_diameter, "small_diameter", "mm")
+    r = _positive(radius, "radius", "mm")
+    return float(_core.shoulder_fillet_kt(big, small, r))
 
 
 def estimate_sections(skeleton: Skeleton, interval: float = 2.0) -> int:

@@ -40,6 +40,12 @@ struct AnalysisOptions {
   /// AnalysisResult::thickness_pending for complete_section_thickness(). Python reads them on
   /// first use of Analysis.section_thickness.
   bool defer_thickness = false;
+  /// Stress concentration at corners (docs/notch.md): notch sensitivity q (0..1), governing
+  /// stress = (1 + q (Kt - 1)) x nominal; 1 = the full elastic peak (brittle, the safe side).
+  double notch_sensitivity = 1.0;
+  /// A corner is never sharper than the print makes it: measured radii below this are raised to
+  /// it, mm (default: half a 0.4 mm nozzle's line, docs/notch.md).
+  double min_notch_radius = 0.2;
 };
 
 /// Where a section sits on its bone.
@@ -74,7 +80,13 @@ struct AnalysisResult {
   std::vector<double> section_cut_modulus;
   std::vector<double> moment_arm;  ///< S distance centroid -> load point d, mm
   std::vector<double> moment;      ///< S bending moment M = F d, N mm
-  std::vector<double> stress;  ///< S peak bending stress M / W, MPa (NaN when skipped/unreliable)
+  /// S governing stress, MPa (NaN when skipped/unreliable): the beam stress M / W, times
+  /// 1 + q (Kt - 1) and the moment at the corner over M at a notch section (kFlagNotch)
+  std::vector<double> stress;
+  std::vector<double> nominal_stress;        ///< S beam stress M / W, MPa (NaN when skipped)
+  std::vector<double> stress_concentration;  ///< S Kt at the corner next to it, 1 where none
+  std::vector<double> notch_radius;  ///< S corner radius used for Kt, mm (NaN where none)
+  std::vector<double> notch_step;    ///< S step ratio D/d of the corner (NaN where none)
   std::vector<std::uint8_t> culled;       ///< S W > safe modulus: safe for sure (drawn grey)
   std::vector<std::uint8_t> weak;         ///< S stress > section_allowable
   std::vector<double> section_allowable;  ///< S [sigma](theta) for the build direction, MPa
