@@ -213,7 +213,12 @@ def main(argv=None):
         t0 = time.time()
         work = args.keep or tempfile.mkdtemp(prefix="osteon_notch_")
         os.makedirs(work, exist_ok=True)
-        fem, n_nodes = fem_peak(step, rel_r, 4, work)
+        try:
+            fem, n_nodes = fem_peak(step, rel_r, 4, work)
+        except Exception as exc:  # noqa: BLE001 - a shape OCC cannot build is reported, not fatal
+            print(f"D/d {step:g} r/d {rel_r:g}: not built ({exc})", file=sys.stderr, flush=True)
+            rows.append((step, rel_r, None, str(exc)))
+            continue
         fem_fine = n_fine = float("nan")
         if not args.no_refine:
             fem_fine, n_fine = fem_peak(step, rel_r, 6, work)
@@ -230,15 +235,21 @@ def main(argv=None):
     print("| D/d | r/d | Kt fit | r/d measured | Kt used | FEM r/4 (MPa, nodes) | FEM r/6 (MPa, "
           "nodes) | change | fit x nominal (MPa) | osteon (MPa) | osteon vs FEM | pass |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for (step, rel_r, kt_fit, r_meas, kt_used, fem, n1, fine, n2, fit, ost, err, ok, _) in rows:
+    for row in rows:
+        if row[2] is None:
+            print(f"| {row[0]:g} | {row[1]:g} | not built: {row[3]} |")
+            continue
+        (step, rel_r, kt_fit, r_meas, kt_used, fem, n1, fine, n2, fit, ost, err, ok, _) = row
         change = (fine - fem) / fem if math.isfinite(fine) else float("nan")
         ref = fine if math.isfinite(fine) else fem
         print(f"| {step:g} | {rel_r:g} | {kt_fit:.3f} | {r_meas:.3f} | {kt_used:.3f} | "
               f"{fem:.3f} ({n1}) | {fine:.3f} ({n2}) | {100 * change:+.1f} % | "
               f"{fit:.3f} ({100 * (fit - ref) / ref:+.1f} %) | {ost:.3f} | {100 * err:+.1f} % | "
               f"{'yes' if ok else '**no**'} |")
-    failed = sum(not r[12] for r in rows)
-    print(f"\n{len(rows) - failed} of {len(rows)} shapes pass (e in [-10 %, +15 %]).")
+    built = [r for r in rows if r[2] is not None]
+    failed = sum(not r[12] for r in built)
+    print(f"\n{len(built) - failed} of {len(built)} shapes built pass (e in [-10 %, +15 %]); "
+          f"{len(rows) - len(built)} could not be built.")
     return 0 if failed == 0 else 1
 
 

@@ -79,11 +79,15 @@ struct Corner {
   double axial = 0.0;   // where the fillet meets the thin side, along the axis from the plane, mm
 };
 
+// Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
+constexpr double kMinTurn = 45.0 * kPi / 180.0;
+
 // Fillet points grouped in angular sectors around the axis: axial position a and the normal's
 // axial component n_a of each point (mm, unit).
 constexpr int kSectors = 8;
 struct SectorPoints {
   std::array<std::vector<double>, kSectors> a, na;
+  std::array<double, kSectors> turn{};  // the largest normal turn from radial, radians
 };
 
 // The fillet radius of one sector: a fillet of radius rho tangent to a thin part and a shoulder
@@ -179,11 +183,19 @@ Corner measure_corner(const MeshView& mesh, const std::vector<Vec3>& normals, co
         std::min(kSectors - 1, static_cast<int>((angle + kPi) / (2 * kPi) * kSectors));
     pts.a[sector].push_back(m.a);
     pts.na[sector].push_back(m.na / std::hypot(m.na, m.nr));
+    pts.turn[sector] = std::max(pts.turn[sector], std::atan2(-m.na, m.nr));
   }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
     double rho = 0, axial = 0;
     if (!sector_radius(pts.a[s], pts.na[s], r_thin, rho, axial)) continue;
+    // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
+    // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
+    // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:
+    // their singularity is weaker (Williams 1952: stress ~ dist^-0.33 at a 45-degree turn
+    // against dist^-0.46 at 90), and turns of 45..90 degrees take the shoulder's Kt (safe side).
+    const double turn = rho == 0.0 ? 2.0 * pts.turn[s] : pts.turn[s] + 8.0 * kPi / 180.0;
+    if (turn < kMinTurn) continue;
     if (!c.found || rho < c.radius) {  // the sharpest sector governs
       c.found = true;
       c.radius = rho;
