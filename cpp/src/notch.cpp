@@ -254,10 +254,13 @@ NotchField find_notches(const MeshView& mesh, const AnalysisResult& r, double mi
       const int dir = rb > ra ? 1 : -1;  // along the chain, thin -> thick
       int thin = rb > ra ? k : k + 1;
       const int thick = thin + dir;
-      // The thin side's smallest section within one radius (a plane may cut the fillet itself).
+      // A plane may cut the fillet itself: the thin side's smallest section within the largest
+      // fillet the study covers (r = 0.3 d, i.e. 0.6 of the thin radius) is the thin one.
+      const int first = thin;
       for (int j = thin - dir; j >= 0 && j < n; j -= dir) {
         if (radius_of(j) >= radius_of(thin)) break;
-        if (std::abs(r.section_param[chain[j]] - r.section_param[chain[thin]]) > radius_of(thin))
+        if (std::abs(r.section_param[chain[j]] - r.section_param[chain[first]]) >
+            0.6 * radius_of(first))
           break;
         thin = j;
       }
@@ -276,7 +279,7 @@ NotchField find_notches(const MeshView& mesh, const AnalysisResult& r, double mi
       const double reach = std::max(towards.dot(u), 0.0);
       if (normals.empty()) normals = vertex_normals(mesh);
       const Corner c = measure_corner(mesh, normals, r.section_point[i], u, r_thin, -0.25 * reach,
-                                      reach + r_thin);
+                                      reach + 0.25 * r_thin);
       if (!c.found) continue;
       const double rho = std::max(c.radius, min_radius);
       const double kt = shoulder_fillet_kt(2 * r_big, 2 * r_thin, rho);
