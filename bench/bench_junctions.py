@@ -7,7 +7,7 @@ interleaved in the same process.
 Prints per model and interval h the median times, their ratio (target <= 1.10) and the number
 of junction sections found; then the same for a live update (an ``osteon.Analyzer`` re-run after
 the vertices of the bone with the fewest vertices moved by 0.5 mm: a posed limb, the partial run
-of live mode, SPEC section 9), with the junction checks that update re-made.
+of live mode, docs/method.md, Targets), with the junction checks that update re-made.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Live-mode update speed inside Blender: one live update (evaluated mesh -> analysis ->
 ``osteon_stress`` colour layer) on a ~100k-vertex rig, against a bare ``foreach_get`` of the
-evaluated vertex coordinates in the same process.  Target (SPEC section 9): <= 33 ms.
+evaluated vertex coordinates in the same process.  Target (docs/method.md, Targets): <= 33 ms.
 
     blender -b --factory-startup --python bench/bench_live.py -- [--repeat 15]
     .venv-live/bin/python bench/bench_live.py -- [--repeat 15]      # the bpy 4.5 wheel

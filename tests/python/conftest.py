@@ -13,7 +13,6 @@ if os.environ.get("CI"):
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parents[1] / "bench"))
 
 # The test models live in the repository (tests/data, origins and licences in its SOURCES.md);
 # OSTEON_DATA may point elsewhere (a folder with the same layout).

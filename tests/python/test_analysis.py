@@ -1,4 +1,4 @@
-"""Analysis physics (SPEC §3-5) on procedural meshes with closed-form answers."""
+"""Analysis physics (docs/method.md) on procedural meshes with closed-form answers."""
 
 import numpy as np
 import osteon
@@ -292,7 +292,7 @@ def test_several_roots_are_joined_to_the_main_tree():
 
 def test_analyzer_reuses_unchanged_sections_exactly(data_dir):
     """Live mode: after posing one limb, a re-run equals a fresh analysis of the posed mesh."""
-    from models import load
+    from rigged_models import load
     from scipy import sparse
 
     v, f, sk, w = load("elephant")
@@ -351,7 +351,7 @@ def test_section_outlines_enclose_the_section_area():
 
 
 def test_section_outlines_on_a_real_model(data_dir):
-    from models import load
+    from rigged_models import load
 
     v, f, sk, w = load("arm", height_mm=120.0)
     res = osteon.analyze(v, f, sk, w, interval=2.0, keep_outlines=True)

@@ -1,9 +1,9 @@
-"""Correction (SPEC §6, paper §5): per-bone cross-section scaling with linear blend skinning."""
+"""Correction (docs/method.md, Correction; paper §5): per-bone cross-section scaling with linear blend skinning."""
 
 import numpy as np
 import osteon
 import pytest
-from models import load
+from rigged_models import load
 from scipy import sparse
 from shapes import circle, cylinder_along, merge, prism, rectangle, revolve
 

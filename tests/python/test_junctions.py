@@ -1,5 +1,5 @@
 """Junctions (issue 16): at a side branch only the material that continues through the plane
-carries the load (SPEC §3, docs/junctions.md). Numbers from closed forms: a round bar's
+carries the load (docs/method.md, Sections; docs/junctions.md). Numbers from closed forms: a round bar's
 W = π r³/4, and the same bar analysed without the stub."""
 
 import json

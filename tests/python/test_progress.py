@@ -6,8 +6,8 @@ import time
 import numpy as np
 import osteon
 import pytest
-from models import load
 from osteon.settings import SECTION_LIMIT, section_guard
+from rigged_models import load
 
 MODELS = ["arm", "cow", "rignet2982", "cheburashka"]
 

@@ -1,9 +1,9 @@
-"""Every closed rigged model of tests/data analyses with finite results (SPEC §9)."""
+"""Every closed rigged model of tests/data analyses with finite results (docs/method.md, Targets)."""
 
 import numpy as np
 import osteon
 import pytest
-from models import load
+from rigged_models import load
 
 CLOSED = ["elephant", "arm", "cheburashka", "cow", "rignet2982", "rignet11814"]
 

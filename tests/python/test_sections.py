@@ -1,4 +1,4 @@
-"""Section properties against closed forms (SPEC §4): exact polygon integrals, minimum section
+"""Section properties against closed forms (docs/method.md, Section properties and stress): exact polygon integrals, minimum section
 modulus over all bending directions with unsymmetric bending."""
 
 import numpy as np

@@ -38,7 +38,7 @@ __all__ = [
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    from ..batch.cli import cmd_batch
+    from .batch import cmd_batch
 
     handler = {"analyze": cmd_analyze, "correct": cmd_correct, "validate": cmd_validate,
                "skeleton": cmd_skeleton, "batch": cmd_batch}

@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 
 from .. import materials
+from .options import DEFAULT_SAFETY_FACTOR, MATERIALS, add_junction_switch
 
-#: preset -> strength in MPa, from the one table in :mod:`osteon.materials`
-MATERIALS = materials.strengths_mpa()
-DEFAULT_SAFETY_FACTOR = materials.DEFAULT_SAFETY_FACTOR
+__all__ = ["DEFAULT_SAFETY_FACTOR", "EXAMPLES", "MATERIALS", "add_junction_switch",
+           "build_parser"]
 
 EXAMPLES = """\
 examples:
@@ -119,19 +119,6 @@ def _add_common(p: argparse.ArgumentParser):
         help="bones listed in the terminal table (default 10)",
     )
     o.add_argument("-q", "--quiet", action="store_true", help="no table, no progress bars")
-
-
-def add_junction_switch(p) -> None:
-    """``--no-junction-cores`` (``Settings.junctions``) on a command or an option group."""
-    p.add_argument(
-        "--no-junction-cores",
-        dest="junction_cores",
-        action="store_false",
-        help="analyse whole cuts: skip the junction stage, which counts only the core that "
-        "continues through the plane where a section cuts a side branch's stub "
-        "(docs/junctions.md). Faster on models with many side branches, but a stub is then "
-        "counted as carrying load (lower, unsafe stress there)",
-    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -251,7 +238,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .skeleton import add_parser as _add_skeleton
 
     _add_skeleton(sub)
-    from ..batch.cli import add_batch_parser
+    from .batch import add_batch_parser
 
     add_batch_parser(sub)
     return p

@@ -6,7 +6,7 @@ hips (two legs along ±y at x = 12 mm), a dorsal fin stub (+z at x = 28 mm, no b
 tail base (a tail leaving the spine's start downwards at 45°). Units mm; the spine is r = 3.5,
 the limbs r = 3, the fin r = 3.5 and 7 mm tall.
 
-Run:  python scripts/make_junction_rig.py OUT_DIR   (needs ``pip install manifold3d``)
+Run:  python bench/make_junction_rig.py OUT_DIR   (needs ``pip install manifold3d``)
 Then: osteon validate OUT_DIR/junction_rig.obj --skeleton OUT_DIR/junction_rig.tgf \
           --height-mm 0 --fem --junctions --sections 4
 """

@@ -25,7 +25,7 @@ r = 3 mm, 66 mm tall (``--height-mm 66`` keeps the size) but for ``fused`` (80 m
 * ``oblique``: the cylinder entering the block's bottom face at 45 degrees (its axis through
   the face's centre, 20 mm of it inside the block), the bone along the axis.
 
-Run:  python scripts/make_limb_root_rigs.py OUT_DIR [KIND ...]   (default: all seven; needs
+Run:  python bench/make_limb_root_rigs.py OUT_DIR [KIND ...]   (default: all seven; needs
 ``pip install manifold3d trimesh``)
 Then: osteon validate OUT_DIR/fillet.obj --skeleton OUT_DIR/fillet.tgf --height-mm 66 \\
           --fem --junctions --sections 4
@@ -125,6 +125,6 @@ def main(out, kinds=KINDS):
 
 if __name__ == "__main__":
     if len(sys.argv) < 2 or any(k not in KINDS for k in sys.argv[2:]):
-        raise SystemExit("usage: python scripts/make_limb_root_rigs.py OUT_DIR [KIND ...], "
+        raise SystemExit("usage: python bench/make_limb_root_rigs.py OUT_DIR [KIND ...], "
                          f"KIND one of {', '.join(KINDS)}")
     main(sys.argv[1], sys.argv[2:] or KINDS)

@@ -20,7 +20,7 @@ examples:
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
-    from ..cli.parser import MATERIALS, add_junction_switch
+    from .options import MATERIALS, add_junction_switch
 
     p = sub.add_parser(
         "batch",
@@ -81,8 +81,8 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
 def settings_from_args(args):
     """The batch settings: the shared Settings built as ``analyze`` builds them, plus the
     batch's own options."""
-    from ..cli.common import check, settings_from_args
-    from .settings import BatchSettings
+    from ..batch.settings import BatchSettings
+    from .common import check, settings_from_args
 
     shared = settings_from_args(args)
     check(shared, correct=args.correct)  # errors name the option
@@ -91,7 +91,7 @@ def settings_from_args(args):
 
 
 def cmd_batch(args, out=sys.stdout) -> int:
-    from .runner import dask_client, run
+    from ..batch.runner import dask_client, run
 
     settings = settings_from_args(args)
     settings.check()
