@@ -179,6 +179,7 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
         item.ratio = row["ratio"]
         item.limit = row.get("limit") or ""
         item.scale = row["scale"]
+        item.stress_concentration = row.get("stress_concentration") or 1.0
         item.weak = row["weak"]
         item.status = "weak" if row["weak"] else "ok"
     doubt_ui_publish(s, report)

@@ -31,6 +31,8 @@ class Settings:
     preset's; docs/printing.md); ``junctions`` (default True): where a section cuts a side
     branch's stub, count only the core that continues through the plane (flag ``junction``,
     docs/junctions.md); False analyses whole cuts (faster, no junction stage).
+    ``notch_sensitivity`` q (0…1) at corners and ``min_notch_radius_mm`` (mm), ``None``: the
+    material preset's (docs/notch.md; a custom strength: q = 1, 0.2 mm).
     """
 
     force_n: float
@@ -47,6 +49,8 @@ class Settings:
     build_direction: tuple = (0.0, 0.0, 1.0)
     layer_strength_ratio: float | None = 1.0
     junctions: bool = True
+    notch_sensitivity: float | None = None
+    min_notch_radius_mm: float | None = None
 
     def layer_ratio(self) -> float:
         """Layer / in-plane strength used: the given one; ``None``: the material preset's (1.0
@@ -84,6 +88,8 @@ class Settings:
         d["build_direction"] = [float(x) for x in self.build_direction]
         d["layer_strength_ratio"] = self.layer_ratio()
         d["junctions"] = _switch(self.junctions, "junctions")
+        d["notch_sensitivity"] = notch_sensitivity(self)
+        d["min_notch_radius_mm"] = min_notch_radius_mm(self)
         return d
 
 
@@ -144,10 +150,42 @@ def min_thickness_mm(settings: Settings) -> float:
         return 0.8
 
 
+def _preset(settings: Settings):
+    try:
+        return materials.get(settings.material)
+    except (KeyError, ValueError):
+        return None
+
+
+def notch_sensitivity(settings: Settings) -> float:
+    """q used at corners: the given one, else the material preset's (1 for a custom strength);
+    ``ValueError`` outside 0…1."""
+    q = settings.notch_sensitivity
+    if q is None:
+        m = _preset(settings)
+        q = 1.0 if m is None else m.notch_sensitivity
+    q = float(q)
+    if not 0.0 <= q <= 1.0:
+        raise ValueError(f"notch sensitivity must be a number from 0 to 1, got {q}")
+    return q
+
+
+def min_notch_radius_mm(settings: Settings, profile=None) -> float:
+    """Smallest corner radius in mm: the given one; else the print profile's (FDM: half its
+    line width; the rule of docs/notch.md); else the material preset's (0.2 mm when custom)."""
+    if settings.min_notch_radius_mm is not None:
+        return _positive(settings.min_notch_radius_mm, "min notch radius", "mm")
+    if profile is not None and getattr(profile, "kind", "") == "fdm":
+        return 0.5 * float(profile.line_width)
+    m = _preset(settings)
+    return 0.2 if m is None else float(m.min_notch_radius_mm)
+
+
 def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> dict:
     """The keyword arguments of ``osteon.analyze`` / ``Analyzer`` (``force``,
     ``allowable_stress``, ``interval``, ``root``, ``build_direction``,
-    ``layer_strength_ratio``, ``min_thickness``, ``junctions``), plus ``max_scale``, ``max_rounds``,
+    ``layer_strength_ratio``, ``min_thickness``, ``junctions``, ``notch_sensitivity``,
+    ``min_notch_radius``), plus ``max_scale``, ``max_rounds``,
     ``scaling`` with ``correct=True`` for ``osteon.correct``. Raises ``ValueError`` naming the
     bad setting."""
     kw = {
@@ -160,6 +198,8 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
                                           "(layer / in-plane strength)"),
         "min_thickness": min_thickness_mm(settings),
         "junctions": _switch(settings.junctions, "junctions"),
+        "notch_sensitivity": notch_sensitivity(settings),
+        "min_notch_radius": min_notch_radius_mm(settings),
     }
     if correct:
         if not (float(settings.max_scale) >= 1.0):

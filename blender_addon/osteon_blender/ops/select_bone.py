@@ -121,6 +121,9 @@ def row_tooltip(row, allowable_mpa: float) -> str:
             f"{row.ratio:.2f} (allowable {allowable_mpa:.1f} MPa")
     text += f", the strength {row.limit} governs)" if row.limit else ")"
     text += ", over the limit" if row.weak else ", within the limit"
+    if row.stress_concentration > 1.0:
+        text += (f"; its worst section is next to a corner: the peak there, Kt "
+                 f"{row.stress_concentration:.2f} (a larger fillet lowers it)")
     if abs(row.scale - 1.0) > 1e-6:
         text += f"; Correct scaled its cross-section x{row.scale:.2f}"
     return text + ". Click: select the bone, outline its weakest section, frame it"

@@ -115,7 +115,8 @@ class OSTEON_UL_weak_bones(bpy.types.UIList):
             return
         col = split.row()
         col.alert = item.weak
-        col.label(text=f"{item.ratio:.2f}")
+        corner = item.stress_concentration > 1.0  # the peak at a corner (docs/notch.md)
+        col.label(text=f"{item.ratio:.2f}" + (" K" if corner else ""))
         scaled = abs(item.scale - 1.0) > 1e-6
         split.label(text=f"{item.scale:.2f}" if scaled else "-")
 

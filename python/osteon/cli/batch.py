@@ -20,7 +20,7 @@ examples:
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
-    from .options import MATERIALS, add_junction_switch
+    from .options import MATERIALS, add_junction_switch, add_notch_options
 
     p = sub.add_parser(
         "batch",
@@ -56,6 +56,7 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--layer-ratio", type=float, metavar="R",
                    help="layer / in-plane strength (default: the material preset's)")
     add_junction_switch(p)
+    add_notch_options(p)
     p.add_argument("--correct", action="store_true",
                    help="also thicken weak bones and write each corrected mesh")
     p.add_argument("--max-scale", type=float, default=3.0, metavar="S",

@@ -38,6 +38,8 @@ def settings_from_args(args) -> Settings:
         build_direction=_build_direction(getattr(args, "build_direction", "0,0,1")),
         layer_strength_ratio=getattr(args, "layer_ratio", None),  # None: the material preset's
         junctions=getattr(args, "junction_cores", True),  # --no-junction-cores
+        notch_sensitivity=getattr(args, "notch_sensitivity", None),  # None: the material's
+        min_notch_radius_mm=getattr(args, "min_notch_radius", None),
     )
 
 
@@ -151,7 +153,8 @@ def bone_table(analysis, top=10, scales=None):
     """Rows (worst first) of per-bone results (:func:`osteon.report.bone_table`)."""
     rows = _bone_rows(analysis.section_bone, analysis.stress, analysis.weak,
                       analysis.bone_names, analysis.allowable_stress, scales,
-                      analysis.stress_ratio, analysis.across_layers)
+                      analysis.stress_ratio, analysis.across_layers,
+                      getattr(analysis, "stress_concentration", None))
     return [r for r in rows if r["max_stress_mpa"] is not None][:top]
 
 
@@ -170,6 +173,9 @@ def format_table(rows, allowable, scales=False, layer_ratio=1.0):
         )
         if scales:
             line += f" {r['scale']:>6.3f}"
+        kt = r.get("stress_concentration")
+        if kt is not None and kt > 1.0:  # the worst section is next to a corner (docs/notch.md)
+            flag += f"  corner Kt {kt:.2f}"
         lines.append(line + flag)
     note = f"(allowable stress [σ] = {allowable:g} MPa"
     if layer_ratio != 1.0:
@@ -183,7 +189,8 @@ def format_table(rows, allowable, scales=False, layer_ratio=1.0):
 _OPTIONS = {"force": "--force", "section interval": "--interval",
             "material strength": "--strength-mpa", "safety factor": "--safety-factor",
             "max scale": "--max-scale", "max rounds": "--max-rounds", "Held bone": "--root",
-            "layer strength ratio": "--layer-ratio", "build direction": "--build-direction"}
+            "layer strength ratio": "--layer-ratio", "build direction": "--build-direction",
+            "notch sensitivity": "--notch-sensitivity", "min notch radius": "--min-notch-radius"}
 
 
 def _arguments(settings: Settings, bone_names, correct: bool) -> dict:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from .. import materials
-from .options import DEFAULT_SAFETY_FACTOR, MATERIALS, add_junction_switch
+from .options import DEFAULT_SAFETY_FACTOR, MATERIALS, add_junction_switch, add_notch_options
 
 __all__ = ["DEFAULT_SAFETY_FACTOR", "EXAMPLES", "MATERIALS", "add_junction_switch",
            "build_parser"]
@@ -139,6 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_common(pa)
     add_junction_switch(pa)
+    add_notch_options(pa)
     po = pa.add_argument_group("best print orientation (docs/printing.md)")
     po.add_argument(
         "--orient",
@@ -172,6 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_common(pc)
     add_junction_switch(pc)
+    add_notch_options(pc)
     pc.add_argument(
         "--out",
         metavar="FILE",
