@@ -4,6 +4,7 @@ stepped bars of known fillet radius, notch sensitivity, and what the results say
 from __future__ import annotations
 
 import importlib.util
+import itertools
 import json
 import math
 import shutil
@@ -65,7 +66,7 @@ def test_kt_fit_reads_the_charts_at_the_issue_case():
 def test_kt_fit_behaves_like_a_stress_concentration():
     kt = osteon.shoulder_fillet_kt
     radii = [0.12, 0.3, 0.6, 1.2, 1.8]
-    assert all(kt(12, 6, a) > kt(12, 6, b) for a, b in zip(radii, radii[1:]))  # sharper: higher
+    assert all(kt(12, 6, a) > kt(12, 6, b) for a, b in itertools.pairwise(radii))  # sharper: up
     assert kt(6.0, 6.0, 0.6) == 1.0  # no step
     assert kt(7.2, 6.0, 0.6) < kt(9.0, 6.0, 0.6) < kt(12.0, 6.0, 0.6)  # a bigger step: higher
     assert kt(30.0, 6.0, 0.6) == kt(18.0, 6.0, 0.6)  # D/d capped at 3
