@@ -73,7 +73,12 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   // stress, the peak at the corner next to the section; the beam stress stays as nominal_stress.
   run.timer.lap("loads");
   r.nominal_stress = r.stress;
-  NotchField notch = find_notches(mesh, r, options.min_notch_radius, options.notch_sensitivity);
+  const auto grid = [&]() -> const FaceGrid& {
+    run.build_grid(options.threads);
+    return run.grid;
+  };
+  NotchField notch =
+      find_notches(mesh, grid, r, options.min_notch_radius, options.notch_sensitivity);
   for (int i = 0; i < ns; ++i) {
     if (!(notch.kt[i] > 1.0) || !std::isfinite(r.stress[i])) continue;
     r.stress[i] *= notch.effective[i] * notch.arm_ratio[i];

@@ -49,27 +49,67 @@ double kt_at(double step, double r_over_d) {
   return 1.0 + (at_edge - 1.0) * std::sqrt(h_over_r / 20.0);
 }
 
-// Vertex normals weighted by the face angle at the vertex (Thuermer & Wuethrich 1998): a vertex
-// on a sharp edge gets the bisector whatever the faces' sizes (unit; zero where no face).
-std::vector<Vec3> vertex_normals(const MeshView& mesh) {
-  std::vector<Vec3> normals(mesh.num_vertices, Vec3::Zero());
-  for (Index f = 0; f < mesh.num_faces; ++f) {
-    const std::int32_t* v = mesh.faces + 3 * f;
-    const Vec3 p[3] = {mesh.vertex(v[0]), mesh.vertex(v[1]), mesh.vertex(v[2])};
+// The faces near one corner and their vertices' normals, weighted by the face angle at the
+// vertex (Thuermer & Wuethrich 1998: a vertex on a sharp edge gets the bisector whatever the
+// faces' sizes). Every face touching a vertex inside the searched region is among them (a face
+// lies in a grid cell whose box holds it), so those vertices' normals are complete.
+struct LocalMesh {
+  std::vector<std::int32_t> faces;     // 3 per face, mesh vertex indices
+  std::vector<std::int32_t> vertices;  // distinct vertices of `faces`
+  std::vector<Vec3> normals;           // per entry of `vertices`, unit
+  std::vector<int>* slot = nullptr;    // V scratch: entry of each vertex, -1 elsewhere
+  int at(std::int32_t v) const { return (*slot)[v]; }
+  void release() {  // the scratch back to all -1
+    for (std::int32_t v : vertices) (*slot)[v] = -1;
+  }
+};
+
+// Faces of the cells the slab lo <= u.x <= hi and the region reach that have a vertex inside
+// both (the only ones a candidate's normal and neighbours need), and their vertices' normals.
+LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, double lo,
+                     double hi, const CutRegion& region, std::vector<int>& slot) {
+  LocalMesh m;
+  m.slot = &slot;
+  const double r2 = region.radius * region.radius;
+  auto inside = [&](std::int32_t v) {
+    const Vec3 p = mesh.vertex(v);
+    const double a = u.dot(p);
+    if (a < lo || a > hi) return false;
+    Vec3 d = p - region.point;
+    d -= d.dot(u) * u;
+    return d.squaredNorm() <= r2;
+  };
+  for (Index k = 0; k < grid.num_blocks(); ++k) {
+    if (!grid.block_near(k, region)) continue;
+    for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+      if (!grid.meets(c, u, lo, hi, &region)) continue;
+      for (const std::int32_t* f = grid.faces() + 3 * grid.begin(c);
+           f != grid.faces() + 3 * grid.end(c); f += 3) {
+        if (!inside(f[0]) && !inside(f[1]) && !inside(f[2])) continue;
+        for (int j = 0; j < 3; ++j) {
+          m.faces.push_back(f[j]);
+          if (slot[f[j]] >= 0) continue;
+          slot[f[j]] = static_cast<int>(m.vertices.size());
+          m.vertices.push_back(f[j]);
+        }
+      }
+    }
+  }
+  m.normals.assign(m.vertices.size(), Vec3::Zero());
+  for (std::size_t f = 0; f < m.faces.size(); f += 3) {
+    const Vec3 p[3] = {mesh.vertex(m.faces[f]), mesh.vertex(m.faces[f + 1]),
+                       mesh.vertex(m.faces[f + 2])};
     const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
     const double len = n.norm();
     if (!(len > 0)) continue;
     for (int k = 0; k < 3; ++k) {
       const Vec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-      const double angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
-      normals[v[k]] += angle / len * n;
+      m.normals[m.at(m.faces[f + k])] += std::atan2(e1.cross(e2).norm(), e1.dot(e2)) / len * n;
     }
   }
-  for (Vec3& n : normals) {
-    const double len = n.norm();
-    if (len > 0) n /= len;
-  }
-  return normals;
+  for (Vec3& n : m.normals)
+    if (n.norm() > 0) n.normalize();
+  return m;
 }
 
 // One concave corner measured on the mesh.
@@ -78,6 +118,9 @@ struct Corner {
   double radius = 0.0;  // fillet radius of the sharpest sector, mm (0: a sharp edge)
   double axial = 0.0;   // where the fillet meets the thin side, along the axis from the plane, mm
 };
+
+// Smallest moment arm / equivalent radius of a thin side the fit is applied to.
+constexpr double kMinSlenderness = 2.0;
 
 // Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
 constexpr double kMinTurn = 45.0 * kPi / 180.0;
@@ -125,59 +168,72 @@ struct Meridian {
   double a = 0, t = 0, na = 0, nr = 0;
 };
 
-Meridian meridian_of(const MeshView& mesh, const std::vector<Vec3>& normals, Index v,
-                     const Vec3& origin, const Vec3& u) {
-  const Vec3 d = mesh.vertex(v) - origin;
+Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, const Vec3& u) {
+  const Vec3 d = p - origin;
   Meridian m;
   m.a = d.dot(u);
   const Vec3 radial = d - m.a * u;
   m.t = radial.norm();
-  m.na = normals[v].dot(u);
-  m.nr = m.t > 0 ? normals[v].dot(radial) / m.t : 0.0;
+  m.na = normal.dot(u);
+  m.nr = m.t > 0 ? normal.dot(radial) / m.t : 0.0;
   return m;
 }
 
 // Measures the concave corner between a thin section (bone point `origin`, equivalent radius
 // r_thin) and the thick side along unit axis `u` (thin -> thick), within axial [lo, hi] of the
 // thin section's plane.
-Corner measure_corner(const MeshView& mesh, const std::vector<Vec3>& normals, const Vec3& origin,
-                      const Vec3& u, double r_thin, double lo, double hi) {
+Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<int>& slot,
+                      const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi) {
   const Vec3 e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+  CutRegion region;  // the cylinder t <= 2.5 r_thin around the axis
+  region.point = origin;
+  region.axis = u;
+  region.radius = 2.5 * r_thin;
+  const double at = u.dot(origin);
+  LocalMesh local = local_mesh(mesh, grid, u, at + lo, at + hi, region, slot);
   // Fillet points: normal mostly in the meridian plane, turned 8..82 degrees from radial
   // towards the thin side (the shoulder face, at 90 degrees, and the thin part, at 0, left out).
   const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
-  std::vector<Index> candidates;
-  std::vector<int> slot(mesh.num_vertices, -1);
-  for (Index v = 0; v < mesh.num_vertices; ++v) {
-    const Meridian m = meridian_of(mesh, normals, v, origin, u);
+  std::vector<Meridian> merid(local.vertices.size());
+  std::vector<int> candidate(local.vertices.size(), 0);
+  for (std::size_t k = 0; k < local.vertices.size(); ++k) {
+    const Meridian m = merid[k] =
+        meridian_of(mesh.vertex(local.vertices[k]), local.normals[k], origin, u);
     if (m.a < lo || m.a > hi || m.t < 0.5 * r_thin || m.t > 2.5 * r_thin) continue;
     const double meridian = std::hypot(m.na, m.nr);
     if (meridian < 0.7 || m.nr <= 0) continue;
     const double turn = -m.na / meridian;  // sin of the angle from radial towards the thin side
-    if (turn < lo_sin || turn > hi_sin) continue;
-    slot[v] = static_cast<int>(candidates.size());
-    candidates.push_back(v);
+    candidate[k] = turn >= lo_sin && turn <= hi_sin;
   }
   // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
   // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
   // shoulder has the same normal turn and is left out by this).
-  std::vector<double> bend(candidates.size(), 0.0);
-  for (Index f = 0; f < mesh.num_faces; ++f) {
-    const std::int32_t* fv = mesh.faces + 3 * f;
-    for (int k = 0; k < 3; ++k) {
-      if (slot[fv[k]] < 0) continue;
-      const Meridian p = meridian_of(mesh, normals, fv[k], origin, u);
-      for (int j = 1; j < 3; ++j) {
-        const Meridian q = meridian_of(mesh, normals, fv[(k + j) % 3], origin, u);
-        bend[slot[fv[k]]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
+  std::vector<double> bend(local.vertices.size(), 0.0);
+  for (std::size_t f = 0; f < local.faces.size(); f += 3) {
+    int slots[3];
+    for (int j = 0; j < 3; ++j) slots[j] = local.at(local.faces[f + j]);
+    for (int j = 0; j < 3; ++j) {
+      if (!candidate[slots[j]]) continue;
+      const Meridian& p = merid[slots[j]];
+      for (int k = 1; k < 3; ++k) {
+        const Meridian& q = merid[slots[(j + k) % 3]];
+        bend[slots[j]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
       }
     }
   }
+  local.release();
+  std::vector<Index> candidates;
+  std::vector<double> bends;
+  for (std::size_t k = 0; k < local.vertices.size(); ++k)
+    if (candidate[k]) {
+      candidates.push_back(static_cast<Index>(k));
+      bends.push_back(bend[k]);
+    }
   SectorPoints pts;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
-    if (!(bend[c] > 1e-9 * r_thin)) continue;
-    const Meridian m = meridian_of(mesh, normals, candidates[c], origin, u);
-    const Vec3 radial = mesh.vertex(candidates[c]) - origin - m.a * u;
+    if (!(bends[c] > 1e-9 * r_thin)) continue;
+    const Meridian& m = merid[candidates[c]];
+    const Vec3 radial = mesh.vertex(local.vertices[candidates[c]]) - origin - m.a * u;
     const double angle = std::atan2(radial.dot(e2), radial.dot(e1));
     const int sector =
         std::min(kSectors - 1, static_cast<int>((angle + kPi) / (2 * kPi) * kSectors));
@@ -235,8 +291,8 @@ double shoulder_fillet_kt(double big_diameter, double small_diameter, double rad
   return kt;
 }
 
-NotchField find_notches(const MeshView& mesh, const AnalysisResult& r, double min_radius,
-                        double sensitivity) {
+NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
+                        const AnalysisResult& r, double min_radius, double sensitivity) {
   const int ns = static_cast<int>(r.section_bone.size());
   NotchField out;
   out.kt.assign(ns, 1.0);
@@ -244,7 +300,8 @@ NotchField find_notches(const MeshView& mesh, const AnalysisResult& r, double mi
   out.step.assign(ns, kNaN);
   out.effective.assign(ns, 1.0);
   out.arm_ratio.assign(ns, 1.0);
-  std::vector<Vec3> normals;  // computed on the first step found
+  const FaceGrid* grid = nullptr;  // built on the first step found
+  std::vector<int> slot;           // scratch of measure_corner, all -1 between calls
   for (const std::vector<int>& chain : bone_profiles(r)) {
     const int n = static_cast<int>(chain.size());
     auto radius_of = [&](int k) { return equivalent_radius(r.section_cut_area[chain[k]]); };
@@ -266,6 +323,10 @@ NotchField find_notches(const MeshView& mesh, const AnalysisResult& r, double mi
       }
       const int i = chain[thin];
       const double r_thin = equivalent_radius(r.section_area[i]);
+      // The fit is for a shaft, a beam: the thin part must be slender where it is loaded (arm
+      // >= kMinSlenderness r, the FEM check's slenderness, docs/validation.md); a stubby or
+      // body-sized section gets no Kt (and costs no search).
+      if (r.moment_arm[i] < kMinSlenderness * r_thin) continue;
       const double gap = std::abs(r.section_param[chain[thick]] - r.section_param[i]);
       // The big dimension: the thick side's largest section within two thin radii of the step.
       double r_big = 0;
@@ -277,9 +338,12 @@ NotchField find_notches(const MeshView& mesh, const AnalysisResult& r, double mi
       const Vec3 towards = r.section_point[chain[thick]] - r.section_point[i];
       if (towards.dot(u) < 0) u = -u;
       const double reach = std::max(towards.dot(u), 0.0);
-      if (normals.empty()) normals = vertex_normals(mesh);
-      const Corner c = measure_corner(mesh, normals, r.section_point[i], u, r_thin, -0.25 * reach,
-                                      reach + 0.25 * r_thin);
+      if (grid == nullptr) {
+        grid = &face_grid();
+        slot.assign(mesh.num_vertices, -1);
+      }
+      const Corner c = measure_corner(mesh, *grid, slot, r.section_point[i], u, r_thin,
+                                      -0.25 * reach, 1.25 * reach);
       if (!c.found) continue;
       const double rho = std::max(c.radius, min_radius);
       const double kt = shoulder_fillet_kt(2 * r_big, 2 * r_thin, rho);

@@ -2,11 +2,13 @@
 // its use on an analysis. Engine-internal header (the Kt fit: osteon/notch.hpp).
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "osteon/analysis.hpp"
 #include "osteon/mesh.hpp"
 #include "osteon/notch.hpp"
+#include "osteon/slicer.hpp"
 
 namespace osteon {
 
@@ -26,7 +28,9 @@ struct NotchField {
 /// section_point, section_normal, section_center, load_point, section_area, section_cut_area,
 /// moment_arm. `min_radius` (mm): a corner is never sharper than the printer makes it;
 /// `sensitivity` q (0..1): governing stress = (1 + q (Kt - 1)) x nominal.
-NotchField find_notches(const MeshView& mesh, const AnalysisResult& r, double min_radius,
-                        double sensitivity);
+/// `face_grid` returns the run's face grid over `mesh` (built on first call): a corner is
+/// measured from the faces near it only.
+NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
+                        const AnalysisResult& r, double min_radius, double sensitivity);
 
 }  // namespace osteon
