@@ -3,12 +3,10 @@ stepped bars of known fillet radius, notch sensitivity, and what the results say
 
 from __future__ import annotations
 
-import importlib.util
 import itertools
 import json
 import math
 import shutil
-from pathlib import Path
 
 import numpy as np
 import osteon
@@ -207,11 +205,9 @@ def test_one_stepped_bar_against_fem(tmp_path):
     pytest.importorskip("gmsh")
     if shutil.which("ccx") is None:
         pytest.skip("CalculiX (ccx) not installed")
-    path = Path(__file__).resolve().parents[2] / "scripts" / "study_notch.py"
-    spec = importlib.util.spec_from_file_location("study_notch", path)
-    study = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(study)
-    fem, _ = study.fem_peak(2.0, 0.3, 2, str(tmp_path))
-    ost, radius, _, _ = study.osteon_peak(2.0, 0.3)
+    from osteon.fem import stepped
+
+    fem, _ = stepped.fem_peak(2.0, 0.3, 2, str(tmp_path))
+    ost, radius, _, _ = stepped.osteon_peak(2.0, 0.3)
     assert radius == pytest.approx(0.3 * D_SMALL, rel=0.15)
     assert -0.10 <= (ost - fem) / fem <= 0.15
