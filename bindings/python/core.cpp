@@ -146,6 +146,22 @@ struct PendingThickness {
   std::vector<std::shared_ptr<const SectionPolygon>> regions;  // S, null: computed already
 };
 
+// One result field to Python (OSTEON_RESULT_FIELDS' types): arrays without a copy, flags as
+// bool, scalars as numbers, lists of index arrays as lists.
+template <class T>
+py::object to_python(std::vector<T>&& v) {
+  return to_numpy(std::move(v));
+}
+py::object to_python(std::vector<std::uint8_t>&& v) { return to_bool(v); }
+py::object to_python(std::vector<std::vector<std::int32_t>>&& pieces) {
+  py::list out;
+  for (auto& piece : pieces) out.append(to_numpy(std::move(piece)));
+  return out;
+}
+py::object to_python(double x) { return py::float_(x); }
+py::object to_python(int x) { return py::int_(x); }
+
+// Every row of OSTEON_RESULT_FIELDS by its name, plus the deferred thickness handle.
 py::dict result_to_dict(AnalysisResult&& r) {
   py::dict d;
   if (r.thickness_pending.empty()) {
@@ -153,52 +169,25 @@ py::dict result_to_dict(AnalysisResult&& r) {
   } else {
     d["thickness_pending"] = py::cast(PendingThickness{std::move(r.thickness_pending)});
   }
-  d["section_bone"] = to_numpy(std::move(r.section_bone));
-  d["section_kind"] = to_numpy(std::move(r.section_kind));
-  d["section_param"] = to_numpy(std::move(r.section_param));
-  d["section_point"] = to_numpy(std::move(r.section_point));
-  d["section_center"] = to_numpy(std::move(r.section_center));
-  d["section_normal"] = to_numpy(std::move(r.section_normal));
-  d["load_point"] = to_numpy(std::move(r.load_point));
-  d["section_area"] = to_numpy(std::move(r.section_area));
-  d["section_modulus"] = to_numpy(std::move(r.section_modulus));
-  d["section_thin_axis"] = to_numpy(std::move(r.section_thin_axis));
-  d["section_aspect"] = to_numpy(std::move(r.section_aspect));
-  d["section_thickness"] = to_numpy(std::move(r.section_thickness));
-  d["section_cut_area"] = to_numpy(std::move(r.section_cut_area));
-  d["section_cut_modulus"] = to_numpy(std::move(r.section_cut_modulus));
-  d["moment_arm"] = to_numpy(std::move(r.moment_arm));
-  d["moment"] = to_numpy(std::move(r.moment));
-  d["stress"] = to_numpy(std::move(r.stress));
-  d["nominal_stress"] = to_numpy(std::move(r.nominal_stress));
-  d["stress_concentration"] = to_numpy(std::move(r.stress_concentration));
-  d["notch_radius"] = to_numpy(std::move(r.notch_radius));
-  d["notch_step"] = to_numpy(std::move(r.notch_step));
-  d["culled"] = to_bool(r.culled);
-  d["weak"] = to_bool(r.weak);
-  d["section_allowable"] = to_numpy(std::move(r.section_allowable));
-  d["stress_ratio"] = to_numpy(std::move(r.stress_ratio));
-  d["across_layers"] = to_bool(r.across_layers);
-  d["max_stress_ratio"] = r.max_stress_ratio;
-  d["section_flags"] = to_numpy(std::move(r.section_flags));
-  d["max_moment"] = r.max_moment;
-  d["safe_modulus"] = r.safe_modulus;
-  d["max_stress"] = r.max_stress;
-  d["weakest_section"] = r.weakest_section;
-  d["held_bone"] = r.held_bone;
-  d["vertex_stress"] = to_numpy(std::move(r.vertex_stress));
-  d["vertex_culled"] = to_bool(r.vertex_culled);
-  d["vertex_bone"] = to_numpy(std::move(r.vertex_bone));
-  d["outline_points"] = to_numpy(std::move(r.outline_points));
-  d["outline_loop_start"] = to_numpy(std::move(r.outline_loop_start));
-  d["outline_section_start"] = to_numpy(std::move(r.outline_section_start));
-  d["cut_outline_points"] = to_numpy(std::move(r.cut_outline_points));
-  d["cut_outline_loop_start"] = to_numpy(std::move(r.cut_outline_loop_start));
-  d["cut_outline_section_start"] = to_numpy(std::move(r.cut_outline_section_start));
-  py::list loose;
-  for (auto& piece : r.loose_pieces) loose.append(to_numpy(std::move(piece)));
-  d["loose_pieces"] = loose;
+#define OSTEON_TO_DICT(type, name, init, shape, unit, doc) d[#name] = to_python(std::move(r.name));
+  OSTEON_RESULT_FIELDS(OSTEON_TO_DICT)
+#undef OSTEON_TO_DICT
   return d;
+}
+
+// (name, shape, dtype, unit, doc) of every result field, in the table's order; dtype is the
+// NumPy dtype of the array ("float64", "bool", ...), or "float" / "int" / "list".
+py::list result_fields() {
+  py::list out;
+  auto dtype = [](const py::object& empty) -> std::string {
+    if (py::isinstance<py::array>(empty)) return py::str(empty.attr("dtype"));
+    return py::str(empty.attr("__class__").attr("__name__"));
+  };
+#define OSTEON_FIELD_ROW(type, name, init, shape, unit, doc) \
+  out.append(py::make_tuple(#name, shape, dtype(to_python(type init)), unit, doc));
+  OSTEON_RESULT_FIELDS(OSTEON_FIELD_ROW)
+#undef OSTEON_FIELD_ROW
+  return out;
 }
 
 // Reusable analyzer holding faces and weights (live mode re-runs with new vertices / pose).
@@ -289,6 +278,10 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("cancelled", &Progress::cancelled, "True once cancel() was called")
       .def("cancel", &Progress::cancel, "Ask the run to stop (any thread); it raises Cancelled")
       .def("reset", &Progress::reset, "Clear the counters and the cancel switch");
+
+  m.def("result_fields", &result_fields,
+        "(name, shape, dtype, unit, doc) of every field of an analysis result "
+        "(cpp/include/osteon/result_fields.hpp), in order.");
 
   m.def(
       "count_sections",

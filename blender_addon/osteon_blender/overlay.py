@@ -306,7 +306,8 @@ def _draw():
         return
     st = state.get(scene.name)
     hl = st.highlight if st is not None else None
-    if hl is not None and (not st.last or st.last.get("analysis") is not hl.get("analysis")):
+    shown = (st.shown or st.last) if st is not None else None
+    if hl is not None and (not shown or shown.get("analysis") is not hl.get("analysis")):
         hl = None                       # a newer result (or Reset): the highlight is stale
     out = None
     if settings.show_sections:

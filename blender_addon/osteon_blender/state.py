@@ -19,6 +19,9 @@ from . import bridge
 class SceneState:
     #: the operators' last result: ``{"report", "analysis", "inputs", "correction"}``
     last: dict | None = None
+    #: the result the panel shows (summary, rows, row clicks): the operators' ``last`` or, once
+    #: Live has updated, Live's latest in the same form (``results.show`` sets it)
+    shown: dict | None = None
     #: vertex-group weights read once and reused while the mesh and groups are unchanged
     weights: bridge.WeightCache = field(default_factory=bridge.WeightCache)
     #: the running live session (``live.Session``) of this scene, if any

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "analysis_impl.hpp"
-#include "osteon/regions.hpp"
+#include "thickness.hpp"
 
 namespace osteon {
 

@@ -15,8 +15,9 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
-#include "osteon/regions.hpp"
 #include "parallel.hpp"
+#include "region_choice.hpp"
+#include "thickness.hpp"
 
 namespace osteon {
 namespace {
@@ -221,17 +222,39 @@ void Analyzer::Impl::cut_local(RunState& run) {
 }
 
 void Analyzer::Impl::cut_retries(RunState& run) {
-  const MeshView& mesh = run.mesh;
-  const Skeleton& sk = run.sk;
-  const double h = options.interval;
-  const double diag = run.diag;
+  const std::vector<int> units = retry_units(run);
+  // Joints' and whole planes' cuts skip the cells and runs of faces whose triangles' own box the
+  // plane misses (FaceGrid::enable_tight_bounds: the same segments, in the same order).
+  if (!units.empty() && run.grid_built) run.grid.enable_tight_bounds();
+  // The loose pieces and the moment-arm index (stage 4) need no section: they are one more
+  // unit, third in line, so that it fills a core while the other cuts.
+  const long index_unit = std::min<long>(2, static_cast<long>(units.size()));
+  detail::parallel_for(static_cast<long>(units.size()) + 1, options.threads,
+                       [&](long u, int worker) {
+                         if (u == index_unit) {
+                           find_loose_pieces_and_arms(run);
+                           return;
+                         }
+                         run.check_cancel();
+                         const int job = units[u > index_unit ? u - 1 : u];
+                         if (job_bone[job] < 0)
+                           retry_joint(run, job, worker);
+                         else
+                           retry_family(run, job, worker);
+                       });
+  if (run.timer.on) {
+    std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(run.local_used),
+                 int(run.local_failed));
+    std::fprintf(stderr, "sections retried %ld\n", run.retried);
+  }
+}
+
+// Phase 2 units: a family's queued planes are re-cut together in masked passes (a cylinder
+// three times wider, then the whole plane); a joint grows a ball around its point, then cuts
+// the whole plane. Families first: they are the larger units, joints balance the cores last.
+std::vector<int> Analyzer::Impl::retry_units(RunState& run) {
   const long jobs = static_cast<long>(job_bone.size());
   const std::vector<std::uint8_t>& retry = run.retry;
-  const std::vector<double>& reach = run.reach;
-  const bool keep = options.keep_outlines;
-  // Phase 2 units: a family's queued planes are re-cut together in masked passes (a cylinder
-  // three times wider, then the whole plane); a joint grows a ball around its point, then cuts
-  // the whole plane. Families first: they are the larger units, joints balance the cores last.
   std::vector<int> units;
   for (long job = 0; job < jobs; ++job) {
     const int first = job_section[job];
@@ -244,119 +267,128 @@ void Analyzer::Impl::cut_retries(RunState& run) {
     if (any) units.push_back(static_cast<int>(job));
   }
   std::stable_partition(units.begin(), units.end(), [&](int job) { return job_bone[job] >= 0; });
-  // Joints' and whole planes' cuts skip the cells and runs of faces whose triangles' own box the
-  // plane misses (FaceGrid::enable_tight_bounds: the same segments, in the same order).
-  if (!units.empty() && run.grid_built) run.grid.enable_tight_bounds();
-  // The loose pieces and the moment-arm index (stage 4) need no section: they are one more
-  // unit, third in line, so that it fills a core while the other cuts.
-  const long index_unit = std::min<long>(2, static_cast<long>(units.size()));
-  detail::parallel_for(
-      static_cast<long>(units.size()) + 1, options.threads, [&](long u, int worker) {
-        if (u == index_unit) {
-          // Loose pieces fall off the print: their vertices are no load point (full runs; the
-          // correction's partial re-cuts move no piece apart, so they keep the last run's).
-          if (!run.partial) {
-            // A gap under half the minimum printable thickness is fused by the printer.
-            loose = face_shells == 1 ? std::vector<std::vector<std::int32_t>>{}
-                                     : loose_finder.find(mesh, run.vertex_bone, tree.held_bone,
-                                                         0.5 * options.min_thickness, &face_shells,
-                                                         /*same_faces=*/true,
-                                                         run.grid_built ? &run.grid : nullptr);
-            loose_vertex.assign(num_vertices, 0);
-            for (const auto& piece : loose)
-              for (std::int32_t v : piece) loose_vertex[v] = 1;
-          }
-          arm_index.build(mesh, sk, tree, run.vertex_bone, slab_params,
-                          loose.empty() ? nullptr : &loose_vertex);
-          run.arms = &arm_index;
-          return;
-        }
-        run.check_cancel();
-        const int job = units[u > index_unit ? u - 1 : u];
-        const int first = job_section[job];
-        const int b = job_bone[job];
-        if (b < 0) {
-          const SectionSpec& spec = specs[first];
-          const int bone = spec.bone;
-          const PlaneFrame frame = PlaneFrame::make(spec.point, spec.normal);
-          auto& segs = run.single_segments[worker];
-          segs.clear();
-          CutRegion ball{spec.point, Vec3::Zero(), reach[bone]};
-          if (sk.parents[bone] >= 0) ball.radius = std::max(ball.radius, reach[sk.parents[bone]]);
-          const CutRegion* done = nullptr;  // the region already cut
-          CutRegion previous;
-          if (retry[first] == kGrowJoint) {
-            const bool inside = inside_at(run, bone, slab_params[bone][spec.boundary]);
-            for (int step = 0; step < 2 && ball.radius < diag; ++step, ball.radius *= 3.0) {
-              cut_mesh(mesh, frame, segs, &run.grid, &ball, done);
-              const PlaneCut cut = assemble_loops(segs, 0.0);
-              const SectionGeometry geom = select_region(cut, nullptr);
-              previous = ball;
-              done = &previous;
-              if (local_ok(run, cut, geom, inside)) {
-                states[first] = finish(frame, geom, &ball, keep);
-                run.sections_done();
-                return;
-              }
-              if (geom.found) break;  // found but not provably right: cut the whole plane
-            }
-          }
-          cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
-          states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, keep);
-          run.sections_done();
-          return;
-        }
-        const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
-        const int n = static_cast<int>(slab_params[b].size()) - 2;
-        auto& segs = run.family_segments[worker];
-        std::vector<std::uint8_t> wanted(n);
-        for (int k = 1; k <= n; ++k) wanted[k - 1] = retry[first + k - 1] != kNone;
-        auto frame_of = [&](int k) {
-          PlaneFrame frame = base;
-          frame.origin = specs[first + k - 1].point;
-          return frame;
-        };
-        auto add_kept = [&](int k) {
-          auto& all = run.kept[first + k - 1];
-          all.insert(all.end(), segs[k - 1].begin(), segs[k - 1].end());
-        };
-        const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
-        const CutRegion wide{sk.heads[b], sk.direction(b), 3.0 * reach[b]};
-        const CutRegion* done = &region;
-        bool grow = false;
-        for (int k = 1; k <= n; ++k) grow |= retry[first + k - 1] == kGrowFamily;
-        if (grow && wide.radius < diag) {
-          cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, &wide, wanted.data(), &region);
-          done = &wide;
-          for (int k = 1; k <= n; ++k) {
-            if (!wanted[k - 1]) continue;
-            add_kept(k);
-            if (retry[first + k - 1] != kGrowFamily) continue;
-            run.check_cancel();
-            const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
-            const SectionGeometry geom = select_region(cut, nullptr);
-            if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
-              states[first + k - 1] = finish(frame_of(k), geom, &wide, keep);
-              run.sections_done();
-              wanted[k - 1] = 0;
-            }
-          }
-        }
-        if (std::find(wanted.begin(), wanted.end(), 1) == wanted.end()) return;
-        cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, nullptr, wanted.data(), done);
-        for (int k = 1; k <= n; ++k) {
-          if (!wanted[k - 1]) continue;
-          run.check_cancel();
-          add_kept(k);
-          states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap,
-                                               run.vertex_bone.data(), b, keep);
-          run.sections_done();
-        }
-      });
-  if (run.timer.on) {
-    std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(run.local_used),
-                 int(run.local_failed));
-    std::fprintf(stderr, "sections retried %ld\n", run.retried);
+  return units;
+}
+
+// The loose pieces and, over the vertices of the attached ones, the moment-arm index.
+void Analyzer::Impl::find_loose_pieces_and_arms(RunState& run) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  // Loose pieces fall off the print: their vertices are no load point (full runs; the
+  // correction's partial re-cuts move no piece apart, so they keep the last run's).
+  if (!run.partial) {
+    // A gap under half the minimum printable thickness is fused by the printer.
+    loose = face_shells == 1
+                ? std::vector<std::vector<std::int32_t>>{}
+                : loose_finder.find(mesh, run.vertex_bone, tree.held_bone,
+                                    0.5 * options.min_thickness, &face_shells,
+                                    /*same_faces=*/true, run.grid_built ? &run.grid : nullptr);
+    loose_vertex.assign(num_vertices, 0);
+    for (const auto& piece : loose)
+      for (std::int32_t v : piece) loose_vertex[v] = 1;
+  }
+  arm_index.build(mesh, sk, tree, run.vertex_bone, slab_params,
+                  loose.empty() ? nullptr : &loose_vertex);
+  run.arms = &arm_index;
+}
+
+// A joint's queued section: a ball grown around its point (twice, three times wider each), then
+// the whole plane.
+void Analyzer::Impl::retry_joint(RunState& run, int job, int worker) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  const double diag = run.diag;
+  const std::vector<std::uint8_t>& retry = run.retry;
+  const std::vector<double>& reach = run.reach;
+  const bool keep = options.keep_outlines;
+  const int first = job_section[job];
+  const SectionSpec& spec = specs[first];
+  const int bone = spec.bone;
+  const PlaneFrame frame = PlaneFrame::make(spec.point, spec.normal);
+  auto& segs = run.single_segments[worker];
+  segs.clear();
+  CutRegion ball{spec.point, Vec3::Zero(), reach[bone]};
+  if (sk.parents[bone] >= 0) ball.radius = std::max(ball.radius, reach[sk.parents[bone]]);
+  const CutRegion* done = nullptr;  // the region already cut
+  CutRegion previous;
+  if (retry[first] == kGrowJoint) {
+    const bool inside = inside_at(run, bone, slab_params[bone][spec.boundary]);
+    for (int step = 0; step < 2 && ball.radius < diag; ++step, ball.radius *= 3.0) {
+      cut_mesh(mesh, frame, segs, &run.grid, &ball, done);
+      const PlaneCut cut = assemble_loops(segs, 0.0);
+      const SectionGeometry geom = select_region(cut, nullptr);
+      previous = ball;
+      done = &previous;
+      if (local_ok(run, cut, geom, inside)) {
+        states[first] = finish(frame, geom, &ball, keep);
+        run.sections_done();
+        return;
+      }
+      if (geom.found) break;  // found but not provably right: cut the whole plane
+    }
+  }
+  cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
+  states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, keep);
+  run.sections_done();
+}
+
+// A family's queued planes, re-cut together in masked passes: a cylinder three times wider
+// (for the sections queued to grow), then the whole plane.
+void Analyzer::Impl::retry_family(RunState& run, int job, int worker) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  const double h = options.interval;
+  const double diag = run.diag;
+  const std::vector<std::uint8_t>& retry = run.retry;
+  const std::vector<double>& reach = run.reach;
+  const bool keep = options.keep_outlines;
+  const int first = job_section[job];
+  const int b = job_bone[job];
+  const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
+  const int n = static_cast<int>(slab_params[b].size()) - 2;
+  auto& segs = run.family_segments[worker];
+  std::vector<std::uint8_t> wanted(n);
+  for (int k = 1; k <= n; ++k) wanted[k - 1] = retry[first + k - 1] != kNone;
+  auto frame_of = [&](int k) {
+    PlaneFrame frame = base;
+    frame.origin = specs[first + k - 1].point;
+    return frame;
+  };
+  auto add_kept = [&](int k) {
+    auto& all = run.kept[first + k - 1];
+    all.insert(all.end(), segs[k - 1].begin(), segs[k - 1].end());
+  };
+  const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
+  const CutRegion wide{sk.heads[b], sk.direction(b), 3.0 * reach[b]};
+  const CutRegion* done = &region;
+  bool grow = false;
+  for (int k = 1; k <= n; ++k) grow |= retry[first + k - 1] == kGrowFamily;
+  if (grow && wide.radius < diag) {
+    cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, &wide, wanted.data(), &region);
+    done = &wide;
+    for (int k = 1; k <= n; ++k) {
+      if (!wanted[k - 1]) continue;
+      add_kept(k);
+      if (retry[first + k - 1] != kGrowFamily) continue;
+      run.check_cancel();
+      const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
+      const SectionGeometry geom = select_region(cut, nullptr);
+      if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
+        states[first + k - 1] = finish(frame_of(k), geom, &wide, keep);
+        run.sections_done();
+        wanted[k - 1] = 0;
+      }
+    }
+  }
+  if (std::find(wanted.begin(), wanted.end(), 1) == wanted.end()) return;
+  cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, nullptr, wanted.data(), done);
+  for (int k = 1; k <= n; ++k) {
+    if (!wanted[k - 1]) continue;
+    run.check_cancel();
+    add_kept(k);
+    states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap,
+                                         run.vertex_bone.data(), b, keep);
+    run.sections_done();
   }
 }
 

@@ -6,15 +6,84 @@
 
 #include "analysis_impl.hpp"
 #include "notch.hpp"
-#include "osteon/regions.hpp"
 #include "parallel.hpp"
+#include "thickness.hpp"
 
 namespace osteon {
 
 AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  const int ns = static_cast<int>(specs.size());
+  AnalysisResult r = section_loads(run);
+  // Stress concentration at corners (notch.hpp, docs/notch.md): `stress` becomes the governing
+  // stress, the peak at the corner next to the section; the beam stress stays as nominal_stress.
+  run.timer.lap("loads");
+  r.nominal_stress = r.stress;
+  const auto grid = [&]() -> const FaceGrid& {
+    run.build_grid(options.threads);
+    return run.grid;
+  };
+  NotchField notch =
+      find_notches(run.mesh, grid, r, options.min_notch_radius, options.notch_sensitivity);
+  for (int i = 0; i < ns; ++i) {
+    if (!(notch.kt[i] > 1.0) || !std::isfinite(r.stress[i])) continue;
+    r.stress[i] *= notch.effective[i] * notch.arm_ratio[i];
+    r.section_flags[i] |= kFlagNotch;
+  }
+  r.stress_concentration = notch.kt;
+  r.notch_radius = notch.radius;
+  r.notch_step = notch.step;
+  run.timer.lap("notches");
+  // Direction-dependent allowable (FDM layers, osteon/layers.hpp): exactly allowable_stress
+  // when isotropic.
+  section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
+                     options.layer_strength_ratio, r.section_allowable, r.across_layers);
+  r.stress_ratio.assign(ns, kNaN);
+  const std::vector<std::uint8_t> usable = usable_sections(r);
+  for (int i = 0; i < ns; ++i) {
+    if (!(r.section_flags[i] & kFlagUnreliable) || !(notch.kt[i] > 1.0)) continue;
+    r.nominal_stress[i] = r.notch_radius[i] = r.notch_step[i] = kNaN;  // an unreliable sliver
+    r.stress_concentration[i] = notch.effective[i] = notch.arm_ratio[i] = 1.0;
+    r.section_flags[i] &= ~static_cast<std::uint32_t>(kFlagNotch);
+  }
+  // Thickness not needed so far: the regions, for complete_section_thickness().
+  if (options.defer_thickness) {
+    for (int i = 0; i < ns; ++i) {
+      const SectionState& st = states[i];
+      if (!st.found || !st.analysed || !std::isnan(st.thickness) ||
+          (r.section_flags[i] & kFlagUnreliable))
+        continue;
+      if (r.thickness_pending.empty()) r.thickness_pending.resize(ns);
+      r.thickness_pending[i] = st.analysed;
+    }
+  }
+  for (int i = 0; i < ns; ++i) {
+    if (!usable[i]) continue;
+    // The moment at a notch section's corner counts (the bound below stays a bound).
+    r.max_moment = std::max(r.max_moment, r.moment[i] * notch.arm_ratio[i]);
+    r.max_stress = std::max(r.max_stress, r.stress[i]);
+    if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
+      r.max_stress_ratio = r.stress_ratio[i];
+      r.weakest_section = i;
+    }
+  }
+  r.safe_modulus = r.max_moment / options.allowable_stress;
+  for (int i = 0; i < ns; ++i) {
+    if (!usable[i]) continue;
+    // Safe for sure even with its corner: (1 + q (Kt - 1)) M_max / W below the allowable.
+    r.culled[i] = r.section_modulus[i] > notch.effective[i] * r.max_moment / r.section_allowable[i];
+    r.weak[i] = r.stress[i] > r.section_allowable[i];
+  }
+  run.check_cancel();
+  if (options.keep_outlines) pack_outlines(r);
+  return r;
+}
+
+// Farthest downstream point of every section, then its moment and stress (the result's
+// per-section arrays; the allowable and the ratio come later).
+AnalysisResult Analyzer::Impl::section_loads(RunState& run) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   const MeshView& mesh = run.mesh;
-  // Farthest downstream point of every section, then stress.
   const int ns = static_cast<int>(specs.size());
   AnalysisResult r;
   r.held_bone = tree.held_bone;
@@ -69,135 +138,86 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
-  // Stress concentration at corners (notch.hpp, docs/notch.md): `stress` becomes the governing
-  // stress, the peak at the corner next to the section; the beam stress stays as nominal_stress.
-  run.timer.lap("loads");
-  r.nominal_stress = r.stress;
-  const auto grid = [&]() -> const FaceGrid& {
-    run.build_grid(options.threads);
-    return run.grid;
-  };
-  NotchField notch =
-      find_notches(mesh, grid, r, options.min_notch_radius, options.notch_sensitivity);
-  for (int i = 0; i < ns; ++i) {
-    if (!(notch.kt[i] > 1.0) || !std::isfinite(r.stress[i])) continue;
-    r.stress[i] *= notch.effective[i] * notch.arm_ratio[i];
-    r.section_flags[i] |= kFlagNotch;
-  }
-  r.stress_concentration = notch.kt;
-  r.notch_radius = notch.radius;
-  r.notch_step = notch.step;
-  run.timer.lap("notches");
-  // Direction-dependent allowable (FDM layers, osteon/layers.hpp): exactly allowable_stress
-  // when isotropic.
-  section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
-                     options.layer_strength_ratio, r.section_allowable, r.across_layers);
-  r.stress_ratio.assign(ns, kNaN);
-  // Sections that drive results: found, not doubted (unreliable), not too thin to print. An
-  // outside section far smaller than its bone's sections inside the mesh (below a tenth of their
-  // median area) is a sliver the bone only grazes: unreliable, no number. Too-thin sections keep
-  // their stress and ratio but drive neither the maximum, weak, culled nor the safe modulus.
+  return r;
+}
+
+// Sections that drive results: found, not doubted (unreliable), not too thin to print. An
+// outside section far smaller than its bone's sections inside the mesh (below a tenth of their
+// median area) is a sliver the bone only grazes: unreliable, no number. Too-thin sections keep
+// their stress and ratio but drive neither the maximum, weak, culled nor the safe modulus.
+std::vector<std::uint8_t> Analyzer::Impl::usable_sections(AnalysisResult& r) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  const int ns = static_cast<int>(specs.size());
   std::vector<std::uint8_t> usable(ns, 0);
-  {
-    const int nb = num_bones;
-    std::vector<std::vector<double>> inner(nb);
-    for (int i = 0; i < ns; ++i)
-      if (states[i].found && !(states[i].flags & kFlagOutside))
-        inner[specs[i].bone].push_back(states[i].area);
-    std::vector<double> median(nb, 0.0);
-    for (int b = 0; b < nb; ++b) {
-      auto& a = inner[b];
-      if (a.empty()) continue;
-      std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
-      median[b] = a[a.size() / 2];
-    }
-    for (int i = 0; i < ns; ++i) {
-      if (!states[i].found) continue;
-      std::uint32_t& flags = r.section_flags[i];
-      if ((flags & kFlagOutside) && states[i].area < 0.1 * median[specs[i].bone]) {
-        flags |= kFlagUnreliable;
-        r.section_area[i] = r.section_cut_area[i] = 0.0;
-        r.section_cut_modulus[i] = kNaN;
-        r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
-        r.nominal_stress[i] = r.notch_radius[i] = r.notch_step[i] = kNaN;
-        r.stress_concentration[i] = notch.effective[i] = notch.arm_ratio[i] = 1.0;
-        flags &= ~static_cast<std::uint32_t>(kFlagNotch);
-        r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
-        continue;
-      }
-      // The exact thickness only for a section that is too thin (the check mostly decides
-      // from a lower bound of the width and a search of the walls within the minimum).
-      SectionState& st = states[i];
-      const bool thin =
-          std::isnan(st.thickness)
-              ? st.analysed &&
-                    region_thinner_than(*st.analysed, options.min_thickness, st.thickness_bound)
-              : st.thickness < options.min_thickness;
-      if (thin) {
-        r.section_thickness[i] = section_thickness_at(st);
-        flags |= kFlagTooThin;
-      }
-      r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
-      usable[i] = !(flags & kFlagTooThin);
-    }
-  }
-  // Thickness not needed so far: the regions, for complete_section_thickness().
-  if (options.defer_thickness) {
-    for (int i = 0; i < ns; ++i) {
-      const SectionState& st = states[i];
-      if (!st.found || !st.analysed || !std::isnan(st.thickness) ||
-          (r.section_flags[i] & kFlagUnreliable))
-        continue;
-      if (r.thickness_pending.empty()) r.thickness_pending.resize(ns);
-      r.thickness_pending[i] = st.analysed;
-    }
+  const int nb = num_bones;
+  std::vector<std::vector<double>> inner(nb);
+  for (int i = 0; i < ns; ++i)
+    if (states[i].found && !(states[i].flags & kFlagOutside))
+      inner[specs[i].bone].push_back(states[i].area);
+  std::vector<double> median(nb, 0.0);
+  for (int b = 0; b < nb; ++b) {
+    auto& a = inner[b];
+    if (a.empty()) continue;
+    std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+    median[b] = a[a.size() / 2];
   }
   for (int i = 0; i < ns; ++i) {
-    if (!usable[i]) continue;
-    // The moment at a notch section's corner counts (the bound below stays a bound).
-    r.max_moment = std::max(r.max_moment, r.moment[i] * notch.arm_ratio[i]);
-    r.max_stress = std::max(r.max_stress, r.stress[i]);
-    if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
-      r.max_stress_ratio = r.stress_ratio[i];
-      r.weakest_section = i;
+    if (!states[i].found) continue;
+    std::uint32_t& flags = r.section_flags[i];
+    if ((flags & kFlagOutside) && states[i].area < 0.1 * median[specs[i].bone]) {
+      flags |= kFlagUnreliable;
+      r.section_area[i] = r.section_cut_area[i] = 0.0;
+      r.section_cut_modulus[i] = kNaN;
+      r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
+      r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
+      continue;
     }
+    // The exact thickness only for a section that is too thin (the check mostly decides
+    // from a lower bound of the width and a search of the walls within the minimum).
+    SectionState& st = states[i];
+    const bool thin = std::isnan(st.thickness)
+                          ? st.analysed && region_thinner_than(*st.analysed, options.min_thickness,
+                                                               st.thickness_bound)
+                          : st.thickness < options.min_thickness;
+    if (thin) {
+      r.section_thickness[i] = section_thickness_at(st);
+      flags |= kFlagTooThin;
+    }
+    r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
+    usable[i] = !(flags & kFlagTooThin);
   }
-  r.safe_modulus = r.max_moment / options.allowable_stress;
+  return usable;
+}
+
+// Each analysed region's loops (outline_*), and each junction's whole cut (cut_outline_*).
+void Analyzer::Impl::pack_outlines(AnalysisResult& r) const {
+  const int ns = static_cast<int>(specs.size());
+
+  r.outline_section_start.reserve(ns + 1);
+  r.outline_loop_start.push_back(0);
   for (int i = 0; i < ns; ++i) {
-    if (!usable[i]) continue;
-    // Safe for sure even with its corner: (1 + q (Kt - 1)) M_max / W below the allowable.
-    r.culled[i] = r.section_modulus[i] > notch.effective[i] * r.max_moment / r.section_allowable[i];
-    r.weak[i] = r.stress[i] > r.section_allowable[i];
-  }
-  run.check_cancel();
-  if (options.keep_outlines) {
-    r.outline_section_start.reserve(ns + 1);
-    r.outline_loop_start.push_back(0);
-    for (int i = 0; i < ns; ++i) {
-      r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
-      // Only regions analysed: not an unreliable sliver (no number, no outline).
-      if (!states[i].found || (r.section_flags[i] & kFlagUnreliable)) continue;
-      for (const auto& loop : states[i].loops) {
-        r.outline_points.insert(r.outline_points.end(), loop.begin(), loop.end());
-        r.outline_loop_start.push_back(static_cast<std::int64_t>(r.outline_points.size()));
-      }
-    }
     r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
-    r.cut_outline_section_start.reserve(ns + 1);
-    r.cut_outline_loop_start.push_back(0);
-    for (int i = 0; i < ns; ++i) {
-      r.cut_outline_section_start.push_back(
-          static_cast<std::int64_t>(r.cut_outline_loop_start.size()) - 1);
-      if (!states[i].found || !(r.section_flags[i] & kFlagJunction)) continue;
-      for (const auto& loop : states[i].cut_loops) {
-        r.cut_outline_points.insert(r.cut_outline_points.end(), loop.begin(), loop.end());
-        r.cut_outline_loop_start.push_back(static_cast<std::int64_t>(r.cut_outline_points.size()));
-      }
+    // Only regions analysed: not an unreliable sliver (no number, no outline).
+    if (!states[i].found || (r.section_flags[i] & kFlagUnreliable)) continue;
+    for (const auto& loop : states[i].loops) {
+      r.outline_points.insert(r.outline_points.end(), loop.begin(), loop.end());
+      r.outline_loop_start.push_back(static_cast<std::int64_t>(r.outline_points.size()));
     }
+  }
+  r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
+  r.cut_outline_section_start.reserve(ns + 1);
+  r.cut_outline_loop_start.push_back(0);
+  for (int i = 0; i < ns; ++i) {
     r.cut_outline_section_start.push_back(
         static_cast<std::int64_t>(r.cut_outline_loop_start.size()) - 1);
+    if (!states[i].found || !(r.section_flags[i] & kFlagJunction)) continue;
+    for (const auto& loop : states[i].cut_loops) {
+      r.cut_outline_points.insert(r.cut_outline_points.end(), loop.begin(), loop.end());
+      r.cut_outline_loop_start.push_back(static_cast<std::int64_t>(r.cut_outline_points.size()));
+    }
   }
-  return r;
+  r.cut_outline_section_start.push_back(static_cast<std::int64_t>(r.cut_outline_loop_start.size()) -
+                                        1);
 }
 
 }  // namespace osteon

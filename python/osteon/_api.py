@@ -6,7 +6,9 @@ inputs (NumPy arrays, SciPy sparse weights) and wraps the results.
 
 from __future__ import annotations
 
+import inspect
 import math
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -14,13 +16,24 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from .options import (
+    DEFAULT_MIN_THICKNESS,
+    AnalysisOptions,
+    _count,
+    _min_thickness,  # noqa: F401 -- imported from here by autoskeleton
+    _positive,
+    engine_options,
+    option_docs,
+)
 
 __all__ = [
     "DEFAULT_MIN_THICKNESS",
     "FLAG_REASONS",
+    "RESULT_FIELDS",
     "SECTION_FLAGS",
     "SECTION_KINDS",
     "Analysis",
+    "AnalysisOptions",
     "Analyzer",
     "Cancelled",
     "Correction",
@@ -262,219 +275,92 @@ def _weights_args(weights: Any, num_vertices: int, num_bones: int):
     return np.ascontiguousarray(w, dtype=np.float64), None  # values: checked by the engine
 
 
-def _positive(value: float, name: str, unit: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number ({unit})") from None
-    if not (v > 0 and math.isfinite(v)):
-        raise ValueError(f"{name} must be a positive finite number ({unit}), got {value!r}")
-    return v
-
-
-def _layer_options(build_direction: Any, layer_strength_ratio: Any) -> tuple[np.ndarray, float]:
-    """(unit build direction (3,), layer strength ratio) checked; ValueError naming the problem."""
-    try:
-        d = np.asarray(build_direction, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ValueError(f"build_direction must be a 3-vector, got {build_direction!r}") from None
-    if d.shape != (3,) or not np.isfinite(d).all() or not np.linalg.norm(d) > 0:
-        raise ValueError(
-            f"build_direction must be a finite non-zero 3-vector, got {build_direction!r}")
-    try:
-        r = float(layer_strength_ratio)
-    except (TypeError, ValueError):
-        raise ValueError("layer_strength_ratio must be a number (layer / in-plane strength)"
-                         ) from None
-    if not (r > 0 and math.isfinite(r)):
-        raise ValueError(
-            f"layer_strength_ratio must be a positive finite number, got {layer_strength_ratio!r}")
-    return d / np.linalg.norm(d), r
-
-
-#: Default minimum printable thickness, mm (FDM: two perimeters of a 0.4 mm nozzle).
-DEFAULT_MIN_THICKNESS = 0.8
-#: Default notch sensitivity q: the full elastic peak at a corner (brittle; the safe side).
-DEFAULT_NOTCH_SENSITIVITY = 1.0
-#: Default smallest corner radius a print makes, mm: half a 0.4 mm nozzle's line (docs/notch.md).
-DEFAULT_MIN_NOTCH_RADIUS = 0.2
-
-
-def _notch_sensitivity(value: Any) -> float:
-    """``notch_sensitivity`` q: None -> 1; must be a number from 0 to 1."""
-    if value is None:
-        return DEFAULT_NOTCH_SENSITIVITY
-    try:
-        q = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"notch_sensitivity must be a number from 0 to 1, got {value!r}"
-                         ) from None
-    if not 0.0 <= q <= 1.0:
-        raise ValueError(f"notch_sensitivity must be a number from 0 to 1, got {value!r}")
-    return q
-
-
-def _min_notch_radius(value: Any) -> float:
-    """``min_notch_radius`` in mm: None -> the default; must be a positive finite number."""
-    if value is None:
-        return DEFAULT_MIN_NOTCH_RADIUS
-    return _positive(value, "min_notch_radius", "mm")
-
-
-def _min_thickness(value: Any) -> float:
-    """``min_thickness`` in mm: None -> the default; must be a finite number >= 0."""
-    if value is None:
-        return DEFAULT_MIN_THICKNESS
-    try:
-        t = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"min_thickness must be a number of mm, got {value!r}") from None
-    if not (t >= 0.0 and math.isfinite(t)):
-        raise ValueError(f"min_thickness must be a finite length >= 0 mm, got {value!r}")
-    return t
-
-
-def _switch(value: Any, name: str) -> bool:
-    """A yes/no argument: True/False (a NumPy bool, or 1/0); ``ValueError`` naming it otherwise
-    (a string such as "false" is not taken for True)."""
-    if isinstance(value, (bool, np.bool_)) or (isinstance(value, (int, np.integer))
-                                                and value in (0, 1)):
-        return bool(value)
-    raise ValueError(f"{name} must be True or False, got {value!r}")
-
-
 def _held_bone(root: int | str | None, skeleton: Skeleton) -> int:
-    if root is None:
-        return -1
-    if isinstance(root, (bool, np.bool_)) or not isinstance(root, (int, np.integer, str)):
-        raise ValueError(f"root must be a bone index or name, got {root!r}")  # noqa: TRY004
-    return skeleton.bone_index(root)
+    """The engine's held bone: -1 (the main root) or the index of ``root`` (checked already
+    for its type by :class:`AnalysisOptions`) in ``skeleton``."""
+    return -1 if root is None else skeleton.bone_index(root)
 
 
-def _count(value: Any, name: str) -> int:
-    """A non-negative integer setting (threads, max_rounds) that fits the engine's int."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name} must be an integer >= 0, got {value!r}")  # noqa: TRY004
-    if not 0 <= int(value) <= 2**31 - 1:
-        raise ValueError(f"{name} must be an integer >= 0 (at most 2^31 - 1), got {value!r}")
-    return int(value)
+#: (name, shape, dtype, unit, doc) of every output of the engine, in order: the one list of
+#: result fields (cpp/include/osteon/result_fields.hpp); :class:`Analysis` is made from it.
+RESULT_FIELDS = tuple(_core.result_fields())
+
+#: Result fields an :class:`Analysis` may be built without (older callers), with their default
+#: (``list``: an empty list); ``Analysis.__post_init__`` fills in the ``None`` ones. The packed
+#: outlines default to ``None`` (no ``keep_outlines``); every other result field is required.
+_RESULT_DEFAULTS = {"section_allowable": None, "stress_ratio": None, "across_layers": None,
+                    "max_stress_ratio": 0.0, "loose_pieces": list, "section_cut_area": None,
+                    "section_cut_modulus": None, "nominal_stress": None,
+                    "stress_concentration": None, "notch_radius": None, "notch_step": None}
+_OUTLINE_SHAPES = ("(P,3)", "(L+1,)", "(S+1,)")
+
+#: The settings an :class:`Analysis` records (fields of the same name of :class:`AnalysisOptions`).
+_RECORDED_OPTIONS = ("allowable_stress", "force", "interval", "build_direction",
+                     "layer_strength_ratio", "min_thickness")
 
 
-def _options(force: float, allowable_stress: float, interval: float, held_bone: int,
-             gap_tolerance: float | None, threads: int, build_direction: Any = (0.0, 0.0, 1.0),
-             layer_strength_ratio: float = 1.0) -> _core.AnalysisOptions:
-    """The engine's options object (values already converted by the callers)."""
-    o = _core.AnalysisOptions()
-    o.build_direction = [float(x) for x in build_direction]
-    o.layer_strength_ratio = float(layer_strength_ratio)
-    o.force, o.allowable_stress, o.interval = force, allowable_stress, interval
-    o.held_bone, o.threads = held_bone, threads
-    o.gap_tolerance = -1.0 if gap_tolerance is None else float(gap_tolerance)
-    # Thickness only where the too_thin check needs it; Analysis.section_thickness computes the
-    # rest on first read (a convex hull per section: ~7 % of an analysis nobody may read).
-    o.defer_thickness = True
-    return o
+def _field_line(name: str, shape: str, unit: str, doc: str) -> str:
+    text = " ".join(part for part in (f"``{name}``", shape, unit) if part) + f": {doc}."
+    return textwrap.fill(text, 96, initial_indent="- ", subsequent_indent="  ")
 
 
-@dataclass
+def _result_dataclass(cls: type) -> type:
+    """``cls`` as a dataclass whose fields are :data:`RESULT_FIELDS` (required ones first), the
+    recorded options, ``bone_names`` and ``thickness_pending``; its docstring lists them."""
+    annotations, lines = {}, []
+    rows = sorted(RESULT_FIELDS, key=lambda r: r[0] in _RESULT_DEFAULTS or r[1] in _OUTLINE_SHAPES)
+    for name, shape, dtype, unit, doc in rows:
+        annotations[name] = dtype if dtype in ("float", "int", "list") else "np.ndarray"
+        if name in _RESULT_DEFAULTS or shape in _OUTLINE_SHAPES:
+            default = _RESULT_DEFAULTS.get(name)
+            setattr(cls, name, field(default_factory=list) if default is list else default)
+        if dtype not in ("float", "int", "list"):
+            shape = f"{shape} {dtype}"
+        lines.append(_field_line(name, shape, unit, doc))
+    lines.append("")
+    lines += ["Settings of the run (:class:`AnalysisOptions`):", ""]
+    defaults, docs = AnalysisOptions(), {n: (u, d) for n, u, d in option_docs()}
+    for name in _RECORDED_OPTIONS:
+        annotations[name] = "np.ndarray" if name == "build_direction" else "float"
+        value = getattr(defaults, name)
+        setattr(cls, name, field(default_factory=lambda v=value: np.array(v, dtype=float))
+                if isinstance(value, tuple) else value)
+        lines.append(_field_line(name, "(3,)" if isinstance(value, tuple) else "()", *docs[name]))
+    annotations["bone_names"] = "list"
+    cls.bone_names = field(default_factory=list)
+    lines.append(_field_line("bone_names", "(B,)", "", "the skeleton's bone names"))
+    #: the engine's regions whose thickness is not computed yet (section_thickness fills them)
+    annotations["thickness_pending"] = "Any"
+    cls.thickness_pending = field(default=None, repr=False, compare=False)
+    cls.__annotations__ = annotations
+    cls.__doc__ = (cls.__doc__.rstrip() + "\n\n" + textwrap.indent("\n".join(lines), "    ")
+                   + "\n    ")
+    return dataclass(cls)
+
+
+@_result_dataclass
 class Analysis:
     """Result of :func:`analyze`: one row per section (S), one per vertex (V). mm, N, MPa.
 
-    Per section: ``section_bone`` (S,) int, ``section_kind`` (S,) int (0 interior, 1 joint,
-    2 end), ``section_param`` (S,) mm from the bone head, ``section_point`` (S,3) where the bone
-    pierces the plane, ``section_center`` (S,3) centroid, ``section_normal`` (S,3),
-    ``load_point`` (S,3) farthest downstream point, ``section_area`` (S,) mm², ``section_modulus``
-    (S,) mm³, ``section_thin_axis`` (S,3) unit in-plane direction across the section's thinnest
-    width, ``section_aspect`` (S,) width / thickness (1 for a circle or square), ``moment_arm`` (S,) mm, ``moment`` (S,) N·mm, ``stress`` (S,) MPa, ``culled`` (S,)
-    bool (W > safe modulus: safe for sure), ``weak`` (S,) bool (stress > allowable),
-    ``section_flags`` (S,) bit mask (see ``SECTION_FLAGS``), ``section_thickness`` (S,) mm: the
-    region's minimum width (narrowest distance between two parallel lines enclosing it; a solid
-    round section's diameter, a plate's thickness; computed on first read, except where the
-    ``too_thin`` check needed it). Skipped sections (flag ``empty``,
-    ``degenerate`` or ``unreliable``) have NaN modulus and stress and are never weak or culled;
-    ``too_thin`` sections (thinner than ``min_thickness`` mm) keep their stress but are never
-    weak, culled, the maximum or corrected. ``loose_pieces``: list of (n,) vertex index arrays,
-    one per shell that neither touches nor overlaps the held piece (it would fall off).
-    Per vertex: ``vertex_stress`` (V,) MPa, ``vertex_culled`` (V,) bool, ``vertex_bone`` (V,).
-    Scalars: ``max_moment`` N·mm, ``safe_modulus`` mm³, ``max_stress`` MPa, ``allowable_stress``
-    MPa, ``force`` N, ``interval`` mm, ``held_bone`` index.
+    Skipped sections (flag ``empty``, ``degenerate`` or ``unreliable``) have NaN modulus and
+    stress and are never weak or culled; ``too_thin`` sections (thinner than ``min_thickness``
+    mm) keep their stress but are never weak, culled, the maximum or corrected. The packed
+    ``outline_*`` / ``cut_outline_*`` arrays are None without ``keep_outlines`` (read them as
+    :attr:`section_loops` / :attr:`section_cut_loops`). ``section_thickness`` is computed on
+    first read, except where the ``too_thin`` check needed it.
+
+    Fields (cpp/include/osteon/result_fields.hpp):
     """
 
-    section_bone: np.ndarray
-    section_kind: np.ndarray
-    section_param: np.ndarray
-    section_point: np.ndarray
-    section_center: np.ndarray
-    section_normal: np.ndarray
-    load_point: np.ndarray
-    section_area: np.ndarray
-    section_modulus: np.ndarray
-    section_thin_axis: np.ndarray
-    section_aspect: np.ndarray
-    moment_arm: np.ndarray
-    moment: np.ndarray
-    stress: np.ndarray
-    culled: np.ndarray
-    weak: np.ndarray
-    section_flags: np.ndarray
-    section_thickness: np.ndarray
-    max_moment: float
-    safe_modulus: float
-    max_stress: float
-    weakest_section: int
-    held_bone: int
-    vertex_stress: np.ndarray
-    vertex_culled: np.ndarray
-    vertex_bone: np.ndarray
-    section_allowable: np.ndarray | None = None
-    stress_ratio: np.ndarray | None = None
-    across_layers: np.ndarray | None = None
-    max_stress_ratio: float = 0.0
-    loose_pieces: list = field(default_factory=list)
-    allowable_stress: float = 60.0
-    force: float = 20.0
-    interval: float = 2.0
-    bone_names: list = field(default_factory=list)
-    build_direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
-    layer_strength_ratio: float = 1.0
-    min_thickness: float = DEFAULT_MIN_THICKNESS
-    #: the engine's regions whose thickness is not computed yet (section_thickness fills them)
-    thickness_pending: Any = field(default=None, repr=False, compare=False)
-
-    outline_points: np.ndarray | None = None
-    outline_loop_start: np.ndarray | None = None
-    outline_section_start: np.ndarray | None = None
-    #: (S,) area mm² and modulus W mm³ of the whole cut; differ from section_area /
-    #: section_modulus only at ``junction`` sections (those are the core's, docs/junctions.md)
-    section_cut_area: np.ndarray | None = None
-    section_cut_modulus: np.ndarray | None = None
-    cut_outline_points: np.ndarray | None = None
-    cut_outline_loop_start: np.ndarray | None = None
-    cut_outline_section_start: np.ndarray | None = None
-    #: (S,) the beam stress M / W, MPa; ``stress`` is the governing stress: this times
-    #: 1 + q (Kt - 1) (and the moment at the corner over the section's) at ``notch`` sections
-    nominal_stress: np.ndarray | None = None
-    #: (S,) Kt of the corner next to the section (1 where none), docs/notch.md
-    stress_concentration: np.ndarray | None = None
-    #: (S,) corner radius Kt was computed with, mm (NaN where none); never below the print's
-    notch_radius: np.ndarray | None = None
-    #: (S,) step ratio D/d (big / small equivalent diameter) of that corner (NaN where none)
-    notch_step: np.ndarray | None = None
-
     @classmethod
-    def _from_core(cls, d: dict, *, skeleton: Skeleton, allowable_stress: float, force: float,
-                   interval: float, build_direction: Any = (0.0, 0.0, 1.0),
-                   layer_strength_ratio: float = 1.0,
-                   min_thickness: float = DEFAULT_MIN_THICKNESS) -> Analysis:
+    def _from_core(cls, d: dict, *, skeleton: Skeleton, options: AnalysisOptions) -> Analysis:
         if len(d["outline_section_start"]) == 0:  # outlines not asked for
-            d["outline_points"] = d["outline_loop_start"] = d["outline_section_start"] = None
-            d["cut_outline_points"] = d["cut_outline_loop_start"] = None
-            d["cut_outline_section_start"] = None
-        return cls(**d, allowable_stress=allowable_stress, force=force, interval=interval,
-                   bone_names=list(skeleton.names),
-                   build_direction=np.array(build_direction, dtype=float),
-                   layer_strength_ratio=float(layer_strength_ratio),
-                   min_thickness=float(min_thickness))
+            for name, shape, *_ in RESULT_FIELDS:
+                if shape in _OUTLINE_SHAPES:
+                    d[name] = None
+        recorded = {name: getattr(options, name) for name in _RECORDED_OPTIONS}
+        recorded["build_direction"] = np.array(options.build_direction, dtype=float)
+        return cls(**d, **recorded, bone_names=list(skeleton.names))
 
     def __post_init__(self) -> None:
         # Results built without the layer fields (older callers): isotropic values.
@@ -716,67 +602,53 @@ class Correction:
         )
 
 
+def _takes_options(fn):
+    """Shows the :class:`AnalysisOptions` fields as keyword-only parameters in ``fn``'s
+    signature (help, IDEs, ``inspect``) in place of its ``**settings``; ``fn`` receives them
+    in ``settings`` and makes one checked object with ``AnalysisOptions.of(options, settings)``."""
+    sig = inspect.signature(fn)
+    params = [p for p in sig.parameters.values() if p.kind is not p.VAR_KEYWORD]
+    params += [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
+                                 default=getattr(AnalysisOptions, name))
+               for name, _, _ in option_docs()]
+    fn.__signature__ = sig.replace(parameters=params)
+    settings = "\n".join(_field_line(n, "", u, d) for n, u, d in option_docs())
+    fn.__doc__ = ((fn.__doc__ or "").rstrip() + "\n\n    Settings, as keywords or ``options=``:\n\n"
+                  + textwrap.indent(settings, "    ") + "\n    ")
+    return fn
+
+
 class Analyzer:
     """Reusable analysis of one mesh topology: faces, weights and settings fixed; call
     :meth:`run` with new vertex positions and a (posed) skeleton as often as needed (live mode).
 
-    ``faces`` (F,3) int; ``num_vertices`` V; ``weights`` None / (V,B) / SciPy sparse; ``force`` N;
-    ``allowable_stress`` MPa; ``interval`` mm; ``root`` bone index or name to hold;
-    ``gap_tolerance`` mm (None: 1 % of the model size); ``threads`` (0 = all cores);
-    ``local_cuts`` cut near each bone first and fall back to the whole plane only when needed
-    (same result, faster; False always cuts whole planes); ``keep_outlines`` return each
-    section's loops (:attr:`Analysis.section_loops`).
+    ``faces`` (F,3) int; ``num_vertices`` V; ``weights`` None / (V,B) / SciPy sparse; the
+    settings as keywords or ``options=`` an :class:`AnalysisOptions` (kept as ``options``).
     """
 
-    def __init__(
-        self,
-        faces: Any,
-        num_vertices: int,
-        skeleton: Skeleton,
-        weights: Any = None,
-        *,
-        force: float = 20.0,
-        allowable_stress: float = 60.0,
-        interval: float = 2.0,
-        root: int | str | None = None,
-        gap_tolerance: float | None = None,
-        threads: int = 0,
-        local_cuts: bool = True,
-        build_direction: Any = (0.0, 0.0, 1.0),
-        layer_strength_ratio: float = 1.0,
-        keep_outlines: bool = False,
-        min_thickness: float | None = None,
-        junctions: bool = True,
-        notch_sensitivity: float | None = None,
-        min_notch_radius: float | None = None,
-    ) -> None:
+    @_takes_options
+    def __init__(self, faces: Any, num_vertices: int, skeleton: Skeleton, weights: Any = None, *,
+                 options: AnalysisOptions | None = None, **settings: Any) -> None:
         if not isinstance(skeleton, Skeleton):
             raise ValueError("skeleton must be an osteon.Skeleton")  # noqa: TRY004
         if int(num_vertices) <= 0:
             raise ValueError("empty mesh: no vertices")
         self.num_vertices = int(num_vertices)
         self.faces = _faces(faces, self.num_vertices)
-        self.force = _positive(force, "force", "N")
-        self.allowable_stress = _positive(allowable_stress, "allowable_stress", "MPa")
-        self.interval = _positive(interval, "interval", "mm")
-        if gap_tolerance is not None and not (float(gap_tolerance) >= 0):
-            raise ValueError("gap_tolerance must be >= 0 mm")
-        self.build_direction, self.layer_strength_ratio = _layer_options(
-            build_direction, layer_strength_ratio)
-        self.min_thickness = _min_thickness(min_thickness)
+        self.options = AnalysisOptions.of(options, settings)
         dense, csr = _weights_args(weights, self.num_vertices, skeleton.num_bones)
         self._skeleton = skeleton
-        options = _options(self.force, self.allowable_stress, self.interval,
-                           _held_bone(root, skeleton), gap_tolerance, _count(threads, "threads"),
-                           self.build_direction, self.layer_strength_ratio)
-        options.local_cuts = bool(local_cuts)
-        options.keep_outlines = bool(keep_outlines)
-        options.min_thickness = self.min_thickness
-        options.junctions = _switch(junctions, "junctions")
-        options.notch_sensitivity = _notch_sensitivity(notch_sensitivity)
-        options.min_notch_radius = _min_notch_radius(min_notch_radius)
+        core_options = engine_options(self.options, _held_bone(self.options.root, skeleton))
         self._core = _core.Analyzer(self.faces, self.num_vertices, skeleton.num_bones, dense, csr,
-                                    options)
+                                    core_options)
+
+    # the settings by name (public attributes before the options object), read-only views
+    force = property(lambda self: self.options.force)
+    allowable_stress = property(lambda self: self.options.allowable_stress)
+    interval = property(lambda self: self.options.interval)
+    layer_strength_ratio = property(lambda self: self.options.layer_strength_ratio)
+    min_thickness = property(lambda self: self.options.min_thickness)
+    build_direction = property(lambda self: np.array(self.options.build_direction, dtype=float))
 
     def run(self, vertices: Any, skeleton: Skeleton | None = None, *,
             progress: Progress | None = None) -> Analysis:
@@ -798,100 +670,52 @@ class Analyzer:
                 f"vertices has {len(v)} rows, the analyzer was built for {self.num_vertices}"
             )
         d = self._core.run(v, sk._engine(), progress)
-        return Analysis._from_core(d, skeleton=sk, allowable_stress=self.allowable_stress,
-                                   force=self.force, interval=self.interval,
-                                   build_direction=self.build_direction,
-                                   layer_strength_ratio=self.layer_strength_ratio,
-                                   min_thickness=self.min_thickness)
+        return Analysis._from_core(d, skeleton=sk, options=self.options)
 
 
-def analyze(
-    vertices: Any,
-    faces: Any,
-    skeleton: Skeleton,
-    weights: Any = None,
-    *,
-    force: float = 20.0,
-    allowable_stress: float = 60.0,
-    interval: float = 2.0,
-    root: int | str | None = None,
-    gap_tolerance: float | None = None,
-    threads: int = 0,
-    local_cuts: bool = True,
-    build_direction: Any = (0.0, 0.0, 1.0),
-    layer_strength_ratio: float = 1.0,
-    keep_outlines: bool = False,
-    min_thickness: float | None = None,
-    progress: Progress | None = None,
-    junctions: bool = True,
-    notch_sensitivity: float | None = None,
-    min_notch_radius: float | None = None,
-) -> Analysis:
+@_takes_options
+def analyze(vertices: Any, faces: Any, skeleton: Skeleton, weights: Any = None, *,
+            options: AnalysisOptions | None = None, progress: Progress | None = None,
+            **settings: Any) -> Analysis:
     """Skeleton-sectional stress analysis of a mesh.
 
     ``vertices`` (V,3) mm, ``faces`` (F,3) int, ``skeleton`` :class:`Skeleton` (mm), ``weights``
-    None (each vertex bound to its nearest bone) or (V,B) dense / SciPy sparse; ``force`` N on the
-    worst point of each branch; ``allowable_stress`` MPa (strength / safety factor); ``interval``
-    mm between sections along each bone; ``root`` the bone (index or name) held at its head
-    (default: the main root bone). ``build_direction`` (3,) the FDM print's build direction in
-    the model's frame (default +Z) and ``layer_strength_ratio`` layer / in-plane strength (1.0 =
-    isotropic): each section's allowable then depends on the angle between its normal and the
-    build direction (``section_allowable``, ``stress_ratio``, ``across_layers``;
-    docs/printing.md); ``keep_outlines`` also return each section's loops
-    (:attr:`Analysis.section_loops`); ``min_thickness`` mm: sections thinner than this are
-    flagged ``too_thin`` (None: 0.8 mm, FDM; the material presets carry their own; 0 = no
-    check); ``junctions`` (default True) counts only the core that continues through the plane
-    where a section cuts a side branch's stub (flag ``junction``, docs/junctions.md); False
-    analyses whole cuts. ``notch_sensitivity`` q (0…1, None: 1): at a section next to a concave
-    corner (flag ``notch``) the governing ``stress`` is (1 + q (Kt − 1)) × the beam stress
-    (``nominal_stress``; Kt in ``stress_concentration``, docs/notch.md); 1 (brittle) is the safe
-    side, the material presets carry their own. ``min_notch_radius`` mm (None: 0.2, half a
-    0.4 mm nozzle's line): corners sharper than this are taken at this radius (the print rounds
-    them). ``progress``: a :class:`Progress` to follow the run from another
-    thread or cancel it (then :class:`Cancelled` is raised); :func:`estimate_sections` tells
-    the section count beforehand. Raises ValueError on bad input.
+    None (each vertex bound to its nearest bone) or (V,B) dense / SciPy sparse. The settings
+    (listed below) as keywords, e.g. ``force=20.0``, or as ``options=`` an
+    :class:`AnalysisOptions` (not both; equal settings give bit-identical results). With a
+    ``build_direction`` and ``layer_strength_ratio`` each section's allowable depends on the
+    angle between its normal and the build direction (``section_allowable``, ``stress_ratio``,
+    ``across_layers``; docs/printing.md). ``progress``: a :class:`Progress` to follow the run
+    from another thread or cancel it (then :class:`Cancelled` is raised);
+    :func:`estimate_sections` tells the section count beforehand. Raises ValueError on bad
+    input.
     """
     progress = _progress(progress)
     v = _float_rows(vertices, "vertices")
     if len(v) == 0:
         raise ValueError("empty mesh: vertices has no rows")
-    analyzer = Analyzer(faces, len(v), skeleton, weights, force=force,
-                        allowable_stress=allowable_stress, interval=interval, root=root,
-                        gap_tolerance=gap_tolerance, threads=threads, local_cuts=local_cuts,
-                        build_direction=build_direction,
-                        layer_strength_ratio=layer_strength_ratio, keep_outlines=keep_outlines,
-                        min_thickness=min_thickness, junctions=junctions,
-                        notch_sensitivity=notch_sensitivity, min_notch_radius=min_notch_radius)
+    analyzer = Analyzer(faces, len(v), skeleton, weights,
+                        options=AnalysisOptions.of(options, settings))
     return analyzer.run(v, progress=progress)
 
 
+@_takes_options
 def correct(
     vertices: Any,
     faces: Any,
     skeleton: Skeleton,
     weights: Any,
     *,
-    force: float = 20.0,
-    allowable_stress: float = 60.0,
-    interval: float = 2.0,
-    root: int | str | None = None,
     max_scale: float = 3.0,
     max_rounds: int = 100,
     target_ratio: float = 0.99,
-    gap_tolerance: float | None = None,
-    threads: int = 0,
     scaling: str = DEFAULT_SCALING,
     flat_aspect: float = 2.0,
     bone_x_axes: Any = None,
     bone_long_axes: Any = None,
-    build_direction: Any = (0.0, 0.0, 1.0),
-    layer_strength_ratio: float = 1.0,
-    keep_outlines: bool = False,
-    min_thickness: float | None = None,
+    options: AnalysisOptions | None = None,
     progress: Progress | None = None,
-    junctions: bool = True,
-    notch_sensitivity: float | None = None,
-    min_notch_radius: float | None = None,
+    **settings: Any,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
 
@@ -910,16 +734,12 @@ def correct(
     Blender (FBX/glTF) has bones whose local Y is not the segment analysed; scaling across the
     bone's own local axis nearest the segment is what Blender's pose scale can reproduce exactly
     (the sections stay perpendicular to the segments: every round re-analyses the scaled mesh,
-    so this changes how the bone is thickened, not what is checked). ``build_direction`` and
-    ``layer_strength_ratio`` as in :func:`analyze`: the loop is driven by the stress ratio
-    against each section's direction-dependent allowable. ``keep_outlines``: ``before``
-    and ``after`` carry their sections' loops (:attr:`Analysis.section_loops`).
-    ``junctions`` as in :func:`analyze`: True (default) drives the loop by the junction cores
-    (the stub of a side branch not counted, docs/junctions.md), False by the whole cuts.
-    ``notch_sensitivity`` and ``min_notch_radius`` as in :func:`analyze`: the loop is driven by
-    the governing stress, so a ``notch`` section is thickened until its peak at the corner is
-    allowed (thickening the thin side lowers D/d and so Kt; a larger fillet in the model lowers
-    it more, which the loop cannot do: docs/notch.md).
+    so this changes how the bone is thickened, not what is checked). The analysis settings
+    (keywords or ``options=``) as in :func:`analyze`: the loop is driven by the stress ratio
+    against each section's direction-dependent allowable (``build_direction``,
+    ``layer_strength_ratio``), by the junction cores with ``junctions=True``; with
+    ``keep_outlines`` ``before`` and ``after`` carry their sections' loops
+    (:attr:`Analysis.section_loops`).
     ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
     round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
     """
@@ -942,44 +762,30 @@ def correct(
     if len(v) == 0:
         raise ValueError("empty mesh: vertices has no rows")
     f = _faces(faces, len(v))
-    force = _positive(force, "force", "N")
-    allowable_stress = _positive(allowable_stress, "allowable_stress", "MPa")
-    interval = _positive(interval, "interval", "mm")
+    options = AnalysisOptions.of(options, settings)
     if not (float(max_scale) >= 1.0 and math.isfinite(float(max_scale))):
         raise ValueError(f"max_scale must be a finite number >= 1, got {max_scale!r}")
     max_rounds = _count(max_rounds, "max_rounds")
-    threads = _count(threads, "threads")
-    build_direction, layer_strength_ratio = _layer_options(build_direction, layer_strength_ratio)
     if weights is None:
         from scipy import sparse
 
-        nearest = analyze(v, f, skeleton, None, force=force, allowable_stress=allowable_stress,
-                          interval=interval, root=root, progress=progress,
-                          junctions=junctions, notch_sensitivity=notch_sensitivity,
-                          min_notch_radius=min_notch_radius).vertex_bone
+        o = options  # each vertex bound to its nearest bone (the settings as before)
+        nearest = analyze(v, f, skeleton, None, force=o.force, allowable_stress=o.allowable_stress,
+                          interval=o.interval, root=o.root, progress=progress,
+                          junctions=o.junctions).vertex_bone
         weights = sparse.csr_matrix(
             (np.ones(len(v)), (np.arange(len(v)), nearest)), shape=(len(v), skeleton.num_bones)
         )
     dense, csr = _weights_args(weights, len(v), skeleton.num_bones)
-    options = _options(force, allowable_stress, interval, _held_bone(root, skeleton),
-                       gap_tolerance, threads, build_direction, layer_strength_ratio)
-    options.keep_outlines = bool(keep_outlines)
-    options.min_thickness = _min_thickness(min_thickness)
-    options.junctions = _switch(junctions, "junctions")
-    options.notch_sensitivity = _notch_sensitivity(notch_sensitivity)
-    options.min_notch_radius = _min_notch_radius(min_notch_radius)
+    core_options = engine_options(options, _held_bone(options.root, skeleton))
     co = _core.CorrectionOptions()
     co.max_scale, co.max_rounds = float(max_scale), max_rounds
     co.target_ratio, co.thin_direction = float(target_ratio), scaling == "thin"
     co.flat_aspect, co.bone_x_axes = float(flat_aspect), axes
     co.bone_long_axes = long_axes
-    d = _core.correct(v, f, skeleton._engine(), dense, csr, options, co, progress)
-    kw = {"skeleton": skeleton, "allowable_stress": allowable_stress, "force": force,
-          "interval": interval, "build_direction": build_direction,
-          "layer_strength_ratio": layer_strength_ratio,
-          "min_thickness": _min_thickness(min_thickness)}
-    d["before"] = Analysis._from_core(d["before"], **kw)
-    d["after"] = Analysis._from_core(d["after"], **kw)
+    d = _core.correct(v, f, skeleton._engine(), dense, csr, core_options, co, progress)
+    d["before"] = Analysis._from_core(d["before"], skeleton=skeleton, options=options)
+    d["after"] = Analysis._from_core(d["after"], skeleton=skeleton, options=options)
     return Correction(**d)
 
 

@@ -10,6 +10,7 @@ every key of the schema is present in every report (``null`` where it does not a
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -40,7 +41,7 @@ def finite(x) -> float | None:
 
 def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
                bone_scale=None, stress_ratio=None, across_layers=None,
-               stress_concentration=None) -> list[dict]:
+               section_allowable=None, stress_concentration=None) -> list[dict]:
     """One row per bone that has sections, highest stress ratio first (bones whose sections
     have no finite stress last, with ``null`` stress).
 
@@ -50,8 +51,10 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
     bool or None. Row: ``bone``, ``index``, ``max_stress_mpa``, ``ratio`` (the bone's largest
     stress ratio), ``limit`` ("across layers" / "along layers" at that section), ``weak`` (a
     weak section), ``weak_sections``, ``sections``, ``scale`` (the correction's cross-section
-    scale, 1 = unchanged), ``stress_concentration`` (Kt at that section, 1 = no corner; None
-    when not given: docs/notch.md)."""
+    scale, 1 = unchanged); ``stress_mpa`` and ``allowable_mpa``: the stress and the allowable
+    (``section_allowable`` (S,) MPa, else ``allowable_mpa``) of the section that governs, so
+    that ``ratio == stress_mpa / allowable_mpa`` (``max_stress_mpa`` may lie elsewhere on the
+    bone, where the allowable is higher)."""
     section_bone = np.asarray(section_bone, dtype=np.int64)
     stress = np.asarray(stress, dtype=np.float64)
     weak = np.asarray(weak, dtype=bool)
@@ -71,6 +74,8 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
     for i in idx[np.argsort(ratio_s[idx], kind="stable")]:  # ascending: last write = worst
         rmax[section_bone[i]] = ratio_s[i]
         where[section_bone[i]] = i
+    allow_s = (np.full(len(stress), float(allowable_mpa)) if section_allowable is None
+               else np.asarray(section_allowable, dtype=np.float64))
     have = np.flatnonzero(count > 0)
     key = np.where(np.isfinite(rmax[have]), -rmax[have], np.inf)
     rows = []
@@ -81,6 +86,8 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
             "index": int(b),
             "max_stress_mpa": m,
             "ratio": None if m is None else finite(rmax[b]),
+            "stress_mpa": None if where[b] < 0 else finite(stress[where[b]]),
+            "allowable_mpa": None if where[b] < 0 else finite(allow_s[where[b]]),
             "limit": None if where[b] < 0 else
             ("across layers" if across[where[b]] else "along layers"),
             "weak": bool(nweak[b] > 0),
@@ -93,9 +100,19 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
     return rows
 
 
+def worst_of(rows: list[dict]) -> dict | None:
+    """The governing section of a bone table (:func:`bone_table`, worst first): ``bone``,
+    ``stress_mpa``, ``allowable_mpa``, ``ratio``, ``limit``; None without a finite stress."""
+    for r in rows:
+        if r.get("ratio") is not None and r.get("stress_mpa") is not None:
+            return {k: r[k] for k in ("bone", "stress_mpa", "allowable_mpa", "ratio", "limit")}
+    return None
+
+
 def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
     rows = bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale,
                       getattr(a, "stress_ratio", None), getattr(a, "across_layers", None),
+                      getattr(a, "section_allowable", None),
                       getattr(a, "stress_concentration", None))
     # skipped / doubtful sections per bone (osteon.doubt): a bone with too many skipped
     # sections is "not analysed", never "ok"
@@ -281,8 +298,10 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     rows = _analysis_table(shown, bone_names, allowable_mpa, scale)
     if correction is None:
         weak_bones = [{"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"],
-                       "ratio": r["ratio"], "limit": r["limit"], "scale": r["scale"],
-                       "weak": True, "stress_concentration": r["stress_concentration"]}
+                       "ratio": r["ratio"], "stress_mpa": r["stress_mpa"],
+                       "allowable_mpa": r["allowable_mpa"], "limit": r["limit"],
+                       "scale": r["scale"], "weak": True,
+                       "stress_concentration": r["stress_concentration"]}
                       for r in rows if r["weak"]]
         before_rows = None
     else:
@@ -290,6 +309,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         before = {r["bone"]: r for r in before_rows}
         weak_bones = [
             {"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"], "ratio": r["ratio"],
+             "stress_mpa": r["stress_mpa"], "allowable_mpa": r["allowable_mpa"],
              "limit": r["limit"], "scale": r["scale"], "weak": r["weak"],
              "stress_concentration": r["stress_concentration"],
              "max_stress_before_mpa": before[r["bone"]]["max_stress_mpa"]
@@ -325,6 +345,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         "weak_sections": int(np.count_nonzero(shown.weak)),
         "culled_sections": int(np.count_nonzero(shown.culled)),
         "weak_bones": weak_bones,
+        # the section that governs the verdict: the highest stress / ITS allowable (FDM layers:
+        # across or along them), so that ratio == stress_mpa / allowable_mpa
+        "worst": worst_of(rows),
         "bones": rows,
         # the CLI's name for ``bones`` before the schema had a version; same list
         "bone_results": rows,
@@ -398,7 +421,10 @@ def to_json(report: dict, indent: int = 1) -> str:
     return json.dumps(report, indent=indent, allow_nan=False)
 
 
+@functools.lru_cache(maxsize=1)
 def _version() -> str:
+    """The installed osteon's version (read once: the metadata lookup costs ~20 ms, and the
+    Blender add-on's Live mode builds a report on every update)."""
     try:
         from importlib.metadata import version
 

@@ -7,11 +7,10 @@ Units: mm, N, MPa.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
 from . import materials
-from ._api import _switch
+from .options import AnalysisOptions, _switch
 from .report import allowable_stress
 
 
@@ -107,21 +106,23 @@ def axis_direction(axis: str) -> tuple:
         raise ValueError(f"print axis must be one of {', '.join(AXES)}, got {axis!r}") from None
 
 
-def _positive(value, what: str, unit: str) -> float:
-    v = float(value)
-    if not (v > 0.0 and math.isfinite(v)):
-        raise ValueError(f"{what} must be a positive number of {unit}, got {value}")
-    return v
+#: The options' names as the front ends word them (the CLI maps these words to its flags).
+_FRONT_END_WORDS = {"interval": "section interval",
+                    "layer_strength_ratio": "layer strength ratio",
+                    "build_direction": "build direction",
+                    "notch_sensitivity": "notch sensitivity",
+                    "min_notch_radius": "min notch radius"}
 
 
-def _direction(value) -> list[float]:
+def _checked(kw: dict) -> AnalysisOptions:
+    """The settings as checked :class:`osteon.AnalysisOptions` (the one place they are checked);
+    ``ValueError`` naming the setting as the front ends do."""
     try:
-        d = [float(x) for x in value]
-    except (TypeError, ValueError):
-        d = []
-    if len(d) != 3 or not all(math.isfinite(x) for x in d) or not any(d):
-        raise ValueError(f"build direction must be three finite numbers, not all 0, got {value!r}")
-    return d
+        return AnalysisOptions(**kw)
+    except ValueError as e:
+        msg = str(e)
+        name = msg.split(" ", 1)[0]
+        raise ValueError(_FRONT_END_WORDS.get(name, name) + msg[len(name):]) from None
 
 
 def held_bone_index(held_bone, bone_names) -> int | None:
@@ -158,23 +159,18 @@ def _preset(settings: Settings):
 
 
 def notch_sensitivity(settings: Settings) -> float:
-    """q used at corners: the given one, else the material preset's (1 for a custom strength);
-    ``ValueError`` outside 0…1."""
-    q = settings.notch_sensitivity
-    if q is None:
-        m = _preset(settings)
-        q = 1.0 if m is None else m.notch_sensitivity
-    q = float(q)
-    if not 0.0 <= q <= 1.0:
-        raise ValueError(f"notch sensitivity must be a number from 0 to 1, got {q}")
-    return q
+    """q used at corners: the given one, else the material preset's (1 for a custom strength)."""
+    if settings.notch_sensitivity is not None:
+        return settings.notch_sensitivity
+    m = _preset(settings)
+    return 1.0 if m is None else m.notch_sensitivity
 
 
 def min_notch_radius_mm(settings: Settings, profile=None) -> float:
     """Smallest corner radius in mm: the given one; else the print profile's (FDM: half its
-    line width; the rule of docs/notch.md); else the material preset's (0.2 mm when custom)."""
+    line width, the rule of docs/notch.md); else the material preset's (0.2 mm when custom)."""
     if settings.min_notch_radius_mm is not None:
-        return _positive(settings.min_notch_radius_mm, "min notch radius", "mm")
+        return settings.min_notch_radius_mm
     if profile is not None and getattr(profile, "kind", "") == "fdm":
         return 0.5 * float(profile.line_width)
     m = _preset(settings)
@@ -189,18 +185,21 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
     ``scaling`` with ``correct=True`` for ``osteon.correct``. Raises ``ValueError`` naming the
     bad setting."""
     kw = {
-        "force": _positive(settings.force_n, "force", "N"),
+        "force": settings.force_n,
         "allowable_stress": settings.allowable_stress_mpa(),
-        "interval": _positive(settings.interval_mm, "section interval", "mm"),
+        "interval": settings.interval_mm,
         "root": held_bone_index(settings.held_bone, bone_names),
-        "build_direction": _direction(settings.build_direction),
-        "layer_strength_ratio": _positive(settings.layer_ratio(), "layer strength ratio",
-                                          "(layer / in-plane strength)"),
+        "build_direction": settings.build_direction,
+        "layer_strength_ratio": settings.layer_ratio(),
         "min_thickness": min_thickness_mm(settings),
-        "junctions": _switch(settings.junctions, "junctions"),
+        "junctions": settings.junctions,
         "notch_sensitivity": notch_sensitivity(settings),
         "min_notch_radius": min_notch_radius_mm(settings),
     }
+    options = _checked(kw)
+    kw.update((name, getattr(options, name)) for name in kw)
+    # as given (analyze makes it a unit vector): the report shows the user's numbers
+    kw["build_direction"] = [float(x) for x in settings.build_direction]
     if correct:
         if not (float(settings.max_scale) >= 1.0):
             raise ValueError(f"max scale must be >= 1, got {settings.max_scale}")

@@ -1,11 +1,10 @@
 """The sidebar's print-direction block (FDM layers, docs/printing.md)."""
 
 from .. import state
+from .widgets import labelled, wrapped_label
 
 
 def draw(layout, s, context):
-    from .panel import labelled, wrapped_label
-
     layout.prop(s, "layer_strength_ratio")
     labelled(layout, s, "print_direction", "Layers")
     if s.print_direction == "AXIS":

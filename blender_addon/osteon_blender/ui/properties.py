@@ -41,8 +41,12 @@ class OsteonBoneResult(bpy.types.PropertyGroup):
     # name (StringProperty) comes with PropertyGroup: the bone name
     max_stress_mpa: FloatProperty(name="Max stress (MPa)", description="Highest section stress "
                                   "along the bone, MPa")
-    ratio: FloatProperty(name="Stress ratio", description="Max stress / allowable stress "
-                         "(> 1 = weak)")
+    ratio: FloatProperty(name="Stress ratio", description="Stress / allowable at the bone's "
+                         "governing section (> 1 = weak)")
+    stress_mpa: FloatProperty(name="Stress (MPa)", description="Stress at the bone's governing "
+                              "section (the highest stress / allowable), MPa")
+    allowable_mpa: FloatProperty(name="Allowable (MPa)", description="Allowable stress at the "
+                                 "governing section (across or along the layers), MPa")
     weak: BoolProperty(name="Weak", description="Stress above the allowable stress now")
     limit: StringProperty(name="Limit", description="Which strength governs the worst section: "
                           "'across layers' or 'along layers'")
@@ -106,6 +110,15 @@ class OsteonSettings(bpy.types.PropertyGroup):
     result_armature: StringProperty()
     max_stress_mpa: FloatProperty(name="Max stress (MPa)")
     allowable_mpa: FloatProperty(name="Allowable stress (MPa)")
+    # the governing section of the whole model (report["worst"]): what the verdict speaks of
+    worst_bone: StringProperty(name="Worst bone")
+    worst_stress_mpa: FloatProperty(name="Worst section's stress (MPa)")
+    worst_allowable_mpa: FloatProperty(name="Worst section's allowable (MPa)")
+    worst_ratio: FloatProperty(name="Worst stress / allowable")
+    worst_limit: StringProperty(name="Worst section's limit", description="'across layers' or "
+                                "'along layers'")
+    result_source: StringProperty(name="Result from", description="'analyze', 'correct' or "
+                                  "'live': which run the panel shows")
     sections: IntProperty(name="Sections")
     weak_sections: IntProperty(name="Weak sections")
     converged: BoolProperty(name="Converged")

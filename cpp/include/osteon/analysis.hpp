@@ -9,6 +9,7 @@
 #include "osteon/layers.hpp"
 #include "osteon/mesh.hpp"
 #include "osteon/progress.hpp"
+#include "osteon/result_fields.hpp"
 #include "osteon/section.hpp"
 #include "osteon/skeleton.hpp"
 #include "osteon/weights.hpp"
@@ -55,77 +56,21 @@ enum SectionKind : std::int8_t {
   kEnd = 2,       ///< at a free bone end
 };
 
-/// Result of one analysis: one entry per section (S), per vertex (V). mm, N, MPa.
+/// Result of one analysis: one entry per section (S), per vertex (V). mm, N, MPa. The members
+/// and their docs are the rows of OSTEON_RESULT_FIELDS (result_fields.hpp), the one list of
+/// outputs shared with the Python binding.
 struct AnalysisResult {
-  std::vector<int> section_bone;          ///< S bone each section belongs to
-  std::vector<std::int8_t> section_kind;  ///< S SectionKind
-  std::vector<double> section_param;      ///< S distance along the bone from its head, mm
-  std::vector<Vec3> section_point;        ///< S where the bone pierces the plane, mm
-  std::vector<Vec3> section_center;       ///< S centroid of the section region, mm
-  std::vector<Vec3> section_normal;       ///< S unit plane normal
-  std::vector<Vec3> load_point;           ///< S farthest downstream mesh point, mm
-  std::vector<double> section_area;       ///< S area, mm^2 (0 when skipped)
-  std::vector<double> section_modulus;    ///< S minimum section modulus W, mm^3 (NaN when skipped)
-  std::vector<Vec3>
-      section_thin_axis;               ///< S unit in-plane direction the section is thinnest across
-  std::vector<double> section_aspect;  ///< S width / thickness (sqrt of J's eigenvalue ratio)
-  std::vector<double> section_thickness;  ///< S region thickness, mm (regions.hpp; NaN: skipped)
+#define OSTEON_RESULT_MEMBER(type, name, init, shape, unit, doc) type name init;
+  OSTEON_RESULT_FIELDS(OSTEON_RESULT_MEMBER)
+#undef OSTEON_RESULT_MEMBER
   /// S with AnalysisOptions::defer_thickness: the region of each section whose thickness was
   /// not computed (null elsewhere); complete_section_thickness() fills them in. Empty otherwise.
+  /// Not an output: the binding hands it to Python as an opaque handle (thickness_pending).
   std::vector<std::shared_ptr<const SectionPolygon>> thickness_pending;
-  /// S area (mm^2) and modulus W (mm^3) of the whole cut around the bone point; they differ from
-  /// section_area / section_modulus only at a junction (kFlagJunction), where those are the
-  /// core's (the material that continues through the plane, docs/junctions.md). 0 / NaN: skipped.
-  std::vector<double> section_cut_area;
-  std::vector<double> section_cut_modulus;
-  std::vector<double> moment_arm;  ///< S distance centroid -> load point d, mm
-  std::vector<double> moment;      ///< S bending moment M = F d, N mm
-  /// S governing stress, MPa (NaN when skipped/unreliable): the beam stress M / W, times
-  /// 1 + q (Kt - 1) and the moment at the corner over M at a notch section (kFlagNotch)
-  std::vector<double> stress;
-  std::vector<double> nominal_stress;        ///< S beam stress M / W, MPa (NaN when skipped)
-  std::vector<double> stress_concentration;  ///< S Kt at the corner next to it, 1 where none
-  std::vector<double> notch_radius;  ///< S corner radius used for Kt, mm (NaN where none)
-  std::vector<double> notch_step;    ///< S step ratio D/d of the corner (NaN where none)
-  std::vector<std::uint8_t> culled;       ///< S W > safe modulus: safe for sure (drawn grey)
-  std::vector<std::uint8_t> weak;         ///< S stress > section_allowable
-  std::vector<double> section_allowable;  ///< S [sigma](theta) for the build direction, MPa
-  std::vector<double> stress_ratio;  ///< S stress / section_allowable (NaN when skipped/unreliable)
-  std::vector<std::uint8_t> across_layers;   ///< S the layer (Z) strength governs the allowable
-  std::vector<std::uint32_t> section_flags;  ///< S SectionFlag bits
-  double max_moment = 0.0;                   ///< M_gmax, N mm
-  double safe_modulus = 0.0;                 ///< W_k = M_gmax / [sigma], mm^3
-  double max_stress = 0.0;                   ///< largest section stress, MPa
-  double max_stress_ratio = 0.0;             ///< largest stress_ratio
-  int weakest_section = -1;                  ///< index of the largest stress_ratio, -1 if none
-  int held_bone = -1;                        ///< bone the object was held by
-  std::vector<double> vertex_stress;         ///< V stress interpolated along the vertex's bone, MPa
-  std::vector<std::uint8_t> vertex_culled;   ///< V vertex lies among culled sections
-  std::vector<int> vertex_bone;              ///< V bone whose sections colour the vertex
-
-  /// Section outlines (only with AnalysisOptions::keep_outlines; otherwise all three are empty):
-  /// the loops of the region each section analysed, packed. Section s owns the loops
-  /// outline_section_start[s] .. outline_section_start[s+1] (S+1 entries): first its outer
-  /// boundary, then its holes; none when the section was skipped. Loop l is the points
-  /// outline_points[outline_loop_start[l] .. outline_loop_start[l+1]) (L+1 entries), in order,
-  /// the last joining the first. Points are 3D on the section plane, mm (P of them).
-  std::vector<Vec3> outline_points;                 ///< P loop points, mm
-  std::vector<std::int64_t> outline_loop_start;     ///< L+1 first point of each loop
-  std::vector<std::int64_t> outline_section_start;  ///< S+1 first loop of each section
-  /// The whole cut of each junction section (kFlagJunction), packed the same way (only with
-  /// keep_outlines): section s owns loops cut_outline_section_start[s] .. [s+1]; none for a
-  /// section that is not a junction (its whole cut is its outline above).
-  std::vector<Vec3> cut_outline_points;                 ///< loop points, mm
-  std::vector<std::int64_t> cut_outline_loop_start;     ///< first point of each loop (+1 entry)
-  std::vector<std::int64_t> cut_outline_section_start;  ///< S+1 first loop of each section
-  /// Vertex indices of each loose piece: a shell that neither touches nor overlaps the held piece
-  /// (it would fall off the print). Its vertices are no load point of any section and keep
-  /// vertex_stress 0 (it carries no load); sections along its bones are still cut.
-  std::vector<std::vector<std::int32_t>> loose_pieces;
 };
 
-/// Writes the thickness (mm, regions.hpp) of every region in `pending` (S, null: none) into
-/// `thickness` (S,); the regions stay (a second call writes the same).
+/// Writes the thickness (mm, cpp/src/thickness.hpp) of every region in `pending` (S, null: none)
+/// into `thickness` (S,); the regions stay (a second call writes the same).
 void fill_section_thickness(const std::vector<std::shared_ptr<const SectionPolygon>>& pending,
                             std::vector<double>& thickness);
 

@@ -154,7 +154,7 @@ def bone_table(analysis, top=10, scales=None):
     rows = _bone_rows(analysis.section_bone, analysis.stress, analysis.weak,
                       analysis.bone_names, analysis.allowable_stress, scales,
                       analysis.stress_ratio, analysis.across_layers,
-                      getattr(analysis, "stress_concentration", None))
+                      stress_concentration=getattr(analysis, "stress_concentration", None))
     return [r for r in rows if r["max_stress_mpa"] is not None][:top]
 
 
