@@ -45,9 +45,11 @@ import os
 import sys
 import tempfile
 import time
+from pathlib import Path
 
-from osteon.fem import stepped
-from osteon.fem.stepped import D_SMALL, FORCE, fem_peak, osteon_peak
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
+import stepped_bars as stepped  # test tooling, as bench/models.py reuses
+from stepped_bars import D_SMALL, FORCE, fem_peak, osteon_peak
 
 SHAPES = [  # (D/d, r/d)
     (1.2, 0.05),

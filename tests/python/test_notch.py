@@ -205,7 +205,7 @@ def test_one_stepped_bar_against_fem(tmp_path):
     pytest.importorskip("gmsh")
     if shutil.which("ccx") is None:
         pytest.skip("CalculiX (ccx) not installed")
-    from osteon.fem import stepped
+    import stepped_bars as stepped
 
     fem, _ = stepped.fem_peak(2.0, 0.3, 2, str(tmp_path))
     ost, radius, _, _ = stepped.osteon_peak(2.0, 0.3)

@@ -1,7 +1,7 @@
 """Stepped round bars with a shoulder fillet (issue 33): built with gmsh's OpenCASCADE kernel
 (the ``gmsh`` Python wheel), FEM peak at the fillet with CalculiX, and osteon's governing stress
-there. Used by scripts/study_notch.py (the pre-registered study, its docstring says how) and its
-test. Units: mm, N, MPa; d = ``D_SMALL``, D = step x d, r = rel_r x d."""
+there. Test tooling (gmsh is no dependency of the wheel): used by tests/python/test_notch.py
+and scripts/study_notch.py (the pre-registered study; its docstring says how). Units: mm, N, MPa; d = ``D_SMALL``, D = step x d, r = rel_r x d."""
 
 from __future__ import annotations
 
@@ -100,7 +100,7 @@ def mesh_shape(step, rel_r, dim, fine_div):
 
 
 def fem_peak(step, rel_r, fine_div, workdir):
-    from .solve import solve
+    from osteon.fem.solve import solve
 
     big, small = step * D_SMALL, D_SMALL
     radius = rel_r * D_SMALL
@@ -124,7 +124,7 @@ def fem_peak(step, rel_r, fine_div, workdir):
 
 
 def osteon_peak(step, rel_r):
-    from .._api import Skeleton, analyze
+    from osteon import Skeleton, analyze
 
     big, small = step * D_SMALL, D_SMALL
     vertices, faces = mesh_shape(step, rel_r, 2, 2)
