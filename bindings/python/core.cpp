@@ -14,6 +14,7 @@
 
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
+#include "osteon/notch.hpp"
 #include "osteon/progress.hpp"
 #include "osteon/readers.hpp"
 #include "osteon/section.hpp"
@@ -362,6 +363,10 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("junctions", &AnalysisOptions::junctions)
       .def_readwrite("min_thickness", &AnalysisOptions::min_thickness,
                      "mm; thinner sections are flagged too_thin (0 = no check)")
+      .def_readwrite("notch_sensitivity", &AnalysisOptions::notch_sensitivity,
+                     "q, 0..1: governing stress = (1 + q (Kt - 1)) x nominal")
+      .def_readwrite("min_notch_radius", &AnalysisOptions::min_notch_radius,
+                     "mm; corners sharper than this are taken at this radius")
       .def_property(
           "build_direction",
           [](const AnalysisOptions& o) {
@@ -600,4 +605,9 @@ PYBIND11_MODULE(_core, m) {
   m.attr("FLAG_UNRELIABLE") = static_cast<int>(kFlagUnreliable);
   m.attr("FLAG_TOO_THIN") = static_cast<int>(kFlagTooThin);
   m.attr("FLAG_JUNCTION") = static_cast<int>(kFlagJunction);
+  m.attr("FLAG_NOTCH") = static_cast<int>(kFlagNotch);
+  m.def("shoulder_fillet_kt", &shoulder_fillet_kt, py::arg("big_diameter"),
+        py::arg("small_diameter"), py::arg("radius"),
+        "Kt of a stepped round bar's shoulder fillet in bending (D, d, r in mm; Roark Table 17.1 "
+        "/ Peterson Chart 3.11; clamped on the safe side outside the fit, docs/notch.md)");
 }

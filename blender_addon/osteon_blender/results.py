@@ -26,6 +26,7 @@ def show(scene, report: dict, entry: dict, source: str) -> None:
         item.allowable_mpa = row.get("allowable_mpa") or 0.0
         item.limit = row.get("limit") or ""
         item.scale = row["scale"]
+        item.stress_concentration = row.get("stress_concentration") or 1.0
         item.weak = row["weak"]
         item.status = "weak" if row["weak"] else "ok"
     s.skipped_sections = int(report.get("skipped_sections") or 0)

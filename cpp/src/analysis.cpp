@@ -26,6 +26,10 @@ void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
   if (!(o.min_thickness >= 0) || !std::isfinite(o.min_thickness))
     throw std::invalid_argument("min_thickness must be a finite length >= 0 mm");
   validate_print_options(o.print);
+  if (!(o.notch_sensitivity >= 0 && o.notch_sensitivity <= 1))
+    throw std::invalid_argument("notch_sensitivity must be a number from 0 to 1");
+  if (!(o.min_notch_radius > 0) || !std::isfinite(o.min_notch_radius))
+    throw std::invalid_argument("min_notch_radius must be a positive finite length in mm");
 }
 
 void fill_section_thickness(const std::vector<std::shared_ptr<const SectionPolygon>>& pending,

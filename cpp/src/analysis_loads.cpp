@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
+#include "notch.hpp"
 #include "parallel.hpp"
 #include "thickness.hpp"
 
@@ -39,12 +40,37 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   const int ns = static_cast<int>(specs.size());
   AnalysisResult r = section_loads(run);
+  // Stress concentration at corners (notch.hpp, docs/notch.md): `stress` becomes the governing
+  // stress, the peak at the corner next to the section; the beam stress stays as nominal_stress.
+  run.timer.lap("loads");
+  r.nominal_stress = r.stress;
+  const auto grid = [&]() -> const FaceGrid& {
+    run.build_grid(options.threads);
+    return run.grid;
+  };
+  NotchField notch =
+      find_notches(run.mesh, grid, r, options.min_notch_radius, options.notch_sensitivity);
+  for (int i = 0; i < ns; ++i) {
+    if (!(notch.kt[i] > 1.0) || !std::isfinite(r.stress[i])) continue;
+    r.stress[i] *= notch.effective[i] * notch.arm_ratio[i];
+    r.section_flags[i] |= kFlagNotch;
+  }
+  r.stress_concentration = notch.kt;
+  r.notch_radius = notch.radius;
+  r.notch_step = notch.step;
+  run.timer.lap("notches");
   // Direction-dependent allowable (FDM layers, osteon/layers.hpp): exactly allowable_stress
   // when isotropic.
   section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
                      options.layer_strength_ratio, r.section_allowable, r.across_layers);
   r.stress_ratio.assign(ns, kNaN);
   const std::vector<std::uint8_t> usable = usable_sections(r);
+  for (int i = 0; i < ns; ++i) {
+    if (!(r.section_flags[i] & kFlagUnreliable) || !(notch.kt[i] > 1.0)) continue;
+    r.nominal_stress[i] = r.notch_radius[i] = r.notch_step[i] = kNaN;  // an unreliable sliver
+    r.stress_concentration[i] = notch.effective[i] = notch.arm_ratio[i] = 1.0;
+    r.section_flags[i] &= ~static_cast<std::uint32_t>(kFlagNotch);
+  }
   // Thickness not needed so far: the regions, for complete_section_thickness().
   if (options.defer_thickness) {
     for (int i = 0; i < ns; ++i) {
@@ -58,7 +84,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   }
   for (int i = 0; i < ns; ++i) {
     if (!usable[i]) continue;
-    r.max_moment = std::max(r.max_moment, r.moment[i]);
+    // The moment at a notch section's corner counts (the bound below stays a bound).
+    r.max_moment = std::max(r.max_moment, r.moment[i] * notch.arm_ratio[i]);
     r.max_stress = std::max(r.max_stress, r.stress[i]);
     if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
       r.max_stress_ratio = r.stress_ratio[i];
@@ -68,7 +95,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   r.safe_modulus = r.max_moment / options.allowable_stress;
   for (int i = 0; i < ns; ++i) {
     if (!usable[i]) continue;
-    r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
+    // Safe for sure even with its corner: (1 + q (Kt - 1)) M_max / W below the allowable.
+    r.culled[i] = r.section_modulus[i] > notch.effective[i] * r.max_moment / r.section_allowable[i];
     r.weak[i] = r.stress[i] > r.section_allowable[i];
   }
   run.check_cancel();

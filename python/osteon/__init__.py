@@ -22,6 +22,7 @@ from ._api import (
     correct,
     estimate_sections,
     section_properties,
+    shoulder_fillet_kt,
     skin,
     slice_section,
 )
@@ -57,6 +58,7 @@ __all__ = [
     "print_profiles",
     "reinforce",
     "section_properties",
+    "shoulder_fillet_kt",
     "skin",
     "slice_section",
 ]

@@ -44,6 +44,7 @@ __all__ = [
     "correct",
     "estimate_sections",
     "section_properties",
+    "shoulder_fillet_kt",
     "skin",
     "slice_section",
 ]
@@ -94,6 +95,7 @@ SECTION_FLAGS = {
     "unreliable": _core.FLAG_UNRELIABLE,
     "too_thin": _core.FLAG_TOO_THIN,
     "junction": _core.FLAG_JUNCTION,
+    "notch": _core.FLAG_NOTCH,
 }
 
 #: Plain-language reason of each flag (``Analysis.flag_reasons``, the JSON ``sections`` rows).
@@ -109,7 +111,10 @@ FLAG_REASONS = {
                   "left out of every result",
     "too_thin": "too thin to print ({thickness} mm < {minimum} mm)",
     "junction": "a side branch is cut here: only the material that continues through the plane "
-                "counts ({area} of {cut_area} mm²)",
+                "counts ({area} of {cut_area} mm²); where the branch is a limb rooted in a "
+                "massive body this is conservative by design (docs/junctions.md)",
+    "notch": "corner radius {radius} mm at {bone}: peak {peak}× the beam stress (Kt {kt}, step "
+             "D/d {step}); a larger fillet or a thicker thin side lowers it",
 }
 #: Values of ``Analysis.section_kind``.
 SECTION_KINDS = {0: "interior", 1: "joint", 2: "end"}
@@ -288,7 +293,8 @@ _RESULT_DEFAULTS = {"section_allowable": None, "stress_ratio": None, "across_lay
                     "max_stress_ratio": 0.0, "loose_pieces": list, "section_cut_area": None,
                     "section_cut_modulus": None, "section_solid_modulus": None,
                     "section_wall_area": None, "section_skin_area": None,
-                    "section_infill_area": None}
+                    "section_infill_area": None, "nominal_stress": None,
+                    "stress_concentration": None, "notch_radius": None, "notch_step": None}
 _OUTLINE_SHAPES = ("(P,3)", "(L+1,)", "(S+1,)")
 
 #: The settings an :class:`Analysis` records (fields of the same name of :class:`AnalysisOptions`).
@@ -378,6 +384,14 @@ class Analysis:
         for name in ("section_wall_area", "section_skin_area", "section_infill_area"):
             if getattr(self, name) is None:
                 setattr(self, name, np.zeros(len(self.stress)))
+        if self.nominal_stress is None:  # results built without the notch fields: no corner
+            self.nominal_stress = np.asarray(self.stress, dtype=float).copy()
+        if self.stress_concentration is None:
+            self.stress_concentration = np.ones(len(self.stress))
+        if self.notch_radius is None:
+            self.notch_radius = np.full(len(self.stress), np.nan)
+        if self.notch_step is None:
+            self.notch_step = np.full(len(self.stress), np.nan)
 
     @property
     def num_sections(self) -> int:
@@ -449,9 +463,24 @@ class Analysis:
         t = float(self.section_thickness[section])
         area = float(self.section_area[section])
         cut = float(self.section_cut_area[section])
+        nominal = float(self.nominal_stress[section])
+        peak = float(self.stress[section]) / nominal if nominal > 0 else float("nan")
+        b = int(self.section_bone[section])
+        bone = (f"the {self.bone_names[b]}" if b < len(self.bone_names) and self.bone_names[b]
+                else f"bone {b}")
         return [FLAG_REASONS[name].format(thickness=f"{t:.2g}", minimum=f"{self.min_thickness:g}",
-                                          area=f"{area:.3g}", cut_area=f"{cut:.3g}")
+                                          area=f"{area:.3g}", cut_area=f"{cut:.3g}",
+                                          radius=f"{float(self.notch_radius[section]):.2g}",
+                                          bone=bone, peak=f"{peak:.2g}",
+                                          kt=f"{float(self.stress_concentration[section]):.2f}",
+                                          step=f"{float(self.notch_step[section]):.2g}")
                 for name in self.flag_names(section)]
+
+    @property
+    def notch(self) -> np.ndarray:
+        """(S,) bool: sections next to a concave corner whose stress is the peak at it (Kt > 1,
+        :attr:`stress_concentration`, docs/notch.md)."""
+        return (self.section_flags & SECTION_FLAGS["notch"]) != 0
 
     @property
     def too_thin(self) -> np.ndarray:
@@ -803,6 +832,17 @@ def correct(
     d["before"] = Analysis._from_core(d["before"], skeleton=skeleton, options=options)
     d["after"] = Analysis._from_core(d["after"], skeleton=skeleton, options=options)
     return Correction(**d)
+
+
+def shoulder_fillet_kt(big_diameter: float, small_diameter: float, radius: float) -> float:
+    """Kt of a stepped round bar's shoulder fillet in bending: big and small diameter D > d and
+    fillet radius r, mm (Roark's Formulas 7th ed. Table 17.1, the fit of Peterson's charts;
+    clamped on the safe side outside 0.25 <= h/r <= 20 and D/d <= 3; docs/notch.md). 1 when
+    D <= d. Raises ValueError for a non-positive or non-finite length."""
+    big = _positive(big_diameter, "big_diameter", "mm")
+    small = _positive(small_diameter, "small_diameter", "mm")
+    r = _positive(radius, "radius", "mm")
+    return float(_core.shoulder_fillet_kt(big, small, r))
 
 
 def estimate_sections(skeleton: Skeleton, interval: float = 2.0) -> int:

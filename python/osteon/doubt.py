@@ -40,6 +40,7 @@ REASONS = {
     "hollow": "the bone lies in a hole there",
     "gap_closed": "gaps in the cut were closed there",
     "junction": "a side branch is cut there: only the core that continues counts",
+    "notch": "a corner is there: its stress peak counts (docs/notch.md)",
 }
 
 
@@ -83,7 +84,7 @@ def fix(names) -> str:
 def reason(names) -> str:
     """One sentence part from flag names, most telling first (``open`` before ``empty``)."""
     order = ["open", "outside", "non_manifold", "too_thin", "unreliable", "degenerate", "empty",
-             "hollow", "gap_closed", "junction"]
+             "hollow", "gap_closed", "junction", "notch"]
     names = sorted(set(names), key=lambda n: order.index(n) if n in order else len(order))
     return "; ".join(REASONS.get(n, n.replace("_", " ")) for n in names[:2])
 

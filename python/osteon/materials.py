@@ -41,7 +41,10 @@ class Material:
     ``strength_mpa``: tensile strength in MPa of a printed part (along the layers for FDM);
     ``layer_strength_ratio``: strength across the layers / ``strength_mpa`` (1 = no weaker;
     sources in ``layer_strength_source`` and docs/printing.md); ``min_thickness_mm``: thinnest wall in mm the process prints
-    reliably (used by the printability check of issue 12).
+    reliably (used by the printability check of issue 12); ``notch_sensitivity``: q, 0…1, how
+    much of a corner's elastic peak Kt the material feels (1 brittle, lower for ductile ones
+    that yield locally; docs/notch.md); ``min_notch_radius_mm``: the sharpest inside corner the
+    process makes, mm. Each with its ``*_source``.
     """
 
     key: str
@@ -54,6 +57,13 @@ class Material:
     min_thickness_mm: float
     min_thickness_source: str
     note: str
+    #: notch sensitivity q (0..1): the governing stress at a corner is (1 + q (Kt - 1)) x the
+    #: beam stress (docs/notch.md); 1 = brittle, fails at the elastic peak
+    notch_sensitivity: float = 1.0
+    notch_sensitivity_source: str = ""
+    #: the smallest corner radius the process makes, mm (sharper corners are taken at this)
+    min_notch_radius_mm: float = 0.2
+    min_notch_radius_source: str = ""
 
     @property
     def default_profile(self) -> str:
@@ -71,25 +81,48 @@ _SLS_LAYER = "SLS parts are near-isotropic; treated as isotropic (docs/printing.
 _FDM_WALL = "two perimeters of a 0.4 mm nozzle (FDM design rules: supported walls >= 0.8 mm)"
 _RESIN_WALL = "Formlabs design guide: supported walls 0.2 mm, unsupported 0.4 mm"
 _SLS_WALL = "SLS design rules (Hubs, EOS): walls >= 0.7 mm"
+# Notch sensitivity (issue 33, docs/notch.md). Rule: a material whose elongation at break is
+# below 5 % is brittle (Budynas & Nisbett, Shigley's Mechanical Engineering Design, sec. 5-1:
+# ductile when the strain at fracture >= 0.05) and fails at the elastic peak, q = 1. A ductile
+# one yields locally at the corner under a static load and feels less than the elastic peak;
+# printed parts keep brittle layer seams, so q = 0.5 (judgement, on the safe side of q = 0).
+_Q_PLA = ("brittle: FDM PLA elongation at break 2.5 % (XZ) / 1.0 % (XY) (Stratasys FDM PLA "
+          "data sheet), across layers 0.9 % (Polymaker PolyTerra PLA TDS v5.3): < 5 %, q = 1")
+_Q_PETG = ("ductile: FDM PETG elongation at break 20-50 % along layers, 5-18 % across "
+           "(published FDM data, additive.tools PETG); layer seams stay brittle: q = 0.5")
+_Q_ABS = ("ductile in bulk (moulded ABS well above 5 %); printed ABS fails at its road bonds "
+          "first (Ahn et al. 2002): treated as PETG, q = 0.5")
+_Q_RESIN = "standard SLA/DLP resins break in a brittle way (the issue's decision): q = 1"
+_Q_NYLON = ("ductile: SLS PA12 (EOS PA 2200) elongates well beyond 5 % before it breaks; "
+            "SLS parts keep fused-powder pores: q = 0.5")
+_R_FDM = ("half a 0.4 mm nozzle's extrusion line: a printed inside corner is rounded by the "
+          "bead's own half width (docs/notch.md)")
+_R_RESIN = "one 0.05 mm layer / pixel of an MSLA printer (docs/notch.md)"
+_R_SLS = "about one 0.1 mm powder layer / laser spot (docs/notch.md)"
 
 MATERIALS: tuple[Material, ...] = (
     Material("PLA", "PLA", "FDM", 60.0,
              "paper §6 (PLA yield 60 MPa); Prusament PLA data sheet: yield 57 ± 1 MPa",
-             0.55, _PLA_LAYER, 0.8, _FDM_WALL, "FDM PLA, ~50-65 MPa along layers"),
+             0.55, _PLA_LAYER, 0.8, _FDM_WALL, "FDM PLA, ~50-65 MPa along layers",
+             1.0, _Q_PLA, 0.2, _R_FDM),
     Material("PETG", "PETG", "FDM", 50.0,
              "Prusament PETG data sheet: yield 47 ± 2 MPa; FDM PETG data sheets 45-55 MPa",
-             0.6, _PETG_LAYER, 0.8, _FDM_WALL, "FDM PETG, ~45-55 MPa"),
+             0.6, _PETG_LAYER, 0.8, _FDM_WALL, "FDM PETG, ~45-55 MPa",
+             0.5, _Q_PETG, 0.2, _R_FDM),
     Material("ABS", "ABS", "FDM", 40.0,
              "FDM ABS data sheets (e.g. Ultimaker ABS, Prusament ASA): 35-45 MPa at yield",
-             0.5, _ABS_LAYER, 0.8, _FDM_WALL, "FDM ABS, ~35-45 MPa"),
+             0.5, _ABS_LAYER, 0.8, _FDM_WALL, "FDM ABS, ~35-45 MPa",
+             0.5, _Q_ABS, 0.2, _R_FDM),
     Material("RESIN", "Resin", "resin", 45.0,
              "standard SLA/DLP resins: Formlabs Grey V4 65 MPa post-cured (38 green), "
              "hobby MSLA resins 30-50 MPa; 45 MPa is a cured mid value",
              1.0, "resin parts are near-isotropic", 0.3, _RESIN_WALL,
-             "standard SLA/DLP resin, ~40-65 MPa"),
+             "standard SLA/DLP resin, ~40-65 MPa",
+             1.0, _Q_RESIN, 0.05, _R_RESIN),
     Material("NYLON", "Nylon (PA12)", "SLS", 48.0,
              "EOS PA 2200 (SLS PA12) data sheet: tensile strength 48 MPa",
-             1.0, _SLS_LAYER, 0.7, _SLS_WALL, "SLS PA12, ~45-50 MPa"),
+             1.0, _SLS_LAYER, 0.7, _SLS_WALL, "SLS PA12, ~45-50 MPa",
+             0.5, _Q_NYLON, 0.1, _R_SLS),
 )
 
 _BY_KEY = {m.key: m for m in MATERIALS}

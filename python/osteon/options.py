@@ -112,6 +112,25 @@ def _gap_tolerance(value: Any) -> float | None:
     return None if value is None else float(value)
 
 
+def _notch_sensitivity(value: Any) -> float:
+    """``notch_sensitivity`` q: None -> 1 (the safe side); must be a number from 0 to 1."""
+    if value is None:
+        return 1.0
+    try:
+        q = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"notch_sensitivity must be a number from 0 to 1, got {value!r}"
+                         ) from None
+    if not 0.0 <= q <= 1.0:
+        raise ValueError(f"notch_sensitivity must be a number from 0 to 1, got {value!r}")
+    return q
+
+
+def _min_notch_radius(value: Any) -> float:
+    """``min_notch_radius`` mm: None -> 0.2 (half a 0.4 mm nozzle's line); positive, finite."""
+    return 0.2 if value is None else _positive(value, "min_notch_radius", "mm")
+
+
 def _option(default: Any, unit: str, doc: str, check=None):
     """A field of :class:`AnalysisOptions`: its default, unit, one-line doc and the function
     that checks and normalises a value (``ValueError`` naming the setting)."""
@@ -161,6 +180,13 @@ class AnalysisOptions:
         "(osteon.print_profiles(); None: solid); each section becomes what that print makes of "
         "it (walls, skins, sparse infill in the frame of build_direction, or a resin shell; "
         "docs/printing.md), section_modulus and the stress the printed section's", get_profile)
+    notch_sensitivity: float = _option(
+        1.0, "", "q, 0..1: at a section next to a concave corner (flag notch) the governing "
+        "stress is (1 + q (Kt - 1)) x the beam stress (docs/notch.md); 1 (brittle) is the safe "
+        "side, the material presets carry their own", _notch_sensitivity)
+    min_notch_radius: float = _option(
+        0.2, "mm", "corners sharper than this are taken at this radius, the print rounds them "
+        "(None: 0.2 mm, half a 0.4 mm nozzle's line; docs/notch.md)", _min_notch_radius)
 
     def __post_init__(self) -> None:
         # The one layer that checks: every value normalised here (the fields' order is the
@@ -206,6 +232,8 @@ def engine_options(options: AnalysisOptions, held_bone: int) -> _core.AnalysisOp
     o.min_thickness = options.min_thickness
     o.junctions = options.junctions
     engine_print_options(o, options.print_profile)
+    o.notch_sensitivity = options.notch_sensitivity
+    o.min_notch_radius = options.min_notch_radius
     # Thickness only where the too_thin check needs it; Analysis.section_thickness computes the
     # rest on first read (a convex hull per section: ~7 % of an analysis nobody may read).
     o.defer_thickness = True

@@ -43,7 +43,7 @@ def finite(x) -> float | None:
 
 def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
                bone_scale=None, stress_ratio=None, across_layers=None,
-               section_allowable=None) -> list[dict]:
+               section_allowable=None, stress_concentration=None) -> list[dict]:
     """One row per bone that has sections, highest stress ratio first (bones whose sections
     have no finite stress last, with ``null`` stress).
 
@@ -96,6 +96,8 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
             "weak_sections": int(nweak[b]),
             "sections": int(count[b]),
             "scale": 1.0 if bone_scale is None else float(bone_scale[b]),
+            "stress_concentration": None if stress_concentration is None or where[b] < 0
+            else finite(stress_concentration[where[b]]),
         })
     return rows
 
@@ -112,7 +114,8 @@ def worst_of(rows: list[dict]) -> dict | None:
 def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
     rows = bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale,
                       getattr(a, "stress_ratio", None), getattr(a, "across_layers", None),
-                      getattr(a, "section_allowable", None))
+                      getattr(a, "section_allowable", None),
+                      getattr(a, "stress_concentration", None))
     # skipped / doubtful sections per bone (osteon.doubt): a bone with too many skipped
     # sections is "not analysed", never "ok"
     per_bone = doubt.bone_doubt(a, len(bone_names))
@@ -154,7 +157,10 @@ def section_rows(a, bone_names) -> list[dict]:
     (``null`` where the engine gives none; solid: ``solid_modulus_mm3`` = ``modulus_mm3``). At a ``junction``
     section area and modulus are the core's (the material that continues through the plane,
     docs/junctions.md) and ``cut_area_mm2`` / ``cut_modulus_mm3`` the whole cut's (elsewhere the
-    same numbers). An object without section geometry (no ``section_center``) gives ``[]``."""
+    same numbers). ``stress_mpa`` is the governing stress; at a ``notch`` section (next to a
+    concave corner, docs/notch.md) it is the peak at the corner, ``nominal_stress_mpa`` the beam
+    stress, ``stress_concentration`` Kt (1 elsewhere) and ``notch_radius_mm`` the corner radius
+    used (null elsewhere). An object without section geometry (no ``section_center``) gives ``[]``."""
     if not hasattr(a, "section_center"):
         return []
     n = len(a.stress)
@@ -178,6 +184,10 @@ def section_rows(a, bone_names) -> list[dict]:
         "moment_arm_mm": _finite_list(a.moment_arm),
         "moment_nmm": _finite_list(a.moment),
         "stress_mpa": _finite_list(a.stress),
+        "nominal_stress_mpa": _finite_list(getattr(a, "nominal_stress", a.stress)),
+        "stress_concentration": _finite_list(getattr(a, "stress_concentration",
+                                                     np.ones(n))),
+        "notch_radius_mm": _finite_list(getattr(a, "notch_radius", np.full(n, np.nan))),
         "allowable_mpa": _finite_list(allow) if allow is not None else none,
         "stress_ratio": _finite_list(ratio) if ratio is not None else none,
         "thickness_mm": _finite_list(a.section_thickness)
@@ -222,6 +232,9 @@ def section_rows(a, bone_names) -> list[dict]:
             "moment_arm_mm": cols["moment_arm_mm"][i],
             "moment_nmm": cols["moment_nmm"][i],
             "stress_mpa": cols["stress_mpa"][i],
+            "nominal_stress_mpa": cols["nominal_stress_mpa"][i],
+            "stress_concentration": cols["stress_concentration"][i],
+            "notch_radius_mm": cols["notch_radius_mm"][i],
             "culled": culled[i],
             "weak": weak[i],
             "allowable_mpa": cols["allowable_mpa"][i],
@@ -314,7 +327,8 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         weak_bones = [{"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"],
                        "ratio": r["ratio"], "stress_mpa": r["stress_mpa"],
                        "allowable_mpa": r["allowable_mpa"], "limit": r["limit"],
-                       "scale": r["scale"], "weak": True}
+                       "scale": r["scale"], "weak": True,
+                       "stress_concentration": r["stress_concentration"]}
                       for r in rows if r["weak"]]
         before_rows = None
     else:
@@ -324,6 +338,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
             {"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"], "ratio": r["ratio"],
              "stress_mpa": r["stress_mpa"], "allowable_mpa": r["allowable_mpa"],
              "limit": r["limit"], "scale": r["scale"], "weak": r["weak"],
+             "stress_concentration": r["stress_concentration"],
              "max_stress_before_mpa": before[r["bone"]]["max_stress_mpa"]
              if r["bone"] in before else None}
             for r in rows if r["weak"] or (r["bone"] in before and before[r["bone"]]["weak"])

@@ -39,6 +39,9 @@ class Settings:
     ``layer_height_mm``, ``top_bottom_layers`` (count) for FDM presets, ``shell_mm`` for a
     hollowed resin preset. :meth:`profile` resolves them into one checked
     :class:`osteon.profiles.PrintProfile`.
+
+    ``notch_sensitivity`` q (0…1) at corners and ``min_notch_radius_mm`` (mm), ``None``: the
+    material preset's (docs/notch.md; a custom strength: q = 1, 0.2 mm).
     """
 
     force_n: float
@@ -69,6 +72,8 @@ class Settings:
         value or an override the preset's kind has no use for)."""
         return resolve_profile(self.print_profile,
                                {f: getattr(self, f) for f in profiles.OVERRIDES})
+    notch_sensitivity: float | None = None
+    min_notch_radius_mm: float | None = None
 
     def layer_ratio(self) -> float:
         """Layer / in-plane strength used: the given one; ``None``: the material preset's (1.0
@@ -107,6 +112,8 @@ class Settings:
         d["layer_strength_ratio"] = self.layer_ratio()
         d["junctions"] = _switch(self.junctions, "junctions")
         d["print_profile"] = str(self.print_profile).strip().lower()
+        d["notch_sensitivity"] = notch_sensitivity(self)
+        d["min_notch_radius_mm"] = min_notch_radius_mm(self)
         return d
 
 
@@ -127,7 +134,9 @@ def axis_direction(axis: str) -> tuple:
 #: The options' names as the front ends word them (the CLI maps these words to its flags).
 _FRONT_END_WORDS = {"interval": "section interval",
                     "layer_strength_ratio": "layer strength ratio",
-                    "build_direction": "build direction"}
+                    "build_direction": "build direction",
+                    "notch_sensitivity": "notch sensitivity",
+                    "min_notch_radius": "min notch radius"}
 
 
 def _checked(kw: dict) -> AnalysisOptions:
@@ -167,12 +176,40 @@ def min_thickness_mm(settings: Settings) -> float:
         return 0.8
 
 
+def _preset(settings: Settings):
+    try:
+        return materials.get(settings.material)
+    except (KeyError, ValueError):
+        return None
+
+
+def notch_sensitivity(settings: Settings) -> float:
+    """q used at corners: the given one, else the material preset's (1 for a custom strength)."""
+    if settings.notch_sensitivity is not None:
+        return settings.notch_sensitivity
+    m = _preset(settings)
+    return 1.0 if m is None else m.notch_sensitivity
+
+
+def min_notch_radius_mm(settings: Settings, profile=None) -> float:
+    """Smallest corner radius in mm: the given one; else the print profile's (FDM: half its
+    line width, the rule of docs/notch.md); else the material preset's (0.2 mm when custom)."""
+    if settings.min_notch_radius_mm is not None:
+        return settings.min_notch_radius_mm
+    if profile is not None and getattr(profile, "kind", "") == "fdm":
+        return 0.5 * float(profile.line_width)
+    m = _preset(settings)
+    return 0.2 if m is None else float(m.min_notch_radius_mm)
+
+
 def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> dict:
     """The keyword arguments of ``osteon.analyze`` / ``Analyzer`` (``force``,
     ``allowable_stress``, ``interval``, ``root``, ``build_direction``,
-    ``layer_strength_ratio``, ``min_thickness``, ``junctions``, and ``print_profile`` unless the
-    profile is solid), plus ``max_scale``, ``max_rounds``, ``scaling`` with ``correct=True`` for
-    ``osteon.correct``. Raises ``ValueError`` naming the bad setting."""
+    ``layer_strength_ratio``, ``min_thickness``, ``junctions``, ``notch_sensitivity``,
+    ``min_notch_radius``, and ``print_profile`` unless the profile is solid), plus
+    ``max_scale``, ``max_rounds``, ``scaling`` with ``correct=True`` for ``osteon.correct``.
+    Raises ``ValueError`` naming the bad setting."""
+    profile = settings.profile()
     kw = {
         "force": settings.force_n,
         "allowable_stress": settings.allowable_stress_mpa(),
@@ -182,12 +219,13 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
         "layer_strength_ratio": settings.layer_ratio(),
         "min_thickness": min_thickness_mm(settings),
         "junctions": settings.junctions,
+        "notch_sensitivity": notch_sensitivity(settings),
+        "min_notch_radius": min_notch_radius_mm(settings, profile),
     }
     options = _checked(kw)
     kw.update((name, getattr(options, name)) for name in kw)
     # as given (analyze makes it a unit vector): the report shows the user's numbers
     kw["build_direction"] = [float(x) for x in settings.build_direction]
-    profile = settings.profile()
     if not profile.is_solid:  # solid: no argument, the engine's default (bit for bit)
         kw["print_profile"] = profile
     if correct:

@@ -184,6 +184,9 @@ def row_tooltip(row, allowable_mpa: float) -> str:
             f"{stress:.1f} MPa of {allow:.1f} MPa allowed")
     text += f" {row.limit}" if row.limit else ""
     text += ", over the limit" if row.weak else ", within the limit"
+    if row.stress_concentration > 1.0:
+        text += (f"; its worst section is next to a corner: the peak there, Kt "
+                 f"{row.stress_concentration:.2f} (a larger fillet lowers it)")
     if row.max_stress_mpa > stress * (1.0 + 1e-6):
         text += (f" (its highest stress, {row.max_stress_mpa:.1f} MPa, lies where more is "
                  "allowed)")

@@ -89,7 +89,8 @@ class OSTEON_UL_weak_bones(bpy.types.UIList):
             return
         col = nums.row()
         col.alert = item.weak
-        col.label(text=_ratio_text(item.ratio))
+        corner = item.stress_concentration > 1.0  # the peak at a corner (docs/notch.md)
+        col.label(text=_ratio_text(item.ratio) + (" K" if corner else ""))
         if ncols > 1:
             scaled = abs(item.scale - 1.0) > 1e-6
             nums.label(text=f"{item.scale:.2f}" if scaled else "-")

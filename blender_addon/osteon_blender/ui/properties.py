@@ -57,6 +57,9 @@ class OsteonBoneResult(bpy.types.PropertyGroup):
     reason: StringProperty(name="Reason", description="Why sections were skipped or doubtful")
     scale: FloatProperty(name="Scale", default=1.0, description="Cross-section scale applied by "
                          "Correct (1 = unchanged)")
+    stress_concentration: FloatProperty(name="Kt", default=1.0, description="Stress "
+                                        "concentration at a corner next to the worst section "
+                                        "(1 = none; docs/notch.md)")
 
 
 class OsteonSettings(bpy.types.PropertyGroup):

@@ -46,6 +46,12 @@ struct AnalysisOptions {
   /// sparse infill (FDM, in the frame of build_direction) or a hollow shell (resin); W becomes
   /// the printed section's. Default kind solid: the section as cut.
   PrintOptions print;
+  /// Stress concentration at corners (docs/notch.md): notch sensitivity q (0..1), governing
+  /// stress = (1 + q (Kt - 1)) x nominal; 1 = the full elastic peak (brittle, the safe side).
+  double notch_sensitivity = 1.0;
+  /// A corner is never sharper than the print makes it: measured radii below this are raised to
+  /// it, mm (default: half a 0.4 mm nozzle's line, docs/notch.md).
+  double min_notch_radius = 0.2;
 };
 
 /// Where a section sits on its bone.

@@ -59,7 +59,16 @@
   X(std::vector<double>, moment_arm, {}, "(S,)", "mm", "distance centroid -> load point d")      \
   X(std::vector<double>, moment, {}, "(S,)", "N mm", "bending moment M = F d")                   \
   X(std::vector<double>, stress, {}, "(S,)", "MPa",                                               \
-    "peak bending stress M / W (NaN when skipped or unreliable)")                               \
+    "governing stress: the beam stress M / W, at a notch section the peak at the corner next to " \
+    "it, (1 + q (Kt - 1)) x the beam stress there (docs/notch.md); NaN when skipped or unreliable") \
+  X(std::vector<double>, nominal_stress, {}, "(S,)", "MPa",                                       \
+    "beam stress M / W (NaN when skipped or unreliable)")                                       \
+  X(std::vector<double>, stress_concentration, {}, "(S,)", "",                                    \
+    "Kt of the concave corner next to the section (flag notch), 1 where none")                  \
+  X(std::vector<double>, notch_radius, {}, "(S,)", "mm",                                          \
+    "corner radius Kt was computed with, never below the print's (NaN where none)")             \
+  X(std::vector<double>, notch_step, {}, "(S,)", "",                                              \
+    "step ratio D/d (big / small equivalent diameter) of that corner (NaN where none)")         \
   X(std::vector<std::uint8_t>, culled, {}, "(S,)", "",                                            \
     "W > safe modulus: safe for sure (drawn grey)")                                             \
   X(std::vector<std::uint8_t>, weak, {}, "(S,)", "", "stress > section_allowable")               \

@@ -26,6 +26,7 @@ enum SectionFlag : std::uint32_t {
   kFlagUnreliable = 1u << 7,   ///< bone outside and no region tied to it: no number, left out
   kFlagTooThin = 1u << 8,   ///< thinner than the printable minimum: reported apart, not corrected
   kFlagJunction = 1u << 9,  ///< a side branch is cut: only the core that continues is counted
+  kFlagNotch = 1u << 10,    ///< next to a concave corner: stress is the peak at it (Kt > 1)
 };
 
 /// An orthonormal plane frame: origin, unit normal and in-plane axes u, v (u x v = normal).

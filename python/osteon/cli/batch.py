@@ -22,7 +22,13 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
     from ..batch.settings import DEFAULT_MODEL_TIMEOUT_S
-    from .options import MATERIALS, add_junction_switch, add_max_sections, add_print_options
+    from .options import (
+        MATERIALS,
+        add_junction_switch,
+        add_max_sections,
+        add_notch_options,
+        add_print_options,
+    )
 
     p = sub.add_parser(
         "batch",
@@ -63,6 +69,7 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--model-timeout", type=float, default=DEFAULT_MODEL_TIMEOUT_S, metavar="S",
                    help="seconds one model may take; over it the model fails with that reason "
                    f"and its worker is stopped (default {DEFAULT_MODEL_TIMEOUT_S:g}; 0 = none)")
+    add_notch_options(p)
     p.add_argument("--correct", action="store_true",
                    help="also thicken weak bones and write each corrected mesh")
     p.add_argument("--max-scale", type=float, default=3.0, metavar="S",

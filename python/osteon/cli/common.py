@@ -49,6 +49,8 @@ def settings_from_args(args) -> Settings:
         layer_height_mm=getattr(args, "layer_height", None),
         top_bottom_layers=getattr(args, "top_bottom_layers", None),
         shell_mm=getattr(args, "shell", None),
+        notch_sensitivity=getattr(args, "notch_sensitivity", None),  # None: the material's
+        min_notch_radius_mm=getattr(args, "min_notch_radius", None),
     )
 
 
@@ -172,7 +174,8 @@ def bone_table(analysis, top=10, scales=None):
     stress = np.where(too_thin_mask(analysis), np.nan, np.asarray(analysis.stress, float))
     rows = _bone_rows(analysis.section_bone, stress, analysis.weak,
                       analysis.bone_names, analysis.allowable_stress, scales,
-                      analysis.stress_ratio, analysis.across_layers)
+                      analysis.stress_ratio, analysis.across_layers,
+                      stress_concentration=getattr(analysis, "stress_concentration", None))
     return [r for r in rows if r["max_stress_mpa"] is not None][:top]
 
 
@@ -191,6 +194,9 @@ def format_table(rows, allowable, scales=False, layer_ratio=1.0):
         )
         if scales:
             line += f" {r['scale']:>6.3f}"
+        kt = r.get("stress_concentration")
+        if kt is not None and kt > 1.0:  # the worst section is next to a corner (docs/notch.md)
+            flag += f"  corner Kt {kt:.2f}"
         lines.append(line + flag)
     note = f"(allowable stress [σ] = {allowable:g} MPa"
     if layer_ratio != 1.0:
@@ -210,7 +216,8 @@ _OPTIONS = {"force": "--force", "section interval": "--interval",
             "perimeters": "--perimeters", "infill_pattern": "--infill-pattern",
             "infill": "--infill", "line_width": "--line-width",
             "layer_height": "--layer-height", "top_bottom_layers": "--top-bottom-layers",
-            "shell": "--shell"}
+            "shell": "--shell",
+            "notch sensitivity": "--notch-sensitivity", "min notch radius": "--min-notch-radius"}
 
 
 def _arguments(settings: Settings, bone_names, correct: bool) -> dict:

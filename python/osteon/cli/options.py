@@ -106,3 +106,17 @@ def add_print_options(p) -> None:
                    help="FDM: solid layers at the top and bottom surfaces (count)")
     g.add_argument("--shell", type=float, metavar="MM",
                    help="hollowed resin (--profile resin_hollow): shell thickness, mm")
+
+
+def add_notch_options(p) -> None:
+    """``--notch-sensitivity Q`` and ``--min-notch-radius MM`` (``Settings.notch_sensitivity``,
+    ``Settings.min_notch_radius_mm``; docs/notch.md) on a command or an option group."""
+    p.add_argument(
+        "--notch-sensitivity", type=float, default=None, metavar="Q",
+        help="how much of a corner's stress peak the material feels, 0..1: the stress at a "
+        "section next to a concave corner is (1 + Q (Kt - 1)) x the beam stress "
+        "(default: the material's: 1 for PLA and resin, 0.5 for PETG, ABS, nylon)")
+    p.add_argument(
+        "--min-notch-radius", type=float, default=None, metavar="MM",
+        help="sharpest inside corner the print makes, mm: sharper corners of the mesh are taken "
+        "at this radius (default: the material's process: FDM 0.2, resin 0.05, SLS 0.1)")

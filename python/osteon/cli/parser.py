@@ -11,6 +11,7 @@ from .options import (
     ListProfiles,
     add_junction_switch,
     add_max_sections,
+    add_notch_options,
     add_print_options,
 )
 
@@ -150,6 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_common(pa)
     add_junction_switch(pa)
+    add_notch_options(pa)
     po = pa.add_argument_group("best print orientation (docs/printing.md)")
     po.add_argument(
         "--orient",
@@ -183,6 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_common(pc)
     add_junction_switch(pc)
+    add_notch_options(pc)
     pc.add_argument(
         "--out",
         metavar="FILE",

@@ -1,0 +1,367 @@
+// Stress concentration at a change of section (issue 33, docs/notch.md).
+#include "notch.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace osteon {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Roark 7th ed. Table 17.1, square shoulder with fillet in a circular shaft, bending; C_i = a +
+// b sqrt(h/r) + c h/r for 0.25 <= h/r <= 2 (first four rows) and 2 <= h/r <= 20 (last four).
+constexpr std::array<std::array<double, 3>, 8> kShoulderBending = {{
+    {0.927, 1.149, -0.086},
+    {0.015, -3.281, 0.837},
+    {0.847, 1.716, -0.506},
+    {-0.790, 0.417, -0.246},
+    {1.225, 0.831, -0.010},
+    {-3.790, 0.958, -0.257},
+    {7.374, -4.834, 0.862},
+    {-3.809, 3.046, -0.595},
+}};
+
+// The fit inside its range (h/r in [0.25, 20], t = 2h/D).
+double fit_kt(double h_over_r, double t) {
+  const int first = h_over_r <= 2.0 ? 0 : 4;
+  const double s = std::sqrt(h_over_r);
+  double kt = 0.0, power = 1.0;
+  for (int i = 0; i < 4; ++i) {
+    const auto& c = kShoulderBending[first + i];
+    kt += (c[0] + c[1] * s + c[2] * h_over_r) * power;
+    power *= t;
+  }
+  return kt;
+}
+
+// Kt for one D/d at one r/d, clamped to the fit's h/r range on the safe side.
+double kt_at(double step, double r_over_d) {
+  const double h_over_r = (step - 1.0) / (2.0 * r_over_d);
+  const double t = 1.0 - 1.0 / step;  // 2h / D
+  if (h_over_r <= 20.0) return std::max(1.0, fit_kt(std::max(h_over_r, 0.25), t));
+  // Sharper than the fit: Neuber, Kt - 1 ~ sqrt(depth / radius), continued from h/r = 20.
+  const double at_edge = std::max(1.0, fit_kt(20.0, t));
+  return 1.0 + (at_edge - 1.0) * std::sqrt(h_over_r / 20.0);
+}
+
+// The faces near one corner and their vertices' normals, weighted by the face angle at the
+// vertex (Thuermer & Wuethrich 1998: a vertex on a sharp edge gets the bisector whatever the
+// faces' sizes). Every face touching a vertex inside the searched region is among them (a face
+// lies in a grid cell whose box holds it), so those vertices' normals are complete.
+struct LocalMesh {
+  std::vector<std::int32_t> faces;     // 3 per face, mesh vertex indices
+  std::vector<std::int32_t> vertices;  // distinct vertices of `faces`
+  std::vector<Vec3> normals;           // per entry of `vertices`, unit
+  std::vector<int>* slot = nullptr;    // V scratch: entry of each vertex, -1 elsewhere
+  int at(std::int32_t v) const { return (*slot)[v]; }
+  void release() {  // the scratch back to all -1
+    for (std::int32_t v : vertices) (*slot)[v] = -1;
+  }
+};
+
+// Faces of the cells the slab lo <= u.x <= hi and the region reach that have a vertex inside
+// both (the only ones a candidate's normal and neighbours need), and their vertices' normals.
+LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, double lo,
+                     double hi, const CutRegion& region, std::vector<int>& slot) {
+  LocalMesh m;
+  m.slot = &slot;
+  const double r2 = region.radius * region.radius;
+  auto inside = [&](std::int32_t v) {
+    const Vec3 p = mesh.vertex(v);
+    const double a = u.dot(p);
+    if (a < lo || a > hi) return false;
+    Vec3 d = p - region.point;
+    d -= d.dot(u) * u;
+    return d.squaredNorm() <= r2;
+  };
+  for (Index k = 0; k < grid.num_blocks(); ++k) {
+    if (!grid.block_near(k, region)) continue;
+    for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+      if (!grid.meets(c, u, lo, hi, &region)) continue;
+      for (const std::int32_t* f = grid.faces() + 3 * grid.begin(c);
+           f != grid.faces() + 3 * grid.end(c); f += 3) {
+        if (!inside(f[0]) && !inside(f[1]) && !inside(f[2])) continue;
+        for (int j = 0; j < 3; ++j) {
+          m.faces.push_back(f[j]);
+          if (slot[f[j]] >= 0) continue;
+          slot[f[j]] = static_cast<int>(m.vertices.size());
+          m.vertices.push_back(f[j]);
+        }
+      }
+    }
+  }
+  m.normals.assign(m.vertices.size(), Vec3::Zero());
+  for (std::size_t f = 0; f < m.faces.size(); f += 3) {
+    const Vec3 p[3] = {mesh.vertex(m.faces[f]), mesh.vertex(m.faces[f + 1]),
+                       mesh.vertex(m.faces[f + 2])};
+    const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double len = n.norm();
+    if (!(len > 0)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+      m.normals[m.at(m.faces[f + k])] += std::atan2(e1.cross(e2).norm(), e1.dot(e2)) / len * n;
+    }
+  }
+  for (Vec3& n : m.normals)
+    if (n.norm() > 0) n.normalize();
+  return m;
+}
+
+// One concave corner measured on the mesh.
+struct Corner {
+  bool found = false;
+  double radius = 0.0;  // fillet radius of the sharpest sector, mm (0: a sharp edge)
+  double axial = 0.0;   // where the fillet meets the thin side, along the axis from the plane, mm
+};
+
+// Smallest moment arm / equivalent radius of a thin side the fit is applied to.
+constexpr double kMinSlenderness = 2.0;
+
+// Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
+constexpr double kMinTurn = 45.0 * kPi / 180.0;
+
+// Fillet points grouped in angular sectors around the axis: axial position a and the normal's
+// axial component n_a of each point (mm, unit).
+constexpr int kSectors = 8;
+struct SectorPoints {
+  std::array<std::vector<double>, kSectors> a, na;
+  std::array<double, kSectors> turn{};  // the largest normal turn from radial, radians
+};
+
+// The fillet radius of one sector: a fillet of radius rho tangent to a thin part and a shoulder
+// normal to the axis is a circle whose points satisfy a = c_a - rho n_a (the outward normal
+// points to the circle's centre), whatever the section's shape: rho = -cov(a, n_a) / var(n_a).
+// Returns false when the sector says nothing (no point, a straight taper, a convex turn).
+bool sector_radius(const std::vector<double>& a, const std::vector<double>& na, double scale,
+                   double& rho, double& axial) {
+  const std::size_t n = a.size();
+  if (n == 0) return false;
+  const double ma = std::accumulate(a.begin(), a.end(), 0.0) / n;
+  const double mn = std::accumulate(na.begin(), na.end(), 0.0) / n;
+  double saa = 0, snn = 0, san = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    saa += (a[i] - ma) * (a[i] - ma);
+    snn += (na[i] - mn) * (na[i] - mn);
+    san += (a[i] - ma) * (na[i] - mn);
+  }
+  const double sd_a = std::sqrt(saa / n), sd_n = std::sqrt(snn / n);
+  if (sd_a < 0.02 * scale) {  // every fillet point on one ring: a sharp edge
+    rho = 0.0;
+    axial = ma;
+    return true;
+  }
+  if (sd_n < 0.05) return false;  // one normal direction along a length: a straight taper
+  rho = -san / snn;
+  if (!(rho > 0)) return false;  // the surface turns the other way: no inside corner
+  axial = ma + rho * mn;         // the circle's centre: where the fillet leaves the thin side
+  return true;
+}
+
+// Meridian coordinates of a vertex about the axis (origin, u): axial a, radial t, and its
+// normal's axial and radial components.
+struct Meridian {
+  double a = 0, t = 0, na = 0, nr = 0;
+};
+
+Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, const Vec3& u) {
+  const Vec3 d = p - origin;
+  Meridian m;
+  m.a = d.dot(u);
+  const Vec3 radial = d - m.a * u;
+  m.t = radial.norm();
+  m.na = normal.dot(u);
+  m.nr = m.t > 0 ? normal.dot(radial) / m.t : 0.0;
+  return m;
+}
+
+// Measures the concave corner between a thin section (bone point `origin`, equivalent radius
+// r_thin) and the thick side along unit axis `u` (thin -> thick), within axial [lo, hi] of the
+// thin section's plane.
+Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<int>& slot,
+                      const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi) {
+  const Vec3 e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+  CutRegion region;  // the cylinder t <= 2.5 r_thin around the axis
+  region.point = origin;
+  region.axis = u;
+  region.radius = 2.5 * r_thin;
+  const double at = u.dot(origin);
+  LocalMesh local = local_mesh(mesh, grid, u, at + lo, at + hi, region, slot);
+  // Fillet points: normal mostly in the meridian plane, turned 8..82 degrees from radial
+  // towards the thin side (the shoulder face, at 90 degrees, and the thin part, at 0, left out).
+  const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
+  std::vector<Meridian> merid(local.vertices.size());
+  std::vector<int> candidate(local.vertices.size(), 0);
+  for (std::size_t k = 0; k < local.vertices.size(); ++k) {
+    const Meridian m = merid[k] =
+        meridian_of(mesh.vertex(local.vertices[k]), local.normals[k], origin, u);
+    if (m.a < lo || m.a > hi || m.t < 0.5 * r_thin || m.t > 2.5 * r_thin) continue;
+    const double meridian = std::hypot(m.na, m.nr);
+    if (meridian < 0.7 || m.nr <= 0) continue;
+    const double turn = -m.na / meridian;  // sin of the angle from radial towards the thin side
+    candidate[k] = turn >= lo_sin && turn <= hi_sin;
+  }
+  // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
+  // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
+  // shoulder has the same normal turn and is left out by this).
+  std::vector<double> bend(local.vertices.size(), 0.0);
+  for (std::size_t f = 0; f < local.faces.size(); f += 3) {
+    int slots[3];
+    for (int j = 0; j < 3; ++j) slots[j] = local.at(local.faces[f + j]);
+    for (int j = 0; j < 3; ++j) {
+      if (!candidate[slots[j]]) continue;
+      const Meridian& p = merid[slots[j]];
+      for (int k = 1; k < 3; ++k) {
+        const Meridian& q = merid[slots[(j + k) % 3]];
+        bend[slots[j]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
+      }
+    }
+  }
+  local.release();
+  std::vector<Index> candidates;
+  std::vector<double> bends;
+  for (std::size_t k = 0; k < local.vertices.size(); ++k)
+    if (candidate[k]) {
+      candidates.push_back(static_cast<Index>(k));
+      bends.push_back(bend[k]);
+    }
+  SectorPoints pts;
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    if (!(bends[c] > 1e-9 * r_thin)) continue;
+    const Meridian& m = merid[candidates[c]];
+    const Vec3 radial = mesh.vertex(local.vertices[candidates[c]]) - origin - m.a * u;
+    const double angle = std::atan2(radial.dot(e2), radial.dot(e1));
+    const int sector =
+        std::min(kSectors - 1, static_cast<int>((angle + kPi) / (2 * kPi) * kSectors));
+    pts.a[sector].push_back(m.a);
+    pts.na[sector].push_back(m.na / std::hypot(m.na, m.nr));
+    pts.turn[sector] = std::max(pts.turn[sector], std::atan2(-m.na, m.nr));
+  }
+  Corner c;
+  for (int s = 0; s < kSectors; ++s) {
+    double rho = 0, axial = 0;
+    if (!sector_radius(pts.a[s], pts.na[s], r_thin, rho, axial)) continue;
+    // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
+    // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
+    // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:
+    // their singularity is weaker (Williams 1952: stress ~ dist^-0.33 at a 45-degree turn
+    // against dist^-0.46 at 90), and turns of 45..90 degrees take the shoulder's Kt (safe side).
+    const double turn = rho == 0.0 ? 2.0 * pts.turn[s] : pts.turn[s] + 8.0 * kPi / 180.0;
+    if (turn < kMinTurn) continue;
+    if (!c.found || rho < c.radius) {  // the sharpest sector governs
+      c.found = true;
+      c.radius = rho;
+      c.axial = axial;
+    }
+  }
+  return c;
+}
+
+// Sections of each bone that have a region, in order along the bone.
+std::vector<std::vector<int>> bone_profiles(const AnalysisResult& r) {
+  int nb = 0;
+  for (int b : r.section_bone) nb = std::max(nb, b + 1);
+  std::vector<std::vector<int>> chains(nb);
+  for (int i = 0; i < static_cast<int>(r.section_bone.size()); ++i)
+    if (r.section_cut_area[i] > 0 && r.section_area[i] > 0 && std::isfinite(r.moment_arm[i]))
+      chains[r.section_bone[i]].push_back(i);
+  for (auto& c : chains)
+    std::stable_sort(c.begin(), c.end(),
+                     [&](int x, int y) { return r.section_param[x] < r.section_param[y]; });
+  return chains;
+}
+
+double equivalent_radius(double area) { return std::sqrt(area / kPi); }
+
+}  // namespace
+
+double shoulder_fillet_kt(double big_diameter, double small_diameter, double radius) {
+  if (!(std::isfinite(big_diameter) && std::isfinite(small_diameter) && std::isfinite(radius)) ||
+      !(small_diameter > 0) || !(radius > 0) || !(big_diameter > small_diameter))
+    return 1.0;
+  const double step = std::min(big_diameter / small_diameter, kMaxStepRatio);
+  const double r_over_d = radius / small_diameter;
+  // The fit is not monotone in D/d at a large r/d: the largest Kt up to this step (safe side).
+  double kt = kt_at(step, r_over_d);
+  for (int k = 1; k < 16; ++k) kt = std::max(kt, kt_at(1.0 + (step - 1.0) * k / 16.0, r_over_d));
+  return kt;
+}
+
+NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
+                        const AnalysisResult& r, double min_radius, double sensitivity) {
+  const int ns = static_cast<int>(r.section_bone.size());
+  NotchField out;
+  out.kt.assign(ns, 1.0);
+  out.radius.assign(ns, kNaN);
+  out.step.assign(ns, kNaN);
+  out.effective.assign(ns, 1.0);
+  out.arm_ratio.assign(ns, 1.0);
+  const FaceGrid* grid = nullptr;  // built on the first step found
+  std::vector<int> slot;           // scratch of measure_corner, all -1 between calls
+  for (const std::vector<int>& chain : bone_profiles(r)) {
+    const int n = static_cast<int>(chain.size());
+    auto radius_of = [&](int k) { return equivalent_radius(r.section_cut_area[chain[k]]); };
+    for (int k = 0; k + 1 < n; ++k) {
+      const double ra = radius_of(k), rb = radius_of(k + 1);
+      if (std::max(ra, rb) < kStepRatio * std::min(ra, rb)) continue;
+      const int dir = rb > ra ? 1 : -1;  // along the chain, thin -> thick
+      int thin = rb > ra ? k : k + 1;
+      const int thick = thin + dir;
+      // A plane may cut the fillet itself: the thin side's smallest section within the largest
+      // fillet the study covers (r = 0.3 d, i.e. 0.6 of the thin radius) is the thin one.
+      const int first = thin;
+      for (int j = thin - dir; j >= 0 && j < n; j -= dir) {
+        if (radius_of(j) >= radius_of(thin)) break;
+        if (std::abs(r.section_param[chain[j]] - r.section_param[chain[first]]) >
+            0.6 * radius_of(first))
+          break;
+        thin = j;
+      }
+      const int i = chain[thin];
+      const double r_thin = equivalent_radius(r.section_area[i]);
+      // The fit is for a shaft, a beam: the thin part must be slender where it is loaded (arm
+      // >= kMinSlenderness r, the FEM check's slenderness, docs/validation.md); a stubby or
+      // body-sized section gets no Kt (and costs no search).
+      if (r.moment_arm[i] < kMinSlenderness * r_thin) continue;
+      const double gap = std::abs(r.section_param[chain[thick]] - r.section_param[i]);
+      // The big dimension: the thick side's largest section within two thin radii of the step.
+      double r_big = 0;
+      for (int j = thick; j >= 0 && j < n; j += dir) {
+        if (std::abs(r.section_param[chain[j]] - r.section_param[i]) > gap + 2 * r_thin) break;
+        r_big = std::max(r_big, radius_of(j));
+      }
+      Vec3 u = r.section_normal[i];
+      const Vec3 towards = r.section_point[chain[thick]] - r.section_point[i];
+      if (towards.dot(u) < 0) u = -u;
+      const double reach = std::max(towards.dot(u), 0.0);
+      if (grid == nullptr) {
+        grid = &face_grid();
+        slot.assign(mesh.num_vertices, -1);
+      }
+      const Corner c = measure_corner(mesh, *grid, slot, r.section_point[i], u, r_thin,
+                                      -0.25 * reach, 1.25 * reach);
+      if (!c.found) continue;
+      const double rho = std::max(c.radius, min_radius);
+      const double kt = shoulder_fillet_kt(2 * r_big, 2 * r_thin, rho);
+      // Nominal stress at the corner: the same load point, the centroid moved to the corner.
+      const double shift = std::clamp(c.axial, 0.0, reach);
+      const double arm_c = (r.load_point[i] - (r.section_center[i] + shift * u)).norm();
+      const double arm_ratio = r.moment_arm[i] > 0 ? std::max(1.0, arm_c / r.moment_arm[i]) : 1.0;
+      const double effective = 1.0 + sensitivity * (kt - 1.0);
+      if (kt * arm_ratio > out.kt[i] * out.arm_ratio[i]) {  // a corner on each side: the worse
+        out.kt[i] = kt;
+        out.radius[i] = rho;
+        out.step[i] = r_big / r_thin;
+        out.effective[i] = effective;
+        out.arm_ratio[i] = arm_ratio;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace osteon

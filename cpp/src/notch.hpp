@@ -1,0 +1,36 @@
+// Stress concentration at a change of section (issue 33, docs/notch.md): the corner finder and
+// its use on an analysis. Engine-internal header (the Kt fit: osteon/notch.hpp).
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "osteon/analysis.hpp"
+#include "osteon/mesh.hpp"
+#include "osteon/notch.hpp"
+#include "osteon/slicer.hpp"
+
+namespace osteon {
+
+/// Per-section result of the corner search (S entries each).
+struct NotchField {
+  std::vector<double> kt;         ///< Kt, 1 where no corner
+  std::vector<double> radius;     ///< corner radius used (measured, at least min_radius), mm; NaN
+  std::vector<double> step;       ///< D/d of the step, NaN where no corner
+  std::vector<double> effective;  ///< 1 + q (Kt - 1), 1 where no corner
+  std::vector<double> arm_ratio;  ///< moment at the corner / the section's moment (>= 1), 1: none
+};
+
+/// Finds, along each bone's sections, the steps of the equivalent radius sqrt(A / pi) between
+/// neighbours (ratio >= kStepRatio), measures the fillet radius of the concave corner between
+/// them on the mesh (the meridian circle fitted through the vertex normals, docs/notch.md), and
+/// sets Kt on the section at the thin side. Reads from `r`: section_bone, section_param,
+/// section_point, section_normal, section_center, load_point, section_area, section_cut_area,
+/// moment_arm. `min_radius` (mm): a corner is never sharper than the printer makes it;
+/// `sensitivity` q (0..1): governing stress = (1 + q (Kt - 1)) x nominal.
+/// `face_grid` returns the run's face grid over `mesh` (built on first call): a corner is
+/// measured from the faces near it only.
+NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
+                        const AnalysisResult& r, double min_radius, double sensitivity);
+
+}  // namespace osteon

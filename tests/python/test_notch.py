@@ -1,0 +1,213 @@
+"""Stress concentration at corners (issue 33, docs/notch.md): the Kt fit, the corner finder on
+stepped bars of known fillet radius, notch sensitivity, and what the results say."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import shutil
+
+import numpy as np
+import osteon
+import pytest
+from osteon import materials
+from osteon.report import section_rows
+from osteon.settings import Settings, engine_arguments
+from shapes import revolve
+
+D_SMALL, D_BIG = 6.0, 12.0
+
+
+def stepped_bar(rho: float, d: float = D_SMALL, big: float = D_BIG, arc: int = 9,
+                cone_deg: float | None = None):
+    """Closed stepped round bar along x (mm): thick x in [-15, 0], a shoulder at x = 0 with a
+    fillet of radius `rho` (0: a sharp corner), thin x up to 30. With `cone_deg` the shoulder
+    is a cone at that angle to the axis instead (no fillet)."""
+    xs = list(np.arange(-15.0, 0.0, 1.0))
+    ts = [big / 2] * len(xs)
+    if cone_deg is not None:
+        run = (big - d) / 2 / math.tan(math.radians(cone_deg))
+        xs += list(np.linspace(0.0, run, 6))
+        ts += list(np.linspace(big / 2, d / 2, 6))
+    else:
+        xs.append(0.0)
+        ts.append(big / 2)
+        if rho > 0:
+            th = np.linspace(0.0, np.pi / 2, arc)
+            xs += list(rho - rho * np.cos(th))
+            ts += list(d / 2 + rho - rho * np.sin(th))
+        else:
+            xs.append(0.0)
+            ts.append(d / 2)
+    tail = list(np.arange(xs[-1] + 0.5, 30.0 + 1e-9, 0.5))
+    return revolve(xs + tail, ts + [d / 2] * len(tail), 96)
+
+
+def bar_skeleton():
+    return osteon.Skeleton(np.array([[-15.0, 0, 0]]), np.array([[30.0, 0, 0]]), [-1])
+
+
+def analyse(v, f, **kw):
+    return osteon.analyze(v, f, bar_skeleton(), force=1.0, root=0, **kw)
+
+
+# --- the fit -------------------------------------------------------------------------------
+
+
+def test_kt_fit_reads_the_charts_at_the_issue_case():
+    # Peterson's chart (stepped shaft, bending) at D/d = 2, r/d = 0.1 reads Kt ~ 1.75; the issue
+    # quotes 1.73 from the charts, the Roark Table 17.1 fit gives 1.79.
+    assert 1.73 <= osteon.shoulder_fillet_kt(12.0, 6.0, 0.6) <= 1.80
+
+
+def test_kt_fit_behaves_like_a_stress_concentration():
+    kt = osteon.shoulder_fillet_kt
+    radii = [0.12, 0.3, 0.6, 1.2, 1.8]
+    assert all(kt(12, 6, a) > kt(12, 6, b) for a, b in itertools.pairwise(radii))  # sharper: up
+    assert kt(6.0, 6.0, 0.6) == 1.0  # no step
+    assert kt(7.2, 6.0, 0.6) < kt(9.0, 6.0, 0.6) < kt(12.0, 6.0, 0.6)  # a bigger step: higher
+    assert kt(30.0, 6.0, 0.6) == kt(18.0, 6.0, 0.6)  # D/d capped at 3
+    # below the fit's range (h/r < 0.25) the value at its edge (safe side: Kt grows with h/r)
+    assert kt(6.6, 6.0, 2.0) == pytest.approx(kt(6.6, 6.0, 1.2))
+    # sharper than its range (h/r > 20): Neuber's sqrt law from the edge (h/r 4x: Kt - 1 2x),
+    # or more where a smaller step of the same bar reads higher (the largest over D/d is used)
+    edge, sharp = kt(18.0, 6.0, 0.3), kt(18.0, 6.0, 0.3 / 4)
+    assert 1 + (edge - 1) * 2.0 <= sharp <= 1 + (edge - 1) * 2.1
+    with pytest.raises(ValueError, match="radius"):
+        kt(12.0, 6.0, 0.0)
+    with pytest.raises(ValueError, match="small_diameter"):
+        kt(12.0, float("nan"), 0.6)
+
+
+# --- the corner finder ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("rho", [1.2, 0.6])
+def test_the_corner_finder_measures_a_known_fillet(rho):
+    v, f = stepped_bar(rho)
+    a = analyse(v, f, min_notch_radius=0.05)
+    (i,) = np.flatnonzero(a.notch)  # one section, on the thin side next to the shoulder
+    assert a.section_param[i] > 15.0  # thin side (the shoulder is 15 mm from the head)
+    assert a.notch_radius[i] == pytest.approx(rho, rel=0.03)
+    assert a.notch_step[i] == pytest.approx(2.0, rel=0.02)
+    d = 2 * math.sqrt(a.section_area[i] / math.pi)  # the thin section's equivalent diameter
+    assert d == pytest.approx(D_SMALL, rel=0.01)
+    assert a.stress_concentration[i] == pytest.approx(
+        osteon.shoulder_fillet_kt(a.notch_step[i] * d, d, a.notch_radius[i]))
+    # the governing stress is Kt x the beam stress at the corner (a longer arm than the plane's)
+    assert a.stress[i] >= a.stress_concentration[i] * a.nominal_stress[i]
+    assert a.stress[i] <= a.stress_concentration[i] * a.nominal_stress[i] * 1.1
+    others = np.ones(a.num_sections, bool)
+    others[i] = False
+    assert np.all(a.stress_concentration[others] == 1.0)
+    assert np.all(np.isnan(a.notch_radius[others]))
+    assert np.array_equal(a.stress[others], a.nominal_stress[others], equal_nan=True)
+
+
+def test_a_sharp_corner_is_taken_at_the_print_resolution():
+    v, f = stepped_bar(0.0)
+    a = analyse(v, f)
+    (i,) = np.flatnonzero(a.notch)
+    assert a.notch_radius[i] == 0.2  # the default: half a 0.4 mm nozzle's line
+    b = analyse(v, f, min_notch_radius=0.5)
+    assert b.notch_radius[i] == 0.5
+    assert b.stress_concentration[i] == pytest.approx(osteon.shoulder_fillet_kt(12, 6, 0.5), rel=1e-3)
+    assert b.stress[i] < a.stress[i]  # a rounder corner: a lower peak
+
+
+def test_a_plain_bar_and_a_shallow_taper_have_no_corner():
+    for v, f in (revolve(np.arange(-15.0, 30.01, 0.5), np.full(91, 3.0), 96),
+                 stepped_bar(0.0, cone_deg=30.0)):
+        a = analyse(v, f)
+        assert not a.notch.any()
+        assert np.all(a.stress_concentration == 1.0)
+        assert np.array_equal(a.stress, a.nominal_stress, equal_nan=True)
+
+
+def test_notch_sensitivity_scales_the_peak_and_drives_weak_and_culled():
+    v, f = stepped_bar(0.6)
+    q1, q0, qh = (analyse(v, f, notch_sensitivity=q) for q in (1.0, 0.0, 0.5))
+    (i,) = np.flatnonzero(q1.notch)
+    kt = q1.stress_concentration[i]
+    arm_ratio = q0.stress[i] / q0.nominal_stress[i]  # q = 0: the beam stress at the corner
+    assert q1.stress[i] / q1.nominal_stress[i] == pytest.approx(kt * arm_ratio)
+    assert qh.stress[i] / qh.nominal_stress[i] == pytest.approx((1 + 0.5 * (kt - 1)) * arm_ratio)
+    # an allowable between the beam stress and the peak: weak only with the corner counted
+    allow = 0.5 * (q1.nominal_stress[i] + q1.stress[i])
+    a = analyse(v, f, allowable_stress=allow)
+    assert a.weak[i] and not a.culled[i]
+    assert np.all(a.stress[a.culled] <= a.section_allowable[a.culled])
+    with pytest.raises(ValueError, match="notch_sensitivity"):
+        analyse(v, f, notch_sensitivity=1.5)
+    with pytest.raises(ValueError, match="min_notch_radius"):
+        analyse(v, f, min_notch_radius=0.0)
+
+
+def test_the_reason_and_the_report_say_it():
+    v, f = stepped_bar(0.6)
+    a = analyse(v, f)
+    (i,) = np.flatnonzero(a.notch)
+    reason = a.flag_reasons(i)[a.flag_names(i).index("notch")]
+    assert "corner radius 0.6 mm" in reason and "× the beam stress" in reason
+    row = section_rows(a, ["bar"])[i]
+    assert row["stress_concentration"] == pytest.approx(a.stress_concentration[i])
+    assert row["notch_radius_mm"] == pytest.approx(0.6, rel=0.03)
+    assert row["nominal_stress_mpa"] < row["stress_mpa"]
+    assert "notch" in row["flags"]
+    json.dumps(row)  # finite numbers or null only
+    assert section_rows(a, ["bar"])[0]["notch_radius_mm"] is None
+
+
+# --- materials and front ends ----------------------------------------------------------------
+
+
+def test_every_material_carries_its_notch_sensitivity_with_a_source():
+    for m in materials.MATERIALS:
+        assert 0.0 <= m.notch_sensitivity <= 1.0 and m.notch_sensitivity_source
+        assert m.min_notch_radius_mm > 0 and m.min_notch_radius_source
+    assert materials.get("PLA").notch_sensitivity == 1.0  # brittle (< 5 % at break)
+    assert materials.get("RESIN").notch_sensitivity == 1.0
+    assert materials.get("PETG").notch_sensitivity < 1.0
+
+
+def test_the_front_ends_pass_the_materials_q():
+    kw = engine_arguments(Settings(force_n=20, interval_mm=2, material="PETG"), ["b"])
+    assert kw["notch_sensitivity"] == materials.get("PETG").notch_sensitivity
+    assert kw["min_notch_radius"] == materials.get("PETG").min_notch_radius_mm
+    kw = engine_arguments(Settings(force_n=20, interval_mm=2, material="PETG",
+                                   notch_sensitivity=1.0, min_notch_radius_mm=0.4), ["b"])
+    assert (kw["notch_sensitivity"], kw["min_notch_radius"]) == (1.0, 0.4)
+    with pytest.raises(ValueError, match="notch sensitivity"):
+        engine_arguments(Settings(force_n=20, interval_mm=2, notch_sensitivity=2.0), ["b"])
+
+
+def test_the_cli_takes_notch_options():
+    from osteon.cli.common import check, settings_from_args
+    from osteon.cli.parser import build_parser
+
+    args = build_parser().parse_args(["analyze", "m.obj", "--notch-sensitivity", "0.3",
+                                      "--min-notch-radius", "0.4"])
+    s = settings_from_args(args)
+    assert (s.notch_sensitivity, s.min_notch_radius_mm) == (0.3, 0.4)
+    args = build_parser().parse_args(["analyze", "m.obj", "--notch-sensitivity", "3"])
+    with pytest.raises(ValueError, match="--notch-sensitivity"):
+        check(settings_from_args(args))
+
+
+# --- against FEM (one shape of the pre-registered study, coarse) -----------------------------
+
+
+@pytest.mark.slow
+def test_one_stepped_bar_against_fem(tmp_path):
+    """D/d = 2, r/d = 0.3 (scripts/study_notch.py), elements r/2 on the fillet: osteon's
+    governing stress at the fillet within the study's band of FEM's peak (-10 % .. +15 %)."""
+    pytest.importorskip("gmsh")
+    if shutil.which("ccx") is None:
+        pytest.skip("CalculiX (ccx) not installed")
+    import stepped_bars as stepped
+
+    fem, _ = stepped.fem_peak(2.0, 0.3, 2, str(tmp_path))
+    ost, radius, _, _ = stepped.osteon_peak(2.0, 0.3)
+    assert radius == pytest.approx(0.3 * D_SMALL, rel=0.15)
+    assert -0.10 <= (ost - fem) / fem <= 0.15
