@@ -283,9 +283,7 @@ def correct_steps(job: Job):
             # printed with the regions' walls and infill: the engine's reinforced analysis
             # (Blender's re-analysis knows only the profile); the modifiers shown
             after = fix.after
-            from .ops.slicer_export import show_modifiers
-
-            show_modifiers(context, fix.reinforcement, inp.mm_per_unit)
+            bridge.show_modifiers(context, fix.reinforcement, inp.mm_per_unit)
     except Exception:  # leave the pose as it was before this call (errors, cancel)
         bridge.restore_pose(job.context, arm)
         if had_previous:

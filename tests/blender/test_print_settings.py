@@ -7,13 +7,8 @@ import numpy as np
 import pytest
 from conftest import empty_scene, one_bone_rig
 from osteon import profiles
-from osteon.settings import engine_takes_print_profile
 from osteon_blender import core, overlay, state
 from test_draw import _closed_cylinder
-
-needs_printed_engine = pytest.mark.skipif(
-    not engine_takes_print_profile(),
-    reason="this engine has no print_profile= yet (print-core's branch, issue 31)")
 
 
 @pytest.fixture
@@ -57,18 +52,8 @@ def test_overlay_draws_the_infill_loops_inside_the_outline(engine):
 
     v, f = _closed_cylinder([0, 0, 0], [40, 0, 0], 6.0, stations=21)
     sk = osteon.Skeleton([[0, 0, 0]], [[40, 0, 0]], [-1])
-    printed = {"print_profile": "prusaslicer"} if engine_takes_print_profile() else {}
-    a = osteon.analyze(v, f, sk, interval=4.0, keep_outlines=True, **printed)
-    assert (getattr(a, "infill_outline_section_start", None) is not None) == bool(printed)
-    if not printed:
-        # an engine without printed sections: the loops packed as the printed engine packs
-        # them (like outline_*), here each outline shrunk to half around its centre
-        pts = np.asarray(a.outline_points, float).copy()
-        ls, ss = np.asarray(a.outline_loop_start), np.asarray(a.outline_section_start)
-        sec = np.repeat(np.repeat(np.arange(len(ss) - 1), np.diff(ss)), np.diff(ls))
-        pts = a.section_center[sec] + 0.5 * (pts - a.section_center[sec])
-        a.infill_outline_points, a.infill_outline_loop_start = pts, ls
-        a.infill_outline_section_start = ss
+    a = osteon.analyze(v, f, sk, interval=4.0, keep_outlines=True, print_profile="prusaslicer")
+    assert getattr(a, "infill_outline_section_start", None) is not None
     out = overlay.compute_outlines(a, mm_per_unit=1.0)
     infill = np.concatenate([out.infill_lines, out.weak_infill_lines])
     assert len(infill) > 0 and np.allclose(out.infill_colors[:, 3], overlay.INFILL_ALPHA)
@@ -82,7 +67,6 @@ def test_overlay_draws_the_infill_loops_inside_the_outline(engine):
     assert np.hypot(y, z).max() < 6.0 - 0.5
 
 
-@needs_printed_engine
 def test_analyze_with_a_print_profile(bar):
     s = bpy.context.scene.osteon
     assert bpy.ops.osteon.analyze() == {"FINISHED"}
@@ -99,7 +83,6 @@ def test_analyze_with_a_print_profile(bar):
     assert printed["max_stress_mpa"] > 1.2 * solid["max_stress_mpa"]
 
 
-@needs_printed_engine
 def test_find_orientation_analyses_the_candidates_as_printed(bar):
     s = bpy.context.scene.osteon
     s.print_settings.profile = "prusaslicer"

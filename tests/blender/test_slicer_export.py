@@ -7,7 +7,6 @@ import zipfile
 
 import bpy
 import numpy as np
-from osteon_blender.ops import slicer_export
 
 
 def _closed(mesh) -> bool:
@@ -29,7 +28,7 @@ def test_export_for_slicer_shows_the_modifiers_and_writes_them(sample, tmp_path)
     s.print_settings.profile = "prusaslicer"
     path = tmp_path / "sample.3mf"
     assert bpy.ops.osteon.export_slicer(filepath=str(path), slicer="prusaslicer") == {"FINISHED"}
-    shown = list(bpy.data.collections[slicer_export.COLLECTION].objects)
+    shown = list(bpy.data.collections[bridge.MODIFIER_COLLECTION].objects)
     assert shown, "no weak region under 60 N"
     for o in shown:
         assert o.display_type == "WIRE" and _closed(o.data)
@@ -73,5 +72,5 @@ def test_correct_reinforce_first_thickens_fewer_bones(sample):
     assert walls_only and all(g["fixed"] for g in block["regions"])
     assert not block["unfixable"] and report["correction"]["converged"]
     assert report["weak_sections"] == 0
-    shown = bpy.data.collections[slicer_export.COLLECTION].objects
+    shown = bpy.data.collections[bridge.MODIFIER_COLLECTION].objects
     assert len(shown) == len(block["regions"])

@@ -10,11 +10,7 @@ import zipfile
 
 import pytest
 from osteon.cli import main
-from osteon.settings import engine_takes_print_profile
 from shapes import cylinder_along
-
-pytestmark = pytest.mark.skipif(not engine_takes_print_profile(),
-                                reason="this engine has no printed section (print_profile=)")
 
 
 @pytest.fixture

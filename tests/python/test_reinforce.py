@@ -9,12 +9,7 @@ import osteon
 import pytest
 import trimesh
 from osteon.reinforcement import convex_volume, modifier_volume, vertex_stress, weak_regions
-from osteon.settings import engine_takes_print_profile
 from shapes import cylinder_along, merge
-
-#: the search needs the printed section (issue 31: ``print_profile=`` of osteon.analyze)
-needs_printed = pytest.mark.skipif(not engine_takes_print_profile(),
-                                   reason="this engine has no printed section (print_profile=)")
 
 
 def _l_shape():
@@ -112,7 +107,6 @@ def _tube_w(p):
 KW = {"force": 10.0, "interval": 2.0}
 
 
-@needs_printed
 def test_the_load_does_not_depend_on_the_print():
     # why re-analysing the whole part per candidate is exact: only W changes with the profile
     v, f, sk = _rod()
@@ -124,7 +118,6 @@ def test_the_load_does_not_depend_on_the_print():
     assert np.all(b.section_modulus[b.valid] > a.section_modulus[a.valid])
 
 
-@needs_printed
 @pytest.mark.parametrize("n", [4, 7])
 def test_a_rod_that_needs_n_perimeters_gets_n(n):
     v, f, sk = _rod()
@@ -157,7 +150,6 @@ def test_a_rod_that_needs_n_perimeters_gets_n(n):
     assert g["extra_volume_mm3"] == pytest.approx(expected, rel=0.01)
 
 
-@needs_printed
 def test_infill_after_walls_and_unfixable_when_solid_is_not_enough():
     v, f, sk = _rod()
     solid = osteon.analyze(v, f, sk, allowable_stress=30, **KW)
@@ -186,7 +178,6 @@ def test_infill_after_walls_and_unfixable_when_solid_is_not_enough():
     assert not r.regions[0]["fixed"] and r.regions[0]["infill"] == 1.0
 
 
-@needs_printed
 def test_reinforce_first_thickens_only_what_solid_cannot_carry():
     v, f, sk = _rod()
     solid = osteon.analyze(v, f, sk, allowable_stress=30, **KW)
@@ -205,7 +196,6 @@ def test_reinforce_first_thickens_only_what_solid_cannot_carry():
     assert fix.reinforcement is not None and not fix.reinforcement.unfixable
 
 
-@needs_printed
 def test_reinforce_rejects_bad_input():
     v, f, sk = _rod()
     with pytest.raises(ValueError, match="FDM"):

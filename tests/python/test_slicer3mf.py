@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 from osteon.profiles import PrintProfile
 from osteon.reinforcement import convex_volume
-from osteon.settings import engine_takes_print_profile
 from osteon.slicer3mf import BED_CENTER, build_rotation, write_3mf
 from shapes import circle, prism
 
@@ -184,8 +183,6 @@ def test_bad_input_names_the_problem(tmp_path):
 
 @pytest.mark.skipif(shutil.which("prusa-slicer") is None,
                     reason="prusa-slicer is not installed (apt-get install prusa-slicer)")
-@pytest.mark.skipif(not engine_takes_print_profile(),
-                    reason="this engine has no printed section (print_profile=)")
 def test_a_reinforced_rod_prints_the_walls_osteon_asked_for(tmp_path):
     """osteon.reinforce on a standing rod r = 5 (bone z 0..40, 10 N) that needs 5 walls at the
     allowable (test_reinforce's closed form), exported and sliced: the layers inside the

@@ -7,6 +7,7 @@ bridges:
 - ``weights``: vertex-group weights <-> sparse (V, B) matrices, and their cache
 - ``viewport``: the stress colour layer, Solid shading by it, redraws
 - ``pose``: the correction as pose-bone scales (apply, restore, read back, bake)
+- ``modifiers``: reinforcement regions as wireframe modifier volumes (Export for slicer)
 
 Bulk ``foreach_get``/``foreach_set`` everywhere.  Everything returned is in world space and
 Blender units unless a name says mm.  The names below are re-exported so that callers write
@@ -25,6 +26,8 @@ from .mesh import (  # noqa: F401
     triangles,
     world_rest_positions,
 )
+from .modifiers import COLLECTION as MODIFIER_COLLECTION  # noqa: F401
+from .modifiers import show_modifiers  # noqa: F401
 from .objects import (  # noqa: F401
     armature_of,
     arrow_empty,

@@ -6,14 +6,12 @@ modifiers in the chosen slicer's format. The model's shape is not changed."""
 from __future__ import annotations
 
 import bpy
-import numpy as np
 from bpy.props import EnumProperty, IntProperty, StringProperty
 
-from .. import core, service, state
+from .. import bridge, core, service, state
 from ..core import OsteonError
 from ._base import OsteonOperator
 
-COLLECTION = "osteon modifiers"
 SLICER_ITEMS = [("prusaslicer", "PrusaSlicer", "PrusaSlicer 2.4+ project (modifier volumes)"),
                 ("bambu", "Bambu Studio", "Bambu Studio project (modifier parts)"),
                 ("orca", "OrcaSlicer", "OrcaSlicer project (modifier parts)")]
@@ -49,37 +47,6 @@ def reinforce_active(context, max_perimeters: int = 10):
     return r, inp
 
 
-def show_modifiers(context, r, mm_per_unit: float) -> list:
-    """One wireframe mesh object per region in the collection "osteon modifiers" (replacing
-    the last ones), in scene units; named by bone and settings."""
-    from osteon.slicer3mf import settings_label
-
-    coll = bpy.data.collections.get(COLLECTION)
-    if coll is None:
-        coll = bpy.data.collections.new(COLLECTION)
-        context.scene.collection.children.link(coll)
-    for old in list(coll.objects):
-        mesh = old.data
-        bpy.data.objects.remove(old, do_unlink=True)
-        if mesh is not None and mesh.users == 0:
-            bpy.data.meshes.remove(mesh)
-    made = []
-    for reg in r.regions:
-        name = f"osteon {reg['bone']}: {settings_label(reg)}"
-        mesh = bpy.data.meshes.new(name)
-        v = np.asarray(reg["vertices"], dtype=float) / mm_per_unit
-        mesh.from_pydata(v.tolist(), [], np.asarray(reg["faces"]).tolist())
-        mesh.update()
-        obj = bpy.data.objects.new(name, mesh)
-        obj.display_type = "WIRE"
-        obj.show_in_front = True
-        obj["osteon_perimeters"] = int(reg["perimeters"])
-        obj["osteon_infill_percent"] = float(100.0 * reg["infill"])
-        coll.objects.link(obj)
-        made.append(obj)
-    return made
-
-
 class OSTEON_OT_export_slicer(OsteonOperator, bpy.types.Operator):
     """Reinforce instead of reshape: give each weak region more walls (then denser infill, up
     to solid), show the regions as wireframe modifier volumes, and write a 3MF project with the
@@ -104,7 +71,7 @@ class OSTEON_OT_export_slicer(OsteonOperator, bpy.types.Operator):
         except OsteonError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        show_modifiers(context, r, inp.mm_per_unit)
+        bridge.show_modifiers(context, r, inp.mm_per_unit)
         state.of(context.scene).slicer_export = {"object": inp.obj.name, "result": r}
         if not self.filepath:
             self.filepath = bpy.path.ensure_ext(inp.obj.name, ".3mf")
@@ -122,7 +89,7 @@ class OSTEON_OT_export_slicer(OsteonOperator, bpy.types.Operator):
             r = kept["result"]
         else:
             r, inp = reinforce_active(context, self.max_perimeters)
-            show_modifiers(context, r, inp.mm_per_unit)
+            bridge.show_modifiers(context, r, inp.mm_per_unit)
         try:
             r.write_3mf(path, slicer=self.slicer, name=obj.name)
         except (OSError, ValueError) as e:
