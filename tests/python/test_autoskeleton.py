@@ -9,9 +9,9 @@ a round end's centre), the T's junction sits at the bars' meeting point."""
 import numpy as np
 import osteon
 import pytest
-from osteon.autoskeleton import END_RATIO
+from osteon.autoskeleton import END_RATIO, LoosePiecesWarning, split_pieces
 from scipy import sparse
-from shapes import merge, revolve
+from shapes import capsule_along, merge, revolve
 
 pytest.importorskip("pygel3d")
 
@@ -197,11 +197,66 @@ def test_torus_loop_is_cut_into_a_tree():
     assert covered.max() < 20.0
 
 
-def test_two_pieces_raise_a_clear_error():
-    v, f = merge(capsule(), capsule())
-    v[len(v) // 2 :, 1] += 40.0
-    with pytest.raises(ValueError, match="2 separate pieces"):
-        osteon.auto_skeleton(v, f)
+def sphere(centre, r, n=16, m=8):
+    """Closed UV sphere of radius r (mm) about centre."""
+    t = np.linspace(0, np.pi, m + 1)
+    radii = r * np.sin(t)
+    radii[0] = radii[-1] = 0.05 * r
+    v, f = revolve(-r * np.cos(t), radii, n)
+    return v + np.asarray(centre, float), f
+
+
+def creature():
+    """A head (capsule along x, r = 10 mm, tip at x = 90) with two eyes poking out of its
+    surface, a third eye wholly inside it, a beak overlapping its tip, and a loose prop 30 mm
+    away: (parts (list of (v, f)), index of the loose part)."""
+    head = capsule_along((0, 0, 0), (80, 0, 0), 10.0, n=16, cap_stations=5, stations=10)
+    parts = [head, sphere((84, 4, 5), 3), sphere((84, -4, 5), 3), sphere((70, 0, 0), 2),
+             capsule_along((86, 0, 0), (100, 0, 0), 3.0, n=8, cap_stations=3, stations=4),
+             sphere((40, 40, 0), 5)]
+    return parts, 5
+
+
+def test_pieces_touching_the_body_join_it_and_loose_ones_are_reported():
+    parts, loose = creature()
+    v, f = merge(*parts)
+    counts = np.cumsum([0] + [len(p[0]) for p in parts])
+    p = split_pieces(v, f)
+    assert len(p.joined) == 4 and len(p.loose) == 1  # 2 eyes + inner eye + beak; the prop
+    assert set(p.labels[counts[loose] : counts[loose + 1]]) == set(p.loose)
+    assert set(p.labels[: counts[1]]) == {p.main}
+    with pytest.warns(LoosePiecesWarning, match="1 loose piece"):
+        sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    # the head is rigged as it would be alone: same bones (the small pieces get none)
+    sk_head, w_head = osteon.auto_skeleton(*parts[0])
+    assert np.array_equal(sk.heads, sk_head.heads) and np.array_equal(sk.tails, sk_head.tails)
+    assert (w[: counts[1]] != w_head).nnz == 0
+    # the loose prop is bound whole to one bone (the one nearest it)
+    prop = w[counts[loose] : counts[loose + 1]].toarray()
+    assert np.all(prop.max(1) == 1.0) and len(set(prop.argmax(1))) == 1
+    # an eye moves with the head next to it: its weights are the head's nearest vertex's
+    eye = slice(counts[1], counts[2])
+    nearest = np.linalg.norm(v[eye][:, None] - parts[0][0][None], axis=2).argmin(1)
+    assert (w[eye] != w_head[nearest]).nnz == 0
+
+
+def test_a_limb_modelled_apart_gets_bones_of_its_own():
+    """Two capsules crossing (an X of two separate closed pieces, both as big): the second is
+    joined to the first and gets its own bones, hung from the first's; each of the 4 ends has
+    a bone ending END_RATIO radii inside it."""
+    r = 6.0
+    a = capsule_along((-40, 0, 0), (40, 0, 0), r, n=12, cap_stations=4, stations=12)
+    b = capsule_along((0, -40, 0), (0, 40, 0), r, n=12, cap_stations=4, stations=12)
+    v, f = merge(a, b)
+    p = split_pieces(v, f)
+    assert len(p.joined) == 1 and not p.loose
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1  # one tree
+    ends = np.concatenate([sk.heads, sk.tails])
+    for tip in ([-46, 0, 0], [46, 0, 0], [0, -46, 0], [0, 46, 0]):
+        assert np.linalg.norm(ends - tip, axis=1).min() < (END_RATIO + 0.5) * r, tip
 
 
 @pytest.mark.parametrize(
