@@ -259,6 +259,47 @@ def test_a_limb_modelled_apart_gets_bones_of_its_own():
         assert np.linalg.norm(ends - tip, axis=1).min() < (END_RATIO + 0.5) * r, tip
 
 
+def segment_distance(p, a, b):
+    """Distance (mm) from points p (..., 3) to the segment a-b."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    d = b - a
+    t = np.clip(((p - a) @ d) / (d @ d), 0.0, 1.0)
+    return np.linalg.norm(p - (a + t[..., None] * d), axis=-1)
+
+
+def hand(r=4.0, h=1.5):
+    """A hand as one closed mesh: a palm (ellipsoid 80 x 90 x 28 mm) and five capsule fingers
+    of radius r (4 mm: 0.05 of the hand's 157 mm length, 0.1 of the palm's width), the thumb
+    at 40 degrees; voxelised at h mm. Returns (v, f, finger axes [(base, end)], r)."""
+    fingers = [((-27, 30, 0), (-30, 85, 0)), ((-9, 35, 0), (-9, 100, 0)),
+               ((9, 35, 0), (9, 105, 0)), ((27, 30, 0), (30, 92, 0)),
+               ((-30, -15, 0), (-75, 25, 0))]
+    xs, ys, zs = (np.arange(lo, hi, h) + h / 2 for lo, hi in ((-90, 50), (-55, 120), (-20, 20)))
+    X, Y, Z = np.meshgrid(xs, ys, zs, indexing="ij")
+    occ = (X / 40) ** 2 + (Y / 45) ** 2 + (Z / 14) ** 2 <= 1
+    for a, b in fingers:
+        occ |= segment_distance(np.stack([X, Y, Z], -1), a, b) <= r
+    v, f = voxel_mesh(occ, h, (xs[0] - h / 2, ys[0] - h / 2, zs[0] - h / 2))
+    return v, f, fingers, r
+
+
+def test_every_finger_of_a_hand_gets_a_bone_reaching_its_tip():
+    """Fingers 8 mm wide and 60-70 mm long are limbs: a bone runs along each (within a radius
+    of its axis half-way out) and ends within 1.5 radii of its tip (END_RATIO = 1.25 radii
+    inside a round end)."""
+    v, f, fingers, r = hand()
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    ends = np.concatenate([sk.heads, sk.tails])
+    for a, b in fingers:
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        tip = b + r * (b - a) / np.linalg.norm(b - a)
+        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * r, (tip, ends)
+        middle = 0.5 * (a + b)
+        along = min(segment_distance(middle, h, t) for h, t in zip(sk.heads, sk.tails))
+        assert along < r, (middle, along)
+
+
 @pytest.mark.parametrize(
     "vertices,faces,match",
     [

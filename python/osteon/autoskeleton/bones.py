@@ -63,11 +63,14 @@ def branch_polyline(body: Body, tree: Tree, ch: list[list[int]], start: int, fir
     bpath = path
     if not ch[end]:  # leaf: reach the limb's end, short of its end cap
         stop, k = limb_end(body, tree, pts, end)
+        if len(stop) > 1:  # a joint at the limb's base: the leaf's node goes to the last bone
+            bpath = [*path[:k], *[end] * len(stop)]
         pts = np.vstack([pts[:k], stop])
     if start == tree.root and len(ch[start]) == 1:  # the root is an end: reach it
         d = pts[0] - pts[min(2, len(pts) - 1)]
         if np.linalg.norm(d) > 0:
             stop, k = limb_end(body, tree, pts[::-1], tree.root)
+            stop = stop[-1:]  # (no joint at the base here: the root end is one bone)
             bpath = [path[0], *path[len(pts) - k :]]  # bpath[0] is never assigned
             pts = np.vstack([stop, pts[len(pts) - k :]])
     return path, pts, bpath

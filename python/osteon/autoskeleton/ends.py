@@ -53,6 +53,26 @@ def _end_axis(line: np.ndarray, rad: float) -> tuple[np.ndarray, np.ndarray, np.
     return stretch, c, d
 
 
+def _surface_axis(ends: np.ndarray, start: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The principal axis of a limb's own surface vertices ``ends`` (M,3) mm, for a limb that
+    has a single skeleton node (a finger on a coarse simplified mesh: the line from the
+    junction to that node misses the limb's axis): (its start (1,3) on the axis level with the
+    limb's vertex nearest ``start``, centre (3,), unit direction (3,) pointing away from
+    ``start``); None unless the limb is longer than it is wide."""
+    if len(ends) < 6:
+        return None
+    c = ends.mean(0)
+    d = np.linalg.svd(ends - c, full_matrices=False)[2][0]
+    if (c - start) @ d < 0:
+        d = -d
+    t = (ends - c) @ d
+    off = np.linalg.norm(ends - c - t[:, None] * d, axis=1)
+    if np.ptp(t) <= 2.0 * float(np.median(off)):  # not longer than wide: a bump or a blob
+        return None
+    return (c + d * t.min())[None], c, d
+
+
 def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int) -> tuple[np.ndarray, int]:
     """Where a limb's end bone stops (mm).  ``line`` (K,3): the branch's polyline from its
     start out to the limb's last node ``leaf``.
@@ -65,10 +85,12 @@ def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int) -> tuple[np.nd
     the surface): on a capsule just past the cap's centre (where its medial axis ends), on a
     pointed spike at its point, but never where the section is a sliver (under a tenth of the
     limb's median area).  The axis is the line fitted to the branch's last stretch (3 branch
-    radii), so a last node in a corner of a blunt end does not bend it.
+    radii), so a last node in a corner of a blunt end does not bend it; when that stretch
+    reaches back to the branch's start (a finger with one skeleton node), the axis of the
+    limb's own surface (:func:`_surface_axis`), and the bone gets a joint at the limb's base.
 
-    Returns (the end point (3,), k): the bone's polyline is ``line[:k]`` then the end point
-    (1 <= k <= K)."""
+    Returns (points (P,3), k): the bone's polyline is ``line[:k]`` then ``points``
+    (1 <= k <= K; P = 1, the end point, or 2, the limb's base and its end point)."""
     n = len(line)
     # The limb's own radius: the median over its nodes outside the body's ball at the
     # branch's start (those inside it measure the body, not the limb).
@@ -77,14 +99,19 @@ def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int) -> tuple[np.nd
     rad = max(float(np.median(r_line[own] if own.any() else r_line)), 1e-3 * body.size)
     axis = _end_axis(line, rad)
     if axis is None:
-        return line[-1], max(n - 1, 1)
+        return line[-1][None], max(n - 1, 1)
     stretch, c, d = axis
     ends = body.v[body.is_used & (tree.owner[body.near_i[:, 0]] == leaf)]  # the limb's end
+    base = np.zeros((0, 3))
+    limb = _surface_axis(ends, line[0]) if len(stretch) == n else None
+    if limb is not None:
+        base, c, d = limb
+        stretch = base
     far = float((ends @ d).max()) if len(ends) else float(line[-1] @ d)
     a = c + d * ((stretch[0] - c) @ d)  # the axis point level with the stretch's start
     length = far - a @ d
     if length <= 0:
-        return line[-1], max(n - 1, 1)
+        return line[-1][None], max(n - 1, 1)
     t = np.linspace(length, 0.0, 400)  # from the end inwards
     pts = a + t[:, None] * d
     radius = body.inner_radius(pts)
@@ -92,5 +119,10 @@ def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int) -> tuple[np.nd
     # engine's sliver rule), i.e. radius >= sqrt(0.1) x the limb's median radius.
     ok = np.flatnonzero((radius >= math.sqrt(0.1) * rad) & (length - t >= END_RATIO * radius))
     stop = pts[ok[0]] if len(ok) else a
+    if len(base):  # a joint at the limb's base only if the straight bone would leave the mesh
+        s = np.linspace(0.0, 1.0, 50)[:, None]
+        if (body.inner_radius(line[0] + s * (stop - line[0])) > 0).all():
+            return stop[None], 1
+        return np.vstack([base, stop]), 1
     k = n - len(stretch) + 1  # the bone keeps the nodes before the last stretch
-    return stop, max(k, 1)
+    return stop[None], max(k, 1)
