@@ -42,19 +42,19 @@ class Pieces:
 
 
 def _piece_measures(v: np.ndarray, f: np.ndarray, labels: np.ndarray, n: int):
-    """Per piece: enclosed volume (mm³, 0 if open), size (mm), closed (every edge in 2 faces)."""
+    """Per piece: enclosed volume (mm³, 0 if open), bounding box low and high corners (n,3) mm,
+    closed (every edge in 2 faces)."""
     fl = labels[f[:, 0]]
     signed = np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])) / 6.0
     volume = np.abs(np.bincount(fl, signed, minlength=n))
     edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
     uniq, counts = np.unique(edges, axis=0, return_counts=True)
-    open_count = np.bincount(labels[uniq[counts != 2, 0]], minlength=n)
-    closed = open_count == 0
-    size = np.zeros(n)
-    for k in range(n):
-        pts = v[labels == k]
-        size[k] = float(np.ptp(pts, axis=0).max()) if len(pts) else 0.0
-    return np.where(closed, volume, 0.0), size, closed
+    closed = np.bincount(labels[uniq[counts != 2, 0]], minlength=n) == 0
+    lo, hi = np.full((n, 3), np.inf), np.full((n, 3), -np.inf)
+    inside = labels >= 0
+    np.minimum.at(lo, labels[inside], v[inside])
+    np.maximum.at(hi, labels[inside], v[inside])
+    return np.where(closed, volume, 0.0), lo, hi, closed
 
 
 def _distance_field(v: np.ndarray, f: np.ndarray):
@@ -77,11 +77,6 @@ def _touch(v, f, labels, closed, size, a: int, b: int, fields: dict) -> bool:
     return False
 
 
-def _boxes_meet(v, labels, a: int, b: int, tol: float) -> bool:
-    pa, pb = v[labels == a], v[labels == b]
-    return bool(np.all(pa.min(0) - tol <= pb.max(0)) and np.all(pb.min(0) - tol <= pa.max(0)))
-
-
 def split_pieces(v: np.ndarray, f: np.ndarray) -> Pieces:
     """The main body, the pieces joined to it and the loose pieces of the welded mesh
     ``v`` (V,3) mm, ``f`` (F,3)."""
@@ -92,16 +87,19 @@ def split_pieces(v: np.ndarray, f: np.ndarray) -> Pieces:
     _, dense = np.unique(labels[in_face], return_inverse=True)
     lab = np.full(len(v), -1, np.int64)
     lab[in_face] = dense.ravel()
-    volume, size, closed = _piece_measures(v, f, lab, n)
+    volume, lo, hi, closed = _piece_measures(v, f, lab, n)
+    size = (hi - lo).max(1)
     main = int(np.argmax(np.where(volume > 0, volume, -1.0 / (1.0 + size))))
     held, todo, fields = [main], [main], {}
-    rest = [k for k in range(n) if k != main]
-    while todo and rest:
+    rest = np.array([k for k in range(n) if k != main], np.int64)
+    while todo and len(rest):
         a = todo.pop()
-        for b in list(rest):
-            tol = TOUCH * min(size[a], size[b])
-            if _boxes_meet(v, lab, a, b, tol) and _touch(v, f, lab, closed, size, a, b, fields):
-                rest.remove(b)
-                held.append(b)
-                todo.append(b)
-    return Pieces(lab, main, sorted(held[1:]), sorted(rest), volume, size, closed)
+        tol = TOUCH * np.minimum(size[a], size[rest])[:, None]
+        boxes = np.all((lo[a] - tol <= hi[rest]) & (lo[rest] - tol <= hi[a]), axis=1)
+        near = [int(b) for b in rest[boxes]
+                if _touch(v, f, lab, closed, size, a, int(b), fields)]
+        rest = rest[~np.isin(rest, near)]
+        held += near
+        todo += near
+    return Pieces(lab, main, sorted(held[1:]), sorted(int(k) for k in rest), volume, size,
+                  closed)
