@@ -259,6 +259,25 @@ def test_a_limb_modelled_apart_gets_bones_of_its_own():
         assert np.linalg.norm(ends - tip, axis=1).min() < (END_RATIO + 0.5) * r, tip
 
 
+@pytest.mark.parametrize("name,joined,loose", [("8184", 2, 0), ("8333", 1, 0)])
+def test_rignet_models_in_several_pieces_are_rigged_whole(name, joined, loose):
+    """RigNet 8184 (3 pieces) and 8333 (2 pieces; tests/data/RigNet): pieces counted as the
+    checked mesh has them (the smaller pieces touch the body), one tree, every vertex weighted;
+    before, auto_skeleton refused them ("mesh is in 3 separate pieces")."""
+    from osteon.autoskeleton.mesh import check_mesh
+    from osteon.io import load_model
+    from rigged_models import DATA
+
+    obj = DATA / "RigNet" / f"{name}_ori.obj"
+    m = load_model(obj, skeleton=obj.with_name(f"{name}_ori_rig.txt"), height_mm=120)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    p = split_pieces(*check_mesh(v, f)[:2])
+    assert (len(p.joined), len(p.loose)) == (joined, loose)
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1 and sk.num_bones >= 5
+
+
 def segment_distance(p, a, b):
     """Distance (mm) from points p (..., 3) to the segment a-b."""
     a, b = np.asarray(a, float), np.asarray(b, float)

@@ -45,12 +45,11 @@ def smoothed_binding(body: Body, sbone: np.ndarray, nb: int, smooth: int) -> np.
 
 
 def top4(full: np.ndarray) -> np.ndarray:
-    """Keep each row's 4 largest weights, drop those under 1 % (or under half the row's
+    """Keep each row's 4 largest weights (ties broken by column), drop those under 1 % (or under half the row's
     largest), renormalise; (V,B) -> (V,B)."""
     nb = full.shape[1]
-    if nb > 4:
-        cut = np.partition(full, nb - 4, axis=1)[:, nb - 4 : nb - 3]
-        full[full < cut] = 0.0
+    if nb > 4:  # (argpartition: exactly 4 stay when weights tie at the 4th largest)
+        np.put_along_axis(full, np.argpartition(full, nb - 4, axis=1)[:, : nb - 4], 0.0, axis=1)
     full[full < np.minimum(0.01, 0.5 * full.max(1, keepdims=True))] = 0.0
     full /= full.sum(1, keepdims=True)
     return full
