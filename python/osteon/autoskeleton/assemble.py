@@ -83,7 +83,7 @@ def _warn_loose(pieces: Pieces, sk: Skeleton, v: np.ndarray) -> None:
         f"{len(pieces.loose)} loose piece{'s' if len(sizes) > 1 else ''} of the mesh neither "
         f"touch nor overlap the body ({listed}{', …' if len(sizes) > 6 else ''}): bound whole "
         "to the nearest bone; nothing holds them when printed (the analysis reports them as "
-        "loose pieces)"), stacklevel=3)
+        "loose pieces)"), stacklevel=4)
 
 
 def rig_pieces(v: np.ndarray, f: np.ndarray, pieces: Pieces, root: str, rig: RigOne
