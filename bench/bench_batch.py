@@ -90,7 +90,7 @@ def _pose(V, joints, E, parents, W, rng):
     return Vp, J
 
 
-def make_library(root: Path, n_models: int, seed: int = 0) -> dict:
+def make_library(root: Path, n_models: int, seed: int = 0, unrigged: bool = True) -> dict:
     """Write about ``n_models`` models into ``root``; returns counts per kind."""
     from osteon.io import read_dmat, read_mesh, read_tgf, write_dmat, write_mesh, write_tgf
 
@@ -114,7 +114,7 @@ def make_library(root: Path, n_models: int, seed: int = 0) -> dict:
     n_var = int(0.55 * n_models)
     n_sub = max(1, int(0.08 * n_models))
     n_rig = min(int(0.15 * n_models), 3 * len(rignet)) if rignet else 0
-    n_unr = int(0.10 * n_models)
+    n_unr = int(0.10 * n_models) if unrigged else 0  # auto_skeleton: seconds per model
     n_bad = max(2, n_models - n_var - n_sub - n_rig - n_unr - 2)
     plan += ["var"] * n_var + ["sub"] * n_sub + ["rig"] * n_rig + ["unr"] * n_unr
     plan += ["gltf"] * (2 if fox.exists() else 0) + ["bad"] * n_bad
@@ -207,13 +207,15 @@ def main(argv=None):
     ap.add_argument("--png-sample", type=int, default=12,
                     help="models run with pictures on 1 process to time the picture (0: skip)")
     ap.add_argument("--keep", metavar="DIR", help="make the library here and keep it")
+    ap.add_argument("--no-unrigged", action="store_true",
+                    help="no unrigged models (their auto_skeleton, seconds each, is not reading)")
     args = ap.parse_args(argv)
     import osteon
 
     tmp = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="osteon-batch-"))
     lib = tmp / "lib"
     t = time.perf_counter()
-    kinds = make_library(lib, args.models)
+    kinds = make_library(lib, args.models, unrigged=not args.no_unrigged)
     gen = time.perf_counter() - t
     n_files = sum(kinds.values())
     print(f"osteon {osteon.__version__}; {os.cpu_count()} cores; library of {n_files} models "

@@ -36,12 +36,12 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path[:0] = [os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")]
+sys.path[:0] = [os.path.join(ROOT, "blender_addon")]
 
-import make_sample_rig
 import osteon
 import osteon_blender
 from osteon_blender import bridge, core
+from osteon_blender import sample as make_sample_rig
 from osteon_blender import service as common
 
 

@@ -33,7 +33,6 @@ if os.environ.get("OSTEON_SITE"):
     site.addsitedir(os.environ["OSTEON_SITE"])
     sys.path.insert(0, sys.path.pop())  # ahead of Blender's own site-packages
 sys.path.insert(0, str(ROOT / "blender_addon"))
-sys.path.insert(0, str(ROOT / "scripts"))
 
 import bpy
 from blender_window import view3d
@@ -61,9 +60,9 @@ def _invoke(**kw):
 
 
 def main():
-    import make_sample_rig
     import osteon_blender
     from osteon_blender import bridge
+    from osteon_blender import sample as make_sample_rig
     from osteon_blender.ops._base import OsteonJobOperator
 
     osteon_blender.register()

@@ -5,7 +5,7 @@ evaluated vertex coordinates in the same process.  Target (docs/method.md, Targe
     blender -b --factory-startup --python bench/bench_live.py -- [--repeat 15]
     .venv-live/bin/python bench/bench_live.py -- [--repeat 15]      # the bpy 4.5 wheel
 
-The rig is the bundled sample figurine (scripts/make_sample_rig.py ``--levels 3 --cuts 2``):
+The rig is the bundled sample figurine (blender_addon/osteon_blender/sample.py ``--levels 3 --cuts 2``):
 ~107k vertices, 13 bones.  Each round changes a pose-bone scale (Blender evaluates the armature outside the
 timed region), then times ``live.update_now()``; the overlay outlines are timed apart.
 ``--extra-shells 2`` adds an unweighted 'eye' inside the head and a 'prop' beside it (a
@@ -25,13 +25,14 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
+for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts"),
+          os.path.join(ROOT, "tests", "blender")):
     if p not in sys.path:
         sys.path.insert(0, p)
 
-import make_sample_rig
 import osteon_blender
 from osteon_blender import live
+from osteon_blender import sample as make_sample_rig
 
 
 def add_shells(obj, count: int) -> None:

@@ -1,7 +1,7 @@
 """This build of osteon against another build, in alternating child processes.
 
     python bench/compare_builds.py OTHER_PYTHONPATH [--rounds 7] [--model cow --subdivisions 1]
-        [--cpu] [--no-junctions] [--instructions]
+        [--cpu] [--no-junctions] [--instructions] [--identity [--keep DIR]]
 
 OTHER_PYTHONPATH is a directory holding another build's ``osteon`` package (its
 ``python/osteon`` directory with its compiled ``_core`` module inside). Two pybind11 builds
@@ -16,6 +16,11 @@ analysis (its ``Analyzer`` construction and run, counted by valgrind's callgrind
 ``valgrind``, e.g. ``apt-get install valgrind``). Exact and repeatable to the instruction,
 whatever the machine's load: the figure to compare on a noisy machine (the VM has no hardware
 counters for ``perf stat``). One analysis per h in its own child process per build.
+
+``--identity``: instead of times, every number of the analyses of bench/identity_dump.py (all
+real models of tests/data, outlines, junctions on and off, live runs, loose pieces, a
+correction), one child process per build, compared byte for byte; exits 1 on any difference
+(``--keep DIR`` keeps both dumps as .npz).
 """
 
 from __future__ import annotations
@@ -101,6 +106,51 @@ def count_instructions(pythonpath: str | None, model: str, sub: int, h: float,
     return total, int(faces), file
 
 
+IDENTITY_CHILD = """
+import os, sys
+if os.environ.get("OSTEON_OTHER_BUILD"):
+    sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
+    sys.path.insert(0, os.environ["OSTEON_OTHER_BUILD"])
+sys.path.insert(0, {here!r})
+import numpy as np, osteon, identity_dump
+np.savez({out!r}, **identity_dump.dump())
+print(osteon.__file__)
+"""
+
+
+def identity(other: str, keep: str | None) -> int:
+    """Both builds' identity dumps compared byte for byte: 0 when every array is equal."""
+    import tempfile
+
+    import numpy as np
+    from identity_dump import compare
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(keep or tmp)
+        folder.mkdir(parents=True, exist_ok=True)
+        dumps = {}
+        for name, path in (("this", None), ("other", other)):
+            env = dict(os.environ)
+            if path:
+                env["OSTEON_OTHER_BUILD"] = path
+            out = str(folder / f"identity_{name}.npz")
+            res = subprocess.run([sys.executable, "-c", IDENTITY_CHILD.format(here=str(HERE),
+                                                                           out=out)],
+                                 env=env, capture_output=True, text=True, check=True)
+            file = res.stdout.strip().splitlines()[-1]
+            if path and not file.startswith(path):
+                raise SystemExit(f"the other build was not imported: {file}")
+            with np.load(out) as data:
+                dumps[name] = {k: data[k] for k in data.files}
+    bad = compare(dumps["this"], dumps["other"])
+    values = sum(a.size for a in dumps["this"].values())
+    print(f"{len(dumps['this'])} arrays ({values} numbers) in this build, "
+          f"{len(dumps['other'])} in the other; {len(bad)} differ")
+    for k in bad[:50]:
+        print("  differs:", k)
+    return 1 if bad else 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("other", help="PYTHONPATH entry holding the other build's osteon package")
@@ -113,7 +163,12 @@ def main(argv=None) -> int:
                     help="this build without the junction stage (analyze(junctions=False))")
     ap.add_argument("--instructions", action="store_true",
                     help="count the engine's instructions (callgrind) instead of timing")
+    ap.add_argument("--identity", action="store_true",
+                    help="compare every number of bench/identity_dump.py byte for byte")
+    ap.add_argument("--keep", help="with --identity: keep both dumps (.npz) in this folder")
     args = ap.parse_args(argv)
+    if args.identity:
+        return identity(args.other, args.keep)
     if args.instructions:
         print("| model | faces | h (mm) | this build (M instructions) | other build "
               "(M instructions) | ratio |")

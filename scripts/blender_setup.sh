@@ -35,6 +35,10 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 # 2. engine wheel + add-on zips ----------------------------------------------------------
+# A compiler cache, where the machine has one, makes the wheels' rebuilds fast.
+if command -v ccache >/dev/null 2>&1; then
+  export CMAKE_ARGS="${CMAKE_ARGS:-} -DCMAKE_CXX_COMPILER_LAUNCHER=ccache"
+fi
 PY="${OSTEON_PYTHON:-$ROOT/.venv/bin/python}"
 if [ ! -x "$PY" ]; then
   log "no $PY: run scripts/setup.sh first (or set OSTEON_PYTHON)"; exit 1

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README demo: on a fresh Debian machine, build osteon, build the bundled sample rigged
 # figurine in Blender, analyse and correct it headless. Leaves in out/:
-#   sample_rig.blend            the sample model (made from primitives by make_sample_rig.py)
+#   sample_rig.blend            the sample model (made from primitives by osteon_blender/sample.py)
 #   sample_stress.png           stress map of the model as modelled (red = at/over allowable)
 #   sample_report.json          report of the correction run (before/after, bone scales)
 #   sample_corrected.png        stress map after the correction
@@ -16,7 +16,7 @@ if [ "${OSTEON_SKIP_SETUP:-0}" != 1 ]; then
 fi
 mkdir -p out
 BATCH=blender_addon/osteon_blender/batch.py
-blender -b --factory-startup --python-exit-code 1 --python scripts/make_sample_rig.py -- \
+blender -b --factory-startup --python-exit-code 1 --python blender_addon/osteon_blender/sample.py -- \
   --out out/sample_rig.blend
 blender -b out/sample_rig.blend --python-exit-code 1 --python "$BATCH" -- \
   --report out/sample_analysis.json --png out/sample_stress.png

@@ -1,7 +1,7 @@
 """Screenshot of the live section overlay in a real Blender window (needs a display; Xvfb
 works):
 
-    blender -b --factory-startup --python scripts/make_sample_rig.py -- --out out/sample_rig.blend
+    blender -b --factory-startup --python blender_addon/osteon_blender/sample.py -- --out out/sample_rig.blend
     xvfb-run -a -s "-screen 0 1600x1000x24" blender --factory-startup out/sample_rig.blend \
         --python scripts/overlay_screenshot.py -- --out docs/img/overlay.png
 
@@ -24,14 +24,15 @@ import sys
 import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
+for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts"),
+          os.path.join(ROOT, "tests", "blender")):
     if p not in sys.path:
         sys.path.insert(0, p)
 
-import make_sample_rig
 import osteon_blender
 from blender_window import view3d
 from osteon_blender import live, overlay
+from osteon_blender import sample as make_sample_rig
 
 argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
 ap = argparse.ArgumentParser()

@@ -7,20 +7,26 @@ that every text it draws fits at the default sidebar width (issue 20).
 (``scripts/ui_screenshots.sh`` runs exactly that.)  Factory settings, the sidebar opened at its
 default width on the "Osteon" tab; then
 
-1. the sample figurine (scripts/make_sample_rig.py): Analyze, screenshot (``sample``);
+1. the sample figurine (blender_addon/osteon_blender/sample.py): Analyze, screenshot (``sample``);
 2. a click on the first weak bone (osteon.select_bone, as the list's row does), screenshot
    (``sample_bone``: the bone and its weakest section outlined in yellow, framed);
    "Next weak bone" must move to the next weak row;
 3. Correct, screenshot (``sample_corrected``: the scale column); Reset must put back the
    viewport's Solid colour the user had (Analyze switched it to the attribute);
-4. the RigNet dog FBX from tests/data (an imported rig: joint names, cm units): Analyze,
-   screenshot (``dog``), a click on its first weak bone, screenshot (``dog_bone``).
+4. the RigNet dog FBX from tests/data (an imported rig: joint names, cm units, 1 cm tall in
+   scene units): Analyze, screenshot (``dog``), a click on its first weak bone in a
+   perspective view, screenshot (``dog_bone``).
+
+After each click the pixels where the section projects must not be the background and must
+hold its yellow outline (``check_section_shown``); with the sample's result and with Live on,
+the summary's worst line, the worst row and the Live box must show the same numbers
+(``check_numbers_agree``).
 
 Each step saves the window (``<step>_window.png``) and the sidebar cut out of it
 (``<step>_panel.png``) to the output folder, and checks, from the UI itself:
 
 * every label, property and button text the panels draw fits its button at the sidebar's
-  real width and UI scale (``scripts/ui_fit.py``: ``blf.dimensions`` against the width
+  real width and UI scale (``tests/blender/ui_fit.py``: ``blf.dimensions`` against the width
   Blender's layout gives it);
 * the result summary's first words are the verdict ("N bones over the limit", "all within
   the limit", "not analysed: ...").
@@ -39,14 +45,15 @@ import traceback
 import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
+for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts"),
+          os.path.join(ROOT, "tests", "blender")):
     if p not in sys.path:
         sys.path.insert(0, p)
 
-import make_sample_rig
 import osteon_blender
 import ui_fit
 from blender_window import view3d
+from osteon_blender import sample as make_sample_rig
 
 argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
 ap = argparse.ArgumentParser()
@@ -164,6 +171,120 @@ def crop(src: str, dst: str, x: int, y: int, w: int, h: int) -> None:
     bpy.data.images.remove(img)
 
 
+def _pixels(path: str):
+    """(H, W, 4) float pixels of a PNG (bottom row first, as Blender stores images)."""
+    import numpy as np
+
+    img = bpy.data.images.load(path)
+    W, H = img.size
+    px = np.empty(W * H * 4, dtype=np.float32)
+    img.pixels.foreach_get(px)
+    bpy.data.images.remove(img)
+    return px.reshape(H, W, 4)
+
+
+def check_section_shown(step: str) -> None:
+    """A row click must show the section (issue 35): in the screenshot just taken, the disc
+    where the highlighted section projects (its centre and outline radius) is mostly not the
+    viewport's background, and the yellow outline is drawn there -- read from the pixels, not
+    from the view distance (a 1 cm model once left a blank view, the section behind the near
+    clip)."""
+    import numpy as np
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+    from mathutils import Vector
+    from osteon_blender import overlay, state
+
+    _win, area, region, _ui = view3d()
+    st = state.get(bpy.context.scene)
+    hl = st.highlight if st is not None else None
+    if not hl:
+        fail(f"{step}: no section highlighted after the click")
+        return
+    r3d = area.spaces.active.region_3d
+    centre = Vector(tuple(float(x) for x in hl["centre"]))
+    right = r3d.view_rotation @ Vector((1.0, 0.0, 0.0))
+    c2 = location_3d_to_region_2d(region, r3d, centre)
+    e2 = location_3d_to_region_2d(region, r3d, centre + right * float(hl["radius"]))
+    if c2 is None or e2 is None:
+        fail(f"{step}: the section's centre is behind the view")
+        return
+    rad = max(6.0, (e2 - c2).length)
+    px = _pixels(os.path.join(OUT, f"{step}_window.png"))
+    h, w = px.shape[:2]
+    ys, xs = np.mgrid[0:h, 0:w]
+    cx, cy = region.x + c2.x, region.y + c2.y
+    disc = (xs - cx) ** 2 + (ys - cy) ** 2 <= rad ** 2
+    disc &= (xs >= region.x) & (xs < region.x + region.width)
+    disc &= (ys >= region.y) & (ys < region.y + region.height)
+    theme = bpy.context.preferences.themes[0].view_3d.space.gradients
+    bg = np.array(tuple(theme.high_gradient)[:3], dtype=np.float32)
+    rgb = px[..., :3][disc]
+    if len(rgb) == 0:
+        fail(f"{step}: the section projects outside the viewport ({cx:.0f}, {cy:.0f})")
+        return
+    not_bg = float(np.mean(np.abs(rgb - bg).max(axis=1) > 0.04))
+    yellow = np.array(overlay.HIGHLIGHT_RGBA[:3], dtype=np.float32)
+    n_yellow = int(np.count_nonzero(np.abs(rgb - yellow).max(axis=1) < 0.15))
+    REPORT.setdefault("sections_shown", []).append({
+        "step": step, "centre_px": [round(cx), round(cy)], "radius_px": round(rad, 1),
+        "not_background": round(not_bg, 3), "yellow_px": n_yellow,
+        "view_distance": r3d.view_distance, "clip_start": area.spaces.active.clip_start,
+        "clip_end": area.spaces.active.clip_end})
+    print(f"osteon ui screenshots: {step}: section disc {rad:.0f} px at ({cx:.0f}, {cy:.0f}): "
+          f"{100 * not_bg:.0f}% not background, {n_yellow} yellow px, view distance "
+          f"{r3d.view_distance:.4g}, clip {area.spaces.active.clip_start:.3g}..."
+          f"{area.spaces.active.clip_end:.3g}")
+    if not_bg < 0.5:
+        fail(f"{step}: the section's place in the view is background ({100 * not_bg:.0f}% "
+             "not background): the click does not show it")
+    if n_yellow < 3:
+        fail(f"{step}: the yellow outline of the section is not in the view")
+
+
+_NUM = r"\d+\.\d+"
+
+
+def check_numbers_agree(step: str) -> None:
+    """The summary, the worst row and the Live box show the same verdict (issue 35): read the
+    texts the panels draw (ui_fit's recorder) and compare their numbers."""
+    import re
+
+    _w, _a, _r, ui = view3d()
+    _misfits, items = ui_fit.check_panels(osteon_blender._classes, bpy.context, ui.width)
+    texts = {}
+    for item, _need, _have in items:
+        texts.setdefault(item.where.split(" ")[0], []).append(item.text)
+    summ = " ".join(t for t in texts.get("OSTEON_PT_main", []) if t)
+    live = " ".join(t for t in texts.get("OSTEON_PT_live", []) if t)
+    m = re.search(rf"Worst σ/\[σ\] ({_NUM}): (.+?), ({_NUM}) / ({_NUM}) MPa", summ)
+    if not m:
+        fail(f"{step}: no worst line in the summary: {summ!r}")
+        return
+    ratio, bone, stress, allow = float(m.group(1)), m.group(2), float(m.group(3)), float(
+        m.group(4))
+    s = bpy.context.scene.osteon
+    rows = [r for r in s.weak_bones if r.status != "not analysed"]
+    row = max(rows, key=lambda r: r.ratio) if rows else None
+    got = {"summary": [ratio, bone, stress, allow]}
+    if abs(ratio - stress / allow) > 0.006:
+        fail(f"{step}: the summary's numbers do not add up: {stress} / {allow} != {ratio}")
+    if row is None or row.name != bone or f"{row.ratio:.2f}" != f"{ratio:.2f}":
+        fail(f"{step}: the worst row ({row and row.name} {row and row.ratio:.2f}) is not the "
+             f"summary's ({bone} {ratio:.2f})")
+    if "sections over" in live:           # Live has a result: it must say the same
+        lm = re.search(rf"Worst σ/\[σ\] ({_NUM}): (.+?), ({_NUM}) / ({_NUM}) MPa", live)
+        if not lm:
+            fail(f"{step}: no worst line in the Live box: {live!r}")
+        else:
+            got["live"] = [float(lm.group(1)), lm.group(2), float(lm.group(3)),
+                           float(lm.group(4))]
+            if got["live"] != got["summary"]:
+                fail(f"{step}: Live says {got['live']}, the summary {got['summary']}")
+    REPORT.setdefault("agreement", []).append({"step": step, **got})
+    print(f"osteon ui screenshots: {step}: summary {got['summary']}, live {got.get('live')}, "
+          f"worst row {row and row.name} {row and round(row.ratio, 2)}")
+
+
 def load_dog():
     import addon_utils
 
@@ -238,6 +359,34 @@ def s_sample():
 def s_sample_shot():
     check("sample")
     screenshot("sample")
+    check_numbers_agree("sample")
+
+
+@step
+def s_sample_live():
+    win, area, region, _ui = view3d()
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        bpy.context.scene.osteon_live.enabled = True
+
+
+@step
+def s_sample_live_shot():
+    from osteon_blender import live
+
+    if not live.is_live(bpy.context.scene):
+        fail("Live did not start on the sample")
+    check("sample_live")
+    screenshot("sample_live")
+    check_numbers_agree("sample_live")
+    if not doubt_summary()[0].endswith("(Live)"):
+        fail(f"sample_live: the summary does not show Live's result: {doubt_summary()[0]!r}")
+    bpy.context.scene.osteon_live.enabled = False
+
+
+def doubt_summary() -> list[str]:
+    from osteon_blender.ui import panel
+
+    return panel.summary(bpy.context.scene.osteon)
 
 
 @step
@@ -249,6 +398,7 @@ def s_click():
 def s_click_shot():
     check("sample_bone")
     screenshot("sample_bone")
+    check_section_shown("sample_bone")
     s = bpy.context.scene.osteon
     weak = [i for i, b in enumerate(s.weak_bones) if b.weak]
     before = s.weak_bones_index
@@ -286,6 +436,9 @@ def s_dog():
 def s_dog_shot():
     check("dog")
     screenshot("dog")
+    # the user's view is perspective (Front made it orthographic): there a 1 cm model's
+    # section once fell inside the near clip (0.01) and the view went blank
+    view3d()[1].spaces.active.region_3d.view_perspective = "PERSP"
     select_first_weak()
 
 
@@ -293,6 +446,7 @@ def s_dog_shot():
 def s_dog_bone_shot():
     check("dog_bone")
     screenshot("dog_bone")
+    check_section_shown("dog_bone")
 
 
 state = {"i": 0}

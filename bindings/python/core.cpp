@@ -15,6 +15,7 @@
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
 #include "osteon/progress.hpp"
+#include "osteon/readers.hpp"
 #include "osteon/section.hpp"
 #include "osteon/skinning.hpp"
 #include "osteon/slicer.hpp"
@@ -237,6 +238,19 @@ class PyAnalyzer {
 
 }  // namespace
 
+// The bytes of a Python bytes object, without a copy (valid while the object lives).
+static std::string_view bytes_view(const py::bytes& b) {
+  char* data = nullptr;
+  Py_ssize_t size = 0;
+  PyBytes_AsStringAndSize(b.ptr(), &data, &size);
+  return {data, static_cast<std::size_t>(size)};
+}
+
+template <class T>
+py::array_t<T> to_array(const std::vector<T>& v) {
+  return py::array_t<T>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
 PYBIND11_MODULE(_core, m) {
   m.doc() = "osteon engine (C++): skeleton-sectional structural analysis; mm, N, MPa";
   // A cancelled run (Progress.cancel()) raises osteon._core.Cancelled, not a ValueError.
@@ -282,6 +296,34 @@ PYBIND11_MODULE(_core, m) {
         "(name, shape, dtype, unit, doc) of every field of an analysis result "
         "(cpp/include/osteon/result_fields.hpp), in order.");
 
+  m.def(
+      "parse_obj",
+      [](const py::bytes& text) {
+        const std::string_view view = bytes_view(text);
+        readers::ObjData d;
+        {
+          py::gil_scoped_release release;
+          d = readers::parse_obj(view);
+        }
+        return py::make_tuple(to_array(d.vertices), to_array(d.corners), to_array(d.counts),
+                              d.error, d.unsupported);
+      },
+      "OBJ bytes -> (xyz (3V,), corners (0-based), corners per face, error, unsupported)");
+  m.def(
+      "parse_numbers",
+      [](const py::bytes& text) {
+        const std::string_view view = bytes_view(text);
+        std::vector<double> out;
+        std::size_t bad = 0;
+        {
+          py::gil_scoped_release release;
+          bad = readers::parse_numbers(view, out);
+        }
+        return py::make_tuple(to_array(out), bad == std::string_view::npos
+                                                 ? py::ssize_t(-1)
+                                                 : static_cast<py::ssize_t>(bad));
+      },
+      "whitespace-separated numbers -> (values, offset of the first non-number or -1)");
   m.def(
       "count_sections",
       [](const Skeleton& s, double interval) { return count_sections(s, interval); },
@@ -331,7 +373,38 @@ PYBIND11_MODULE(_core, m) {
           },
           "FDM build direction (3,), model frame")
       .def_readwrite("layer_strength_ratio", &AnalysisOptions::layer_strength_ratio,
-                     "layer / in-plane strength (1 = isotropic)");
+                     "layer / in-plane strength (1 = isotropic)")
+      // The printed section (osteon/printed_section.hpp), set from a PrintProfile by
+      // osteon.printed.engine_print_options.
+      .def_property(
+          "print_kind", [](const AnalysisOptions& o) { return o.print.kind; },
+          [](AnalysisOptions& o, int k) { o.print.kind = k; },
+          "0 solid, 1 FDM (walls, skins, infill), 2 hollow shell (resin)")
+      .def_property(
+          "print_wall_depth", [](const AnalysisOptions& o) { return o.print.wall_depth; },
+          [](AnalysisOptions& o, double v) { o.print.wall_depth = v; },
+          "mm: FDM perimeters' depth in the layer plane, or the resin shell")
+      .def_property(
+          "print_skin_depth", [](const AnalysisOptions& o) { return o.print.skin_depth; },
+          [](AnalysisOptions& o, double v) { o.print.skin_depth = v; },
+          "mm: solid top/bottom skins along the build direction")
+      .def_property(
+          "print_infill_build", [](const AnalysisOptions& o) { return o.print.infill_build; },
+          [](AnalysisOptions& o, double v) { o.print.infill_build = v; },
+          "infill stiffness fraction for stress along the build direction")
+      .def_property(
+          "print_infill_layer", [](const AnalysisOptions& o) { return o.print.infill_layer; },
+          [](AnalysisOptions& o, double v) { o.print.infill_layer = v; },
+          "infill stiffness fraction for stress in the layer plane")
+      .def_property(
+          "print_solid_infill_below_area",
+          [](const AnalysisOptions& o) { return o.print.solid_infill_below_area; },
+          [](AnalysisOptions& o, double v) { o.print.solid_infill_below_area = v; },
+          "mm^2: a layer's infill island under this area is filled solid")
+      .def_property(
+          "print_skin_max_slope", [](const AnalysisOptions& o) { return o.print.skin_max_slope; },
+          [](AnalysisOptions& o, double v) { o.print.skin_max_slope = v; },
+          "radians from the layer plane: skins only under surfaces this flat (pi/2: all)");
 
   py::class_<CorrectionOptions>(m, "CorrectionOptions", "Limits of the correction loop.")
       .def(py::init<>())

@@ -7,7 +7,7 @@ legacy add-on in Blender 3.4-4.1 (bl_info below).  Units: mm, N, MPa.
 
 import bpy
 
-from . import live, ops, overlay, prefs, ui
+from . import live, ops, overlay, prefs, state, ui
 from .ui import live_panel
 
 bl_info = {
@@ -33,7 +33,7 @@ def register():
     for cls in _classes:
         bpy.utils.register_class(cls)
     bpy.types.Scene.osteon = bpy.props.PointerProperty(type=ui.properties.OsteonSettings)
-    live.register()  # scene.osteon_live, load_post handler (live mode, issue 7)
+    live.register(ui.live_properties.OsteonLiveSettings)  # scene.osteon_live, load_post handler (live mode, issue 7)
     overlay.register()
     if not bpy.app.binary_path and not _atexit_hooked:
         # bpy as a Python module (PyPI wheel) hangs at exit while classes are registered
@@ -56,6 +56,4 @@ def unregister():
     for cls in reversed(_classes):
         if getattr(cls, "is_registered", True):
             bpy.utils.unregister_class(cls)
-    from . import state
-
     state.clear()

@@ -134,10 +134,11 @@ def _text(name: str, body: str, size: float):
     return cu
 
 
-def render_png(context, obj, path: str, allowable: float, max_stress: float,
+def render_png(context, obj, path: str, allowable: float, worst_ratio: float,
                width: int = 1000) -> None:
     """Workbench render of the stress colours, orthographic 3/4 front view framing the
-    model, with a colour legend (a gradient bar and labels parented to the camera)."""
+    model, with a colour legend (a gradient bar of stress / allowable, 0 to 1.2: red from the
+    limit on, and labels parented to the camera)."""
     scene = context.scene
     r = scene.render
     shading = scene.display.shading
@@ -188,11 +189,11 @@ def render_png(context, obj, path: str, allowable: float, max_stress: float,
         bw = 0.07 * h
         by0, by1 = v0 + 0.30 * h - cv, v1 - 0.10 * h - cv
         z = -1.5 * size
-        n = 32
+        n, top = 36, 1.2                 # the bar spans stress / allowable 0 .. 1.2; 1 on row 30
         ts = np.linspace(0.0, 1.0, n + 1)
         bar_v = [(bx0 + dx, by0 + t * (by1 - by0), z) for t in ts for dx in (0.0, bw)]
         bar_f = [(2 * i, 2 * i + 1, 2 * i + 3, 2 * i + 2) for i in range(n)]
-        bar_c = np.repeat(core.stress_colors(ts * allowable, allowable), 2, axis=0)
+        bar_c = np.repeat(core.stress_colors(ts * top * allowable, allowable), 2, axis=0)
         sw0, sw1 = by0 - 0.14 * h, by0 - 0.07 * h
         bar_v += [(bx0, sw0, z), (bx0 + bw, sw0, z), (bx0 + bw, sw1, z), (bx0, sw1, z)]
         bar_f += [(2 * n + 2, 2 * n + 3, 2 * n + 4, 2 * n + 5)]
@@ -201,10 +202,11 @@ def render_png(context, obj, path: str, allowable: float, max_stress: float,
         legend = bpy.data.objects.new("osteon_legend", me)
         made += [legend, me]
         ts_ = 0.035 * h
+        at = [by0 + (r / top) * (by1 - by0) - 0.3 * ts_ for r in (1.0, 0.5, 0.0)]
         labels = [
-            (f"{allowable:.4g} MPa (allowable)", by1 - 0.3 * ts_),
-            (f"{allowable / 2:.4g} MPa", (by0 + by1) / 2 - 0.3 * ts_),
-            ("0 MPa", by0 - 0.3 * ts_),
+            ("1: the limit (red: over)", at[0]),
+            ("0.5", at[1]),
+            ("0", at[2]),
             ("safe for sure", (sw0 + sw1) / 2 - 0.3 * ts_),
         ]
         objs = [legend]
@@ -214,7 +216,7 @@ def render_png(context, obj, path: str, allowable: float, max_stress: float,
             t.location = (bx0 + bw + 0.3 * ts_, y, z)
             made += [t, c]
             objs.append(t)
-        title = _text("osteon_title", f"stress, max {max_stress:.4g} MPa", ts_ * 1.1)
+        title = _text("osteon_title", f"stress / allowable, worst {worst_ratio:.2f}", ts_ * 1.1)
         tobj = bpy.data.objects.new("osteon_title", title)
         tobj.location = (bx0, by1 + 0.06 * h, z)
         made += [tobj, title]
@@ -301,7 +303,7 @@ def run(argv: list[str]) -> int:
     if a.png:
         target = bpy.data.objects[report["object"]]
         render_png(context, target, a.png, report["allowable_stress_mpa"],
-                   report["max_stress_mpa"], a.resolution)
+                   (report.get("worst") or {}).get("ratio") or 0.0, a.resolution)
     if a.save:
         os.makedirs(os.path.dirname(os.path.abspath(a.save)), exist_ok=True)
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save), check_existing=False)

@@ -40,6 +40,8 @@ SHADE = 0.55   # ordinary outlines: the stress colour darkened, to stand out on 
 ALPHA = 0.5    # ordinary outlines: half transparent over the colours
 CUT_WIDTH = 1.0   # px, the whole cut of a junction section (dashed, dimmer)
 CUT_ALPHA = 0.45
+INFILL_WIDTH = 1.0   # px, the sparse-infill region inside a printed section's outline
+INFILL_ALPHA = 0.6
 
 _versions = itertools.count(1)
 
@@ -60,6 +62,12 @@ class Outlines:
     # the whole cut of junction sections: every other segment (dashed), dimmer
     cut_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
     cut_colors: np.ndarray = field(default_factory=lambda: np.empty((0, 4), np.float32))
+    # the sparse-infill region of printed sections (a print profile, docs/printing.md): its
+    # loops inside the outline, thinner; those of weak sections drawn always, the rest with
+    # "All sections"
+    infill_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
+    infill_colors: np.ndarray = field(default_factory=lambda: np.empty((0, 4), np.float32))
+    weak_infill_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
 
     @property
     def num_sections(self) -> int:
@@ -114,7 +122,10 @@ def compute_outlines(analysis, mm_per_unit: float = 1.0) -> Outlines:
     weak_colors = np.broadcast_to(np.float32(WEAK_RGBA), (len(weak_lines), 4)).copy()
     doubt_lines, _ = lines_of(outlined & ~weak & doubtful_sections(analysis, len(stress)))
     cut_lines, cut_colors = _dashed_cuts(analysis, rgba, k)
-    return Outlines(lines=np.ascontiguousarray(lines), colors=np.ascontiguousarray(colors),
+    infill_lines, infill_colors = _infill_loops(analysis, rgba, k, ~weak)
+    weak_infill_lines, _ = _infill_loops(analysis, rgba, k, weak)
+    return Outlines(infill_lines=infill_lines, infill_colors=infill_colors,
+                    weak_infill_lines=weak_infill_lines,lines=np.ascontiguousarray(lines), colors=np.ascontiguousarray(colors),
                     weak_lines=np.ascontiguousarray(weak_lines), weak_colors=weak_colors,
                     section_ids=np.flatnonzero(outlined).astype(np.int64),
                     weak_ids=np.flatnonzero(outlined & weak).astype(np.int64),
@@ -147,24 +158,52 @@ def highlight_lines(where: dict) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(segs))
 
 
-def _dashed_cuts(analysis, rgba, k):
-    """Every other segment of the whole-cut loops of junction sections (``cut_outline_*``),
-    in the section's colour at CUT_ALPHA."""
-    ss = getattr(analysis, "cut_outline_section_start", None)
+def _packed_loops(analysis, prefix: str):
+    """(points (P,3), next point of each point's loop (P,), loop start of each point (P,),
+    section of each point (P,)) of loops packed like ``outline_*`` under ``prefix``
+    (``cut_outline``, ``infill_outline``); None when the analysis has none."""
+    ss = getattr(analysis, f"{prefix}_section_start", None)
     if ss is None or len(ss) < 2 or ss[-1] == 0:
-        return np.empty((0, 3), np.float32), np.empty((0, 4), np.float32)
-    pts = np.asarray(analysis.cut_outline_points, dtype=np.float64)
-    ls = np.asarray(analysis.cut_outline_loop_start, dtype=np.int64)
+        return None
+    pts = np.asarray(getattr(analysis, f"{prefix}_points"), dtype=np.float64)
+    ls = np.asarray(getattr(analysis, f"{prefix}_loop_start"), dtype=np.int64)
     nxt = np.arange(1, len(pts) + 1)
     nxt[ls[1:] - 1] = ls[:-1]
     loop_of = np.repeat(np.arange(len(ls) - 1), np.diff(ls))
-    sel = np.flatnonzero((np.arange(len(pts)) - ls[loop_of]) % 2 == 0)
+    section_of = np.repeat(np.repeat(np.arange(len(ss) - 1), np.diff(ss)), np.diff(ls))
+    return pts, nxt, ls[loop_of], section_of
+
+
+def _loop_segments(packed, sel, rgba, alpha, k):
+    """LINES segments from the points ``sel`` of ``packed`` to their next ones, in their
+    section's colour at ``alpha``, world space."""
+    pts, nxt, _first, section_of = packed
     seg = np.empty((2 * len(sel), 3), dtype=np.float32)
     seg[0::2], seg[1::2] = pts[sel], pts[nxt[sel]]
-    section_of = np.repeat(np.repeat(np.arange(len(ss) - 1), np.diff(ss)), np.diff(ls))
     colors = np.repeat(rgba[section_of[sel]], 2, axis=0)
-    colors[:, 3] = CUT_ALPHA
+    colors[:, 3] = alpha
     return np.ascontiguousarray(seg / k), np.ascontiguousarray(colors)
+
+
+def _dashed_cuts(analysis, rgba, k):
+    """Every other segment of the whole-cut loops of junction sections (``cut_outline_*``),
+    in the section's colour at CUT_ALPHA."""
+    packed = _packed_loops(analysis, "cut_outline")
+    if packed is None:
+        return np.empty((0, 3), np.float32), np.empty((0, 4), np.float32)
+    sel = np.flatnonzero((np.arange(len(packed[0])) - packed[2]) % 2 == 0)
+    return _loop_segments(packed, sel, rgba, CUT_ALPHA, k)
+
+
+def _infill_loops(analysis, rgba, k, sections):
+    """Segments and colours (INFILL_ALPHA) of the sparse-infill loops of printed sections
+    (``infill_outline_*``, a print profile) among the ``sections`` (S,) bool mask; empty
+    without them."""
+    packed = _packed_loops(analysis, "infill_outline")
+    if packed is None:
+        return np.empty((0, 3), np.float32), np.empty((0, 4), np.float32)
+    sel = np.flatnonzero(np.asarray(sections, dtype=bool)[packed[3]])
+    return _loop_segments(packed, sel, rgba, INFILL_ALPHA, k)
 
 
 # --------------------------------------------------------------------------- state
@@ -272,6 +311,10 @@ def _make_batches(out: Outlines) -> dict:
     b["doubt"] = _flat_batch(shader, out.doubt_lines, DOUBT_RGBA)
     b["cut"] = (batch_for_shader(shader, "LINES", {"pos": out.cut_lines, "color": out.cut_colors})
                 if len(out.cut_lines) else None)
+    b["infill"] = (batch_for_shader(shader, "LINES", {"pos": out.infill_lines,
+                                                     "color": out.infill_colors})
+                   if len(out.infill_lines) else None)
+    b["weak_infill"] = _flat_batch(shader, out.weak_infill_lines, WEAK_RGBA)
     return b
 
 
@@ -306,7 +349,8 @@ def _draw():
         return
     st = state.get(scene.name)
     hl = st.highlight if st is not None else None
-    if hl is not None and (not st.last or st.last.get("analysis") is not hl.get("analysis")):
+    shown = (st.shown or st.last) if st is not None else None
+    if hl is not None and (not shown or shown.get("analysis") is not hl.get("analysis")):
         hl = None                       # a newer result (or Reset): the highlight is stale
     out = None
     if settings.show_sections:
@@ -327,6 +371,10 @@ def _draw():
             _draw_batch(_batches, _batches["cut"], CUT_WIDTH, region)
         if settings.show_all_sections and _batches.get("lines") is not None:
             _draw_batch(_batches, _batches["lines"], WIDTH, region)
+        if settings.show_all_sections and _batches.get("infill") is not None:
+            _draw_batch(_batches, _batches["infill"], INFILL_WIDTH, region)
+        if _batches.get("weak_infill") is not None:
+            _draw_batch(_batches, _batches["weak_infill"], INFILL_WIDTH, region)
         if _batches.get("doubt") is not None:
             _draw_batch(_batches, _batches["doubt"], DOUBT_WIDTH, region)
         if _batches.get("weak") is not None:

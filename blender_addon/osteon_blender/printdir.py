@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 from osteon.settings import AXES, axis_direction
 
+from .errors import OsteonError
+
 MODES = (
     ("Z", "Up (+Z)", ("Layers stack along the scene's +Z: the model prints as it stands in the "
                       "scene (as a slicer places the exported model)")),
@@ -24,16 +26,15 @@ AXIS_ITEMS = tuple((k, k, f"Layers stack along the scene's {k} axis") for k in A
 UP = (0.0, 0.0, 1.0)
 
 
-def build_direction(s) -> tuple:
-    """The build direction (3,) of ``scene.osteon`` ``s`` (world frame, unit)."""
+def build_direction(s, orientation: dict | None = None) -> tuple:
+    """The build direction (3,) of ``scene.osteon`` ``s`` (world frame, unit); ``orientation``:
+    the scene's "Find best orientation" result (``state.SceneState.orientation``, passed in by
+    the caller), which mode "Best found" reads."""
     mode = getattr(s, "print_direction", "Z")
     if mode == "AXIS":
         return axis_direction(s.print_axis)
     if mode == "BEST":
-        from . import state
-        from .core import OsteonError
-
-        found = state.of(s.id_data).orientation
+        found = orientation
         if found is None:
             raise OsteonError("Print direction 'Best found': press 'Find best orientation' "
                               "first")

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import bridge, core, printdir, state
+from . import bridge, core, results, state
 from .core import OsteonError, min_thickness_mm
 
 # read-only view: scene name -> the last result (report, Analysis, inputs, correction),
@@ -42,7 +42,8 @@ def gather(context, use_weight_cache: bool = False, mm_per_unit: float | None = 
     t0 = time.perf_counter()
     obj, arm = bridge.find_target(context)
     sk = bridge.skeleton_arrays(arm)
-    params = core.engine_params(s, arm, sk.names)
+    params = core.engine_params(s, arm, sk.names,
+                                orientation=state.of(context.scene).orientation)
     csr = (state.of(context.scene).weights.get(obj, sk.names) if use_weight_cache
            else bridge.vertex_weights_csr(obj, sk.names))
     t1 = time.perf_counter()
@@ -164,70 +165,27 @@ def publish(context, inp: Inputs, analysis, correction=None, first_analysis=None
     """Write the stress layer and the results list; remember the report."""
     s = context.scene.osteon
     allowable = inp.params["allowable_stress"]
-    culled = getattr(analysis, "vertex_culled", None)
     report = core.build_report(
         object_name=inp.obj.name, armature_name=inp.arm.name, bone_names=inp.skeleton.names,
         analysis=first_analysis if first_analysis is not None else analysis,
         corrected_analysis=analysis if correction is not None else None,
-        allowable_mpa=allowable, settings=core.settings_of(s).as_dict(), mm_per_unit=inp.mm_per_unit,
+        allowable_mpa=allowable, settings=core.settings_of(
+            s, state.of(context.scene).orientation).as_dict(), mm_per_unit=inp.mm_per_unit,
         correction=correction, vertices=len(inp.vertices_mm), faces=len(inp.faces))
-    s.weak_bones.clear()
-    for row in report["weak_bones"]:
-        item = s.weak_bones.add()
-        item.name = row["bone"]
-        item.max_stress_mpa = row["max_stress_mpa"]
-        item.ratio = row["ratio"]
-        item.limit = row.get("limit") or ""
-        item.scale = row["scale"]
-        item.weak = row["weak"]
-        item.status = "weak" if row["weak"] else "ok"
-    doubt_ui_publish(s, report)
-    # colours by stress ratio at the print direction (stress itself when isotropic)
     k = inp.mm_per_unit
-    shown = printdir.colour_stress(analysis, inp.skeleton.heads * k, inp.skeleton.tails * k)
-    rgba = core.stress_colors(shown, allowable, culled,
-                              not_analysed_vertices(analysis, report, inp.skeleton.names))
+    rgba = core.result_colors(analysis, inp.skeleton.heads * k, inp.skeleton.tails * k,
+                              results.not_analysed_vertices(analysis, report, inp.skeleton.names))
     bridge.write_point_colors(inp.obj.data, rgba)
     bridge.show_colors_in_viewports()
+    entry = {"report": report, "analysis": analysis, "inputs": inp, "correction": correction}
+    results.show(context.scene, report, entry, "correct" if correction is not None else "analyze")
     s.weak_bones_index = -1
-    s.has_result = True
-    s.result_object = inp.obj.name
-    s.result_armature = inp.arm.name
-    # no section gave a stress (all skipped): 0.0 here, the doubt lines say why
-    s.max_stress_mpa = report["max_stress_mpa"] if report["max_stress_mpa"] is not None else 0.0
-    s.allowable_mpa = allowable
-    s.sections = report["sections"]
-    s.weak_sections = report["weak_sections"]
-    s.converged = report["converged"]
     st = state.of(context.scene)
-    st.last = {"report": report, "analysis": analysis, "inputs": inp, "correction": correction}
+    st.last = entry
     st.loose_pieces = {"object": inp.obj.name, "vertices": len(inp.vertices_mm),
                        "pieces": [np.asarray(p, dtype=np.int64)
                                   for p in getattr(analysis, "loose_pieces", [])]}
     return report
-
-
-def not_analysed_vertices(analysis, report: dict, bone_names) -> np.ndarray | None:
-    """(V,) bool: vertices whose bone is "not analysed" (drawn magenta), or None."""
-    bad = {r["bone"] for r in report.get("not_analysed_bones") or []}
-    vb = getattr(analysis, "vertex_bone", None)
-    if not bad or vb is None:
-        return None
-    idx = np.array([i for i, n in enumerate(bone_names) if n in bad], dtype=np.int64)
-    return np.isin(np.asarray(vb, dtype=np.int64), idx)
-
-
-def doubt_ui_publish(s, report: dict) -> None:
-    """Skipped sections and not-analysed bones into the sidebar's properties and list."""
-    s.skipped_sections = int(report.get("skipped_sections") or 0)
-    s.doubt = report.get("doubt") or ""
-    s.verdict = report.get("verdict") or ""
-    for row in report.get("not_analysed_bones") or []:
-        item = s.weak_bones.add()
-        item.name = row["bone"]
-        item.status = "not analysed"
-        item.reason = row["reason"] or ""
-        item.weak = False
 
 
 def clear_results(context):
@@ -241,17 +199,19 @@ def clear_results(context):
     s.doubt = ""
     s.verdict = ""
     s.weak_sections = 0
+    s.worst_bone = s.worst_limit = s.result_source = ""
+    s.worst_stress_mpa = s.worst_allowable_mpa = s.worst_ratio = 0.0
     st = state.get(context.scene)
     if st is not None:
-        st.last = None
+        st.last = st.shown = None
         st.loose_pieces = None
 
 
 def summary(report: dict) -> str:
     weak = [r["bone"] for r in report["weak_bones"] if r.get("weak", True)]
     n = len(weak)
-    msg = (f"osteon: max stress {report['max_stress_mpa']:.1f} MPa, allowable "
-           f"{report['allowable_stress_mpa']:.1f} MPa, {report['sections']} sections, "
+    worst = results.report_worst_line(report)
+    msg = (f"osteon: {worst or 'no stress'}, {report['sections']} sections, "
            f"{n} weak bone{'s' if n != 1 else ''}")
     if n:
         msg += " (" + ", ".join(weak[:5]) + ")"
@@ -293,17 +253,19 @@ def correct_steps(job: Job):
         inp = gather(context)
         skeleton = engine_skeleton(osteon, inp)
         check_sections(osteon, inp, skeleton, job.max_sections)
-        params = core.engine_params(s, arm, inp.skeleton.names, correct=True)
+        params = core.engine_params(s, arm, inp.skeleton.names, correct=True,
+                                    orientation=state.of(context.scene).orientation)
 
         def engine_correct():
             try:
                 # The bones' own X axes: a thin-direction scale must be one Blender's pose
                 # scale X or Z can reproduce; on a joint rig, also the local axis each bone
                 # scales across (its segment is not its Y axis).
+                first = reinforce_first_params(s, params)
                 return osteon.correct(inp.vertices_mm, inp.faces, skeleton, inp.weights,
                                       bone_x_axes=inp.skeleton.x_axes,
                                       bone_long_axes=inp.skeleton.long_axes, keep_outlines=True,
-                                      progress=job.progress, **params)
+                                      progress=job.progress, **params, **first)
             except ValueError as e:
                 raise OsteonError(f"osteon could not correct '{inp.obj.name}': {e}") from e
 
@@ -317,6 +279,13 @@ def correct_steps(job: Job):
         job.stage = "Correct: analysing the result"
         after = yield lambda: analyze_inputs(osteon, after_inp, progress=job.progress)
         context = job.context
+        if fix.reinforcement is not None:
+            # printed with the regions' walls and infill: the engine's reinforced analysis
+            # (Blender's re-analysis knows only the profile); the modifiers shown
+            after = fix.after
+            from .ops.slicer_export import show_modifiers
+
+            show_modifiers(context, fix.reinforcement, inp.mm_per_unit)
     except Exception:  # leave the pose as it was before this call (errors, cancel)
         bridge.restore_pose(job.context, arm)
         if had_previous:
@@ -324,7 +293,23 @@ def correct_steps(job: Job):
         raise
     report = publish(context, after_inp, after, correction=fix, first_analysis=fix.before)
     report["warnings"] = correction_warnings(context, obj, arm)
+    if fix.reinforcement is not None:
+        from osteon.report import reinforcement_section
+
+        report["reinforcement"] = reinforcement_section(fix.reinforcement)
     return report
+
+
+def reinforce_first_params(s, params: dict) -> dict:
+    """``reinforce_first=True`` for ``osteon.correct`` when "Reinforce first (keep shape)" is
+    on (the print profile must be an FDM one: walls and infill to change)."""
+    if not getattr(s, "reinforce_first", False):
+        return {}
+    profile = params.get("print_profile")
+    if profile is None or getattr(profile, "kind", None) != "fdm":
+        raise OsteonError("Reinforce first needs an FDM print profile (walls and infill): "
+                          "choose one under Print settings")
+    return {"reinforce_first": True}
 
 
 def run_correct(context, progress=_no_progress, max_sections: int = 0) -> dict:
@@ -395,13 +380,7 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
         raise OsteonError("Make skeleton: select the mesh to rig (the active object is not a mesh)")
     if bridge.armature_of(obj) is not None:
         raise OsteonError(f"Mesh '{obj.name}' already has an Armature modifier")
-    try:
-        import pygel3d  # noqa: F401  (auto_skeleton imports it lazily)
-    except ImportError:
-        raise OsteonError(
-            "Make skeleton needs the Python package 'pygel3d', which this Blender cannot import; "
-            "install it into Blender's Python (scripts/blender_setup.sh does: "
-            "pip install --target <Blender's site-packages> pygel3d)") from None
+    core.import_pygel3d()  # auto_skeleton imports it lazily: check first, say what to do
     s = context.scene.osteon
     verts = bridge.world_rest_positions(obj)
     faces = bridge.triangles(obj.data)
@@ -416,7 +395,8 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
     t0 = time.perf_counter()
     try:
         sk, w = osteon.auto_skeleton(verts * k, faces, root=root,
-                                     min_thickness=min_thickness_mm(core.settings_of(s)))
+                                     min_thickness=min_thickness_mm(
+                                         core.settings_of(s, state.of(context.scene).orientation)))
     except ValueError as e:
         raise OsteonError(f"Make skeleton: {e}") from e
     progress(0.7)

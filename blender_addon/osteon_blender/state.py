@@ -19,6 +19,9 @@ from . import bridge
 class SceneState:
     #: the operators' last result: ``{"report", "analysis", "inputs", "correction"}``
     last: dict | None = None
+    #: the result the panel shows (summary, rows, row clicks): the operators' ``last`` or, once
+    #: Live has updated, Live's latest in the same form (``results.show`` sets it)
+    shown: dict | None = None
     #: vertex-group weights read once and reused while the mesh and groups are unchanged
     weights: bridge.WeightCache = field(default_factory=bridge.WeightCache)
     #: the running live session (``live.Session``) of this scene, if any
@@ -36,6 +39,9 @@ class SceneState:
     #: (osteon.Orientation), "before", "applied", "matrices" (name -> matrix_world before
     #: Apply), "preview" (name of the arrow empty)}`` (ops/orientation.py)
     orientation: dict | None = None
+    #: "Export for slicer (3MF)": ``{"object", "result" (osteon.Reinforcement)}`` between the
+    #: modifiers shown and the file written (ops/slicer_export.py)
+    slicer_export: dict | None = None
     #: the last analysis' loose pieces (shells that would fall off the print): ``{"object"
     #: (name of the analysed mesh), "vertices" (its vertex count then), "pieces" (list of (n,)
     #: int64 vertex-index arrays)}``, read by ``osteon.select_loose_pieces`` (ops/loose.py)

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "analysis_impl.hpp"
-#include "osteon/regions.hpp"
+#include "thickness.hpp"
 
 namespace osteon {
 
@@ -25,6 +25,7 @@ void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
   if (std::isnan(o.gap_tolerance)) throw std::invalid_argument("gap_tolerance must not be NaN");
   if (!(o.min_thickness >= 0) || !std::isfinite(o.min_thickness))
     throw std::invalid_argument("min_thickness must be a finite length >= 0 mm");
+  validate_print_options(o.print);
 }
 
 void fill_section_thickness(const std::vector<std::shared_ptr<const SectionPolygon>>& pending,

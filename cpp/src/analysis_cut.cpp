@@ -15,8 +15,9 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
-#include "osteon/regions.hpp"
 #include "parallel.hpp"
+#include "region_choice.hpp"
+#include "thickness.hpp"
 
 namespace osteon {
 namespace {
@@ -51,15 +52,15 @@ bool local_ok(RunState& run, const PlaneCut& cut, const SectionGeometry& geom, b
 }
 
 // Section state of a found (or skipped) section geometry; region null: the whole plane was cut.
-// With `keep`, the region's loops are kept in 3D (AnalysisOptions::keep_outlines).
+// With `ro.keep`, the region's loops are kept in 3D (AnalysisOptions::keep_outlines).
 SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const CutRegion* region,
-                    bool keep) {
+                    const RegionOptions& ro) {
   SectionState st;
   st.flags = geom.flags;
   st.whole_plane = region == nullptr;
   if (region != nullptr) st.region = *region;
   if (geom.found) {
-    if (set_section_region(st, frame, geom.polygon, keep)) {
+    if (set_section_region(st, frame, geom.polygon, ro)) {
       st.found = true;
       st.frame = frame;
       st.cut = geom.polygon;
@@ -75,21 +76,32 @@ SectionState finish(const PlaneFrame& frame, const SectionGeometry& geom, const 
 // The whole-plane section from all of a plane's segments (gaps closed: nothing is clipped). A
 // bone outside the mesh takes the region cut from its own skinning domain (vertex_bone, #V).
 SectionState finish_whole(const PlaneFrame& frame, const std::vector<CutSegment>& segs, double gap,
-                          const int* vertex_bone, int bone, bool keep) {
+                          const int* vertex_bone, int bone, const RegionOptions& ro) {
   const BoneDomain domain{&segs, vertex_bone, bone};
   SectionGeometry geom = select_region(assemble_loops(segs, gap), &domain);
   if (segs.empty()) geom.flags |= kFlagEmpty;
-  return finish(frame, geom, nullptr, keep);
+  return finish(frame, geom, nullptr, ro);
 }
 
 }  // namespace
 
 bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
-                        bool keep) {
+                        const RegionOptions& ro) {
   const SectionProperties props = section_properties(polygon);
   if (!props.valid) return false;
+  PrintedSection printed;
+  if (ro.print != nullptr) {
+    const Vec2 build(ro.build.dot(frame.u), ro.build.dot(frame.v));
+    printed =
+        printed_section(polygon, props, build, ro.build.dot(frame.normal), *ro.print, ro.keep);
+    if (!printed.valid) return false;
+  }
   st.area = props.area;
-  st.modulus = props.modulus;
+  st.solid_modulus = props.modulus;
+  st.modulus = ro.print != nullptr ? printed.modulus : props.modulus;
+  st.wall_area = printed.wall_area;
+  st.skin_area = printed.skin_area;
+  st.infill_area = printed.infill_area;
   st.center = frame.to_world(props.centroid);
   // Principal second moments: the smaller one is across the thinnest direction (a b x t
   // rectangle has b^3 t / 12 and b t^3 / 12, so the aspect is b / t).
@@ -103,7 +115,7 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
   st.thickness_bound = region_thickness_lower_bound(props.area, lo);
   st.analysed = std::make_shared<const SectionPolygon>(polygon);
   st.loops.clear();
-  if (keep) {
+  if (ro.keep) {
     auto to_world = [&](const std::vector<Vec2>& loop) {
       std::vector<Vec3> out(loop.size());
       for (std::size_t k = 0; k < loop.size(); ++k) out[k] = frame.to_world(loop[k]);
@@ -111,6 +123,8 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
     };
     st.loops.push_back(to_world(polygon.outer));
     for (const auto& hole : polygon.holes) st.loops.push_back(to_world(hole));
+    st.infill_loops.clear();
+    for (const auto& loop : printed.sparse) st.infill_loops.push_back(to_world(loop));
   }
   return true;
 }
@@ -163,7 +177,7 @@ void Analyzer::Impl::cut_local(RunState& run) {
   const Skeleton& sk = run.sk;
   const double h = options.interval;
   const long jobs = static_cast<long>(job_bone.size());
-  const bool keep = options.keep_outlines;
+  const RegionOptions ro(options);
   // Phase 1 (parallel over bones and joints): one local cut per family of parallel planes.
   // Sections whose local cut is not provably right, and all joints, are queued for phase 2.
   detail::parallel_for(jobs, options.threads, [&](long job, int worker) {
@@ -203,14 +217,14 @@ void Analyzer::Impl::cut_local(RunState& run) {
       PlaneFrame frame = base;
       frame.origin = specs[si].point;
       if (!local) {
-        states[si] = finish_whole(frame, segs[k - 1], run.gap, run.vertex_bone.data(), b, keep);
+        states[si] = finish_whole(frame, segs[k - 1], run.gap, run.vertex_bone.data(), b, ro);
         run.sections_done();
         continue;
       }
       const PlaneCut cut = assemble_loops(segs[k - 1], 0.0);
       const SectionGeometry geom = select_region(cut, nullptr);
       if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
-        states[si] = finish(frame, geom, &region, keep);
+        states[si] = finish(frame, geom, &region, ro);
         run.sections_done();
         continue;
       }
@@ -221,17 +235,39 @@ void Analyzer::Impl::cut_local(RunState& run) {
 }
 
 void Analyzer::Impl::cut_retries(RunState& run) {
-  const MeshView& mesh = run.mesh;
-  const Skeleton& sk = run.sk;
-  const double h = options.interval;
-  const double diag = run.diag;
+  const std::vector<int> units = retry_units(run);
+  // Joints' and whole planes' cuts skip the cells and runs of faces whose triangles' own box the
+  // plane misses (FaceGrid::enable_tight_bounds: the same segments, in the same order).
+  if (!units.empty() && run.grid_built) run.grid.enable_tight_bounds();
+  // The loose pieces and the moment-arm index (stage 4) need no section: they are one more
+  // unit, third in line, so that it fills a core while the other cuts.
+  const long index_unit = std::min<long>(2, static_cast<long>(units.size()));
+  detail::parallel_for(static_cast<long>(units.size()) + 1, options.threads,
+                       [&](long u, int worker) {
+                         if (u == index_unit) {
+                           find_loose_pieces_and_arms(run);
+                           return;
+                         }
+                         run.check_cancel();
+                         const int job = units[u > index_unit ? u - 1 : u];
+                         if (job_bone[job] < 0)
+                           retry_joint(run, job, worker);
+                         else
+                           retry_family(run, job, worker);
+                       });
+  if (run.timer.on) {
+    std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(run.local_used),
+                 int(run.local_failed));
+    std::fprintf(stderr, "sections retried %ld\n", run.retried);
+  }
+}
+
+// Phase 2 units: a family's queued planes are re-cut together in masked passes (a cylinder
+// three times wider, then the whole plane); a joint grows a ball around its point, then cuts
+// the whole plane. Families first: they are the larger units, joints balance the cores last.
+std::vector<int> Analyzer::Impl::retry_units(RunState& run) {
   const long jobs = static_cast<long>(job_bone.size());
   const std::vector<std::uint8_t>& retry = run.retry;
-  const std::vector<double>& reach = run.reach;
-  const bool keep = options.keep_outlines;
-  // Phase 2 units: a family's queued planes are re-cut together in masked passes (a cylinder
-  // three times wider, then the whole plane); a joint grows a ball around its point, then cuts
-  // the whole plane. Families first: they are the larger units, joints balance the cores last.
   std::vector<int> units;
   for (long job = 0; job < jobs; ++job) {
     const int first = job_section[job];
@@ -244,119 +280,128 @@ void Analyzer::Impl::cut_retries(RunState& run) {
     if (any) units.push_back(static_cast<int>(job));
   }
   std::stable_partition(units.begin(), units.end(), [&](int job) { return job_bone[job] >= 0; });
-  // Joints' and whole planes' cuts skip the cells and runs of faces whose triangles' own box the
-  // plane misses (FaceGrid::enable_tight_bounds: the same segments, in the same order).
-  if (!units.empty() && run.grid_built) run.grid.enable_tight_bounds();
-  // The loose pieces and the moment-arm index (stage 4) need no section: they are one more
-  // unit, third in line, so that it fills a core while the other cuts.
-  const long index_unit = std::min<long>(2, static_cast<long>(units.size()));
-  detail::parallel_for(
-      static_cast<long>(units.size()) + 1, options.threads, [&](long u, int worker) {
-        if (u == index_unit) {
-          // Loose pieces fall off the print: their vertices are no load point (full runs; the
-          // correction's partial re-cuts move no piece apart, so they keep the last run's).
-          if (!run.partial) {
-            // A gap under half the minimum printable thickness is fused by the printer.
-            loose = face_shells == 1 ? std::vector<std::vector<std::int32_t>>{}
-                                     : loose_finder.find(mesh, run.vertex_bone, tree.held_bone,
-                                                         0.5 * options.min_thickness, &face_shells,
-                                                         /*same_faces=*/true,
-                                                         run.grid_built ? &run.grid : nullptr);
-            loose_vertex.assign(num_vertices, 0);
-            for (const auto& piece : loose)
-              for (std::int32_t v : piece) loose_vertex[v] = 1;
-          }
-          arm_index.build(mesh, sk, tree, run.vertex_bone, slab_params,
-                          loose.empty() ? nullptr : &loose_vertex);
-          run.arms = &arm_index;
-          return;
-        }
-        run.check_cancel();
-        const int job = units[u > index_unit ? u - 1 : u];
-        const int first = job_section[job];
-        const int b = job_bone[job];
-        if (b < 0) {
-          const SectionSpec& spec = specs[first];
-          const int bone = spec.bone;
-          const PlaneFrame frame = PlaneFrame::make(spec.point, spec.normal);
-          auto& segs = run.single_segments[worker];
-          segs.clear();
-          CutRegion ball{spec.point, Vec3::Zero(), reach[bone]};
-          if (sk.parents[bone] >= 0) ball.radius = std::max(ball.radius, reach[sk.parents[bone]]);
-          const CutRegion* done = nullptr;  // the region already cut
-          CutRegion previous;
-          if (retry[first] == kGrowJoint) {
-            const bool inside = inside_at(run, bone, slab_params[bone][spec.boundary]);
-            for (int step = 0; step < 2 && ball.radius < diag; ++step, ball.radius *= 3.0) {
-              cut_mesh(mesh, frame, segs, &run.grid, &ball, done);
-              const PlaneCut cut = assemble_loops(segs, 0.0);
-              const SectionGeometry geom = select_region(cut, nullptr);
-              previous = ball;
-              done = &previous;
-              if (local_ok(run, cut, geom, inside)) {
-                states[first] = finish(frame, geom, &ball, keep);
-                run.sections_done();
-                return;
-              }
-              if (geom.found) break;  // found but not provably right: cut the whole plane
-            }
-          }
-          cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
-          states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, keep);
-          run.sections_done();
-          return;
-        }
-        const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
-        const int n = static_cast<int>(slab_params[b].size()) - 2;
-        auto& segs = run.family_segments[worker];
-        std::vector<std::uint8_t> wanted(n);
-        for (int k = 1; k <= n; ++k) wanted[k - 1] = retry[first + k - 1] != kNone;
-        auto frame_of = [&](int k) {
-          PlaneFrame frame = base;
-          frame.origin = specs[first + k - 1].point;
-          return frame;
-        };
-        auto add_kept = [&](int k) {
-          auto& all = run.kept[first + k - 1];
-          all.insert(all.end(), segs[k - 1].begin(), segs[k - 1].end());
-        };
-        const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
-        const CutRegion wide{sk.heads[b], sk.direction(b), 3.0 * reach[b]};
-        const CutRegion* done = &region;
-        bool grow = false;
-        for (int k = 1; k <= n; ++k) grow |= retry[first + k - 1] == kGrowFamily;
-        if (grow && wide.radius < diag) {
-          cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, &wide, wanted.data(), &region);
-          done = &wide;
-          for (int k = 1; k <= n; ++k) {
-            if (!wanted[k - 1]) continue;
-            add_kept(k);
-            if (retry[first + k - 1] != kGrowFamily) continue;
-            run.check_cancel();
-            const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
-            const SectionGeometry geom = select_region(cut, nullptr);
-            if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
-              states[first + k - 1] = finish(frame_of(k), geom, &wide, keep);
-              run.sections_done();
-              wanted[k - 1] = 0;
-            }
-          }
-        }
-        if (std::find(wanted.begin(), wanted.end(), 1) == wanted.end()) return;
-        cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, nullptr, wanted.data(), done);
-        for (int k = 1; k <= n; ++k) {
-          if (!wanted[k - 1]) continue;
-          run.check_cancel();
-          add_kept(k);
-          states[first + k - 1] = finish_whole(frame_of(k), run.kept[first + k - 1], run.gap,
-                                               run.vertex_bone.data(), b, keep);
-          run.sections_done();
-        }
-      });
-  if (run.timer.on) {
-    std::fprintf(stderr, "local cuts used %d, whole planes %d\n", int(run.local_used),
-                 int(run.local_failed));
-    std::fprintf(stderr, "sections retried %ld\n", run.retried);
+  return units;
+}
+
+// The loose pieces and, over the vertices of the attached ones, the moment-arm index.
+void Analyzer::Impl::find_loose_pieces_and_arms(RunState& run) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  // Loose pieces fall off the print: their vertices are no load point (full runs; the
+  // correction's partial re-cuts move no piece apart, so they keep the last run's).
+  if (!run.partial) {
+    // A gap under half the minimum printable thickness is fused by the printer.
+    loose = face_shells == 1
+                ? std::vector<std::vector<std::int32_t>>{}
+                : loose_finder.find(mesh, run.vertex_bone, tree.held_bone,
+                                    0.5 * options.min_thickness, &face_shells,
+                                    /*same_faces=*/true, run.grid_built ? &run.grid : nullptr);
+    loose_vertex.assign(num_vertices, 0);
+    for (const auto& piece : loose)
+      for (std::int32_t v : piece) loose_vertex[v] = 1;
+  }
+  arm_index.build(mesh, sk, tree, run.vertex_bone, slab_params,
+                  loose.empty() ? nullptr : &loose_vertex);
+  run.arms = &arm_index;
+}
+
+// A joint's queued section: a ball grown around its point (twice, three times wider each), then
+// the whole plane.
+void Analyzer::Impl::retry_joint(RunState& run, int job, int worker) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  const double diag = run.diag;
+  const std::vector<std::uint8_t>& retry = run.retry;
+  const std::vector<double>& reach = run.reach;
+  const RegionOptions ro(options);
+  const int first = job_section[job];
+  const SectionSpec& spec = specs[first];
+  const int bone = spec.bone;
+  const PlaneFrame frame = PlaneFrame::make(spec.point, spec.normal);
+  auto& segs = run.single_segments[worker];
+  segs.clear();
+  CutRegion ball{spec.point, Vec3::Zero(), reach[bone]};
+  if (sk.parents[bone] >= 0) ball.radius = std::max(ball.radius, reach[sk.parents[bone]]);
+  const CutRegion* done = nullptr;  // the region already cut
+  CutRegion previous;
+  if (retry[first] == kGrowJoint) {
+    const bool inside = inside_at(run, bone, slab_params[bone][spec.boundary]);
+    for (int step = 0; step < 2 && ball.radius < diag; ++step, ball.radius *= 3.0) {
+      cut_mesh(mesh, frame, segs, &run.grid, &ball, done);
+      const PlaneCut cut = assemble_loops(segs, 0.0);
+      const SectionGeometry geom = select_region(cut, nullptr);
+      previous = ball;
+      done = &previous;
+      if (local_ok(run, cut, geom, inside)) {
+        states[first] = finish(frame, geom, &ball, ro);
+        run.sections_done();
+        return;
+      }
+      if (geom.found) break;  // found but not provably right: cut the whole plane
+    }
+  }
+  cut_mesh(mesh, frame, segs, &run.grid, nullptr, done);
+  states[first] = finish_whole(frame, segs, run.gap, run.vertex_bone.data(), bone, ro);
+  run.sections_done();
+}
+
+// A family's queued planes, re-cut together in masked passes: a cylinder three times wider
+// (for the sections queued to grow), then the whole plane.
+void Analyzer::Impl::retry_family(RunState& run, int job, int worker) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  const double h = options.interval;
+  const double diag = run.diag;
+  const std::vector<std::uint8_t>& retry = run.retry;
+  const std::vector<double>& reach = run.reach;
+  const RegionOptions ro(options);
+  const int first = job_section[job];
+  const int b = job_bone[job];
+  const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));
+  const int n = static_cast<int>(slab_params[b].size()) - 2;
+  auto& segs = run.family_segments[worker];
+  std::vector<std::uint8_t> wanted(n);
+  for (int k = 1; k <= n; ++k) wanted[k - 1] = retry[first + k - 1] != kNone;
+  auto frame_of = [&](int k) {
+    PlaneFrame frame = base;
+    frame.origin = specs[first + k - 1].point;
+    return frame;
+  };
+  auto add_kept = [&](int k) {
+    auto& all = run.kept[first + k - 1];
+    all.insert(all.end(), segs[k - 1].begin(), segs[k - 1].end());
+  };
+  const CutRegion region{sk.heads[b], sk.direction(b), reach[b]};
+  const CutRegion wide{sk.heads[b], sk.direction(b), 3.0 * reach[b]};
+  const CutRegion* done = &region;
+  bool grow = false;
+  for (int k = 1; k <= n; ++k) grow |= retry[first + k - 1] == kGrowFamily;
+  if (grow && wide.radius < diag) {
+    cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, &wide, wanted.data(), &region);
+    done = &wide;
+    for (int k = 1; k <= n; ++k) {
+      if (!wanted[k - 1]) continue;
+      add_kept(k);
+      if (retry[first + k - 1] != kGrowFamily) continue;
+      run.check_cancel();
+      const PlaneCut cut = assemble_loops(run.kept[first + k - 1], 0.0);
+      const SectionGeometry geom = select_region(cut, nullptr);
+      if (local_ok(run, cut, geom, inside_at(run, b, k * h))) {
+        states[first + k - 1] = finish(frame_of(k), geom, &wide, ro);
+        run.sections_done();
+        wanted[k - 1] = 0;
+      }
+    }
+  }
+  if (std::find(wanted.begin(), wanted.end(), 1) == wanted.end()) return;
+  cut_mesh_parallel(mesh, base, h, n, segs, &run.grid, nullptr, wanted.data(), done);
+  for (int k = 1; k <= n; ++k) {
+    if (!wanted[k - 1]) continue;
+    run.check_cancel();
+    add_kept(k);
+    states[first + k - 1] =
+        finish_whole(frame_of(k), run.kept[first + k - 1], run.gap, run.vertex_bone.data(), b, ro);
+    run.sections_done();
   }
 }
 

@@ -23,9 +23,10 @@
 #include <memory>
 #include <vector>
 
+#include "loads.hpp"
+#include "loose_pieces.hpp"
 #include "osteon/analysis.hpp"
-#include "osteon/loads.hpp"
-#include "osteon/regions.hpp"
+#include "osteon/printed_section.hpp"
 #include "osteon/slicer.hpp"
 
 namespace osteon {
@@ -99,14 +100,33 @@ struct SectionState {
   double cut_modulus = 0.0;   // mm^3
   double junction_delta = 0;  // > 0: junction check made with neighbour planes at +-delta, mm
   std::vector<std::vector<Vec3>> cut_loops;  // keep_outlines, junction only: the whole cut's loops
+  // The printed section (AnalysisOptions::print; solid: modulus is the solid one, areas 0).
+  double solid_modulus = 0.0;  // W of the region as cut, mm^3 (modulus: as printed)
+  double wall_area = 0.0;      // mm^2
+  double skin_area = 0.0;      // mm^2
+  double infill_area = 0.0;    // mm^2
+  std::vector<std::vector<Vec3>> infill_loops;  // keep_outlines: the sparse region's loops, 3D mm
+};
+
+/// What set_section_region needs of the options: keep the loops, and how the part is printed.
+struct RegionOptions {
+  explicit RegionOptions(const AnalysisOptions& options)
+      : keep(options.keep_outlines),
+        print(options.print.kind == PrintOptions::kSolid ? nullptr : &options.print),
+        build(options.build_direction.normalized()) {}
+  bool keep = false;
+  const PrintOptions* print = nullptr;  // null: solid (the section as cut, no print code runs)
+  Vec3 build = Vec3::UnitZ();           // unit build direction
 };
 
 /// Sets a found section's properties (area, W, centroid, thin axis, aspect, thickness and, with
-/// `keep`, its 3D loops) from a region in `frame`'s plane coordinates; false (nothing changed)
+/// `ro.keep`, its 3D loops) from a region in `frame`'s plane coordinates; false (nothing changed)
 /// when the region is degenerate. The thickness is left NaN (the region and a lower bound of
 /// its thickness are kept): section_thickness_at computes it when it is needed.
+/// With a print (`ro.print`), W is the printed section's (printed_section.hpp), solid_modulus
+/// the cut's.
 bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
-                        bool keep);
+                        const RegionOptions& ro);
 
 /// The section's thickness (mm), computed from its kept region on first need.
 double section_thickness_at(SectionState& st);
@@ -245,12 +265,39 @@ struct Analyzer::Impl {
   /// 3c. Phase 2: queued sections re-cut wider or whole (and, beside them, the loose pieces
   /// found and the moment-arm index built over the vertices of the attached ones).
   void cut_retries(RunState& run);
+  /// Steps of cut_retries: the units to re-cut (families first), the loose pieces and the
+  /// moment-arm index (one more unit), a joint's re-cut, a family's re-cuts.
+  std::vector<int> retry_units(RunState& run);
+  void find_loose_pieces_and_arms(RunState& run);
+  void retry_joint(RunState& run, int job, int worker);
+  void retry_family(RunState& run, int job, int worker);
   /// 3d. Junctions (SPEC §3, docs/junctions.md): sections whose whole cut is much larger than
   /// their bone's typical section are re-cut at +-delta; where only a core continues through
   /// the plane, the section's properties are the core's (flag kFlagJunction).
   void find_junction_cores(RunState& run);
+  /// Steps of find_junction_cores: each bone's typical section, the candidates, the planes of a
+  /// candidate's neighbours (its family's sections m intervals away, or two planes cut), and
+  /// one candidate's check.
+  struct JunctionFamily {
+    int first, count, m;  // the family's sections [first, first + count); m: 0 = cut planes
+  };
+  void typical_sections(std::vector<double>& delta, std::vector<double>& median) const;
+  JunctionFamily junction_family(int i, double delta) const;
+  std::vector<int> junction_candidates(RunState& run, const std::vector<double>& delta,
+                                       const std::vector<double>& median);
+  bool cut_neighbour_planes(RunState& run, int i, double delta, std::vector<CutSegment>& segs,
+                            SectionPolygon (&regions)[2],
+                            std::vector<const SectionPolygon*>& neighbours, int& sides) const;
+  void check_junction(RunState& run, int i, double delta, double median,
+                      const std::vector<std::uint8_t>& neighbour_ok,
+                      std::vector<CutSegment>& scratch);
   /// 4. Per section: load point, moment arm, moment, stress, culled and weak flags.
   AnalysisResult compute_loads(RunState& run);
+  /// Steps of compute_loads: each section's load, moment and stress; the sections that drive
+  /// results (unreliable slivers and too-thin sections flagged); the outlines packed.
+  AnalysisResult section_loads(RunState& run);
+  std::vector<std::uint8_t> usable_sections(AnalysisResult& r);
+  void pack_outlines(AnalysisResult& r) const;
   /// 5. Per vertex: stress interpolated along its bone between its sections.
   void compute_vertex_stress(RunState& run, AnalysisResult& result);
   /// Keeps this run's inputs so that the next run re-cuts only what changed.

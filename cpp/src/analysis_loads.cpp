@@ -5,15 +5,82 @@
 #include <vector>
 
 #include "analysis_impl.hpp"
-#include "osteon/regions.hpp"
 #include "parallel.hpp"
+#include "thickness.hpp"
 
 namespace osteon {
+namespace {
+
+// Packs the loops `member` of the sections that `take` (AnalysisResult's outline_* layout):
+// section i owns loops section_start[i] .. section_start[i + 1], loop l the points
+// loop_start[l] .. loop_start[l + 1].
+template <class Take>
+void pack_loops(const std::vector<SectionState>& states,
+                std::vector<std::vector<Vec3>> SectionState::*member, const Take& take,
+                std::vector<Vec3>& points, std::vector<std::int64_t>& loop_start,
+                std::vector<std::int64_t>& section_start) {
+  const int ns = static_cast<int>(states.size());
+  section_start.reserve(ns + 1);
+  loop_start.push_back(0);
+  for (int i = 0; i < ns; ++i) {
+    section_start.push_back(static_cast<std::int64_t>(loop_start.size()) - 1);
+    if (!take(i)) continue;
+    for (const auto& loop : states[i].*member) {
+      points.insert(points.end(), loop.begin(), loop.end());
+      loop_start.push_back(static_cast<std::int64_t>(points.size()));
+    }
+  }
+  section_start.push_back(static_cast<std::int64_t>(loop_start.size()) - 1);
+}
+
+}  // namespace
 
 AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  const int ns = static_cast<int>(specs.size());
+  AnalysisResult r = section_loads(run);
+  // Direction-dependent allowable (FDM layers, osteon/layers.hpp): exactly allowable_stress
+  // when isotropic.
+  section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
+                     options.layer_strength_ratio, r.section_allowable, r.across_layers);
+  r.stress_ratio.assign(ns, kNaN);
+  const std::vector<std::uint8_t> usable = usable_sections(r);
+  // Thickness not needed so far: the regions, for complete_section_thickness().
+  if (options.defer_thickness) {
+    for (int i = 0; i < ns; ++i) {
+      const SectionState& st = states[i];
+      if (!st.found || !st.analysed || !std::isnan(st.thickness) ||
+          (r.section_flags[i] & kFlagUnreliable))
+        continue;
+      if (r.thickness_pending.empty()) r.thickness_pending.resize(ns);
+      r.thickness_pending[i] = st.analysed;
+    }
+  }
+  for (int i = 0; i < ns; ++i) {
+    if (!usable[i]) continue;
+    r.max_moment = std::max(r.max_moment, r.moment[i]);
+    r.max_stress = std::max(r.max_stress, r.stress[i]);
+    if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
+      r.max_stress_ratio = r.stress_ratio[i];
+      r.weakest_section = i;
+    }
+  }
+  r.safe_modulus = r.max_moment / options.allowable_stress;
+  for (int i = 0; i < ns; ++i) {
+    if (!usable[i]) continue;
+    r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
+    r.weak[i] = r.stress[i] > r.section_allowable[i];
+  }
+  run.check_cancel();
+  if (options.keep_outlines) pack_outlines(r);
+  return r;
+}
+
+// Farthest downstream point of every section, then its moment and stress (the result's
+// per-section arrays; the allowable and the ratio come later).
+AnalysisResult Analyzer::Impl::section_loads(RunState& run) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   const MeshView& mesh = run.mesh;
-  // Farthest downstream point of every section, then stress.
   const int ns = static_cast<int>(specs.size());
   AnalysisResult r;
   r.held_bone = tree.held_bone;
@@ -31,6 +98,10 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   r.section_thickness.resize(ns);
   r.section_cut_area.resize(ns);
   r.section_cut_modulus.resize(ns);
+  r.section_solid_modulus.resize(ns);
+  r.section_wall_area.resize(ns);
+  r.section_skin_area.resize(ns);
+  r.section_infill_area.resize(ns);
   r.moment_arm.resize(ns);
   r.moment.resize(ns);
   r.stress.resize(ns);
@@ -65,114 +136,78 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
       r.section_thickness[i] = st.found ? st.thickness : kNaN;
       r.section_cut_area[i] = st.found ? st.cut_area : 0.0;
       r.section_cut_modulus[i] = st.found ? st.cut_modulus : kNaN;
+      r.section_solid_modulus[i] = st.found ? st.solid_modulus : kNaN;
+      r.section_wall_area[i] = st.found ? st.wall_area : 0.0;
+      r.section_skin_area[i] = st.found ? st.skin_area : 0.0;
+      r.section_infill_area[i] = st.found ? st.infill_area : 0.0;
       r.stress[i] = st.found ? r.moment[i] / st.modulus : kNaN;
     }
   });
-  // Direction-dependent allowable (FDM layers, osteon/layers.hpp): exactly allowable_stress
-  // when isotropic.
-  section_allowables(r.section_normal, options.build_direction, options.allowable_stress,
-                     options.layer_strength_ratio, r.section_allowable, r.across_layers);
-  r.stress_ratio.assign(ns, kNaN);
-  // Sections that drive results: found, not doubted (unreliable), not too thin to print. An
-  // outside section far smaller than its bone's sections inside the mesh (below a tenth of their
-  // median area) is a sliver the bone only grazes: unreliable, no number. Too-thin sections keep
-  // their stress and ratio but drive neither the maximum, weak, culled nor the safe modulus.
-  std::vector<std::uint8_t> usable(ns, 0);
-  {
-    const int nb = num_bones;
-    std::vector<std::vector<double>> inner(nb);
-    for (int i = 0; i < ns; ++i)
-      if (states[i].found && !(states[i].flags & kFlagOutside))
-        inner[specs[i].bone].push_back(states[i].area);
-    std::vector<double> median(nb, 0.0);
-    for (int b = 0; b < nb; ++b) {
-      auto& a = inner[b];
-      if (a.empty()) continue;
-      std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
-      median[b] = a[a.size() / 2];
-    }
-    for (int i = 0; i < ns; ++i) {
-      if (!states[i].found) continue;
-      std::uint32_t& flags = r.section_flags[i];
-      if ((flags & kFlagOutside) && states[i].area < 0.1 * median[specs[i].bone]) {
-        flags |= kFlagUnreliable;
-        r.section_area[i] = r.section_cut_area[i] = 0.0;
-        r.section_cut_modulus[i] = kNaN;
-        r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
-        r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
-        continue;
-      }
-      // The exact thickness only for a section that is too thin (the check mostly decides
-      // from a lower bound of the width and a search of the walls within the minimum).
-      SectionState& st = states[i];
-      const bool thin =
-          std::isnan(st.thickness)
-              ? st.analysed &&
-                    region_thinner_than(*st.analysed, options.min_thickness, st.thickness_bound)
-              : st.thickness < options.min_thickness;
-      if (thin) {
-        r.section_thickness[i] = section_thickness_at(st);
-        flags |= kFlagTooThin;
-      }
-      r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
-      usable[i] = !(flags & kFlagTooThin);
-    }
-  }
-  // Thickness not needed so far: the regions, for complete_section_thickness().
-  if (options.defer_thickness) {
-    for (int i = 0; i < ns; ++i) {
-      const SectionState& st = states[i];
-      if (!st.found || !st.analysed || !std::isnan(st.thickness) ||
-          (r.section_flags[i] & kFlagUnreliable))
-        continue;
-      if (r.thickness_pending.empty()) r.thickness_pending.resize(ns);
-      r.thickness_pending[i] = st.analysed;
-    }
-  }
-  for (int i = 0; i < ns; ++i) {
-    if (!usable[i]) continue;
-    r.max_moment = std::max(r.max_moment, r.moment[i]);
-    r.max_stress = std::max(r.max_stress, r.stress[i]);
-    if (r.weakest_section < 0 || r.stress_ratio[i] > r.max_stress_ratio) {
-      r.max_stress_ratio = r.stress_ratio[i];
-      r.weakest_section = i;
-    }
-  }
-  r.safe_modulus = r.max_moment / options.allowable_stress;
-  for (int i = 0; i < ns; ++i) {
-    if (!usable[i]) continue;
-    r.culled[i] = r.section_modulus[i] > r.max_moment / r.section_allowable[i];
-    r.weak[i] = r.stress[i] > r.section_allowable[i];
-  }
-  run.check_cancel();
-  if (options.keep_outlines) {
-    r.outline_section_start.reserve(ns + 1);
-    r.outline_loop_start.push_back(0);
-    for (int i = 0; i < ns; ++i) {
-      r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
-      // Only regions analysed: not an unreliable sliver (no number, no outline).
-      if (!states[i].found || (r.section_flags[i] & kFlagUnreliable)) continue;
-      for (const auto& loop : states[i].loops) {
-        r.outline_points.insert(r.outline_points.end(), loop.begin(), loop.end());
-        r.outline_loop_start.push_back(static_cast<std::int64_t>(r.outline_points.size()));
-      }
-    }
-    r.outline_section_start.push_back(static_cast<std::int64_t>(r.outline_loop_start.size()) - 1);
-    r.cut_outline_section_start.reserve(ns + 1);
-    r.cut_outline_loop_start.push_back(0);
-    for (int i = 0; i < ns; ++i) {
-      r.cut_outline_section_start.push_back(
-          static_cast<std::int64_t>(r.cut_outline_loop_start.size()) - 1);
-      if (!states[i].found || !(r.section_flags[i] & kFlagJunction)) continue;
-      for (const auto& loop : states[i].cut_loops) {
-        r.cut_outline_points.insert(r.cut_outline_points.end(), loop.begin(), loop.end());
-        r.cut_outline_loop_start.push_back(static_cast<std::int64_t>(r.cut_outline_points.size()));
-      }
-    }
-    r.cut_outline_section_start.push_back(
-        static_cast<std::int64_t>(r.cut_outline_loop_start.size()) - 1);
-  }
   return r;
+}
+
+// Sections that drive results: found, not doubted (unreliable), not too thin to print. An
+// outside section far smaller than its bone's sections inside the mesh (below a tenth of their
+// median area) is a sliver the bone only grazes: unreliable, no number. Too-thin sections keep
+// their stress and ratio but drive neither the maximum, weak, culled nor the safe modulus.
+std::vector<std::uint8_t> Analyzer::Impl::usable_sections(AnalysisResult& r) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  const int ns = static_cast<int>(specs.size());
+  std::vector<std::uint8_t> usable(ns, 0);
+  const int nb = num_bones;
+  std::vector<std::vector<double>> inner(nb);
+  for (int i = 0; i < ns; ++i)
+    if (states[i].found && !(states[i].flags & kFlagOutside))
+      inner[specs[i].bone].push_back(states[i].area);
+  std::vector<double> median(nb, 0.0);
+  for (int b = 0; b < nb; ++b) {
+    auto& a = inner[b];
+    if (a.empty()) continue;
+    std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
+    median[b] = a[a.size() / 2];
+  }
+  for (int i = 0; i < ns; ++i) {
+    if (!states[i].found) continue;
+    std::uint32_t& flags = r.section_flags[i];
+    if ((flags & kFlagOutside) && states[i].area < 0.1 * median[specs[i].bone]) {
+      flags |= kFlagUnreliable;
+      r.section_area[i] = r.section_cut_area[i] = 0.0;
+      r.section_cut_modulus[i] = r.section_solid_modulus[i] = kNaN;
+      r.section_wall_area[i] = r.section_skin_area[i] = r.section_infill_area[i] = 0.0;
+      r.section_modulus[i] = r.stress[i] = r.section_aspect[i] = r.section_thickness[i] = kNaN;
+      r.section_thin_axis[i] = Vec3(kNaN, kNaN, kNaN);
+      continue;
+    }
+    // The exact thickness only for a section that is too thin (the check mostly decides
+    // from a lower bound of the width and a search of the walls within the minimum).
+    SectionState& st = states[i];
+    const bool thin = std::isnan(st.thickness)
+                          ? st.analysed && region_thinner_than(*st.analysed, options.min_thickness,
+                                                               st.thickness_bound)
+                          : st.thickness < options.min_thickness;
+    if (thin) {
+      r.section_thickness[i] = section_thickness_at(st);
+      flags |= kFlagTooThin;
+    }
+    r.stress_ratio[i] = r.stress[i] / r.section_allowable[i];
+    usable[i] = !(flags & kFlagTooThin);
+  }
+  return usable;
+}
+
+// Each analysed region's loops (outline_*), each junction's whole cut (cut_outline_*) and each
+// region's sparse infill (infill_outline_*; none when the part is solid).
+void Analyzer::Impl::pack_outlines(AnalysisResult& r) const {
+  // Only regions analysed: not an unreliable sliver (no number, no outline).
+  auto analysed = [&](int i) { return states[i].found && !(r.section_flags[i] & kFlagUnreliable); };
+  pack_loops(states, &SectionState::loops, analysed, r.outline_points, r.outline_loop_start,
+             r.outline_section_start);
+  pack_loops(
+      states, &SectionState::cut_loops,
+      [&](int i) { return states[i].found && (r.section_flags[i] & kFlagJunction); },
+      r.cut_outline_points, r.cut_outline_loop_start, r.cut_outline_section_start);
+  pack_loops(states, &SectionState::infill_loops, analysed, r.infill_outline_points,
+             r.infill_outline_loop_start, r.infill_outline_section_start);
 }
 
 }  // namespace osteon

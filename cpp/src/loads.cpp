@@ -1,4 +1,4 @@
-#include "osteon/loads.hpp"
+#include "loads.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -131,9 +131,19 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
   group_offset_.assign(nb + 1, 0);
   for (int b = 0; b < nb; ++b)
     group_offset_[b + 1] = group_offset_[b] + static_cast<Index>(slab_params_[b].size()) + 1;
+  group_vertices(mesh, s, vertex_bone, skip);
+  pack_buckets(mesh, skip);
+  build_box_trees(tree);
+}
+
+// Each kept vertex's group (vertex_group_) and its pseudo-angle in [0, 4] around the bone axis
+// (vertex_angle_: a monotone function of the angle in the bone's frame u, v: no atan); the
+// vertices per group (group_count_).
+void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
+                                    const std::vector<int>& vertex_bone,
+                                    const std::vector<std::uint8_t>* skip) {
+  const int nb = s.num_bones();
   const Index ngroups = group_offset_[nb];
-  // Each vertex's group and its pseudo-angle in [0, 4] around the bone axis (a monotone
-  // function of the angle in the bone's frame u, v: no atan).
   // (Scratch arrays left uninitialised: every kept vertex's entry is written before it is read.)
   if (vertex_capacity_ < mesh.num_vertices) {
     vertex_group_.reset(new Index[mesh.num_vertices]);
@@ -167,6 +177,16 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
     const double r = sum > 0 ? du / sum : 1.0;
     vertex_angle[v] = dv >= 0 ? 1.0 - r : 3.0 + r;
   }
+}
+
+// The vertices in buckets of ~16 per group (sectors around the bone axis), packed by bucket
+// (packed_xyz_, packed_index_), each bucket with its box.
+void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip) {
+  const Index ngroups = group_offset_.back();
+  Index* const vertex_group = vertex_group_.get();
+  const double* const vertex_angle = vertex_angle_.get();
+  const std::vector<Index>& group_count = group_count_;
+  auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
   // Buckets: ~16 vertices each (fewer, wider buckets cost more scanning, more cost heap work).
   constexpr Index kBucket = 16;
   bucket_offset_.assign(ngroups + 1, 0);
@@ -215,6 +235,15 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
     bucket.lo = bucket.lo.cwiseMin(p);
     bucket.hi = bucket.hi.cwiseMax(p);
   }
+}
+
+// The box trees: over each group's buckets, over each bone's slabs, and each bone's subtree box
+// (the bone and every bone beyond it in `tree`).
+void MomentArmIndex::build_box_trees(const LoadTree& tree) {
+  const Index ngroups = group_offset_.back();
+  const int nb = static_cast<int>(group_offset_.size()) - 1;
+  const Index nbuckets = bucket_offset_[ngroups];
+  const double inf = std::numeric_limits<double>::infinity();
   // A bottom-up tree over the buckets of each group (leaves k + j, parents i = (k + j) / 2, ...);
   // its root (or single leaf) is the group's box.
   groups_.assign(ngroups, Group{});

@@ -1,11 +1,11 @@
-// Choice of the section around a bone among a plane cut's loops (select_region, regions.hpp), and
-// the one-plane convenience (see osteon/slicer.hpp). The slicer's other parts: slicer_grid.cpp
+// Choice of the section around a bone among a plane cut's loops (select_region, region_choice.hpp),
+// and the one-plane convenience (see osteon/slicer.hpp). The slicer's other parts: slicer_grid.cpp
 // (face grid), slicer_cut.cpp (plane cut), slicer_loops.cpp (loop assembly).
 #include "osteon/slicer.hpp"
 
 #include <vector>
 
-#include "osteon/regions.hpp"
+#include "region_choice.hpp"
 
 namespace osteon {
 

@@ -15,21 +15,43 @@
 
 namespace osteon {
 
-void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
+namespace {
+
+constexpr int kBlock = 4;  // cells per block edge
+
+}  // namespace
+
+// The grid's box, cell size and numbering: cells of about `faces_per_cell` triangles, ordered
+// block by block (kBlock^3 cells) so that a block's cells are contiguous.
+struct FaceGrid::Layout {
+  Vec3 lo, hi;                 // the mesh's box, mm
+  Vec3 inv;                    // cells per mm along each axis
+  Vec3 size;                   // a cell's edges, mm
+  Eigen::Array3i dims, bdims;  // cells and blocks along each axis
+  Index total = 0;             // cells
+  // id = (block index) * kBlock^3 + (index inside the block), a sum of one term per axis.
+  std::vector<Index> axis_term[3];
+  // The cell of `raw`, the truncated grid coordinates (c[k] - lo[k]) * inv[k] of a point c.
+  Index cell_id(const int raw[3]) const {
+    return axis_term[0][std::clamp(raw[0], 0, dims[0] - 1)] +
+           axis_term[1][std::clamp(raw[1], 0, dims[1] - 1)] +
+           axis_term[2][std::clamp(raw[2], 0, dims[2] - 1)];
+  }
+};
+
+FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell) const {
   const Index nf = mesh.num_faces;
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  Layout grid;
+  Vec3& lo = grid.lo;
+  Vec3& hi = grid.hi;
+  lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  hi = -lo;
   for (Index i = 0; i < mesh.num_vertices; ++i) {
     const Vec3 p = mesh.vertex(i);
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
   const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-12 * (1.0 + (hi - lo).norm())));
-  // Boxes are widened by a few ulps of the coordinates so that a plane through a box's face is
-  // never rounded out of it (the plane tests compute n.center +- |n|.half).
-  const double slack = 64 * std::numeric_limits<double>::epsilon() *
-                       std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
-  slack_ = slack;
-  tight_on_ = false;
   // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
   // sample) so that a non-empty cell holds about faces_per_cell triangles.
   const Index step = std::max<Index>(1, nf / 2048);
@@ -47,39 +69,52 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   // Never more (volume) cells than a quarter of the faces, so the counting arrays stay small.
   cell = std::max(cell, std::cbrt(extent.prod() / (0.25 * double(std::max<Index>(nf, 4)))));
   if (!(cell > 0) || !std::isfinite(cell)) cell = extent.maxCoeff();
-  constexpr int kBlock = 4;  // cells per block edge
-  Eigen::Array3i dims;
+  Eigen::Array3i& dims = grid.dims;
   for (int k = 0; k < 3; ++k) {
     dims[k] = static_cast<int>(std::clamp(std::ceil(extent[k] / cell), 1.0, 256.0));
     dims[k] = (dims[k] + kBlock - 1) / kBlock * kBlock;
   }
-  const Vec3 inv(dims[0] / extent.x(), dims[1] / extent.y(), dims[2] / extent.z());
-  const Eigen::Array3i bdims = dims / kBlock;
-  // Cell ids ordered block by block so that a block's cells are contiguous: id = (block index) *
-  // kBlock^3 + (index inside the block), which is a sum of one term per axis, tabulated once.
-  // `raw`: the truncated grid coordinates (c[k] - lo[k]) * inv[k] of a point c.
-  std::vector<Index> axis_term[3];
-  {
-    const Index per_block = kBlock * kBlock * kBlock;
-    const Index block_step[3] = {Index(bdims[1]) * bdims[2] * per_block,
-                                 Index(bdims[2]) * per_block, per_block};
-    const Index inner_step[3] = {kBlock * kBlock, kBlock, 1};
-    for (int k = 0; k < 3; ++k) {
-      axis_term[k].resize(dims[k]);
-      for (int x = 0; x < dims[k]; ++x)
-        axis_term[k][x] = (x / kBlock) * block_step[k] + (x % kBlock) * inner_step[k];
-    }
+  grid.inv = Vec3(dims[0] / extent.x(), dims[1] / extent.y(), dims[2] / extent.z());
+  grid.bdims = dims / kBlock;
+  const Eigen::Array3i& bdims = grid.bdims;
+  const Index per_block = kBlock * kBlock * kBlock;
+  const Index block_step[3] = {Index(bdims[1]) * bdims[2] * per_block, Index(bdims[2]) * per_block,
+                               per_block};
+  const Index inner_step[3] = {kBlock * kBlock, kBlock, 1};
+  for (int k = 0; k < 3; ++k) {
+    grid.axis_term[k].resize(dims[k]);
+    for (int x = 0; x < dims[k]; ++x)
+      grid.axis_term[k][x] = (x / kBlock) * block_step[k] + (x % kBlock) * inner_step[k];
   }
-  auto cell_id = [&](const int raw[3]) {
-    return axis_term[0][std::clamp(raw[0], 0, dims[0] - 1)] +
-           axis_term[1][std::clamp(raw[1], 0, dims[1] - 1)] +
-           axis_term[2][std::clamp(raw[2], 0, dims[2] - 1)];
-  };
-  const Index total = Index(dims[0]) * dims[1] * dims[2];
-  // One pass over the triangles (split over the workers): cell of the centroid, and how far each
-  // cell's triangles stick out of it (so that a cell's box = its grid box widened by that,
-  // without a second pass).
+  grid.total = Index(dims[0]) * dims[1] * dims[2];
+  grid.size = Vec3(extent.x() / dims[0], extent.y() / dims[1], extent.z() / dims[2]);
+  return grid;
+}
+
+void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
+  const Index nf = mesh.num_faces;
+  const Layout grid = layout(mesh, faces_per_cell);
+  // Boxes are widened by a few ulps of the coordinates so that a plane through a box's face is
+  // never rounded out of it (the plane tests compute n.center +- |n|.half).
+  slack_ = 64 * std::numeric_limits<double>::epsilon() *
+           std::max(grid.lo.cwiseAbs().maxCoeff(), grid.hi.cwiseAbs().maxCoeff());
+  tight_on_ = false;
   const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
+  bin_faces(mesh, grid, parts);
+  sort_faces_by_cell(mesh, grid.total, parts);
+  collect_cells(grid);
+  start_.push_back(nf);
+  block_start_.push_back(static_cast<Index>(center_.size()));
+  build_entries(mesh, parts);
+}
+
+// One pass over the triangles (split over `parts` workers): cell of the centroid (cell_of_), the
+// faces per cell and part (part_count_), and how far each cell's triangles stick out of it
+// (part_overhang_; so that a cell's box = its grid box widened by that, without a second pass).
+void FaceGrid::bin_faces(const MeshView& mesh, const Layout& grid, int parts) {
+  const Index nf = mesh.num_faces, total = grid.total;
+  const Vec3& lo = grid.lo;
+  const Vec3& inv = grid.inv;
   std::int32_t* cell_of = cell_of_.reserve(nf);
   auto& part_count = part_count_;
   auto& part_overhang = part_overhang_;
@@ -91,10 +126,6 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
     part_count[p].assign(total, 0);
     part_overhang[p].assign(total, 0.0f);
   }
-  const Vec3 size(extent.x() / dims[0], extent.y() / dims[1], extent.z() / dims[2]);
-  auto part_range = [&](long part) {
-    return std::make_pair(nf * part / parts, nf * (part + 1) / parts);
-  };
 #if defined(__SSE2__)
   const __m128d lo_xy = _mm_loadu_pd(lo.data()), inv_xy = _mm_loadu_pd(inv.data());
   const __m128d kThree = _mm_set1_pd(3.0);
@@ -103,7 +134,7 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   detail::parallel_for(parts, parts, [&](long part, int) {
     auto& count = part_count[part];
     auto& overhang = part_overhang[part];
-    const auto [begin, end] = part_range(part);
+    const Index begin = nf * part / parts, end = nf * (part + 1) / parts;
     for (Index f = begin; f < end; ++f) {
       const std::int32_t* t = mesh.faces + 3 * f;
       int raw[3];
@@ -135,14 +166,22 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
       reach = std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
                         (c - centroid).cwiseAbs().maxCoeff()});
 #endif
-      const Index id = cell_id(raw);
+      const Index id = grid.cell_id(raw);
       cell_of[f] = static_cast<std::int32_t>(id);
       ++count[id];
       overhang[id] = std::max(overhang[id], static_cast<float>(reach * (1 + 1e-6)));
     }
   });
-  // Cell starts, and where each part writes its triangles of a cell: after the earlier parts', so
-  // the order is the sequential one whatever the number of workers.
+}
+
+// Cell starts (cell_start_), and the faces sorted by cell (faces_): each part writes its
+// triangles of a cell after the earlier parts', so the order is the sequential one whatever the
+// number of workers. The parts' overhangs are merged into part_overhang_[0].
+void FaceGrid::sort_faces_by_cell(const MeshView& mesh, Index total, int parts) {
+  const Index nf = mesh.num_faces;
+  auto& part_count = part_count_;
+  auto& part_overhang = part_overhang_;
+  const std::int32_t* cell_of = cell_of_.get();
   // The cell starts; count[c + 1] is written at cell c (so no zero-fill).
   Index* count = cell_start_.reserve(total + 1);
   count[0] = 0;
@@ -160,7 +199,7 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   faces_.reserve(3 * nf);  // written in full below
   detail::parallel_for(parts, parts, [&](long part, int) {
     auto& fill = part_count[part];
-    const auto [begin, end] = part_range(part);
+    const Index begin = nf * part / parts, end = nf * (part + 1) / parts;
     for (Index f = begin; f < end; ++f) {
       const Index k = fill[cell_of[f]]++;
       faces_[3 * k] = mesh.faces[3 * f];
@@ -168,8 +207,18 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
       faces_[3 * k + 2] = mesh.faces[3 * f + 2];
     }
   });
-  // Keep the non-empty cells only, each with its grid box widened by its triangles' overhang
-  // (centroids lie inside the grid box), and the non-empty blocks with the box of their cells.
+}
+
+// Keeps the non-empty cells only, each with its grid box widened by its triangles' overhang
+// (centroids lie inside the grid box), and the non-empty blocks with the box of their cells.
+void FaceGrid::collect_cells(const Layout& grid) {
+  const Index total = grid.total;
+  const Vec3& lo = grid.lo;
+  const Vec3& size = grid.size;
+  const Eigen::Array3i& bdims = grid.bdims;
+  const Index* count = cell_start_.get();
+  const std::vector<float>& overhang = part_overhang_[0];
+  const double slack = slack_;
   center_.clear();
   half_.clear();
   start_.clear();
@@ -205,9 +254,6 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
     block_half_.push_back(0.5 * (khi - klo) + Vec3::Constant(slack));
     block_start_.push_back(cells_before);
   }
-  start_.push_back(nf);
-  block_start_.push_back(static_cast<Index>(center_.size()));
-  build_entries(mesh, parts);
 }
 
 void FaceGrid::build_entries(const MeshView& mesh, int parts) {

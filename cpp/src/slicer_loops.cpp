@@ -96,18 +96,17 @@ struct LoopScratch {
   return scratch;
 }
 
-}  // namespace
-
-PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_tolerance) {
-  PlaneCut cut;
-  if (input.empty()) return cut;
-  // Pair the two endpoints that lie on the same mesh edge; orientation-agnostic so that
-  // inconsistently wound meshes still give loops. An edge with more than two endpoints is first
-  // explained by exact duplicate segments (doubled triangles), which are dropped; whatever is
-  // still non-manifold after that is flagged.
+// Pairs the two endpoints of `input`'s segments that lie on the same mesh edge (partner[] in the
+// scratch, both ways; -1 for an endpoint alone on its edge); orientation-agnostic so that
+// inconsistently wound meshes still give loops. An edge with more than two endpoints is first
+// explained by exact duplicate segments (doubled triangles), which are dropped (into
+// `deduplicated`, which the answer then points to); whatever is still non-manifold after that
+// is flagged in `flags`. Returns the segments the partners index.
+const std::vector<CutSegment>* pair_segment_ends(const std::vector<CutSegment>& input,
+                                                 LoopScratch& scratch,
+                                                 std::vector<CutSegment>& deduplicated,
+                                                 std::uint32_t& flags) {
   const std::vector<CutSegment>* source = &input;
-  std::vector<CutSegment> deduplicated;
-  LoopScratch& scratch = loop_scratch();
   EdgeTable& table = scratch.table;
   std::vector<std::int32_t>& partner = scratch.partner;
   for (int attempt = 0; attempt < 2; ++attempt) {
@@ -138,12 +137,17 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
         continue;
       }
     }
-    if (crowded) cut.flags |= kFlagNonManifold;
+    if (crowded) flags |= kFlagNonManifold;
     break;
   }
-  const CutSegment* segments = source->data();
-  const std::size_t m = source->size();
-  const std::int32_t* pair = partner.data();
+  return source;
+}
+
+// Walks the paired segments (pair_segment_ends) into chains: closed ones into cut.loops, open
+// ones (from their true start) into cut.open_chains.
+void walk_segment_chains(const CutSegment* segments, std::size_t m, LoopScratch& scratch,
+                         PlaneCut& cut) {
+  const std::int32_t* pair = scratch.partner.data();
   std::vector<std::uint8_t>& used_flags = scratch.used;
   used_flags.assign(m, 0);
   std::uint8_t* used = used_flags.data();
@@ -203,114 +207,144 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
       cut.loops.emplace_back(forward, forward + nf);
     }
   }
-  // Close small gaps: join open ends closer than the tolerance, closest pairs first (a chain's
-  // own two ends close it into a loop). Ends are bucketed on a grid of the tolerance's size, so
-  // this stays linear even for triangle soups where every triangle is its own chain.
-  auto& chains = cut.open_chains;
-  if (!chains.empty() && gap_tolerance > 0) {
-    const std::size_t c = chains.size();
-    // End 2i is chain i's front, 2i+1 its back.
-    auto end_point = [&](std::size_t end) -> const Vec2& {
-      return end % 2 == 0 ? chains[end / 2].front() : chains[end / 2].back();
-    };
-    const double cell = gap_tolerance;
-    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> buckets;
-    auto cell_of = [&](const Vec2& p, int dx, int dy) {
-      const std::int64_t x = static_cast<std::int64_t>(std::floor(p.x() / cell)) + dx;
-      const std::int64_t y = static_cast<std::int64_t>(std::floor(p.y() / cell)) + dy;
-      return (static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull) ^
-             static_cast<std::uint64_t>(y);
-    };
-    for (std::size_t end = 0; end < 2 * c; ++end)
-      buckets[cell_of(end_point(end), 0, 0)].push_back(static_cast<std::uint32_t>(end));
-    struct Pair {
-      double d2;
-      std::uint32_t a, b;
-    };
-    std::vector<Pair> pairs;
-    const double tol2 = gap_tolerance * gap_tolerance;
-    for (std::size_t end = 0; end < 2 * c; ++end) {
-      const Vec2& p = end_point(end);
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy) {
-          auto it = buckets.find(cell_of(p, dx, dy));
-          if (it == buckets.end()) continue;
-          for (std::uint32_t other : it->second) {
-            if (other <= end) continue;
-            const double d2 = (end_point(other) - p).squaredNorm();
-            if (d2 <= tol2) pairs.push_back({d2, static_cast<std::uint32_t>(end), other});
-          }
-        }
-    }
-    std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
-      return x.d2 < y.d2 || (x.d2 == y.d2 && (x.a < y.a || (x.a == y.a && x.b < y.b)));
-    });
-    // Join ends greedily; `link[end]` is the end it is joined to. Chains then form paths and
-    // cycles of chains; a cycle is a closed loop.
-    std::vector<std::int64_t> link(2 * c, -1);
-    std::vector<std::size_t> group(c);
-    for (std::size_t i = 0; i < c; ++i) group[i] = i;
-    auto root = [&](std::size_t i) {
-      while (group[i] != i) i = group[i] = group[group[i]];
-      return i;
-    };
-    std::vector<std::uint8_t> closed_group(c, 0);
-    for (const Pair& pr : pairs) {
-      if (link[pr.a] >= 0 || link[pr.b] >= 0) continue;
-      const std::size_t ra = root(pr.a / 2), rb = root(pr.b / 2);
-      if (ra == rb) {
-        if (closed_group[ra]) continue;
-        closed_group[ra] = 1;  // joining the two free ends of one path closes it
-      } else {
-        group[ra] = rb;
-        closed_group[rb] = closed_group[ra] || closed_group[rb];
-      }
-      link[pr.a] = pr.b;
-      link[pr.b] = pr.a;
-      cut.flags |= kFlagGapClosed;
-    }
-    // Walk each joined group from a free end (paths) or any end (cycles).
-    std::vector<std::uint8_t> done(c, 0);
-    std::vector<std::vector<Vec2>> remaining;
-    auto walk = [&](std::size_t start_end, bool cycle) {
-      std::vector<Vec2> pts;
-      std::size_t end = start_end;
-      while (true) {
-        const std::size_t chain = end / 2;
-        if (done[chain]) break;
-        done[chain] = 1;
-        // Enter the chain at `end`, traverse to its other end.
-        if (end % 2 == 0)
-          pts.insert(pts.end(), chains[chain].begin(), chains[chain].end());
-        else
-          pts.insert(pts.end(), chains[chain].rbegin(), chains[chain].rend());
-        const std::size_t exit_end = end ^ 1u;
-        if (link[exit_end] < 0) break;
-        end = static_cast<std::size_t>(link[exit_end]);
-      }
-      if (cycle) {
-        if (pts.size() >= 3) cut.loops.push_back(std::move(pts));
-      } else {
-        remaining.push_back(std::move(pts));
-      }
-    };
-    for (std::size_t i = 0; i < c; ++i) {
-      if (done[i]) continue;
-      // Find a free end of this group by walking backwards from chain i's front.
-      std::size_t end = 2 * i;
-      bool cycle = false;
-      for (std::size_t steps = 0; steps <= 2 * c; ++steps) {
-        if (link[end] < 0) break;
-        end = static_cast<std::size_t>(link[end]) ^ 1u;  // the other end of the linked chain
-        if (end == 2 * i) {
-          cycle = true;
-          break;
+}
+
+// A pair of open-chain ends within the gap tolerance (end 2i: chain i's front, 2i+1 its back).
+struct EndPair {
+  double d2;  // squared distance, mm^2
+  std::uint32_t a, b;
+};
+
+// The chains' end pairs closer than the tolerance (mm), closest first (ties by end index). Ends
+// are bucketed on a grid of the tolerance's size, so this stays linear even for triangle soups
+// where every triangle is its own chain.
+std::vector<EndPair> close_end_pairs(const std::vector<std::vector<Vec2>>& chains,
+                                     double gap_tolerance) {
+  const std::size_t c = chains.size();
+  auto end_point = [&](std::size_t end) -> const Vec2& {
+    return end % 2 == 0 ? chains[end / 2].front() : chains[end / 2].back();
+  };
+  const double cell = gap_tolerance;
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> buckets;
+  auto cell_of = [&](const Vec2& p, int dx, int dy) {
+    const std::int64_t x = static_cast<std::int64_t>(std::floor(p.x() / cell)) + dx;
+    const std::int64_t y = static_cast<std::int64_t>(std::floor(p.y() / cell)) + dy;
+    return (static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull) ^ static_cast<std::uint64_t>(y);
+  };
+  for (std::size_t end = 0; end < 2 * c; ++end)
+    buckets[cell_of(end_point(end), 0, 0)].push_back(static_cast<std::uint32_t>(end));
+  std::vector<EndPair> pairs;
+  const double tol2 = gap_tolerance * gap_tolerance;
+  for (std::size_t end = 0; end < 2 * c; ++end) {
+    const Vec2& p = end_point(end);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy) {
+        auto it = buckets.find(cell_of(p, dx, dy));
+        if (it == buckets.end()) continue;
+        for (std::uint32_t other : it->second) {
+          if (other <= end) continue;
+          const double d2 = (end_point(other) - p).squaredNorm();
+          if (d2 <= tol2) pairs.push_back({d2, static_cast<std::uint32_t>(end), other});
         }
       }
-      walk(end, cycle);
-    }
-    chains.swap(remaining);
   }
+  std::sort(pairs.begin(), pairs.end(), [](const EndPair& x, const EndPair& y) {
+    return x.d2 < y.d2 || (x.d2 == y.d2 && (x.a < y.a || (x.a == y.a && x.b < y.b)));
+  });
+  return pairs;
+}
+
+// Joins ends greedily, closest pairs first (a chain's own two ends close it into a loop): the
+// answer's [end] is the end it is joined to, or -1. Chains then form paths and cycles of chains;
+// a cycle is a closed loop. Sets kFlagGapClosed in `flags` when any pair is joined.
+std::vector<std::int64_t> link_chain_ends(const std::vector<EndPair>& pairs, std::size_t c,
+                                          std::uint32_t& flags) {
+  std::vector<std::int64_t> link(2 * c, -1);
+  std::vector<std::size_t> group(c);
+  for (std::size_t i = 0; i < c; ++i) group[i] = i;
+  auto root = [&](std::size_t i) {
+    while (group[i] != i) i = group[i] = group[group[i]];
+    return i;
+  };
+  std::vector<std::uint8_t> closed_group(c, 0);
+  for (const EndPair& pr : pairs) {
+    if (link[pr.a] >= 0 || link[pr.b] >= 0) continue;
+    const std::size_t ra = root(pr.a / 2), rb = root(pr.b / 2);
+    if (ra == rb) {
+      if (closed_group[ra]) continue;
+      closed_group[ra] = 1;  // joining the two free ends of one path closes it
+    } else {
+      group[ra] = rb;
+      closed_group[rb] = closed_group[ra] || closed_group[rb];
+    }
+    link[pr.a] = pr.b;
+    link[pr.b] = pr.a;
+    flags |= kFlagGapClosed;
+  }
+  return link;
+}
+
+// Joins the open chains whose ends are closer than the tolerance (mm): the linked groups that
+// form cycles become loops of `cut`, the others its open chains.
+void close_small_gaps(PlaneCut& cut, double gap_tolerance) {
+  auto& chains = cut.open_chains;
+  const std::size_t c = chains.size();
+  const std::vector<std::int64_t> link =
+      link_chain_ends(close_end_pairs(chains, gap_tolerance), c, cut.flags);
+  // Walk each joined group from a free end (paths) or any end (cycles).
+  std::vector<std::uint8_t> done(c, 0);
+  std::vector<std::vector<Vec2>> remaining;
+  auto walk = [&](std::size_t start_end, bool cycle) {
+    std::vector<Vec2> pts;
+    std::size_t end = start_end;
+    while (true) {
+      const std::size_t chain = end / 2;
+      if (done[chain]) break;
+      done[chain] = 1;
+      // Enter the chain at `end`, traverse to its other end.
+      if (end % 2 == 0)
+        pts.insert(pts.end(), chains[chain].begin(), chains[chain].end());
+      else
+        pts.insert(pts.end(), chains[chain].rbegin(), chains[chain].rend());
+      const std::size_t exit_end = end ^ 1u;
+      if (link[exit_end] < 0) break;
+      end = static_cast<std::size_t>(link[exit_end]);
+    }
+    if (cycle) {
+      if (pts.size() >= 3) cut.loops.push_back(std::move(pts));
+    } else {
+      remaining.push_back(std::move(pts));
+    }
+  };
+  for (std::size_t i = 0; i < c; ++i) {
+    if (done[i]) continue;
+    // Find a free end of this group by walking backwards from chain i's front.
+    std::size_t end = 2 * i;
+    bool cycle = false;
+    for (std::size_t steps = 0; steps <= 2 * c; ++steps) {
+      if (link[end] < 0) break;
+      end = static_cast<std::size_t>(link[end]) ^ 1u;  // the other end of the linked chain
+      if (end == 2 * i) {
+        cycle = true;
+        break;
+      }
+    }
+    walk(end, cycle);
+  }
+  chains.swap(remaining);
+}
+
+}  // namespace
+
+PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_tolerance) {
+  PlaneCut cut;
+  if (input.empty()) return cut;
+  LoopScratch& scratch = loop_scratch();
+  std::vector<CutSegment> deduplicated;
+  const std::vector<CutSegment>* source =
+      pair_segment_ends(input, scratch, deduplicated, cut.flags);
+  walk_segment_chains(source->data(), source->size(), scratch, cut);
+  if (!cut.open_chains.empty() && gap_tolerance > 0) close_small_gaps(cut, gap_tolerance);
   // Drop degenerate loops (fewer than three points cannot bound area).
   cut.loops.erase(std::remove_if(cut.loops.begin(), cut.loops.end(),
                                  [](const std::vector<Vec2>& l) { return l.size() < 3; }),

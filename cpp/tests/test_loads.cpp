@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "osteon/loads.hpp"
+#include "loads.hpp"
 #include "osteon/skeleton.hpp"
 #include "sorted_index.hpp"
 

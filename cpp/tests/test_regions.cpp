@@ -8,12 +8,15 @@
 #include <vector>
 
 #include "clipper2/clipper.h"
+#include "junction_core.hpp"
+#include "loose_pieces.hpp"
 #include "osteon/analysis.hpp"
-#include "osteon/regions.hpp"
 #include "osteon/section.hpp"
 #include "osteon/slicer.hpp"
+#include "region_choice.hpp"
 #include "simplify_path.hpp"
 #include "test_helpers.hpp"
+#include "thickness.hpp"
 
 using namespace osteon;
 using osteon::testing::OwnedMesh;

@@ -27,6 +27,8 @@ from ._api import (
 )
 from .autoskeleton import auto_skeleton
 from .orientation import Orientation, best_orientation
+from .profiles import PrintProfile, print_profiles
+from .reinforcement import Reinforcement, reinforce
 
 __version__ = "0.1.0"
 
@@ -43,13 +45,17 @@ __all__ = [
     "Cancelled",
     "Correction",
     "Orientation",
+    "PrintProfile",
     "Progress",
+    "Reinforcement",
     "Skeleton",
     "analyze",
     "auto_skeleton",
     "best_orientation",
     "correct",
     "estimate_sections",
+    "print_profiles",
+    "reinforce",
     "section_properties",
     "skin",
     "slice_section",

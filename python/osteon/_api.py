@@ -22,6 +22,7 @@ from .options import (
     _count,
     _min_thickness,  # noqa: F401 -- imported from here by autoskeleton
     _positive,
+    _switch,
     engine_options,
     option_docs,
 )
@@ -285,12 +286,14 @@ RESULT_FIELDS = tuple(_core.result_fields())
 #: outlines default to ``None`` (no ``keep_outlines``); every other result field is required.
 _RESULT_DEFAULTS = {"section_allowable": None, "stress_ratio": None, "across_layers": None,
                     "max_stress_ratio": 0.0, "loose_pieces": list, "section_cut_area": None,
-                    "section_cut_modulus": None}
+                    "section_cut_modulus": None, "section_solid_modulus": None,
+                    "section_wall_area": None, "section_skin_area": None,
+                    "section_infill_area": None}
 _OUTLINE_SHAPES = ("(P,3)", "(L+1,)", "(S+1,)")
 
 #: The settings an :class:`Analysis` records (fields of the same name of :class:`AnalysisOptions`).
 _RECORDED_OPTIONS = ("allowable_stress", "force", "interval", "build_direction",
-                     "layer_strength_ratio", "min_thickness")
+                     "layer_strength_ratio", "min_thickness", "print_profile")
 
 
 def _field_line(name: str, shape: str, unit: str, doc: str) -> str:
@@ -315,7 +318,8 @@ def _result_dataclass(cls: type) -> type:
     lines += ["Settings of the run (:class:`AnalysisOptions`):", ""]
     defaults, docs = AnalysisOptions(), {n: (u, d) for n, u, d in option_docs()}
     for name in _RECORDED_OPTIONS:
-        annotations[name] = "np.ndarray" if name == "build_direction" else "float"
+        annotations[name] = {"build_direction": "np.ndarray",
+                             "print_profile": "PrintProfile"}.get(name, "float")
         value = getattr(defaults, name)
         setattr(cls, name, field(default_factory=lambda v=value: np.array(v, dtype=float))
                 if isinstance(value, tuple) else value)
@@ -368,6 +372,12 @@ class Analysis:
             self.section_cut_area = np.asarray(self.section_area, dtype=float).copy()
         if self.section_cut_modulus is None:
             self.section_cut_modulus = np.asarray(self.section_modulus, dtype=float).copy()
+        # ... and without the printed-section fields: a solid part.
+        if self.section_solid_modulus is None:
+            self.section_solid_modulus = np.asarray(self.section_modulus, dtype=float).copy()
+        for name in ("section_wall_area", "section_skin_area", "section_infill_area"):
+            if getattr(self, name) is None:
+                setattr(self, name, np.zeros(len(self.stress)))
 
     @property
     def num_sections(self) -> int:
@@ -397,6 +407,19 @@ class Analysis:
             return None
         pts, ls = self.cut_outline_points, self.cut_outline_loop_start
         ss = self.cut_outline_section_start
+        return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
+                for s in range(len(ss) - 1)]
+
+    @property
+    def infill_loops(self) -> list[list[np.ndarray]] | None:
+        """With ``keep_outlines=True``: per section (S), the loops of its sparse infill (FDM) or
+        hollow (resin) region (``print_profile``), each (N,3) mm on the section plane (outer
+        boundaries and holes, as the orientation tells); ``[]`` where it is all solid (every
+        section of a solid print). ``None`` without outlines. Packed as ``infill_outline_*``."""
+        if self.infill_outline_section_start is None:
+            return None
+        pts, ls = self.infill_outline_points, self.infill_outline_loop_start
+        ss = self.infill_outline_section_start
         return [[pts[ls[k]:ls[k + 1]] for k in range(ss[s], ss[s + 1])]
                 for s in range(len(ss) - 1)]
 
@@ -535,7 +558,8 @@ class Correction:
     positions, mm; ``rounds`` list of ``(bone index, factor, max stress after MPa, axis)`` with
     axis 0 = both axes, 1 = x only, 2 = z only; ``converged``; ``reason``; ``unfixed_sections``
     (indices into ``after``); ``max_displacement`` mm; ``volume_change_percent``; ``before`` and
-    ``after`` :class:`Analysis`.
+    ``after`` :class:`Analysis`; ``reinforcement``: with ``reinforce_first=True`` the
+    :class:`osteon.Reinforcement` of the final shape (walls and infill per region), else None.
     """
 
     bone_scale: np.ndarray
@@ -551,6 +575,7 @@ class Correction:
     volume_change_percent: float
     before: Analysis
     after: Analysis
+    reinforcement: Any = None
 
     @property
     def num_rounds(self) -> int:
@@ -670,6 +695,12 @@ def analyze(vertices: Any, faces: Any, skeleton: Skeleton, weights: Any = None, 
     return analyzer.run(v, progress=progress)
 
 
+#: ``correct(..., reinforce_first=True)``: :func:`osteon.reinforcement.reinforce_then_correct`,
+#: put here by that module when it is imported (``import osteon`` does), so that this module
+#: imports nothing of it (no import cycle: the reinforcement builds on this module).
+_REINFORCE_FIRST: list = []
+
+
 @_takes_options
 def correct(
     vertices: Any,
@@ -686,6 +717,7 @@ def correct(
     bone_long_axes: Any = None,
     options: AnalysisOptions | None = None,
     progress: Progress | None = None,
+    reinforce_first: bool = False,
     **settings: Any,
 ) -> Correction:
     """Thicken weak bones (paper §5) until no section is weak, or a stop rule ends the loop.
@@ -713,7 +745,20 @@ def correct(
     (:attr:`Analysis.section_loops`).
     ``progress``: a :class:`Progress` (``runs_done`` counts the analyses: the first, one per
     round, the last) to follow or cancel the loop (:class:`Cancelled`) from another thread.
+    With a ``print_profile`` the loop is driven by the printed sections.
+    ``reinforce_first`` (with an FDM ``print_profile``): reinforce first (more walls, denser
+    infill where weak: :func:`osteon.reinforce`) and thicken only what even solid cannot carry;
+    the result's ``reinforcement`` has the regions (docs/correction.md).
     """
+    if _switch(reinforce_first, "reinforce_first"):
+        opts = AnalysisOptions.of(options, settings)
+        analysis = {name: getattr(opts, name) for name, _, _ in option_docs()}
+        profile = analysis.pop("print_profile", None)
+        return _REINFORCE_FIRST[0](
+            vertices, faces, skeleton, weights, print_profile=profile, max_scale=max_scale,
+            max_rounds=max_rounds, target_ratio=target_ratio, scaling=scaling,
+            flat_aspect=flat_aspect, bone_x_axes=bone_x_axes, bone_long_axes=bone_long_axes,
+            progress=progress, **analysis)
     progress = _progress(progress)
     if scaling not in ("uniform", "thin"):
         raise ValueError(f"scaling must be 'uniform' or 'thin', got {scaling!r}")

@@ -27,7 +27,13 @@ REASONS = {
     "open": "the mesh is open there",
     "empty": "nothing was cut there",
     "degenerate": "the cut has no area there",
-    "outside": "the bone lies outside the mesh there",
+    # issue 36: RigNet 9000's root_dup_0 read 268 MPa at a 2.0 mm interval and "unreliable" at
+    # 2.001 mm: with the bone point in no material, the engine takes the piece of the plane
+    # holding most of the bone's own skin cut, and two pieces nearly tied there (a 26 mm-far
+    # 25.6 mm² piece, or a sliver under 10 % of the median area: unreliable)
+    "outside": "the bone lies outside the mesh there (the section is the piece of the plane "
+               "holding most of the bone's own skin; a small shift of the plane can pick "
+               "another piece)",
     "non_manifold": "the mesh is non-manifold there",
     "unreliable": "the cut is unreliable there",
     "too_thin": "the part is thinner than printable there",
@@ -52,6 +58,26 @@ def _mask(flags: np.ndarray, names, table) -> np.ndarray:
     for n in names:
         bits |= int(table.get(n, 0))
     return (flags & bits) != 0
+
+
+#: what a user can do about each flag's sections (front-end neutral words)
+FIXES = {
+    "open": "close the mesh's holes there",
+    "empty": "check that the bone runs through the mesh",
+    "outside": "move the bone inside the mesh or shorten it",
+    "non_manifold": "make the mesh manifold there",
+    "degenerate": "check that the bone runs through the mesh",
+    "hollow": "move the bone into the solid part",
+}
+
+
+def fix(names) -> str:
+    """What to do about the most telling of the flags ``names`` ("" when nothing helps)."""
+    order = ["open", "outside", "non_manifold", "hollow", "degenerate", "empty"]
+    for n in sorted(set(names), key=lambda n: order.index(n) if n in order else len(order)):
+        if n in FIXES:
+            return FIXES[n]
+    return ""
 
 
 def reason(names) -> str:
@@ -138,8 +164,17 @@ def summary_text(report: dict) -> str:
     s = report.get("skipped_sections") or 0
     parts = []
     if s:
-        parts.append(f"{s} of {report['sections']} sections could not be cut: "
-                     f"{reason(report.get('skipped_by_flag') or {'empty': 1})}")
+        flags = report.get("skipped_by_flag") or {"empty": 1}
+        text = f"{s} of {report['sections']} sections could not be cut: {reason(flags)}"
+        # which bones, and what to do: a user can act on a name, not on a count
+        where = sorted(((r["skipped_sections"], r["bone"]) for r in report.get("bones") or []
+                        if r.get("skipped_sections")), key=lambda t: -t[0])
+        if where:
+            text += " (" + ", ".join(f"{b} {n}" for n, b in where[:4])
+            text += ", ..." if len(where) > 4 else ""
+            text += ")"
+        todo = fix(flags)
+        parts.append(text + (f": {todo}" if todo else ""))
     na = report.get("not_analysed_bones") or []
     if na:
         parts.append(f"{len(na)} bone{'s' if len(na) != 1 else ''} not analysed ("
@@ -154,8 +189,12 @@ def analysis_text(analysis, bone_names) -> str:
     """:func:`summary_text` straight from an analysis (for the CLI's summary line)."""
     d = section_doubt(analysis)
     per_bone = bone_doubt(analysis, len(bone_names))
+    sb = np.asarray(analysis.section_bone, dtype=np.int64)
+    nskip = np.bincount(sb[d["skipped"]], minlength=len(bone_names))
     return summary_text({
         "sections": len(d["skipped"]),
+        "bones": [{"bone": bone_names[b], "skipped_sections": int(nskip[b])}
+                  for b in range(len(bone_names)) if nskip[b]],
         "skipped_sections": int(np.count_nonzero(d["skipped"])),
         "skipped_by_flag": d["skipped_by_flag"],
         "not_analysed_bones": [{"bone": bone_names[b]} for b, r in enumerate(per_bone)

@@ -27,6 +27,12 @@ DEFAULT_MATERIAL = "PLA"
 #: the key of "my own strength" (no preset numbers): the CLI's --strength-mpa, the add-on's Custom
 CUSTOM = "CUSTOM"
 
+#: The print profile (a key of :func:`osteon.profiles.print_profiles`) each process suggests:
+#: FDM → PrusaSlicer's 0.20mm QUALITY defaults (2 perimeters, 15 % gyroid), resin → a hollowed
+#: print with a 2 mm shell, SLS → solid (a sintered part has no infill). A suggestion only: the
+#: front ends analyse solid unless asked (issue 31), and show this key as the one to try.
+DEFAULT_PROFILE_BY_PROCESS = {"FDM": "prusaslicer", "resin": "resin_hollow", "SLS": "solid"}
+
 
 @dataclass(frozen=True)
 class Material:
@@ -48,6 +54,12 @@ class Material:
     min_thickness_mm: float
     min_thickness_source: str
     note: str
+
+    @property
+    def default_profile(self) -> str:
+        """The print profile key this material's process suggests
+        (:data:`DEFAULT_PROFILE_BY_PROCESS`)."""
+        return DEFAULT_PROFILE_BY_PROCESS[self.process]
 
 
 _PLA_LAYER = ("Polymaker PolyTerra PLA TDS v5.3: tensile X-Y 23.2 MPa, Z 12.2 MPa (0.53); "

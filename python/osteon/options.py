@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from .printed import engine_print_options
+from .profiles import PrintProfile, get_profile
 
 __all__ = ["DEFAULT_MIN_THICKNESS", "AnalysisOptions", "engine_options"]
 
@@ -154,6 +156,11 @@ class AnalysisOptions:
         True, "", "where a section cuts a side branch's stub, count only the core that "
         "continues through the plane (flag junction, docs/junctions.md); False: whole cuts",
         lambda v: _switch(v, "junctions"))
+    print_profile: PrintProfile = _option(  # noqa: RUF009 -- PrintProfile is frozen
+        PrintProfile.solid(), "", "how the part is printed: a PrintProfile or a preset's name "
+        "(osteon.print_profiles(); None: solid); each section becomes what that print makes of "
+        "it (walls, skins, sparse infill in the frame of build_direction, or a resin shell; "
+        "docs/printing.md), section_modulus and the stress the printed section's", get_profile)
 
     def __post_init__(self) -> None:
         # The one layer that checks: every value normalised here (the fields' order is the
@@ -198,6 +205,7 @@ def engine_options(options: AnalysisOptions, held_bone: int) -> _core.AnalysisOp
     o.keep_outlines = options.keep_outlines
     o.min_thickness = options.min_thickness
     o.junctions = options.junctions
+    engine_print_options(o, options.print_profile)
     # Thickness only where the too_thin check needs it; Analysis.section_thickness computes the
     # rest on first read (a convex hull per section: ~7 % of an analysis nobody may read).
     o.defer_thickness = True

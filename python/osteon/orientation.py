@@ -208,6 +208,73 @@ def _refine(terms, r, seeds, values, step, allowed, min_step=1e-4, max_iter=80):
     return d, f
 
 
+def _printed(print_profile) -> bool:
+    if print_profile is None:
+        return False
+    from .profiles import get_profile
+
+    return not get_profile(print_profile).is_solid
+
+
+def _model_parts(model):
+    if model is None:
+        raise ValueError("best_orientation with a print profile needs model=(vertices, faces, "
+                         "skeleton, weights): each candidate is analysed again")
+    if isinstance(model, (tuple, list)):
+        if len(model) != 4:
+            raise ValueError("model must be (vertices, faces, skeleton, weights)")
+        return tuple(model)
+    return model.vertices, model.faces, model.skeleton, model.weights
+
+
+def _rescore_printed(analysis, cands, ref, r, print_profile, model, rescore, engine_options,
+                     symmetric, allowed):
+    """The candidates re-ranked by the worst stress ratio of the printed part analysed at each
+    direction (see :func:`best_orientation`); each gets ``search_ratio`` (the sphere search's:
+    ``analysis``'s own sections turned there, solid when ``analysis`` was)
+    and ``worst_ratio`` / ``worst_section`` of its own printed analysis."""
+    from ._api import analyze
+    from .profiles import get_profile
+
+    profile = get_profile(print_profile)
+    vertices, faces, skeleton, weights = _model_parts(model)
+    same = math.cos(math.radians(2.0))  # directions closer than 2° are analysed once
+
+    def new(d, dirs):
+        return not any((abs(float(d @ e)) if symmetric else float(d @ e)) > same for e in dirs)
+
+    dirs: list = []
+    for c in cands:  # the sphere search's best distinct directions
+        if len(dirs) < max(0, int(rescore)) and not np.array_equal(c["direction"], ref) \
+                and new(c["direction"], dirs):
+            dirs.append(c["direction"])
+    for d in (ref, *np.eye(3)):  # the current direction (first) and the axes
+        if allowed(np.asarray(d)[None])[0] and (d is ref or new(d, dirs)):
+            dirs.append(np.asarray(d, float))
+    kw = {"force": analysis.force, "allowable_stress": analysis.allowable_stress,
+          "interval": analysis.interval, "root": int(analysis.held_bone),
+          "layer_strength_ratio": r, "min_thickness": analysis.min_thickness,
+          **(engine_options or {})}
+    out = []
+    for d in dirs:
+        a = analyze(vertices, faces, skeleton, weights, build_direction=d,
+                    print_profile=profile, **kw)
+        f, w = _worst(_section_terms(a), d[None], r)
+        search = float(_worst(_section_terms(analysis), d[None], r)[0][0])
+        out.append({"direction": d, "rotation": rotation_to_z(d), "worst_ratio": float(f[0]),
+                    "worst_section": int(w[0]), "search_ratio": search,
+                    "across_layers": _across(a, int(w[0]), d, r) if w[0] >= 0 else False})
+    lo = min(c["worst_ratio"] for c in out)
+
+    def key(c):  # ties (1e-6) keep the smaller turn from the current direction
+        dot = abs(float(c["direction"] @ ref)) if symmetric else float(c["direction"] @ ref)
+        return (0, math.acos(min(1.0, dot))) if c["worst_ratio"] <= lo * (1 + 1e-6) \
+            else (1, c["worst_ratio"])
+
+    out.sort(key=key)
+    return out
+
+
 def _hull_bases(vertices: Any) -> tuple[np.ndarray, np.ndarray]:
     """Outward unit normals (K,3) of the convex hull's flat faces (coplanar facets merged) and
     their areas (K,) mm²."""
@@ -240,6 +307,10 @@ def best_orientation(
     cone: tuple | None = None,
     top: int = 5,
     min_base_area: float = 0.0,
+    print_profile=None,
+    model: Any = None,
+    rescore: int = 6,
+    engine_options: dict | None = None,
 ) -> Orientation:
     """The build direction that minimises the worst section stress ratio of ``analysis``.
 
@@ -251,6 +322,18 @@ def best_orientation(
     skipped). ``cone=(axis (3,), half_angle_deg)`` allows only directions within that angle of
     ``axis``. A direction d and −d give the same ratios; unconstrained results prefer the one
     nearer +Z (the smaller turn). Returns an :class:`Orientation`.
+
+    ``print_profile`` (an :class:`osteon.profiles.PrintProfile` or a preset key; default solid):
+    a printed section changes with the build direction (a section across the layers has skins
+    above and below, one in the layer plane perimeters all round; docs/printing.md), which the
+    sphere search above cannot see: it turns only the allowable. So with a profile that is not
+    solid the ``rescore`` best distinct directions of that search, the current direction and
+    the three axes (±X, ±Y, ±Z: where an isotropic material leaves every direction tied) are
+    analysed again with the profile at their own build direction, and the lowest worst ratio
+    of those analyses wins. That needs ``model``: (vertices, faces, skeleton, weights) or an
+    object with those attributes (e.g. ``osteon.io.RiggedModel``); ``engine_options`` extra
+    keywords of :func:`osteon.analyze` (e.g. ``junctions``). Cost: up to ``rescore`` + 4
+    analyses (docs/printing.md, "Orientation with a print profile").
     """
     r = _ratio(_default_ratio(analysis) if layer_strength_ratio is None else layer_strength_ratio)
     samples = int(samples)
@@ -350,8 +433,15 @@ def best_orientation(
         return (0, turn) if tied else (1, c["worst_ratio"])
 
     cands.sort(key=key)
+    if _printed(print_profile):
+        cands = _rescore_printed(analysis, cands, ref, r, print_profile, model, rescore,
+                                 engine_options, symmetric, allowed)
+    cands_all = cands
     cands = cands[:top]
     best = cands[0]
+    if _printed(print_profile):  # the current direction's printed ratio (it was analysed)
+        ref_ratio = next((c["worst_ratio"] for c in cands_all if
+                          np.array_equal(c["direction"], ref)), ref_ratio)
     return Orientation(
         direction=best["direction"], rotation=best["rotation"], worst_ratio=best["worst_ratio"],
         worst_section=best["worst_section"], reference_direction=ref, reference_ratio=ref_ratio,

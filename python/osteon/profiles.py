@@ -150,10 +150,65 @@ class PrintProfile:
         return cls(**{**cls().__dict__, **known, "kind": kind}).with_changes()
 
 
+# The presets: each number from the slicer's own profile file (file, profile name and key in
+# ``source``), for a 0.4 mm nozzle at 0.2 mm layers. Mapping rules (docs/printing.md, "Presets"):
+# - perimeters: PrusaSlicer ``perimeters``, Bambu/Orca ``wall_loops``, Cura ``wall_line_count``.
+# - line_width: the perimeter (wall) extrusion width; where the outer and inner walls differ
+#   (Bambu 0.42 / 0.45 mm) the smaller, so the wall band is never thicker than printed.
+# - top_bottom_layers: where top ≠ bottom (PrusaSlicer 5 / 4, Bambu 5 / 3) the smaller: a
+#   section across the layers is only as strong as its thinner skin (conservative).
+# - solid_infill_below_area: PrusaSlicer ``solid_infill_below_area``, Bambu/Orca
+#   ``minimum_sparse_infill_area`` (the same rule: a sparse region below that area is printed
+#   solid); Cura has ``min_infill_area`` ("use skin instead", default 0 = never).
+_PRUSA_INI = ("PrusaSlicer resources/profiles/PrusaResearch.ini (PrusaSlicer 2.9.4, "
+              "commit 69c8e56), [print:0.20mm QUALITY @MK3] with its parents *0.20mm* and "
+              "*common*")
+_BAMBU_DIR = "BambuStudio resources/profiles/BBL/process/"
+_CURA_DEF = "Cura resources/definitions/fdmprinter.def.json"
+
+
 def _presets() -> dict[str, PrintProfile]:
-    # Filled by the print-profile work (issue 31): each preset with the slicer profile file or
-    # documentation page its numbers come from.
-    return {"solid": PrintProfile.solid()}
+    return {
+        "prusaslicer": PrintProfile.fdm(
+            perimeters=2, line_width=0.45, layer_height=0.2, top_bottom_layers=4, infill=0.15,
+            pattern="gyroid", solid_infill_below_area=0.0,
+            name="PrusaSlicer 0.20mm QUALITY @MK3",
+            source=(f"{_PRUSA_INI}: perimeters = 2, perimeter_extrusion_width = "
+                    "external_perimeter_extrusion_width = 0.45 (*common*); layer_height = 0.2, "
+                    "top_solid_layers = 5, bottom_solid_layers = 4 (*0.20mm*; the smaller, 4, "
+                    "taken); fill_density = 15%, fill_pattern = gyroid (0.20mm QUALITY @MK3); "
+                    "solid_infill_below_area = 0 (*common*; PrusaSlicer's built-in default "
+                    "without a profile is 70 mm², src/libslic3r/PrintConfig.cpp)")),
+        "bambustudio": PrintProfile.fdm(
+            perimeters=2, line_width=0.42, layer_height=0.2, top_bottom_layers=3, infill=0.15,
+            pattern="grid", solid_infill_below_area=15.0,
+            name="Bambu Studio 0.20mm Standard @BBL X1C",
+            source=(f"{_BAMBU_DIR}0.20mm Standard @BBL X1C.json → fdm_process_single_0.20.json "
+                    "→ fdm_process_common.json: wall_loops = 2, outer_wall_line_width = 0.42, "
+                    "inner_wall_line_width = 0.45 (the smaller, 0.42, taken), layer_height = "
+                    "0.2, top_shell_layers = 5 (fdm_process_single_0.20), bottom_shell_layers "
+                    "= 3 (the smaller, 3, taken), sparse_infill_density = 15%, "
+                    "sparse_infill_pattern = grid, minimum_sparse_infill_area = 15 (mm²; "
+                    "OrcaSlicer's own BBL copy has crosshatch and 0)")),
+        "cura": PrintProfile.fdm(
+            perimeters=2, line_width=0.4, layer_height=0.2, top_bottom_layers=4, infill=0.20,
+            pattern="grid", solid_infill_below_area=0.0,
+            name="Cura defaults (fdmprinter) at 0.2 mm layers",
+            source=(f"{_CURA_DEF}: line_width = machine_nozzle_size = 0.4; wall_thickness = "
+                    "0.8 → wall_line_count = round((0.8 - 0.4) / 0.4) + 1 = 2; "
+                    "top_bottom_thickness = 0.8 → top_layers = bottom_layers = ceil(0.8 / 0.2) "
+                    "= 4 at 0.2 mm layers (fdmprinter's own layer_height is 0.1, the machines' "
+                    "quality profiles set it); infill_sparse_density = 20, infill_pattern = "
+                    "grid ('lines' only above 25 %); min_infill_area = 0 (no small-area rule)")),
+        "resin_hollow": PrintProfile.resin_hollow(
+            shell=2.0, name="Resin, hollowed, 2 mm shell",
+            source=("2 mm: the thin end of the 2-3 mm shells that resin hollowing guides advise "
+                    "for Lychee and Chitubox (resinandrolls.com, 'How to hollow resin "
+                    "miniatures'), taken because a thinner shell is the weaker (conservative); "
+                    "PrusaSlicer's SLA hollowing default is 3 mm (hollowing_min_thickness, "
+                    "src/libslic3r/PrintConfig.cpp): use --shell 3 for it")),
+        "solid": PrintProfile.solid(),
+    }
 
 
 def print_profiles() -> dict[str, PrintProfile]:
@@ -174,3 +229,42 @@ def get_profile(name: str | PrintProfile | None) -> PrintProfile:
     if key not in presets:
         raise ValueError(f"unknown print profile {name!r}; choose one of {', '.join(presets)}")
     return presets[key]
+
+
+#: The overrides of a preset, by their ``osteon.settings.Settings`` field: (the PrintProfile
+#: field, the kind that uses it)
+OVERRIDES = {"perimeters": ("perimeters", "fdm"), "infill": ("infill", "fdm"),
+             "infill_pattern": ("pattern", "fdm"), "line_width_mm": ("line_width", "fdm"),
+             "layer_height_mm": ("layer_height", "fdm"),
+             "top_bottom_layers": ("top_bottom_layers", "fdm"),
+             "shell_mm": ("shell", "resin_hollow")}
+
+
+def resolve_profile(key, overrides: dict | None = None) -> PrintProfile:
+    """The preset ``key`` with ``overrides`` ({Settings field: value or None}) applied and
+    checked; the name says what changed ("prusaslicer, perimeters 3"). The one resolution every
+    front end and the report use."""
+    base = get_profile(key if key not in (None, "") else "solid")
+    given = {k: v for k, v in (overrides or {}).items() if v is not None and v != ""}
+    unknown = sorted(set(given) - set(OVERRIDES))
+    if unknown:
+        raise ValueError(f"unknown print setting(s) {', '.join(unknown)}")
+    if not given:
+        return base
+    wrong = [k for k in given if OVERRIDES[k][1] != base.kind]
+    if wrong:
+        needs = {OVERRIDES[k][1] for k in wrong}
+        hint = ("an FDM profile (e.g. prusaslicer)" if needs == {"fdm"}
+                else "a resin profile (resin_hollow)")
+        raise ValueError(f"{wrong[0]} needs {hint}; print profile {key!r} is {base.kind}")
+    changes = {OVERRIDES[k][0]: v for k, v in given.items()}
+    label = ", ".join(f"{OVERRIDES[k][0]} {v:g}" if isinstance(v, (int, float)) else
+                      f"{OVERRIDES[k][0]} {v}" for k, v in given.items())
+    return base.with_changes(name=f"{base.name}, {label}", **changes)
+
+
+def profile_of(settings: dict) -> PrintProfile:
+    """The print profile of a settings dict (:meth:`osteon.settings.Settings.as_dict` or a
+    front end's own; missing keys: the preset's, no key: solid)."""
+    return resolve_profile(settings.get("print_profile"),
+                           {k: settings.get(k) for k in OVERRIDES})

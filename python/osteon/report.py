@@ -10,14 +10,17 @@ every key of the schema is present in every report (``null`` where it does not a
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 from . import doubt
 
-#: bump when a key is renamed, removed or changes meaning (adding keys keeps the version)
-SCHEMA_VERSION = 1
+#: bump when a key is renamed, removed or changes meaning (adding keys keeps the version).
+#: 2 (issue 31): ``modulus_mm3`` / ``area_mm2`` of a section are the printed section's under a
+#: print profile (``print_profile``; solid: as before), ``solid_modulus_mm3`` the cut's.
+SCHEMA_VERSION = 2
 UNITS = {"length": "mm", "force": "N", "stress": "MPa"}
 
 
@@ -39,7 +42,8 @@ def finite(x) -> float | None:
 
 
 def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
-               bone_scale=None, stress_ratio=None, across_layers=None) -> list[dict]:
+               bone_scale=None, stress_ratio=None, across_layers=None,
+               section_allowable=None) -> list[dict]:
     """One row per bone that has sections, highest stress ratio first (bones whose sections
     have no finite stress last, with ``null`` stress).
 
@@ -49,7 +53,10 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
     bool or None. Row: ``bone``, ``index``, ``max_stress_mpa``, ``ratio`` (the bone's largest
     stress ratio), ``limit`` ("across layers" / "along layers" at that section), ``weak`` (a
     weak section), ``weak_sections``, ``sections``, ``scale`` (the correction's cross-section
-    scale, 1 = unchanged)."""
+    scale, 1 = unchanged); ``stress_mpa`` and ``allowable_mpa``: the stress and the allowable
+    (``section_allowable`` (S,) MPa, else ``allowable_mpa``) of the section that governs, so
+    that ``ratio == stress_mpa / allowable_mpa`` (``max_stress_mpa`` may lie elsewhere on the
+    bone, where the allowable is higher)."""
     section_bone = np.asarray(section_bone, dtype=np.int64)
     stress = np.asarray(stress, dtype=np.float64)
     weak = np.asarray(weak, dtype=bool)
@@ -69,6 +76,8 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
     for i in idx[np.argsort(ratio_s[idx], kind="stable")]:  # ascending: last write = worst
         rmax[section_bone[i]] = ratio_s[i]
         where[section_bone[i]] = i
+    allow_s = (np.full(len(stress), float(allowable_mpa)) if section_allowable is None
+               else np.asarray(section_allowable, dtype=np.float64))
     have = np.flatnonzero(count > 0)
     key = np.where(np.isfinite(rmax[have]), -rmax[have], np.inf)
     rows = []
@@ -79,6 +88,8 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
             "index": int(b),
             "max_stress_mpa": m,
             "ratio": None if m is None else finite(rmax[b]),
+            "stress_mpa": None if where[b] < 0 else finite(stress[where[b]]),
+            "allowable_mpa": None if where[b] < 0 else finite(allow_s[where[b]]),
             "limit": None if where[b] < 0 else
             ("across layers" if across[where[b]] else "along layers"),
             "weak": bool(nweak[b] > 0),
@@ -89,9 +100,19 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
     return rows
 
 
+def worst_of(rows: list[dict]) -> dict | None:
+    """The governing section of a bone table (:func:`bone_table`, worst first): ``bone``,
+    ``stress_mpa``, ``allowable_mpa``, ``ratio``, ``limit``; None without a finite stress."""
+    for r in rows:
+        if r.get("ratio") is not None and r.get("stress_mpa") is not None:
+            return {k: r[k] for k in ("bone", "stress_mpa", "allowable_mpa", "ratio", "limit")}
+    return None
+
+
 def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
     rows = bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale,
-                      getattr(a, "stress_ratio", None), getattr(a, "across_layers", None))
+                      getattr(a, "stress_ratio", None), getattr(a, "across_layers", None),
+                      getattr(a, "section_allowable", None))
     # skipped / doubtful sections per bone (osteon.doubt): a bone with too many skipped
     # sections is "not analysed", never "ok"
     per_bone = doubt.bone_doubt(a, len(bone_names))
@@ -117,9 +138,20 @@ def _finite_list(x) -> list:
     return out
 
 
+#: report key -> ``Analysis`` field of the printed section (issue 31, docs/printing.md)
+PRINTED_SECTION_FIELDS = {"solid_modulus_mm3": "section_solid_modulus",
+                          "wall_area_mm2": "section_wall_area",
+                          "skin_area_mm2": "section_skin_area",
+                          "infill_area_mm2": "section_infill_area"}
+
+
 def section_rows(a, bone_names) -> list[dict]:
     """Every section of an ``osteon.Analysis``: bone, position (mm), area (mm²), modulus
-    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. At a ``junction``
+    (mm³), moment arm (mm), moment (N·mm), stress (MPa), culled, weak. Under a print profile
+    (docs/printing.md) ``modulus_mm3`` is the printed section's (what the stress uses),
+    ``solid_modulus_mm3`` the solid cut's, and ``wall_area_mm2`` / ``skin_area_mm2`` /
+    ``infill_area_mm2`` the printed section's perimeters, solid skins and sparse-infill region
+    (``null`` where the engine gives none; solid: ``solid_modulus_mm3`` = ``modulus_mm3``). At a ``junction``
     section area and modulus are the core's (the material that continues through the plane,
     docs/junctions.md) and ``cut_area_mm2`` / ``cut_modulus_mm3`` the whole cut's (elsewhere the
     same numbers). An object without section geometry (no ``section_center``) gives ``[]``."""
@@ -151,6 +183,13 @@ def section_rows(a, bone_names) -> list[dict]:
         "thickness_mm": _finite_list(a.section_thickness)
         if hasattr(a, "section_thickness") else none,
     }
+    # the printed section (issue 31): absent fields (an engine without print profiles) -> the
+    # solid modulus is the modulus, the areas null
+    printed = {key: _finite_list(getattr(a, field)) if getattr(a, field, None) is not None
+               else none for key, field in PRINTED_SECTION_FIELDS.items()}
+    if getattr(a, "section_solid_modulus", None) is None:
+        printed["solid_modulus_mm3"] = cols["modulus_mm3"]
+    cols.update(printed)
     culled = np.asarray(a.culled, dtype=bool).tolist()
     weak = np.asarray(a.weak, dtype=bool).tolist()
     limit = (none if across is None else
@@ -174,6 +213,10 @@ def section_rows(a, bone_names) -> list[dict]:
             "normal": cols["normal"][i],
             "area_mm2": cols["area_mm2"][i],
             "modulus_mm3": cols["modulus_mm3"][i],
+            "solid_modulus_mm3": cols["solid_modulus_mm3"][i],
+            "wall_area_mm2": cols["wall_area_mm2"][i],
+            "skin_area_mm2": cols["skin_area_mm2"][i],
+            "infill_area_mm2": cols["infill_area_mm2"][i],
             "cut_area_mm2": cols["cut_area_mm2"][i],
             "cut_modulus_mm3": cols["cut_modulus_mm3"][i],
             "moment_arm_mm": cols["moment_arm_mm"][i],
@@ -249,7 +292,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
                  armature_name: str | None = None, mm_per_unit: float = 1.0,
                  vertices: int | None = None, faces: int | None = None,
                  seconds: float | None = None, correction=None, corrected_analysis=None,
-                 output: str | None = None) -> dict:
+                 output: str | None = None, print_profile=None) -> dict:
     """The JSON report (schema :data:`SCHEMA_VERSION`) of an analysis or a correction.
 
     ``analysis``: the ``osteon.Analysis`` of the model as it was. With a correction
@@ -257,7 +300,10 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     ``correction.after``), which ``max_stress_mpa``, ``bones`` ... describe; ``weak_bones`` then
     lists every bone weak before or after, with its ``scale``, its stress now and before.
     ``settings``: :meth:`osteon.settings.Settings.as_dict` (or the front end's own dict);
-    ``mm_per_unit``: mm of the print per model unit (file unit or Blender unit).
+    ``mm_per_unit``: mm of the print per model unit (file unit or Blender unit);
+    ``print_profile``: the :class:`osteon.profiles.PrintProfile` analysed with (default: the
+    analysis's own ``print_profile``, else the one ``settings`` names,
+    :func:`osteon.profiles.profile_of`), echoed as ``print_profile``.
     """
     if correction is not None and corrected_analysis is None:
         corrected_analysis = correction.after
@@ -266,8 +312,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     rows = _analysis_table(shown, bone_names, allowable_mpa, scale)
     if correction is None:
         weak_bones = [{"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"],
-                       "ratio": r["ratio"], "limit": r["limit"], "scale": r["scale"],
-                       "weak": True}
+                       "ratio": r["ratio"], "stress_mpa": r["stress_mpa"],
+                       "allowable_mpa": r["allowable_mpa"], "limit": r["limit"],
+                       "scale": r["scale"], "weak": True}
                       for r in rows if r["weak"]]
         before_rows = None
     else:
@@ -275,6 +322,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         before = {r["bone"]: r for r in before_rows}
         weak_bones = [
             {"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"], "ratio": r["ratio"],
+             "stress_mpa": r["stress_mpa"], "allowable_mpa": r["allowable_mpa"],
              "limit": r["limit"], "scale": r["scale"], "weak": r["weak"],
              "max_stress_before_mpa": before[r["bone"]]["max_stress_mpa"]
              if r["bone"] in before else None}
@@ -304,11 +352,19 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         # in-plane strength; stress ratios use each section's angle to the build direction
         "build_direction": [float(x) for x in getattr(shown, "build_direction", (0, 0, 1))],
         "layer_strength_ratio": float(getattr(shown, "layer_strength_ratio", 1.0)),
+        # how the part is printed (walls, skins, infill; docs/printing.md): the profile whose
+        # printed sections the moduli and stresses below are
+        "print_profile": _profile_dict(settings, print_profile
+                                       if print_profile is not None
+                                       else getattr(shown, "print_profile", None)),
         "safe_modulus_mm3": finite(shown.safe_modulus),
         "sections": len(shown.stress),
         "weak_sections": int(np.count_nonzero(shown.weak)),
         "culled_sections": int(np.count_nonzero(shown.culled)),
         "weak_bones": weak_bones,
+        # the section that governs the verdict: the highest stress / ITS allowable (FDM layers:
+        # across or along them), so that ratio == stress_mpa / allowable_mpa
+        "worst": worst_of(rows),
         "bones": rows,
         # the CLI's name for ``bones`` before the schema had a version; same list
         "bone_results": rows,
@@ -321,6 +377,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         "bone_scale": None,
         "bone_scale_xz": None,
         "warnings": [],
+        # reinforce instead of reshape (osteon.reinforce, docs/correction.md): filled by
+        # reinforcement_section when the run reinforced
+        "reinforcement": None,
     }
     # Printability, reported apart from the overloaded sections (issue 12).
     printable = printability(shown, bone_names)
@@ -375,6 +434,36 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     return report
 
 
+def reinforcement_section(reinforcement, slicer: str | None = None,
+                          project: str | None = None) -> dict:
+    """The report's ``reinforcement`` of an ``osteon.Reinforcement``: the profile of the rest of
+    the part, one row per region (bone, walls and infill before -> after, stress before ->
+    after MPa, extra extruded volume mm³, z range mm), the sections solid cannot carry, the
+    total extra volume and the slicer project written (``slicer``, ``project`` path)."""
+    r = reinforcement
+    return {
+        "print_profile": r.profile.as_dict(),
+        "regions": r.table(),
+        "unfixable": [{"section": u["section"], "bone": u["bone"],
+                       "stress_mpa": finite(u["stress_mpa"]), "ratio": finite(u["ratio"])}
+                      for u in r.unfixable],
+        "extra_volume_mm3": finite(r.extra_volume_mm3),
+        "max_stress_before_mpa": finite(r.before.max_stress),
+        "max_stress_after_mpa": finite(r.after.max_stress),
+        "analyses": int(r.analyses),
+        "slicer": slicer,
+        "slicer_project": None if project is None else str(project),
+    }
+
+
+def _profile_dict(settings: dict, print_profile) -> dict:
+    if print_profile is None:
+        from .profiles import profile_of
+
+        print_profile = profile_of(settings)
+    return print_profile.as_dict() if hasattr(print_profile, "as_dict") else dict(print_profile)
+
+
 def to_json(report: dict, indent: int = 1) -> str:
     """The report as JSON text; refuses NaN/inf (which :func:`finite` already removed)."""
     import json
@@ -382,7 +471,10 @@ def to_json(report: dict, indent: int = 1) -> str:
     return json.dumps(report, indent=indent, allow_nan=False)
 
 
+@functools.lru_cache(maxsize=1)
 def _version() -> str:
+    """The installed osteon's version (read once: the metadata lookup costs ~20 ms, and the
+    Blender add-on's Live mode builds a report on every update)."""
     try:
         from importlib.metadata import version
 

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from . import materials
+from . import materials, profiles
 from .options import AnalysisOptions, _switch
+from .profiles import PrintProfile, resolve_profile
 from .report import allowable_stress
 
 
@@ -30,6 +31,14 @@ class Settings:
     preset's; docs/printing.md); ``junctions`` (default True): where a section cuts a side
     branch's stub, count only the core that continues through the plane (flag ``junction``,
     docs/junctions.md); False analyses whole cuts (faster, no junction stage).
+
+    Print profile (docs/printing.md, "Print profiles"): ``print_profile`` a preset key of
+    :func:`osteon.profiles.print_profiles` (default "solid": the section as cut, the numbers
+    before issue 31), with optional overrides (``None`` = the preset's): ``perimeters``
+    (count), ``infill`` (fraction 0…1), ``infill_pattern``, ``line_width_mm``,
+    ``layer_height_mm``, ``top_bottom_layers`` (count) for FDM presets, ``shell_mm`` for a
+    hollowed resin preset. :meth:`profile` resolves them into one checked
+    :class:`osteon.profiles.PrintProfile`.
     """
 
     force_n: float
@@ -46,6 +55,20 @@ class Settings:
     build_direction: tuple = (0.0, 0.0, 1.0)
     layer_strength_ratio: float | None = 1.0
     junctions: bool = True
+    print_profile: str = "solid"
+    perimeters: int | None = None
+    infill: float | None = None
+    infill_pattern: str | None = None
+    line_width_mm: float | None = None
+    layer_height_mm: float | None = None
+    top_bottom_layers: int | None = None
+    shell_mm: float | None = None
+
+    def profile(self) -> PrintProfile:
+        """The print profile: the preset with the overrides applied (``ValueError`` naming a bad
+        value or an override the preset's kind has no use for)."""
+        return resolve_profile(self.print_profile,
+                               {f: getattr(self, f) for f in profiles.OVERRIDES})
 
     def layer_ratio(self) -> float:
         """Layer / in-plane strength used: the given one; ``None``: the material preset's (1.0
@@ -83,6 +106,7 @@ class Settings:
         d["build_direction"] = [float(x) for x in self.build_direction]
         d["layer_strength_ratio"] = self.layer_ratio()
         d["junctions"] = _switch(self.junctions, "junctions")
+        d["print_profile"] = str(self.print_profile).strip().lower()
         return d
 
 
@@ -146,9 +170,9 @@ def min_thickness_mm(settings: Settings) -> float:
 def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> dict:
     """The keyword arguments of ``osteon.analyze`` / ``Analyzer`` (``force``,
     ``allowable_stress``, ``interval``, ``root``, ``build_direction``,
-    ``layer_strength_ratio``, ``min_thickness``, ``junctions``), plus ``max_scale``, ``max_rounds``,
-    ``scaling`` with ``correct=True`` for ``osteon.correct``. Raises ``ValueError`` naming the
-    bad setting."""
+    ``layer_strength_ratio``, ``min_thickness``, ``junctions``, and ``print_profile`` unless the
+    profile is solid), plus ``max_scale``, ``max_rounds``, ``scaling`` with ``correct=True`` for
+    ``osteon.correct``. Raises ``ValueError`` naming the bad setting."""
     kw = {
         "force": settings.force_n,
         "allowable_stress": settings.allowable_stress_mpa(),
@@ -163,6 +187,9 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
     kw.update((name, getattr(options, name)) for name in kw)
     # as given (analyze makes it a unit vector): the report shows the user's numbers
     kw["build_direction"] = [float(x) for x in settings.build_direction]
+    profile = settings.profile()
+    if not profile.is_solid:  # solid: no argument, the engine's default (bit for bit)
+        kw["print_profile"] = profile
     if correct:
         if not (float(settings.max_scale) >= 1.0):
             raise ValueError(f"max scale must be >= 1, got {settings.max_scale}")
@@ -177,6 +204,34 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
 #: "Section limit", the CLI's ``--max-sections``): ~10 s of analysis on a typical model, and
 #: a sign that the print size is wrong (a model in metres read as mm).
 SECTION_LIMIT = 20_000
+
+
+#: Sections above which the front ends refuse to start (the CLI's and batch's
+#: ``--max-sections``, raised by the user): the whole model, not per bone. ~11 kB of memory per
+#: section was measured (616 659 sections took 6.9 GB), so 200 000 is about 2 GB.
+MAX_SECTIONS = 200_000
+#: memory per section (bytes): 6.9 GB / 616 659 sections on a model read 1000x too big
+#: (issue 36); a 2-bone bar of 10 001 and 30 001 sections peaked at 10.5 kB per section
+#: (readers branch, resource.getrusage)
+BYTES_PER_SECTION = 11_200
+
+
+def section_budget(sections: int, vertices: int, interval_mm: float, model_size_mm: float,
+                   limit: int = MAX_SECTIONS) -> str | None:
+    """``None`` when the whole model's ``sections`` (:func:`osteon.estimate_sections`) are
+    within ``limit``, else the reason to refuse it, with the estimate of sections and memory:
+    "616 659 sections (~6.9 GB) at 2 mm on a 120 m model: above the limit of 200 000 (check the
+    print size, or raise --max-sections)". ``vertices``: the mesh's vertex count (mm)."""
+    if int(sections) <= int(limit):
+        return None
+    gb = (int(sections) * BYTES_PER_SECTION + int(vertices) * 200) / 1e9
+
+    def grouped(n: int) -> str:
+        return f"{int(n):,}".replace(",", " ")
+
+    return (f"{grouped(sections)} sections (~{gb:.1f} GB of memory) at {float(interval_mm):g} "
+            f"mm on a {_length_text(float(model_size_mm))} model: above the limit of "
+            f"{grouped(limit)} sections (check the print size, or raise --max-sections)")
 
 
 def _length_text(mm: float) -> str:

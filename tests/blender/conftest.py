@@ -15,7 +15,7 @@ import sys
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-for p in (os.path.join(ROOT, "blender_addon"), os.path.join(ROOT, "scripts")):
+for p in (os.path.join(ROOT, "blender_addon"),):
     if p not in sys.path:
         sys.path.insert(0, p)
 
@@ -66,10 +66,10 @@ def empty_scene():
 @pytest.fixture
 def sample(addon):
     """A fresh scene with the bundled sample figurine (mesh active), default settings."""
-    import make_sample_rig
+    from osteon_blender import sample as sample_rig
 
     empty_scene()
-    obj, arm = make_sample_rig.build()
+    obj, arm = sample_rig.build()
     return obj, arm
 
 

@@ -123,8 +123,8 @@ def test_analyze_real_rignet_fbx(addon, model):
 @pytest.mark.parametrize("model", ["sample", "2982", "11814"])
 def test_weight_reading_methods_agree(addon, model):
     """The bulk (Geometry Nodes) weight read equals the per-vertex loop and leaves nothing."""
-    import make_sample_rig
     from conftest import empty_scene
+    from osteon_blender import sample as make_sample_rig
 
     if model == "sample":
         empty_scene()

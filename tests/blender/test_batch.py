@@ -84,7 +84,7 @@ def test_batch_command_exit_codes(tmp_path):
     assert not (tmp_path / "r.json").exists()
     blend = tmp_path / "s.blend"
     build = subprocess.run([exe, "-b", "--factory-startup", "--python",
-                            os.path.join(ROOT, "scripts", "make_sample_rig.py"), "--",
+                            os.path.join(ROOT, "blender_addon", "osteon_blender", "sample.py"), "--",
                             "--out", str(blend)],
                            check=False, capture_output=True, text=True, env=env, timeout=300)
     assert build.returncode == 0, build.stderr

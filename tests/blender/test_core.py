@@ -29,14 +29,16 @@ def test_mm_per_unit_modes():
 
 
 def test_colours_blue_to_red_grey_for_culled():
-    s = np.array([0.0, 15.0, 30.0, 90.0, 10.0])
-    culled = np.array([False, False, False, False, True])
+    s = np.array([0.0, 15.0, 30.0, 90.0, 10.0, 29.7])
+    culled = np.array([False, False, False, False, True, False])
     c = core.stress_colors(s, 30.0, culled)
-    assert c.shape == (5, 4) and c.dtype == np.float32
+    assert c.shape == (6, 4) and c.dtype == np.float32
     assert c[0, 2] > 0.9 and c[0, 0] < 0.1            # 0 MPa: blue
     assert c[2, 0] > 0.9 and c[2, 1] < 0.1 and c[2, 2] < 0.1  # allowable: red
     assert np.allclose(c[3], c[2])                     # above allowable stays red
     assert np.allclose(c[4], core.GREY)                # culled: grey
+    # within the limit is never red (issue 35): 0.99 x allowable is orange
+    assert c[5, 0] > 0.9 and 0.3 < c[5, 1] < 0.6 and c[5, 2] < 0.1
     assert np.all(c[:, 3] == 1.0)
     # the ramp moves monotonically from blue to red in the red-minus-blue channel
     t = np.linspace(0, 1, 50)
@@ -63,7 +65,10 @@ def test_report_has_spec_keys_and_is_json():
     for key in ("max_stress_mpa", "allowable_stress_mpa", "weak_bones", "sections", "converged"):
         assert key in rep
     assert rep["weak_bones"] == [{"bone": "b1", "max_stress_mpa": 45.0, "ratio": 1.5,
+                                  "stress_mpa": 45.0, "allowable_mpa": 30.0,
                                   "limit": "along layers", "scale": 1.0, "weak": True}]
+    assert rep["worst"] == {"bone": "b1", "stress_mpa": 45.0, "allowable_mpa": 30.0,
+                            "ratio": 1.5, "limit": "along layers"}
     assert rep["sections"] == 4 and rep["converged"] is False
     assert [b["bone"] for b in rep["bones"]] == ["b1", "b0", "b2"]
     json.loads(json.dumps(rep, allow_nan=False))
@@ -79,7 +84,9 @@ def test_report_after_correction():
                             settings={}, mm_per_unit=1.0, correction=fix)
     assert rep["converged"] is True
     assert rep["weak_bones"] == [{"bone": "x", "max_stress_mpa": 29.0, "ratio": 29.0 / 30.0,
-                                  "limit": "along layers", "scale": 1.2, "weak": False, "max_stress_before_mpa": 45.0}]
+                                  "stress_mpa": 29.0, "allowable_mpa": 30.0,
+                                  "limit": "along layers", "scale": 1.2, "weak": False,
+                                  "max_stress_before_mpa": 45.0}]
     assert rep["correction"]["rounds"] == 1
     assert rep["correction"]["bone_scale"] == {"x": 1.2}
     assert rep["max_stress_mpa"] == 29.0 and rep["correction"]["max_stress_before_mpa"] == 45.0

@@ -64,7 +64,7 @@ def test_correct_matches_engine_and_only_scales_across(sample, engine):
 def _flatten_tail(obj, factor: float = 0.4):
     """Squash the figurine's tail across world z about its axis (blended by its weight): a
     flat tail, wide in x and thin in z."""
-    import make_sample_rig
+    from osteon_blender import sample as make_sample_rig
 
     a = np.array(make_sample_rig.JOINTS["tail_base"][0])
     b = np.array(make_sample_rig.JOINTS["tail_tip"][0])

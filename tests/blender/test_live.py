@@ -71,9 +71,11 @@ def test_thinner_limb_gets_higher_stress_live(live_sample):
     after = live.session().last_result.analysis
     layer = bridge.read_point_colors(obj.data)
     # the layer holds the new analysis ...
-    np.testing.assert_allclose(
-        layer, core.stress_colors(after.vertex_stress, after.allowable_stress, after.vertex_culled),
-        atol=1e-6)
+    res = live.session().last_result
+    k = res.mm_per_unit
+    np.testing.assert_allclose(   # Analyze's colours of this analysis (core.result_colors)
+        layer, core.result_colors(after, res.inputs.skeleton.heads * k,
+                                  res.inputs.skeleton.tails * k), atol=1e-6)
     # ... stress on the thinner forearm went up by about 1 / 0.7^3 (section modulus ~ s^3)
     ratio = after.vertex_stress[limb].mean() / before.vertex_stress[limb].mean()
     assert 2.0 < ratio < 3.5, ratio
@@ -88,8 +90,10 @@ def test_thinner_limb_gets_higher_stress_live(live_sample):
     # readout
     assert r.max_stress_mpa == pytest.approx(float(after.max_stress))
     assert r.allowable_mpa == pytest.approx(30.0)
-    per_bone = after.bone_max_stress()
-    assert r.weakest_bone == after.bone_names[int(np.argmax(per_bone))]
+    # the weakest bone is the governing section's: highest stress / ITS allowable (layers)
+    worst = int(np.nanargmax(np.where(np.isfinite(after.stress), after.stress_ratio, -np.inf)))
+    assert r.weakest_bone == after.bone_names[int(after.section_bone[worst])]
+    assert r.weakest_ratio == pytest.approx(float(after.stress_ratio[worst]), rel=1e-12)
 
 
 def test_timer_path_runs_in_a_worker_and_respects_the_throttle(live_sample):
@@ -159,7 +163,7 @@ def test_file_load_and_unregister_end_live(live_sample, addon):
     assert live.handlers_installed()
     empty_scene()                                   # a new file: load_post ends the session
     assert not live.is_live() and not live.handlers_installed()
-    obj, _arm = __import__("make_sample_rig").build()
+    obj, _arm = __import__("osteon_blender.sample", fromlist=["build"]).build()
     activate(obj)
     bpy.context.scene.osteon_live.enabled = True
     assert live.handlers_installed()
@@ -229,3 +233,32 @@ def test_overlay_outlines_of_the_analyze_button(sample, engine):
     out = overlay.get_outlines(bpy.context.scene.name)
     a = common.LAST[bpy.context.scene.name]["analysis"]
     assert out is not None and 0.9 * a.valid.sum() <= out.num_sections <= a.valid.sum()
+
+
+def test_live_result_is_the_panels_and_analyzes(live_sample):
+    """One verdict (issue 35): while Live runs, the summary and the rows show Live's result
+    (never "Not analysed yet" beside Live's numbers), Live's box names the same governing
+    section, and Analyze on the same pose gives the same rows, verdict and colours."""
+    from osteon_blender.ui import doubt_ui
+
+    obj, _arm = live_sample
+    s = bpy.context.scene.osteon
+    assert doubt_ui.summary_lines(s)[0][0] == "Not analysed yet"
+    live.start(bpy.context)
+    lines = [t for t, _ in doubt_ui.summary_lines(s)]
+    assert lines[0].endswith("(Live)") and s.result_source == "live"
+    r = live.readout(bpy.context.scene)
+    assert (r.weakest_bone, r.weakest_ratio) == (s.worst_bone, pytest.approx(s.worst_ratio))
+    assert r.worst_stress_mpa / r.worst_allowable_mpa == pytest.approx(r.weakest_ratio, rel=1e-6)
+    live_rows = [(x.name, round(x.ratio, 6), round(x.stress_mpa, 4), x.limit) for x in s.weak_bones]
+    live_worst = (s.worst_bone, s.worst_ratio, s.worst_stress_mpa, s.worst_allowable_mpa)
+    live_layer = bridge.read_point_colors(obj.data).copy()
+    live.stop()
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    assert s.result_source == "analyze"
+    assert [(x.name, round(x.ratio, 6), round(x.stress_mpa, 4), x.limit)
+            for x in s.weak_bones] == live_rows
+    assert s.worst_bone == live_worst[0]
+    assert (s.worst_ratio, s.worst_stress_mpa, s.worst_allowable_mpa) == pytest.approx(
+        live_worst[1:], rel=1e-6)
+    np.testing.assert_allclose(bridge.read_point_colors(obj.data), live_layer, atol=1e-6)

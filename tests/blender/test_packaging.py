@@ -10,6 +10,7 @@ the engine the package brought, and must give the same result as the in-tree add
 The zips come from scripts/build_addon.py (scripts/blender_tests.sh builds them first)."""
 
 import glob
+import inspect
 import os
 import re
 import subprocess
@@ -20,6 +21,7 @@ import zipfile
 import bpy
 import pytest
 from conftest import ROOT
+from test_skeleton import _capsule
 
 try:
     import tomllib
@@ -27,6 +29,8 @@ except ImportError:  # Python 3.10 (official Blender 3.4-4.0): manifest checks n
     tomllib = None
 
 DIST = os.environ.get("OSTEON_DIST", os.path.join(ROOT, "dist"))
+#: the bundled sample figurine's builder, loaded by path in the child Blenders
+SAMPLE = os.path.join(ROOT, "blender_addon", "osteon_blender", "sample.py")
 PY = "cp{}{}".format(*sys.version_info[:2])
 LEGACY_PYTHONS = ("cp310", "cp311")  # official 3.4-4.0 / 4.1 and Debian's 3.4.1
 
@@ -61,27 +65,30 @@ def _run(script: str, env_extra: dict, tmp_path) -> str:
     return out
 
 
-def _only_engine_under(root: str) -> str:
-    """Child-process prelude: 'osteon' may only be imported from below ``root`` (the package's
-    own copy), never from the environment's site-packages."""
+def _only_engine_under(root: str, names: tuple = ("osteon",)) -> str:
+    """Child-process prelude: ``names`` ('osteon', and 'pygel3d' for Make skeleton) may only
+    be imported from below ``root`` (the package's own copy), never from the environment's
+    site-packages."""
     return f"""
 import importlib.machinery, sys
 class OnlyPackaged:
     def find_spec(self, name, path=None, target=None):
-        if name != "osteon":
+        if name not in {names!r}:
             return None
         spec = importlib.machinery.PathFinder.find_spec(
             name, [p for p in sys.path if p.startswith({root!r})])
         if spec is None:
-            raise ModuleNotFoundError("osteon: not below {root} (hidden for the test)")
+            raise ModuleNotFoundError(name + ": not below {root} (hidden for the test)")
         return spec
 sys.meta_path.insert(0, OnlyPackaged())
 """
 
 
 _ANALYZE = """
-sys.path.insert(0, {scripts!r})
-import make_sample_rig
+import importlib.util
+_spec = importlib.util.spec_from_file_location("osteon_sample", {sample!r})
+make_sample_rig = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(make_sample_rig)
 make_sample_rig.build()
 result = bpy.ops.osteon.analyze()
 import osteon
@@ -100,7 +107,7 @@ def _result(out: str) -> tuple[str, int, float]:
 @pytest.fixture(scope="module")
 def reference(addon):
     """Analyze of the sample rig by the in-tree add-on: (sections, max stress in MPa)."""
-    import make_sample_rig
+    from osteon_blender import sample as make_sample_rig
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     make_sample_rig.build()
@@ -139,7 +146,7 @@ import bpy
 import addon_utils
 bpy.ops.preferences.addon_install(filepath={zip_path!r})
 addon_utils.enable("osteon_blender", default_set=True)
-""" + _ANALYZE.format(scripts=os.path.join(ROOT, "scripts")) + """
+""" + _ANALYZE.format(sample=SAMPLE) + """
 addon_utils.disable("osteon_blender")
 """
     out = _run(script, {"BLENDER_USER_SCRIPTS": str(scripts)}, tmp_path)
@@ -148,10 +155,54 @@ addon_utils.disable("osteon_blender")
     _assert_same_result(out, reference)
 
 
+_SKELETON = """
+import numpy as np
+{capsule}
+verts, faces = _capsule()
+me = bpy.data.meshes.new("capsule")
+me.from_pydata(verts, [], faces)
+ob = bpy.data.objects.new("capsule", me)
+bpy.context.scene.collection.objects.link(ob)
+bpy.context.view_layer.objects.active = ob
+ob.select_set(True)
+res = bpy.ops.osteon.make_skeleton()
+import pygel3d
+arm = bpy.data.objects.get("capsule_skeleton")
+print("PYGEL3D", pygel3d.__file__)
+print("SKELETON", res, len(arm.data.bones) if arm else 0)
+"""
+
+
+def _assert_skeleton(out: str, root: str) -> None:
+    gel = next(line for line in out.splitlines() if line.startswith("PYGEL3D"))
+    assert root in gel, gel                       # the zip's own pygel3d, not the system's
+    m = re.search(r"^SKELETON \{'FINISHED'\} (\d+)$", out, re.MULTILINE)
+    assert m and int(m.group(1)) >= 1, out
+
+
+@pytest.mark.skipif(PY not in LEGACY_PYTHONS,
+                    reason=f"the legacy zip is for Blender 3.4-4.1 (Python 3.10/3.11), not {PY}")
+def test_legacy_zip_makes_a_skeleton_with_its_own_pygel3d(tmp_path):
+    """Make skeleton from the zip alone (issue 35): pygel3d comes from the zip's _vendor."""
+    zip_path = _zip("legacy")
+    with zipfile.ZipFile(zip_path) as z:
+        if not any(n.startswith("osteon_blender/_vendor/pygel3d/") for n in z.namelist()):
+            pytest.fail("the legacy zip carries no pygel3d (scripts/build_addon.py --pygel3d)")
+    scripts = tmp_path / "scripts"
+    script = _only_engine_under(str(scripts), ("osteon", "pygel3d")) + f"""
+import bpy
+import addon_utils
+bpy.ops.preferences.addon_install(filepath={zip_path!r})
+addon_utils.enable("osteon_blender", default_set=True)
+""" + _SKELETON.format(capsule=inspect.getsource(_capsule))
+    out = _run(script, {"BLENDER_USER_SCRIPTS": str(scripts)}, tmp_path)
+    _assert_skeleton(out, str(scripts))
+
+
 # --- the 4.2+ extension zip -------------------------------------------------------------------
 
 def test_extension_manifest_says_what_the_zip_carries():
-    import build_addon
+    import addon_build as build_addon
 
     zip_path = _zip("extension")
     m = _manifest(zip_path)
@@ -210,7 +261,7 @@ r = bpy.ops.extensions.package_install_files(filepath={zip_path!r}, repo="user_d
                                              enable_on_install=True)
 print("INSTALL", r)
 print("MODULE", bpy.types.OSTEON_OT_analyze.__module__)
-""" + _ANALYZE.format(scripts=os.path.join(ROOT, "scripts"))
+""" + _ANALYZE.format(sample=SAMPLE)
     out = _run(script, {"BLENDER_USER_RESOURCES": str(res)}, tmp_path)
     assert "INSTALL {'FINISHED'}" in out, out
     assert "MODULE bl_ext.user_default.osteon_blender" in out
@@ -223,3 +274,20 @@ print("MODULE", bpy.types.OSTEON_OT_analyze.__module__)
     cores = [f for _, _, files in os.walk(res) for f in files if f.startswith("_core.")]
     assert cores and all(f".cpython-{PY[2:]}-" in f for f in cores), cores
     _assert_same_result(out, reference)
+
+
+@pytest.mark.skipif(bpy.app.version < (4, 2, 0), reason="extensions exist from Blender 4.2")
+def test_extension_zip_makes_a_skeleton_with_its_own_pygel3d(tmp_path):
+    """Make skeleton from the extension alone (issue 35): Blender installs the zip's pygel3d
+    wheel beside the engine's."""
+    zip_path = _zip("extension")
+    res = tmp_path / "resources"
+    script = _only_engine_under(str(res), ("osteon", "pygel3d")) + f"""
+import bpy
+r = bpy.ops.extensions.package_install_files(filepath={zip_path!r}, repo="user_default",
+                                             enable_on_install=True)
+print("INSTALL", r)
+""" + _SKELETON.format(capsule=inspect.getsource(_capsule))
+    out = _run(script, {"BLENDER_USER_RESOURCES": str(res)}, tmp_path)
+    assert "INSTALL {'FINISHED'}" in out, out
+    _assert_skeleton(out, str(res))

@@ -68,7 +68,7 @@ def test_cli_and_batch_reports_share_one_schema_and_numbers(sample, tmp_path):
                       "--force", FORCE, "--size-mode", "HEIGHT", "--print-size", SIZE,
                       "--interval", INTERVAL]) == 0
     blend = json.loads(path.read_text())
-    assert cli["schema_version"] == blend["schema_version"] == 1
+    assert cli["schema_version"] == blend["schema_version"] == 2
     assert (cli["run"]["front_end"], blend["run"]["front_end"]) == ("cli", "blender")
     # not a trivial case: many sections, weak bones, culled sections
     assert cli["sections"] > 50 and cli["weak_bones"] and cli["culled_sections"] > 0

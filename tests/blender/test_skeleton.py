@@ -90,6 +90,24 @@ def test_make_skeleton_then_analyze_gives_a_varied_layer(capsule, engine):
         bpy.ops.osteon.make_skeleton()
 
 
+def test_make_skeleton_without_pygel3d_says_what_to_do_in_blender(capsule, monkeypatch,
+                                                                  tmp_path):
+    """A zip for a platform PyPI has no pygel3d wheel for: the message tells a zip user what to
+    do inside Blender (no repository script), and nothing is changed."""
+    import sys
+
+    from osteon_blender import core
+
+    monkeypatch.setitem(sys.modules, "pygel3d", None)        # import pygel3d -> ImportError
+    monkeypatch.setattr(core, "_VENDOR", str(tmp_path / "no_vendor"))
+    with pytest.raises(RuntimeError) as err:
+        bpy.ops.osteon.make_skeleton()
+    msg = str(err.value)
+    assert "pygel3d" in msg and "Python Console" in msg and "pip" in msg
+    assert "blender_setup" not in msg and "scripts/" not in msg
+    assert bridge.armature_of(capsule) is None and not capsule.vertex_groups
+
+
 def test_make_skeleton_blender_weights_option(capsule):
     obj = capsule
     assert bpy.ops.osteon.make_skeleton(blender_weights=True) == {"FINISHED"}

@@ -70,3 +70,23 @@ def crashing_task(path, settings, model_id=None):
     if "crash" in os.path.basename(path):
         os._exit(3)
     return process_model(path, settings, model_id)
+
+
+def hanging_task(path, settings, model_id=None):
+    """The batch task, except that a model whose name has "hang" starts a child process
+    (``sleep``), writes ``PATH.pids`` (worker pid, child pid) and spins for ever: a reader
+    caught in a loop, with something it started."""
+    import os
+    import subprocess
+
+    from osteon.batch import process_model
+
+    if "hang" in os.path.basename(path):
+        child = subprocess.Popen(["sleep", "600"])
+        tmp = path + ".pids.tmp"
+        with open(tmp, "w") as fh:
+            fh.write(f"{os.getpid()} {child.pid}\n")
+        os.replace(tmp, path + ".pids")
+        while True:  # one core at 100 %, as the glTF joint loop did
+            pass
+    return process_model(path, settings, model_id)

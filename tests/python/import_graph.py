@@ -27,7 +27,8 @@ def import_graph(root: Path, package: str) -> dict[str, set[str]]:
     """``{module: {modules of the same package it imports}}`` for every .py under ``root``
     (the package folder). ``from . import x`` counts as importing ``package.x`` when that is a
     module, else the package itself."""
-    files = {module_name(root, p, package): p for p in root.rglob("*.py")}
+    files = {module_name(root, p, package): p for p in sorted(root.rglob("*.py"))
+             if "_vendor" not in p.parts}  # bundled third-party code is not ours
     graph: dict[str, set[str]] = {m: set() for m in files}
     for mod, path in files.items():
         is_package = path.name == "__init__.py"
@@ -90,4 +91,4 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     for v in sorted(edges):
         if v not in index:
             visit(v)
-    return found
+    return sorted(found)

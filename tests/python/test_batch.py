@@ -103,7 +103,7 @@ def test_numbers_equal_direct_analysis(library):
         r = recs[path.name]
         assert r["max_stress_mpa"] == pytest.approx(a.max_stress, rel=1e-12)
         assert r["stress_ratio"] == pytest.approx(a.max_stress / PLA_MPA, rel=1e-12)
-        assert r["schema_version"] == 1 and r["run"]["front_end"] == "batch"
+        assert r["schema_version"] == 2 and r["run"]["front_end"] == "batch"
         assert r["faces"] == len(m.faces) and r["bone_count"] == 2
         assert r["sections"] == len(a.stress)
     # a thinner bar of the same length is more stressed (W ~ r^3)

@@ -10,8 +10,8 @@ import zipfile
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-import build_addon
+sys.path.insert(0, os.path.join(ROOT, "blender_addon"))
+import addon_build as build_addon
 
 tomllib = pytest.importorskip("tomllib")
 
@@ -67,8 +67,17 @@ def test_zips_per_platform(tmp_path):
         _fake_wheel(wh, py, lin, f".cpython-{py[2:]}-x86_64-linux-gnu.so")
     for py in ("cp311", "cp313"):
         _fake_wheel(wh, py, "win_amd64", f".{py}-win_amd64.pyd")
+    gel = tmp_path / "gel"    # pygel3d for Linux x64 only (PyPI has none for some platforms)
+    gel.mkdir()
+    gel_wheel = "pygel3d-0.8.2-py3-none-manylinux_2_27_x86_64.manylinux_2_28_x86_64.whl"
+    with zipfile.ZipFile(gel / gel_wheel, "w") as z:
+        z.writestr("pygel3d/__init__.py", "")
+        z.writestr("pygel3d/libPyGEL.so", b"\0")
+        z.writestr("pygel3d.libs/libGLU-ff1477cc.so.1.3.1", b"\0")
+        z.writestr("pygel3d-0.8.2.dist-info/WHEEL", "Wheel-Version: 1.0\n")
     out = tmp_path / "dist"
-    assert build_addon.main(["--wheel-dir", str(wh), "--out", str(out)]) == 0
+    assert build_addon.main(["--wheel-dir", str(wh), "--out", str(out),
+                             "--pygel3d", str(gel)]) == 0
     v = build_addon.addon_version()
     zips = sorted(p.name for p in out.glob("*.zip"))
     assert zips == [f"osteon_blender-{v}-linux_x64-extension.zip",
@@ -83,12 +92,15 @@ def test_zips_per_platform(tmp_path):
     assert m["wheels"] == [f"./wheels/osteon-0.1.0-{py}-{py}-win_amd64.whl"
                            for py in ("cp311", "cp313")]
     assert {w[2:] for w in m["wheels"]} <= names and "__init__.py" in names
+    assert "docs/blender.md" in names          # the Preferences' Documentation button
     assert m["blender_version_min"] == "4.2.0" and "blender_version_max" not in m
     assert len(m["tagline"]) <= 64 and m["version"] == v
 
     with zipfile.ZipFile(out / f"osteon_blender-{v}-linux_x64-extension.zip") as z:
         m = tomllib.loads(z.read("blender_manifest.toml").decode())
-    assert [w.split("-")[2] for w in m["wheels"]] == ["cp311", "cp313"]  # no cp310 in 4.2+
+    # no cp310 in 4.2+; pygel3d's wheel listed after the engine's, so Blender installs it
+    assert [w.split("-")[2] for w in m["wheels"]] == ["cp311", "cp313", "py3"]
+    assert m["wheels"][-1] == f"./wheels/{gel_wheel}"
     assert m["platforms"] == ["linux-x64"]
 
     with zipfile.ZipFile(out / f"osteon_blender-{v}-linux_x64-legacy.zip") as z:
@@ -99,14 +111,30 @@ def test_zips_per_platform(tmp_path):
     assert cores == [f"osteon_blender/_vendor/osteon/_core.cpython-{p}-x86_64-linux-gnu.so"
                      for p in ("310", "311")]  # side by side; no 3.13 in Blender <= 4.1
     assert "osteon_blender/_vendor/osteon/__init__.py" in names
+    assert {"osteon_blender/_vendor/pygel3d/libPyGEL.so", "osteon_blender/docs/blender.md",
+            "osteon_blender/_vendor/pygel3d.libs/libGLU-ff1477cc.so.1.3.1"} <= set(names)
     assert not any("dist-info" in n for n in names)
+    with zipfile.ZipFile(out / f"osteon_blender-{v}-windows_x64-legacy.zip") as z:
+        assert not any("pygel3d" in n for n in z.namelist())   # none given for Windows
+
+
+@pytest.mark.parametrize("wheel, platforms", [
+    ("pygel3d-0.8.2-py3-none-manylinux_2_27_x86_64.manylinux_2_28_x86_64.whl", ["linux-x64"]),
+    ("pygel3d-0.8.2-py3-none-manylinux_2_27_aarch64.manylinux_2_28_aarch64.whl",
+     ["linux-arm64"]),
+    ("pygel3d-0.8.2-py3-none-win_amd64.whl", ["windows-x64"]),
+    ("pygel3d-0.8.2-py3-none-macosx_11_0_universal2.whl", ["macos-arm64", "macos-x64"]),
+])
+def test_pygel3d_wheel_platforms(wheel, platforms):
+    """The four wheels PyPI has for PyGEL3D 0.8.2 (pip download --platform ..., 2026-11-27)."""
+    assert build_addon.pygel3d_platform(wheel) == platforms
 
 
 def test_cp311_only_zip_stops_before_51(tmp_path):
     wh = tmp_path / "wh"
     wh.mkdir()
     _fake_wheel(wh, "cp311", "linux_x86_64", ".cpython-311-x86_64-linux-gnu.so")
-    build_addon.main(["--wheel-dir", str(wh), "--out", str(tmp_path)])
+    build_addon.main(["--wheel-dir", str(wh), "--out", str(tmp_path), "--pygel3d", "none"])
     (ext,) = tmp_path.glob("*-extension.zip")
     with zipfile.ZipFile(ext) as z:
         m = tomllib.loads(z.read("blender_manifest.toml").decode())

@@ -65,6 +65,9 @@ def test_open_box_report_is_not_an_all_clear():
     assert row["reason"].startswith(f"{r['skipped_sections']} of {n} sections could not be cut")
     assert "open" in row["reason"]
     assert r["doubt"] and "could not be cut" in r["doubt"]
+    # it names the bone and says what to do (issue 35: a count alone helps nobody)
+    assert f"(bone {r['skipped_sections']})" in r["doubt"]
+    assert "close the mesh's holes there" in r["doubt"]
     json.loads(report.to_json(r))  # still valid JSON (no NaN)
 
 

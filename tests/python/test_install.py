@@ -43,7 +43,7 @@ def _requirement_names(reqs) -> set[str]:
 
 def test_every_imported_module_is_a_regular_dependency():
     imported = _third_party_imports()
-    assert {"numpy", "scipy", "trimesh", "pygltflib", "matplotlib", "tqdm"} <= imported
+    assert {"numpy", "scipy", "trimesh", "matplotlib", "tqdm"} <= imported
     required = _requirement_names(importlib.metadata.requires("osteon"))
     missing = {DIST_OF.get(n, n).lower() for n in imported} - required
     assert not missing, f"imported by python/osteon but not a regular dependency: {missing}"

@@ -120,3 +120,41 @@ def test_correction_follows_the_ratio():
 def test_bad_layer_options(rod, kw, match):
     with pytest.raises(ValueError, match=match):
         _run(rod, **kw)
+
+
+def test_report_speaks_of_the_governing_section():
+    """One verdict (issue 35): a standing post (sections across the layers, allowable r X) and
+    a lying arm (along them, X) in one model; every row's ratio is the stress / allowable of
+    one and the same section, and the report's ``worst`` is the row with the highest ratio --
+    not the highest stress, which lies where the allowable is higher."""
+    from osteon import report
+
+    post = cylinder_along([0, 0, 0], [0, 0, 30], 5.5)
+    arm = cylinder_along([0, 0, 30], [60, 0, 30], 5.0)
+    v, f = merge(post, arm)
+    sk = osteon.Skeleton(np.array([[0.0, 0, 0], [0, 0, 30]]), np.array([[0.0, 0, 30], [60, 0, 30]]),
+                         np.array([-1, 0]), names=["post", "arm"])
+    w = np.zeros((len(v), 2))
+    w[: len(post[0]), 0] = 1.0
+    w[len(post[0]):, 1] = 1.0
+    r = 0.25
+    a = osteon.analyze(v, f, sk, w, force=20.0, allowable_stress=X, interval=2.0,
+                       build_direction=(0, 0, 1), layer_strength_ratio=r)
+    rep = report.build_report(analysis=a, bone_names=["post", "arm"], allowable_mpa=X,
+                              settings={}, front_end="test", model="post+arm")
+    rows = {row["bone"]: row for row in rep["bones"]}
+    assert rows["post"]["limit"] == "across layers"
+    assert rows["post"]["allowable_mpa"] == pytest.approx(r * X)
+    assert r * X < rows["arm"]["allowable_mpa"] <= X
+    for row in rows.values():
+        assert row["ratio"] == pytest.approx(row["stress_mpa"] / row["allowable_mpa"], rel=1e-12)
+        assert row["stress_mpa"] <= row["max_stress_mpa"]
+    worst = max(rows.values(), key=lambda row: row["ratio"])
+    assert rep["worst"] == {k: worst[k] for k in ("bone", "stress_mpa", "allowable_mpa", "ratio",
+                                                  "limit")}
+    assert rep["worst"]["ratio"] == pytest.approx(rep["stress_ratio"], rel=1e-12)
+    # the case the issue met: the highest stress (the arm's middle, along the layers) is not
+    # where the ratio is worst (its tilted root, nearer across): max stress / worst allowable
+    # would not be the verdict's ratio
+    assert rep["max_stress_mpa"] > 1.5 * rep["worst"]["stress_mpa"]
+    assert rep["max_stress_mpa"] / rep["worst"]["allowable_mpa"] > 1.5 * rep["worst"]["ratio"]

@@ -66,7 +66,8 @@ def test_every_engine_field_reaches_analysis_with_its_shape(model):
             assert all(p.ndim == 1 and p.dtype == np.int32 for p in value), name
         else:
             want = tuple(sizes[d] for d in shape.strip("()").split(",") if d)
-            if name.startswith("cut_outline"):  # no junction here (junctions=False)
+            # no junction here (junctions=False), no print profile (no infill loops)
+            if name.startswith(("cut_outline", "infill_outline")):
                 want = {"(P,3)": (0, 3), "(L+1,)": (1,), "(S+1,)": (n_sections + 1,)}[shape]
             assert value.shape == want, (name, value.shape, want)
             assert value.dtype == np.dtype(dtype), name

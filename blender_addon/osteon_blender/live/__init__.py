@@ -85,11 +85,11 @@ __all__ = [
 ]
 
 
-def register() -> None:
-    """scene.osteon_live and the load handler (the classes are registered by the add-on)."""
-    from ..ui.live_properties import OsteonLiveSettings
-
-    bpy.types.Scene.osteon_live = bpy.props.PointerProperty(type=OsteonLiveSettings)
+def register(settings_type) -> None:
+    """scene.osteon_live (a pointer to ``settings_type``, ui/live_properties'
+    OsteonLiveSettings, registered by the add-on with the other classes) and the load
+    handler."""
+    bpy.types.Scene.osteon_live = bpy.props.PointerProperty(type=settings_type)
     if _on_load_post not in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.append(_on_load_post)
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from .. import bridge, core, overlay, state
+from .. import bridge, core, overlay, results, state
 from ..core import OsteonError
 
 # --------------------------------------------------------------------------- session state
@@ -27,7 +27,10 @@ class Readout:
     max_stress_mpa: float = 0.0
     allowable_mpa: float = 0.0
     weakest_bone: str = ""
-    weakest_ratio: float = 0.0
+    weakest_ratio: float = 0.0     # stress / allowable at the governing section (report "worst")
+    worst_stress_mpa: float = 0.0
+    worst_allowable_mpa: float = 0.0
+    worst_limit: str = ""
     sections: int = 0
     weak_sections: int = 0
     updates: int = 0
@@ -55,6 +58,9 @@ class LiveInputs:
     want_outlines: bool = False
     t_read: float = 0.0
     skeleton: object = None             # bridge.SkeletonArrays as read (Blender's tails)
+    obj_name: str = ""
+    arm_name: str = ""
+    settings: dict = field(default_factory=dict)   # Settings.as_dict() for the report
 
 
 @dataclass
@@ -67,6 +73,17 @@ class LiveResult:
     parents: np.ndarray
     outlines: object = None
     timings: dict = field(default_factory=dict)
+    report: dict | None = None          # the wheel's report: the panel shows it (results.show)
+    inputs: object = None               # what a row click needs (LiveShown)
+
+
+@dataclass
+class LiveShown:
+    """A live result in the shape ops/select_bone reads from ``service.Inputs``."""
+
+    skeleton: object
+    mm_per_unit: float
+    vertices_mm: np.ndarray
 
 
 class Session:
@@ -129,7 +146,7 @@ def _settings_key(scene) -> tuple:
     setting is covered without listing it here) and the scene's unit scale."""
     s = scene.osteon
     try:
-        settings = core.settings_of(s)
+        settings = core.settings_of(s, state.of(scene).orientation)
         settings = dataclasses.replace(
             settings, build_direction=tuple(float(x) for x in settings.build_direction))
     except (OsteonError, ValueError, TypeError) as e:  # read_inputs reports it to the user
@@ -170,7 +187,7 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
         depsgraph = bpy.context.evaluated_depsgraph_get()
     s = scene.osteon
     sk = bridge.skeleton_arrays(arm)
-    params = core.engine_params(s, arm, sk.names)
+    params = core.engine_params(s, arm, sk.names, orientation=state.of(scene).orientation)
     co, matrix = bridge.evaluated_positions_into(obj, depsgraph)
     settings = _settings_key(scene)
     want = _want_outlines(scene)
@@ -189,7 +206,9 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
         names=list(sk.names), size_mode=s.size_mode, print_size_mm=float(s.print_size_mm),
         unit_scale=float(scene.unit_settings.scale_length),
         params=params,
-        analyzer_key=key, want_outlines=want, skeleton=sk)
+        analyzer_key=key, want_outlines=want, skeleton=sk, obj_name=obj.name,
+        arm_name=arm.name,
+        settings=core.settings_of(s, state.of(scene).orientation).as_dict())
     if rebuild:
         if sess.weights_stale:
             sess.weights.clear()
@@ -239,13 +258,20 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
         sess.analyzer_key = None
         raise OsteonError(f"osteon could not analyse '{sess.obj_name}': {e}") from e
     t2 = time.perf_counter()
-    rgba = core.stress_colors(analysis.vertex_stress, inp.params["allowable_stress"],
-                              analysis.vertex_culled)
+    # the same report and colours as Analyze (service.publish): one verdict everywhere
+    report = core.build_report(
+        object_name=inp.obj_name, armature_name=inp.arm_name, bone_names=inp.names,
+        analysis=analysis, allowable_mpa=inp.params["allowable_stress"], settings=inp.settings,
+        mm_per_unit=k, vertices=len(world), faces=len(sess.faces))
+    doubt = results.not_analysed_vertices(analysis, report, inp.names)
+    rgba = core.result_colors(analysis, inp.heads * k, tails * k, doubt)
     t3 = time.perf_counter()
+    shown = LiveShown(skeleton=inp.skeleton, mm_per_unit=k, vertices_mm=world)
     return LiveResult(analysis=analysis, rgba=rgba, vertices_mm=world, mm_per_unit=k,
-                      names=inp.names, parents=inp.parents,
+                      names=inp.names, parents=inp.parents, report=report, inputs=shown,
                       timings={"read_ms": inp.t_read * 1e3, "prepare_ms": (t1 - t0) * 1e3,
                                "analysis_ms": (t2 - t1) * 1e3, "colors_ms": (t3 - t2) * 1e3})
+
 
 
 def outlines_of(sess: Session, res: LiveResult):
@@ -266,14 +292,22 @@ def publish(sess: Session, res: LiveResult) -> None:
     r.status = "live"
     r.max_stress_mpa = float(np.nan_to_num(a.max_stress))
     r.allowable_mpa = allowable
-    per_bone = a.bone_max_stress()
-    if len(per_bone) and np.any(per_bone > 0):
-        b = int(np.argmax(per_bone))
-        r.weakest_bone, r.weakest_ratio = res.names[b], float(per_bone[b] / allowable)
+    worst = (res.report or {}).get("worst")     # the governing section, as Analyze reports it
+    if worst:
+        r.weakest_bone, r.weakest_ratio = worst["bone"], float(worst["ratio"])
+        r.worst_stress_mpa, r.worst_allowable_mpa = (float(worst["stress_mpa"]),
+                                                     float(worst["allowable_mpa"]))
+        r.worst_limit = worst.get("limit") or ""
     else:
         r.weakest_bone, r.weakest_ratio = "", 0.0
+        r.worst_stress_mpa = r.worst_allowable_mpa = 0.0
+        r.worst_limit = ""
     r.sections = int(a.num_sections)
     r.weak_sections = int(np.count_nonzero(a.weak))
+    if res.report is not None:
+        # Live's result IS the panel's: the summary and the rows show it too
+        results.show(scene, res.report, {"report": res.report, "analysis": a,
+                                         "inputs": res.inputs, "correction": None}, "live")
     r.updates += 1
     r.analysis_ms = res.timings.get("analysis_ms", 0.0)
     res.timings["write_ms"] = (time.perf_counter() - t0) * 1e3

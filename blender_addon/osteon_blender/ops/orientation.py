@@ -28,7 +28,12 @@ def run_find(context) -> dict:
         last = st.last
     analysis, inp = last["analysis"], last["inputs"]
     try:
-        res = osteon.best_orientation(analysis)
+        profile = inp.params.get("print_profile")  # "Print settings": re-analysed per candidate
+        printed = {} if profile is None else {
+            "print_profile": profile, "engine_options": {"junctions": inp.params["junctions"]},
+            "model": (inp.vertices_mm, inp.faces, service.engine_skeleton(osteon, inp),
+                      inp.weights)}
+        res = osteon.best_orientation(analysis, **printed)
     except ValueError as e:
         raise OsteonError(f"osteon could not search orientations of '{obj.name}': {e}") from e
     v = inp.vertices_mm / inp.mm_per_unit

@@ -43,7 +43,7 @@ def weakest_section(scene, name: str) -> dict | None:
     "loops": list of (n, 3) outline loops, "radius": float}``; None without a result or when
     the result has no such bone."""
     st = state.get(scene)
-    last = st.last if st is not None else None
+    last = (st.shown or st.last) if st is not None else None
     if not last:
         return None
     analysis, inp = last["analysis"], last["inputs"]
@@ -64,6 +64,7 @@ def weakest_section(scene, name: str) -> dict | None:
     s = int(mine[np.argmax(ratio[mine])])
     out["section"] = s
     out["centre"] = np.asarray(analysis.section_center[s], dtype=np.float64) / k
+    out["normal"] = np.asarray(analysis.section_normal[s], dtype=np.float64)
     ss = getattr(analysis, "outline_section_start", None)
     if ss is not None and len(ss) > s + 1:
         pts = np.asarray(analysis.outline_points, dtype=np.float64) / k
@@ -72,23 +73,82 @@ def weakest_section(scene, name: str) -> dict | None:
             out["loops"].append(pts[ls[loop]:ls[loop + 1]])
     if out["loops"]:
         allp = np.concatenate(out["loops"])
-        out["radius"] = max(out["radius"], float(np.max(np.linalg.norm(
-            allp - out["centre"], axis=1))))
+        out["radius"] = max(float(np.max(np.linalg.norm(allp - out["centre"], axis=1))),
+                            1e-9)
+    verts = np.asarray(inp.vertices_mm, dtype=np.float64) / k
+    out["size"] = float(np.ptp(verts, axis=0).max()) if len(verts) else out["radius"]
+    out["view"] = view_direction(out["centre"], out["normal"], out["radius"], verts)
     return out
 
 
-def frame(context, centre, radius: float) -> int:
-    """Turn every 3D viewport of the window to ``centre`` (world, Blender units) at a
-    distance that shows ``radius`` around it; returns how many viewports moved (0 headless)."""
+#: how far the view stands from the section, in section radii (the section spans about a
+#: fifth of the view: the limb around it stays in sight)
+FRAME_RADII = 12.0
+#: the clip range kept when it has to move: end / start, Blender's default 1000 / 0.01
+CLIP_RATIO = 1.0e5
+
+
+def view_direction(centre, normal, radius: float, vertices) -> np.ndarray:
+    """A unit direction (3,) from the section towards the eye that shows the section: among
+    directions 30 degrees off the section's plane, on either side and all around (the ring
+    then reads as an ellipse half as wide as long), the one whose line of sight passes by
+    the fewest of the model's ``vertices`` (world, (V, 3)) beyond the section's own
+    surroundings -- no other part (a forearm before a tail root) hides it; ties go to the most
+    upward (the way one looks at a model on a table)."""
+    n = np.asarray(normal, dtype=np.float64)
+    n = n / (np.linalg.norm(n) or 1.0)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(n[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    u = np.cross(n, helper)
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    cands = []
+    for t in np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False):
+        side = np.cos(t) * u + np.sin(t) * v
+        cands += [np.cos(np.pi / 6) * side + sign * np.sin(np.pi / 6) * n for sign in (1, -1)]
+    cands = np.array(cands)
+    p = np.asarray(vertices, dtype=np.float64) - np.asarray(centre, dtype=np.float64)
+    if len(p) > 20000:                   # a sample is enough to tell the sides apart
+        p = p[:: len(p) // 20000 + 1]
+    p = p[(p * p).sum(1) > (2.0 * radius) ** 2]          # the section's own surroundings
+    along = p @ cands.T                                  # (V, C) distance along each sight line
+    across2 = np.maximum((p * p).sum(1)[:, None] - along * along, 0.0)
+    blocked = (along > 0.0) & (across2 < (1.2 * radius) ** 2)
+    cost = blocked.sum(axis=0) - 1e-3 * cands[:, 2]      # fewest in the way; then from above
+    return cands[int(np.argmin(cost))]
+
+
+def frame(context, centre, radius: float, direction=None, model_size: float | None = None
+          ) -> int:
+    """Turn every 3D viewport of the window to ``centre`` (world, Blender units) at a distance
+    that shows ``radius`` around it, looking along ``-direction`` (from the section towards
+    the eye; None keeps the view's direction).  The viewport's clip range is moved where the
+    section would fall outside it (a model of 1 cm: the default near clip, 0.01, is farther
+    than the section), keeping Blender's default ratio of far to near.  Returns how many
+    viewports moved (0 headless)."""
+    from mathutils import Vector
+
     win = getattr(context, "window", None)
     screen = getattr(win, "screen", None)
+    distance = FRAME_RADII * float(radius)
+    size = float(model_size) if model_size else distance
     moved = 0
     for area in getattr(screen, "areas", None) or []:
         if area.type != "VIEW_3D":
             continue
-        r3d = area.spaces.active.region_3d
+        space = area.spaces.active
+        r3d = space.region_3d
+        if r3d.view_perspective == "CAMERA":
+            r3d.view_perspective = "PERSP"
         r3d.view_location = tuple(float(x) for x in centre)
-        r3d.view_distance = 4.0 * float(radius)
+        if direction is not None:
+            r3d.view_rotation = Vector(tuple(float(x) for x in direction)).to_track_quat("Z", "Y")
+        r3d.view_distance = distance
+        if space.clip_start > 0.25 * distance:
+            space.clip_start = 0.05 * distance
+            space.clip_end = min(space.clip_end, max(space.clip_start * CLIP_RATIO,
+                                                     distance + 4.0 * size))
+        if space.clip_end < distance + 2.0 * size:
+            space.clip_end = distance + 4.0 * size
         area.tag_redraw()
         moved += 1
     return moved
@@ -102,7 +162,7 @@ def show_bone(context, arm, name: str) -> dict | None:
         overlay.set_highlight(context.scene, None)
         return None
     overlay.set_highlight(context.scene, where)
-    frame(context, where["centre"], where["radius"])
+    frame(context, where["centre"], where["radius"], where.get("view"), where.get("size"))
     return where
 
 
@@ -113,14 +173,20 @@ def result_rows(scene) -> list:
 
 
 def row_tooltip(row, allowable_mpa: float) -> str:
-    """The full text of one result row (the list's tooltip): name, stress (MPa), ratio,
-    governing strength, scale after Correct."""
+    """The full text of one result row (the list's tooltip): name, stress / allowable at the
+    bone's governing section with both numbers (MPa) and which allowable that is (across or
+    along the layers), the verdict, the scale after Correct."""
     if row.status == "not analysed":
         return f"{row.name}: not analysed. {row.reason}"
-    text = (f"{row.name}: max stress {row.max_stress_mpa:.1f} MPa; stress / allowable "
-            f"{row.ratio:.2f} (allowable {allowable_mpa:.1f} MPa")
-    text += f", the strength {row.limit} governs)" if row.limit else ")"
+    allow = row.allowable_mpa or allowable_mpa
+    stress = row.stress_mpa if row.allowable_mpa else row.max_stress_mpa
+    text = (f"{row.name}: stress / allowable {row.ratio:.2f} at its weakest section: "
+            f"{stress:.1f} MPa of {allow:.1f} MPa allowed")
+    text += f" {row.limit}" if row.limit else ""
     text += ", over the limit" if row.weak else ", within the limit"
+    if row.max_stress_mpa > stress * (1.0 + 1e-6):
+        text += (f" (its highest stress, {row.max_stress_mpa:.1f} MPa, lies where more is "
+                 "allowed)")
     if abs(row.scale - 1.0) > 1e-6:
         text += f"; Correct scaled its cross-section x{row.scale:.2f}"
     return text + ". Click: select the bone, outline its weakest section, frame it"
@@ -169,6 +235,22 @@ class OSTEON_OT_next_weak_bone(OsteonOperator, bpy.types.Operator):
     bl_idname = "osteon.next_weak_bone"
     bl_label = "Next weak bone"
     bl_options = {"REGISTER", "UNDO"}  # noqa: RUF012
+
+    @classmethod
+    def poll(cls, context):
+        """Greyed out while the result has no bone to walk to (none weak, none unanalysed)."""
+        scene = getattr(context, "scene", None)
+        s = getattr(scene, "osteon", None)
+        if s is None or not s.has_result or not result_rows(scene):
+            cls.poll_message_set_compat("No bone over the limit: nothing to walk through")
+            return False
+        return True
+
+    @classmethod
+    def poll_message_set_compat(cls, text: str) -> None:
+        setter = getattr(cls, "poll_message_set", None)  # Blender 3.0+
+        if setter is not None:
+            setter(text)
 
     def run(self, context):
         s = context.scene.osteon

@@ -3,22 +3,11 @@ result does not cover (skipped and doubtful sections, issue 13: no false all-cle
 
 from __future__ import annotations
 
-from .. import state
+from .. import results
 
 
 def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
-
-
-def worst_ratio(s) -> float | None:
-    """The worst stress / allowable of the last result (the report's, which counts the
-    layers' weaker strength across them), or max stress / allowable stress (MPa / MPa)."""
-    st = state.get(s.id_data)
-    rep = st.last["report"] if st is not None and st.last else None
-    r = rep.get("stress_ratio") if rep else None
-    if r is not None:
-        return float(r)
-    return s.max_stress_mpa / s.allowable_mpa if s.allowable_mpa > 0 else None
 
 
 def summary_lines(s) -> list[tuple[str, str]]:
@@ -27,21 +16,22 @@ def summary_lines(s) -> list[tuple[str, str]]:
     "Not analysed: <why>" -- never the object's name."""
     if not s.has_result:
         return [("Not analysed yet", "INFO")]
+    live = " (Live)" if s.result_source == "live" else ""
     rows = list(s.weak_bones)
     weak = sum(1 for r in rows if r.weak)
     uncut = [r for r in rows if r.status == "not analysed"]
     lines = []
     if weak:
-        lines.append((f"{_plural(weak, 'bone')} over the limit", "ERROR"))
+        lines.append((f"{_plural(weak, 'bone')} over the limit{live}", "ERROR"))
     elif s.verdict == "not analysed":
         why = uncut[0].reason.split(": ", 1)[-1] if uncut and uncut[0].reason else (
             "no section could be cut")
         lines.append((f"Not analysed: {why}", "QUESTION"))
     else:
-        lines.append(("All within the limit", "CHECKMARK"))
-    ratio = worst_ratio(s)
-    if ratio is not None and s.sections:
-        lines.append((f"Worst σ/[σ] {ratio:.2f}, {s.max_stress_mpa:.1f} MPa", "NONE"))
+        lines.append((f"All within the limit{live}", "CHECKMARK"))
+    if s.worst_bone and s.sections:
+        lines.append((results.worst_line(s.worst_bone, s.worst_stress_mpa, s.worst_allowable_mpa,
+                                         s.worst_ratio, s.worst_limit), "NONE"))
     lines.append((f"{s.weak_sections} of {_plural(s.sections, 'section')} over", "NONE"))
     if weak and uncut:
         lines.append((f"{_plural(len(uncut), 'bone')} not analysed", "QUESTION"))

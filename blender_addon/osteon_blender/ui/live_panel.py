@@ -1,10 +1,12 @@
 """Sidebar sub-panel "Live" under the Osteon panel: one Live on/off button, the throttle, the
-overlay's options (Show sections, All sections) and a readout of the last live analysis (max
-stress and allowable stress in MPa, the weakest bone)."""
+overlay's options (Show sections, All sections) and a readout of the last live analysis (the
+governing section in the summary's words: stress / allowable, both in MPa, and which allowable;
+the panel's summary and rows show the same result while Live runs)."""
 
 import bpy
 
-from .. import live
+from .. import live, results
+from .widgets import BOX_INSET, wrapped_label
 
 
 class OSTEON_PT_live(bpy.types.Panel):
@@ -33,18 +35,16 @@ class OSTEON_PT_live(bpy.types.Panel):
         box = layout.box()
         col = box.column(align=True)
         if r.status.startswith(("error", "paused")):
-            from .panel import wrapped_label
-
             wrapped_label(col, context, r.status,
                           "ERROR" if r.status.startswith("error") else "PAUSE")
         if r.updates == 0:
             col.label(text="No live result yet")
             return
-        ratio = r.max_stress_mpa / r.allowable_mpa if r.allowable_mpa > 0 else 0.0
-        col.label(text=f"Max {r.max_stress_mpa:.1f} / {r.allowable_mpa:.1f} MPa",
-                  icon="ERROR" if ratio > 1.0 else "CHECKMARK")
-        if r.weakest_bone:
-            col.label(text=f"Worst x{r.weakest_ratio:.2f}: {r.weakest_bone}", icon="BONE_DATA")
+        if r.weakest_bone:   # the governing section, in the summary's words (results.py)
+            wrapped_label(col, context, results.worst_line(
+                r.weakest_bone, r.worst_stress_mpa, r.worst_allowable_mpa, r.weakest_ratio,
+                r.worst_limit), "ERROR" if r.weakest_ratio >= 1.0 else "CHECKMARK",
+                inset=BOX_INSET)
         col.label(text=f"{r.weak_sections} of {r.sections} sections over")
         col.label(text=f"{r.last_update_ms:.0f} ms ({r.analysis_ms:.0f} analysis), #{r.updates}")
 

@@ -12,66 +12,10 @@ from __future__ import annotations
 import bpy
 
 from .. import bridge, core, state
-from . import doubt_ui, print_panel
+from . import doubt_ui, print_panel, widgets
+from .widgets import BOX_INSET, labelled, wrapped_label
 
-LABEL_SPLIT = 0.35    # share of a labelled dropdown's row its label gets
-DEFAULT_WIDTH = 229   # px, the sidebar's default width at UI scale 1 (no region: headless)
-MARGINS = 54          # px at UI scale 1: tabs, panel borders and insets of the sidebar
-BOX_INSET = 12        # px at UI scale 1: a box's own borders
 LOOSE_OP = "OSTEON_OT_select_loose_pieces"   # from branch i12c (ops/loose.py), when present
-
-
-def labelled(layout, data, prop: str, label: str, search=None):
-    """A dropdown (or a search field: ``search`` = (data, collection name)) with its short
-    label in front, the way ``use_property_split`` draws, at a width that keeps both legible."""
-    split = layout.split(factor=LABEL_SPLIT, align=True)
-    split.label(text=label)
-    if search is not None:
-        split.prop_search(data, prop, search[0], search[1], text="")
-    else:
-        split.prop(data, prop, text="")
-
-
-def text_width_px(context) -> float:
-    """Width (px) a label has in this sidebar (the region's, or the default headless)."""
-    region = getattr(context, "region", None)
-    width = region.width if region is not None and region.type == "UI" else DEFAULT_WIDTH
-    return width - MARGINS * _scale(context)
-
-
-def _scale(context) -> float:
-    prefs = context.preferences
-    scale = float(prefs.system.ui_scale)
-    return scale if scale > 0 else float(prefs.view.ui_scale)
-
-
-def wrap(text: str, width_px: float, scale: float, icon: bool = False) -> list[str]:
-    """``text`` cut at spaces into lines no wider than ``width_px`` in the UI font."""
-    import blf
-
-    blf.size(0, 11.0 * scale)
-    room = width_px - (12.0 + (20.0 if icon else 0.0)) * scale
-    lines, cur = [], ""
-    for word in text.split():
-        trial = f"{cur} {word}" if cur else word
-        if cur and blf.dimensions(0, trial)[0] > room:
-            lines.append(cur)
-            cur = word
-        else:
-            cur = trial
-    if cur:
-        lines.append(cur)
-    return lines or [""]
-
-
-def wrapped_label(layout, context, text: str, icon: str = "NONE", inset: float = 0.0) -> None:
-    """``text`` as labels cut to the sidebar's width (``inset`` px at UI scale 1 narrower,
-    e.g. inside a box); the first line carries ``icon``."""
-    col = layout.column(align=True)
-    has_icon = icon not in ("NONE", "")
-    room = text_width_px(context) - inset * _scale(context)
-    for i, line in enumerate(wrap(text, room, _scale(context), has_icon)):
-        col.label(text=line, icon=icon if i == 0 else ("BLANK1" if has_icon else "NONE"))
 
 
 def summary(s) -> list[str]:
@@ -95,29 +39,60 @@ class _Sub:
     bl_parent_id = "OSTEON_PT_main"
 
 
-class OSTEON_UL_weak_bones(bpy.types.UIList):
-    """Result rows: bone (a button that shows it; its tooltip has the full name and numbers),
-    stress / allowable, and the cross-section scale Correct gave it."""
+#: px at UI scale 1 of each number column of the result rows ("2.08", "33.6", "1.45"); a
+#: UIList row loses LIST_MARGIN px to the list's box and scroll bar (tests/blender/ui_fit.py)
+NUMBER_COLUMN = 38
+LIST_MARGIN = 26
+SUBPANEL_INSET = 4    # px at UI scale 1: a sub-panel's layout is this much narrower
 
-    COLUMNS = (0.46,)   # the bone's share; the ratio and the scale share the rest
+
+def _scaled_rows(s) -> bool:
+    return any(abs(r.scale - 1.0) > 1e-6 for r in s.weak_bones)
+
+
+def row_columns(context, s) -> tuple[float, float, int]:
+    """(name share of a result row, its width in px, number of number columns): the name
+    gets what the fixed narrow number columns leave (stress / allowable, and the scale once
+    Correct has scaled a bone)."""
+    scale = widgets._scale(context)
+    width = widgets.text_width_px(context) - LIST_MARGIN * scale
+    ncols = 2 if _scaled_rows(s) else 1
+    numbers = ncols * NUMBER_COLUMN * scale
+    share = max(0.3, min(0.85, 1.0 - numbers / max(width, 1.0)))
+    return share, width * share, ncols
+
+
+def _ratio_text(ratio: float) -> str:
+    """At most four characters: 0.99, 2.08, 33.6, 336."""
+    return f"{ratio:.2f}" if ratio < 9.995 else f"{ratio:.1f}" if ratio < 99.95 else f"{ratio:.0f}"
+
+
+class OSTEON_UL_weak_bones(bpy.types.UIList):
+    """Result rows: the bone's name first (a button that shows it; its tooltip has the full
+    name, the stress and the allowable that governs), then fixed narrow columns: stress /
+    allowable at its governing section and, after Correct, the cross-section scale."""
 
     def draw_item(self, context, layout, data, item, icon, active_data, active_propname, index):
-        split = layout.split(factor=OSTEON_UL_weak_bones.COLUMNS[0], align=True)
+        share, name_px, ncols = row_columns(context, data)
+        split = layout.split(factor=share, align=True)
         uncut = item.status == "not analysed"
-        icon = "QUESTION" if uncut else "ERROR" if item.weak else "CHECKMARK"
         cell = split.row()
         cell.alignment = "LEFT"            # the name reads from the left, like a label
-        op = cell.operator("osteon.select_bone", text=item.name, icon=icon, emboss=False)
+        name = widgets.fit_text(item.name, name_px, widgets._scale(context))
+        op = cell.operator("osteon.select_bone", text=name, emboss=False)
         op.bone = item.name
+        nums = split.split(factor=1.0 / ncols, align=True) if ncols > 1 else split.row()
         if uncut:
-            split.label(text="?")
-            split.label(text="")
+            nums.label(text="?", icon="NONE")
+            if ncols > 1:
+                nums.label(text="")
             return
-        col = split.row()
+        col = nums.row()
         col.alert = item.weak
-        col.label(text=f"{item.ratio:.2f}")
-        scaled = abs(item.scale - 1.0) > 1e-6
-        split.label(text=f"{item.scale:.2f}" if scaled else "-")
+        col.label(text=_ratio_text(item.ratio))
+        if ncols > 1:
+            scaled = abs(item.scale - 1.0) > 1e-6
+            nums.label(text=f"{item.scale:.2f}" if scaled else "-")
 
 
 class OSTEON_PT_main(bpy.types.Panel):
@@ -159,10 +134,13 @@ class OSTEON_PT_results(_Sub, bpy.types.Panel):
         if not len(s.weak_bones):
             layout.label(text="No bone over the limit" if s.has_result else "No result yet")
             return
-        head = layout.split(factor=OSTEON_UL_weak_bones.COLUMNS[0], align=True)
+        share, _px, ncols = row_columns(context, s)
+        head = layout.split(factor=share, align=True)
         head.label(text="Bone")
-        head.label(text="σ/[σ]")
-        head.label(text="Scale")
+        nums = head.split(factor=1.0 / ncols, align=True) if ncols > 1 else head.row()
+        nums.label(text="σ/[σ]")
+        if ncols > 1:
+            nums.label(text="Scale")
         layout.template_list("OSTEON_UL_weak_bones", "", s, "weak_bones", s, "weak_bones_index",
                              rows=4)
         row = layout.row(align=True)
@@ -171,6 +149,18 @@ class OSTEON_PT_results(_Sub, bpy.types.Panel):
         rep = st.last["report"] if st is not None and st.last else None
         if rep and rep.get("loose_pieces") and hasattr(bpy.types, LOOSE_OP):
             layout.operator("osteon.select_loose_pieces", icon="STICKY_UVS_DISABLE")
+
+
+class OSTEON_PT_colours(_Sub, bpy.types.Panel):
+    """What the stress colours on the mesh mean: stress / allowable at each part (the same
+    ratio as the summary and the rows), grey and magenta"""
+
+    bl_label = "Colour scale"
+
+    def draw(self, context):
+        col = self.layout.column(align=True)
+        for _rgba, icon, text in core.LEGEND:
+            wrapped_label(col, context, text, icon, inset=SUBPANEL_INSET)
 
 
 class OSTEON_PT_material(_Sub, bpy.types.Panel):
@@ -239,7 +229,8 @@ class OSTEON_PT_correction(_Sub, bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(s, "max_scale")
         col.prop(s, "max_rounds")
+        layout.prop(s, "reinforce_first")
 
 
-classes = (OSTEON_UL_weak_bones, OSTEON_PT_main, OSTEON_PT_results, OSTEON_PT_material,
-           OSTEON_PT_load, OSTEON_PT_print, OSTEON_PT_correction)
+classes = (OSTEON_UL_weak_bones, OSTEON_PT_main, OSTEON_PT_results, OSTEON_PT_colours,
+           OSTEON_PT_material, OSTEON_PT_load, OSTEON_PT_print, OSTEON_PT_correction)

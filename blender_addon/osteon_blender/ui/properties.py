@@ -7,10 +7,12 @@ from bpy.props import (
     EnumProperty,
     FloatProperty,
     IntProperty,
+    PointerProperty,
     StringProperty,
 )
 
 from .. import core, printdir
+from .print_settings import OsteonPrintSettings
 
 _MATERIAL_ITEMS = core.MATERIAL_ITEMS
 _DEFAULT = core.materials.get(core.materials.DEFAULT_MATERIAL)
@@ -41,8 +43,12 @@ class OsteonBoneResult(bpy.types.PropertyGroup):
     # name (StringProperty) comes with PropertyGroup: the bone name
     max_stress_mpa: FloatProperty(name="Max stress (MPa)", description="Highest section stress "
                                   "along the bone, MPa")
-    ratio: FloatProperty(name="Stress ratio", description="Max stress / allowable stress "
-                         "(> 1 = weak)")
+    ratio: FloatProperty(name="Stress ratio", description="Stress / allowable at the bone's "
+                         "governing section (> 1 = weak)")
+    stress_mpa: FloatProperty(name="Stress (MPa)", description="Stress at the bone's governing "
+                              "section (the highest stress / allowable), MPa")
+    allowable_mpa: FloatProperty(name="Allowable (MPa)", description="Allowable stress at the "
+                                 "governing section (across or along the layers), MPa")
     weak: BoolProperty(name="Weak", description="Stress above the allowable stress now")
     limit: StringProperty(name="Limit", description="Which strength governs the worst section: "
                           "'across layers' or 'along layers'")
@@ -86,6 +92,11 @@ class OsteonSettings(bpy.types.PropertyGroup):
                             description="Largest number of correction rounds")
     scaling: EnumProperty(name="Scaling", items=core.SCALING_MODES, default="THIN",
                           description="How Correct thickens a weak part")
+    reinforce_first: BoolProperty(
+        name="Reinforce first (keep shape)", default=False,
+        description="Correct gives weak regions more walls / denser infill first (shown as "
+        "modifier volumes; Export for slicer writes them) and thickens only what even solid "
+        "cannot carry (needs an FDM print profile; docs/correction.md)")
     # print direction (FDM layers, docs/printing.md); the engine mapping is osteon.settings'
     layer_strength_ratio: FloatProperty(
         name="Layer strength", default=_DEFAULT.layer_strength_ratio, min=0.01, max=1.0,
@@ -95,6 +106,8 @@ class OsteonSettings(bpy.types.PropertyGroup):
                                   description="Direction the layers stack along")
     print_axis: EnumProperty(name="Axis", items=printdir.AXIS_ITEMS, default="+Z",
                              description="Scene axis the layers stack along")
+    # walls, skins, infill (the "Print settings" sub-panel, ui/print_settings.py)
+    print_settings: PointerProperty(type=OsteonPrintSettings)
     # results of the last run
     weak_bones: CollectionProperty(type=OsteonBoneResult)
     weak_bones_index: IntProperty(default=-1, update=_on_bone_row)
@@ -103,6 +116,15 @@ class OsteonSettings(bpy.types.PropertyGroup):
     result_armature: StringProperty()
     max_stress_mpa: FloatProperty(name="Max stress (MPa)")
     allowable_mpa: FloatProperty(name="Allowable stress (MPa)")
+    # the governing section of the whole model (report["worst"]): what the verdict speaks of
+    worst_bone: StringProperty(name="Worst bone")
+    worst_stress_mpa: FloatProperty(name="Worst section's stress (MPa)")
+    worst_allowable_mpa: FloatProperty(name="Worst section's allowable (MPa)")
+    worst_ratio: FloatProperty(name="Worst stress / allowable")
+    worst_limit: StringProperty(name="Worst section's limit", description="'across layers' or "
+                                "'along layers'")
+    result_source: StringProperty(name="Result from", description="'analyze', 'correct' or "
+                                  "'live': which run the panel shows")
     sections: IntProperty(name="Sections")
     weak_sections: IntProperty(name="Weak sections")
     converged: BoolProperty(name="Converged")

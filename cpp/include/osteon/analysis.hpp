@@ -8,6 +8,7 @@
 
 #include "osteon/layers.hpp"
 #include "osteon/mesh.hpp"
+#include "osteon/printed_section.hpp"
 #include "osteon/progress.hpp"
 #include "osteon/result_fields.hpp"
 #include "osteon/section.hpp"
@@ -41,6 +42,10 @@ struct AnalysisOptions {
   /// AnalysisResult::thickness_pending for complete_section_thickness(). Python reads them on
   /// first use of Analysis.section_thickness.
   bool defer_thickness = false;
+  /// How the part is printed (osteon/printed_section.hpp, docs/printing.md): walls, skins and
+  /// sparse infill (FDM, in the frame of build_direction) or a hollow shell (resin); W becomes
+  /// the printed section's. Default kind solid: the section as cut.
+  PrintOptions print;
 };
 
 /// Where a section sits on its bone.
@@ -63,8 +68,8 @@ struct AnalysisResult {
   std::vector<std::shared_ptr<const SectionPolygon>> thickness_pending;
 };
 
-/// Writes the thickness (mm, regions.hpp) of every region in `pending` (S, null: none) into
-/// `thickness` (S,); the regions stay (a second call writes the same).
+/// Writes the thickness (mm, cpp/src/thickness.hpp) of every region in `pending` (S, null: none)
+/// into `thickness` (S,); the regions stay (a second call writes the same).
 void fill_section_thickness(const std::vector<std::shared_ptr<const SectionPolygon>>& pending,
                             std::vector<double>& thickness);
 

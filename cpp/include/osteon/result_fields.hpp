@@ -47,6 +47,15 @@
     "junction section, whose numbers are the core's (docs/junctions.md); 0 when skipped")       \
   X(std::vector<double>, section_cut_modulus, {}, "(S,)", "mm^3",                                 \
     "modulus W of the whole cut (as section_cut_area); NaN when skipped")                       \
+  X(std::vector<double>, section_solid_modulus, {}, "(S,)", "mm^3",                               \
+    "W of the section's region solid; section_modulus is the printed one (print_profile, "      \
+    "docs/printing.md), equal when the part is solid; NaN when skipped")                        \
+  X(std::vector<double>, section_wall_area, {}, "(S,)", "mm^2",                                   \
+    "printed walls: FDM perimeters or the resin shell (0 when solid or skipped)")               \
+  X(std::vector<double>, section_skin_area, {}, "(S,)", "mm^2",                                   \
+    "solid infill: top/bottom skins and small islands filled solid (0 when solid or skipped)")   \
+  X(std::vector<double>, section_infill_area, {}, "(S,)", "mm^2",                                \
+    "sparse infill (FDM) or hollow (resin) region (0 when solid or skipped)")                    \
   X(std::vector<double>, moment_arm, {}, "(S,)", "mm", "distance centroid -> load point d")      \
   X(std::vector<double>, moment, {}, "(S,)", "N mm", "bending moment M = F d")                   \
   X(std::vector<double>, stress, {}, "(S,)", "MPa",                                               \
@@ -84,6 +93,13 @@
     "with keep_outlines: first point of each whole-cut loop")                                   \
   X(std::vector<std::int64_t>, cut_outline_section_start, {}, "(S+1,)", "",                       \
     "with keep_outlines: first whole-cut loop of each section")                                 \
+  X(std::vector<Vec3>, infill_outline_points, {}, "(P,3)", "mm",                                 \
+    "with keep_outlines: loop points of each section's sparse infill or hollow region "          \
+    "(print_profile; none when solid; see infill_loops)")                                        \
+  X(std::vector<std::int64_t>, infill_outline_loop_start, {}, "(L+1,)", "",                      \
+    "with keep_outlines: first point of each infill loop")                                       \
+  X(std::vector<std::int64_t>, infill_outline_section_start, {}, "(S+1,)", "",                   \
+    "with keep_outlines: first infill loop of each section")                                     \
   X(std::vector<std::vector<std::int32_t>>, loose_pieces, {}, "[(n,)]", "",                       \
     "vertex indices of each shell that neither touches nor overlaps the held piece (it would "  \
     "fall off the print); no load point, vertex_stress 0; sections along its bones still cut")

@@ -227,6 +227,14 @@ class FaceGrid {
   std::vector<Index> vstart_;   // cell c's entries: vstart_[c] .. [c + 1]
   Buffer<std::int32_t> entry_vertex_, face_entries_;
   Buffer<double> entry_x_, entry_y_, entry_z_;
+  // The steps of build() (slicer_grid.cpp): the grid's size and cell numbering, each face into
+  // the cell of its centroid (per worker part), the faces sorted by cell, the non-empty cells and
+  // blocks with their boxes, and each cell's vertex entries.
+  struct Layout;
+  Layout layout(const MeshView& mesh, int faces_per_cell) const;
+  void bin_faces(const MeshView& mesh, const Layout& grid, int parts);
+  void sort_faces_by_cell(const MeshView& mesh, Index total, int parts);
+  void collect_cells(const Layout& grid);
   void build_entries(const MeshView& mesh, int parts);
   std::vector<Vec3> block_center_, block_half_;
   std::vector<Index> block_start_;
@@ -266,8 +274,8 @@ std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, c
 PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tolerance);
 
 /// The material region around the plane origin (the bone point), SPEC §3: select_region
-/// (regions.hpp) without a bone domain (the non-zero-winding union of the loops; a bone outside the
-/// mesh gets the nearest region, flagged kFlagOutside).
+/// (cpp/src/region_choice.hpp) without a bone domain (the non-zero-winding union of the loops; a
+/// bone outside the mesh gets the nearest region, flagged kFlagOutside).
 SectionGeometry select_section(const PlaneCut& cut);
 
 /// Convenience: cut, assemble and select the section of one plane (origin = bone point).

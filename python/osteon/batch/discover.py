@@ -62,7 +62,8 @@ def discover(inputs) -> list[ModelFile]:
     for item in inputs:
         s = os.fspath(item)
         p = Path(s)
-        if p.is_file():
+        if p.is_file() or (os.path.islink(s) and not p.exists()):
+            # a broken link or a symlink loop is that model's failure (the run reports it)
             found.append((p, p.name))
         elif p.is_dir():
             found.extend((f, str(f.relative_to(p))) for f in _walk(p))
@@ -80,7 +81,10 @@ def discover(inputs) -> list[ModelFile]:
     seen: set[str] = set()
     unique: list[tuple[str, str]] = []
     for f, rel in found:
-        key = str(f.resolve())
+        try:
+            key = str(f.resolve()) if f.exists() else os.path.abspath(f)
+        except (OSError, RuntimeError):  # a symlink loop: keep the name, the task fails it
+            key = os.path.abspath(f)
         if key not in seen:
             seen.add(key)
             unique.append((key, rel))
@@ -91,6 +95,6 @@ def discover(inputs) -> list[ModelFile]:
     out = []
     for (key, _), i in zip(unique, ids):
         if counts[i] > 1:  # same relative name under two inputs: add a stable hash of the path
-            i = f"{i}-{hashlib.sha1(key.encode()).hexdigest()[:8]}"
+            i = f"{i}-{hashlib.sha1(os.fsencode(key)).hexdigest()[:8]}"
         out.append(ModelFile(key, i))
     return out

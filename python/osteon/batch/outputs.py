@@ -18,14 +18,56 @@ from __future__ import annotations
 
 import csv
 import html
+import io
 import json
 import os
 from pathlib import Path
 
+from ..io.atomic import write_atomic
+from ..io.model import printable
 from ..report import finite, to_json
 from .task import summary_line
 
 RESULTS = "results.jsonl"
+#: the settings of the run that made the folder (``--resume`` checks it)
+SETTINGS_FILE = "batch_settings.json"
+#: settings that change no result (``--resume`` may change them)
+_RESUME_FREE = ("png", "png_dpi", "engine_threads", "model_timeout_s", "max_sections")
+
+
+def _result_settings(s) -> dict:
+    d = s.as_dict()
+    return {k: v for k, v in d.items() if k not in _RESUME_FREE}
+
+
+def check_resume_settings(out, s) -> None:
+    """Raise ValueError when ``--resume`` would mix results of other settings into ``out``
+    (the first run's settings are in ``out/batch_settings.json``). Decided: refuse, naming
+    what differs; a run with new settings goes to a new folder (or runs without --resume)."""
+    path = Path(out) / SETTINGS_FILE
+    if not path.is_file():
+        return
+    try:
+        old = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return
+    new = json.loads(json.dumps(_result_settings(s)))
+    diff = []
+    for k in sorted(set(old) | set(new)):
+        a, b = old.get(k), new.get(k)
+        if isinstance(a, dict) and isinstance(b, dict):
+            diff += [f"{k2} {a.get(k2)!r} -> {b.get(k2)!r}" for k2 in sorted(set(a) | set(b))
+                     if a.get(k2) != b.get(k2)]
+        elif a != b:
+            diff.append(f"{k} {a!r} -> {b!r}")
+    if diff:
+        raise ValueError(f"--resume: {out} was made with other settings ({'; '.join(diff[:6])}); "
+                         "run without --resume to start over, or use another --out")
+
+
+def save_settings(out, s) -> None:
+    write_atomic(Path(out) / SETTINGS_FILE, json.dumps(_result_settings(s), indent=1,
+                                                       sort_keys=True) + "\n")
 MODELS_DIR = "models"
 
 
@@ -37,6 +79,19 @@ def _clean(x):
         return {k: _clean(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
         return [_clean(v) for v in x]
+    return x
+
+
+def _printable(x):
+    """Copy with every str UTF-8 encodable (a non-UTF-8 file name's bytes shown as U+FFFD):
+    for the files people open (JSON report, CSV, HTML). ``results.jsonl`` keeps the exact
+    path (JSON escapes it), which ``--resume`` matches."""
+    if isinstance(x, str):
+        return printable(x)
+    if isinstance(x, dict):
+        return {printable(k) if isinstance(k, str) else k: _printable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_printable(v) for v in x]
     return x
 
 
@@ -88,11 +143,11 @@ class OutputWriter:
         """Write the model's files and append its line; returns the record without file bytes."""
         files = record.pop("_files", None) or {}
         for name, data in files.items():
-            (self.models / name).write_bytes(data)
+            write_atomic(self.models / name, data)
         rec = _clean(record)
         if rec.get("status") == "ok":
             rec["json"] = f"{MODELS_DIR}/{rec['id']}.json"
-            (self.models / f"{rec['id']}.json").write_text(to_json(rec), encoding="utf-8")
+            write_atomic(self.models / f"{rec['id']}.json", to_json(_printable(rec)))
         self._fh.write(json.dumps(summary_line(rec), allow_nan=False) + "\n")
         self._fh.flush()
         return rec
@@ -132,23 +187,24 @@ def _status_text(r) -> str:
 
 def write_csv(out, records) -> Path:
     path = Path(out) / "summary.csv"
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow([c for c, _ in CSV_COLUMNS])
-        for r in _order(records):
-            row = []
-            for col, key in CSV_COLUMNS:
-                v = r.get(key)
-                if col == "weak_bones":
-                    v = _weak_names(r)
-                elif col == "flags":
-                    v = ";".join(v or [])
-                elif col == "status":
-                    v = _status_text(r)
-                elif isinstance(v, float):
-                    v = f"{v:.6g}"
-                row.append("" if v is None else v)
-            w.writerow(row)
+    fh = io.StringIO(newline="")
+    w = csv.writer(fh)
+    w.writerow([c for c, _ in CSV_COLUMNS])
+    for r in _order(_printable(records)):
+        row = []
+        for col, key in CSV_COLUMNS:
+            v = r.get(key)
+            if col == "weak_bones":
+                v = _weak_names(r)
+            elif col == "flags":
+                v = ";".join(v or [])
+            elif col == "status":
+                v = _status_text(r)
+            elif isinstance(v, float):
+                v = f"{v:.6g}"
+            row.append("" if v is None else v)
+        w.writerow(row)
+    write_atomic(path, fh.getvalue())
     return path
 
 
@@ -179,7 +235,7 @@ img{width:360px;display:block}.weak{color:#b00;font-weight:bold}.failed,.skipped
 
 def write_html(out, records, title="osteon batch") -> Path:
     """The contact sheet: one row per model, weakest first; click a column head to sort."""
-    recs = _order(records)
+    recs = _order(_printable(records))
     n_ok = sum(r["status"] == "ok" for r in recs)
     n_weak = sum((r.get("stress_ratio") or 0) > 1 for r in recs)
     e = html.escape
@@ -240,7 +296,7 @@ def write_html(out, records, title="osteon batch") -> Path:
         f"\n</tbody></table><script>{_JS}</script></body></html>\n"
     )
     path = Path(out) / "summary.html"
-    path.write_text(doc, encoding="utf-8")
+    write_atomic(path, doc)
     return path
 
 
@@ -248,5 +304,6 @@ def write_summaries(out) -> list[dict]:
     """Re-write ``summary.csv`` and ``summary.html`` from every line of ``results.jsonl``."""
     records = read_results(out)
     write_csv(out, records)
-    write_html(out, records, title=f"osteon batch: {os.path.basename(os.path.abspath(out))}")
+    write_html(out, records,
+               title=f"osteon batch: {printable(os.path.basename(os.path.abspath(out)))}")
     return records

@@ -2,13 +2,22 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import sys
 import uuid
 from collections.abc import Iterator
+from pathlib import Path
 
 from .discover import ModelFile, discover
-from .outputs import OutputWriter, read_results, write_summaries
+from .outputs import (
+    OutputWriter,
+    check_resume_settings,
+    read_results,
+    save_settings,
+    write_summaries,
+)
 from .settings import BatchSettings
 from .task import process_model
 
@@ -23,9 +32,47 @@ def _crash_record(m: ModelFile, why: str) -> dict:
             "_files": {}}
 
 
-def _serial(models, s):
+def _serial(models, s, timeout=None):
+    """In this process. A model over ``timeout`` seconds is stopped by SIGALRM (main thread,
+    POSIX) at its next Python instruction; the engine's C++ runs finish first."""
     for m in models:
-        yield process_model(m.path, s, m.id)
+        with _alarm(timeout):
+            try:
+                rec = process_model(m.path, s, m.id)
+            except _OverTime:
+                rec = _crash_record(m, _over_time(timeout))
+        yield rec
+
+
+class _OverTime(BaseException):  # BaseException: process_model's `except Exception` lets it by
+    pass
+
+
+def _over_time(timeout) -> str:
+    return (f"stopped: over the time limit of {timeout:g} s per model (model_timeout_s, "
+            "--model-timeout)")
+
+
+@contextlib.contextmanager
+def _alarm(timeout):
+    import threading
+
+    usable = (timeout and hasattr(signal, "setitimer")
+              and threading.current_thread() is threading.main_thread())
+    if not usable:
+        yield
+        return
+
+    def ring(signum, frame):
+        raise _OverTime
+
+    old = signal.signal(signal.SIGALRM, ring)
+    signal.setitimer(signal.ITIMER_REAL, float(timeout))
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
 
 
 def _pool_context():
@@ -40,43 +87,144 @@ def _pool_context():
     return mp.get_context("spawn")
 
 
-def _pool(models, s, workers: int, task=process_model):
-    """A ProcessPoolExecutor with a bounded window of models in flight. A worker that dies
-    (a crash in a reader or the engine) breaks the pool: the models then in flight are re-run
-    one at a time in a fresh pool, so only the one that crashes is marked failed."""
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-    from concurrent.futures.process import BrokenProcessPool
+def _watch_parent(parent_pid: int):
+    """In a worker: end the worker's process group when the batch process is gone (killed),
+    so that no worker keeps spinning on a model nobody waits for."""
+    import threading
+    import time
+
+    def watch():
+        while True:
+            time.sleep(0.5)
+            try:
+                os.kill(parent_pid, 0)
+            except ProcessLookupError:
+                _kill_group(os.getpid())
+                os._exit(1)
+            except PermissionError:  # pid reused by another user's process: ours is gone
+                _kill_group(os.getpid())
+                os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _worker_loop(conn, task, parent_pid):
+    """A pool worker: its own process group (so that stopping it stops whatever it started),
+    then tasks from ``conn`` until None or EOF."""
+    with contextlib.suppress(OSError):
+        os.setsid()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl+C is the batch process's to handle
+    _watch_parent(parent_pid)
+    while True:
+        try:
+            job = conn.recv()
+        except (EOFError, OSError):
+            return
+        if job is None:
+            return
+        path, s, model_id = job
+        try:
+            rec = task(path, s, model_id)
+        except Exception as e:  # noqa: BLE001 - process_model never raises; a test task may
+            rec = {"model": path, "id": model_id, "status": "failed",
+                   "reason": f"{type(e).__name__}: {e}", "seconds": 0.0, "_files": {}}
+        conn.send(rec)
+
+
+def _kill_group(pid: int):
+    """SIGKILL the process group led by ``pid`` (a worker after its setsid), then ``pid``."""
+    if os.name != "posix":
+        return
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        if os.getpgid(pid) == pid:
+            os.killpg(pid, signal.SIGKILL)
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.kill(pid, signal.SIGKILL)
+
+
+class _Worker:
+    """One worker process and the model it works on (``deadline``: when it is over time)."""
+
+    def __init__(self, ctx, task):
+        self.conn, child = ctx.Pipe()
+        self.proc = ctx.Process(target=_worker_loop, args=(child, task, os.getpid()),
+                                daemon=True)
+        self.proc.start()
+        child.close()
+        self.model: ModelFile | None = None
+        self.deadline: float | None = None
+
+    def give(self, m: ModelFile, s, timeout):
+        import time
+
+        self.model = m
+        self.deadline = time.monotonic() + timeout if timeout else None
+        self.conn.send((m.path, s, m.id))
+
+    def stop(self):
+        """Kill the worker and its process group; wait for it."""
+        if self.proc.pid is not None:
+            _kill_group(self.proc.pid)
+        self.proc.join(5)
+        self.conn.close()
+
+    def close(self):
+        """Ask an idle worker to leave; kill it if it does not."""
+        with contextlib.suppress(OSError, ValueError):
+            self.conn.send(None)
+        self.proc.join(2)
+        if self.proc.is_alive():
+            self.stop()
+        else:
+            self.conn.close()
+
+
+def _pool(models, s, workers: int, task=process_model, timeout=None):
+    """``workers`` worker processes, one model each at a time. A worker that dies (a crash in a
+    reader or the engine) fails only its model; a model over ``timeout`` seconds is that
+    model's failure: its worker's process group is killed and a fresh worker takes over. When
+    the run ends or is stopped, every worker is ended (no orphan process)."""
+    import time
+    from multiprocessing.connection import wait
 
     ctx = _pool_context()
     todo = list(models)[::-1]  # a stack: pop() takes the next model
-    window = 2 * workers + 2
-    while todo:
-        crashed: list[ModelFile] = []
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
-            pending = {}
-            while todo or pending:
-                while todo and len(pending) < window:
-                    m = todo.pop()
-                    pending[ex.submit(task, m.path, s, m.id)] = m
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                broken = False
-                for f in done:
-                    m = pending.pop(f)
-                    try:
-                        yield f.result()
-                    except BrokenProcessPool:
-                        crashed.append(m)
-                        broken = True
-                if broken:
-                    crashed.extend(pending.values())
-                    pending.clear()
-                    break
-        for m in crashed:  # isolate: one model per fresh single-worker pool
-            with ProcessPoolExecutor(max_workers=1, mp_context=ctx) as one:
+    idle = [_Worker(ctx, task) for _ in range(min(workers, len(todo)))]
+    busy: dict = {}
+    try:
+        while todo or busy:
+            while todo and idle:
+                w = idle.pop()
+                w.give(todo.pop(), s, timeout)
+                busy[w.conn] = w
+            deadlines = [w.deadline for w in busy.values() if w.deadline is not None]
+            wait_s = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
+            for conn in wait(list(busy), timeout=wait_s):
+                w = busy.pop(conn)
                 try:
-                    yield one.submit(task, m.path, s, m.id).result()
-                except BrokenProcessPool:
-                    yield _crash_record(m, "the worker process crashed on this model")
+                    rec = conn.recv()
+                except (EOFError, OSError):
+                    w.proc.join(1)
+                    rec = _crash_record(w.model, "the worker process crashed on this model "
+                                        f"(exit code {w.proc.exitcode})")
+                    w.stop()
+                    w = _Worker(ctx, task) if todo else None
+                if w is not None:
+                    idle.append(w)
+                yield rec
+            now = time.monotonic()
+            for conn, w in list(busy.items()):
+                if w.deadline is not None and now >= w.deadline:
+                    del busy[conn]
+                    w.stop()
+                    if todo:
+                        idle.append(_Worker(ctx, task))
+                    yield _crash_record(w.model, _over_time(timeout))
+    finally:
+        for w in list(busy.values()):
+            w.stop()
+        for w in idle:
+            w.close()
 
 
 def _dask(models, s, client):
@@ -156,10 +304,16 @@ def run(
     if out is None:
         s = s.replace(png=False)  # no folder for the pictures
     skip = set()
-    if out is not None and resume:
-        skip = {r["model"] for r in read_results(out)}
+    if out is not None:
+        if Path(out).exists() and not Path(out).is_dir():
+            raise ValueError(f"--out {out}: is a file; give a folder")
+        if resume:
+            check_resume_settings(out, s)
+            skip = {r["model"] for r in read_results(out)}
     todo = [m for m in models if m.path not in skip]
     writer = OutputWriter(out, resume=resume) if out is not None else None
+    if writer is not None:
+        save_settings(out, s)
     if client is not None:
         it = _dask(todo, s, client)
     else:
@@ -167,7 +321,8 @@ def run(
         if n < 1:
             raise ValueError(f"workers must be >= 1, got {n}")
         n = min(n, max(len(todo), 1))
-        it = _serial(todo, s) if n == 1 else _pool(todo, s, n)
+        timeout = s.model_timeout_s or None
+        it = _serial(todo, s, timeout) if n == 1 else _pool(todo, s, n, timeout=timeout)
     bar = _bar(len(todo), len(skip & {m.path for m in models})) if progress else None
     failures = 0
     try:

@@ -5,11 +5,13 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, fields, replace
 
-from ..settings import Settings, engine_arguments
+from ..settings import MAX_SECTIONS, Settings, engine_arguments
 
 #: the CLI's defaults for the two settings the shared Settings leaves to the front end
 DEFAULT_FORCE_N = 20.0
 DEFAULT_INTERVAL_MM = 2.0
+#: seconds one model of a batch may take (a hanging or huge model fails with this reason)
+DEFAULT_MODEL_TIMEOUT_S = 300.0
 _SIZE_MODES = {"LARGEST": None, "HEIGHT": "z", "X": "x", "Y": "y", "Z": "z"}
 
 
@@ -29,7 +31,14 @@ class BatchSettings:
     limits). Batch only: ``correct`` (also run the correction and write the corrected mesh);
     ``png`` (render the contact-sheet picture, ``png_dpi``); ``allow_open`` (analyse open
     meshes too, flagged, instead of failing them); ``engine_threads`` (threads of the engine
-    inside one task: 1, since the batch runs models in parallel; 0 = all cores).
+    inside one task: 1, since the batch runs models in parallel; 0 = all cores);
+    ``slicer_project`` ("prusaslicer", "bambu", "orca" or None): also reinforce each model under
+    the settings' FDM print profile (:func:`osteon.reinforce`) and write ``ID.3mf`` for that
+    slicer, the report's ``reinforcement`` listing the regions.
+    ``model_timeout_s`` (seconds one model may take; over it the model fails with that reason
+    and its worker process is stopped; 0 = no limit); ``max_sections`` (a model whose section
+    estimate is above it fails before the analysis, the estimate and memory in its reason:
+    :func:`osteon.settings.section_budget`).
     """
 
     settings: Settings = field(default_factory=_default_settings)
@@ -38,6 +47,9 @@ class BatchSettings:
     png_dpi: int = 60
     allow_open: bool = False
     engine_threads: int = 1
+    slicer_project: str | None = None
+    model_timeout_s: float = DEFAULT_MODEL_TIMEOUT_S
+    max_sections: int = MAX_SECTIONS
 
     @classmethod
     def from_any(cls, settings) -> BatchSettings:
@@ -99,5 +111,16 @@ class BatchSettings:
         h, _ = self.height_and_axis()
         if h is not None and not h > 0:
             raise ValueError(f"print size must be a positive number of mm, got {h}")
+        if self.slicer_project is not None:
+            from ..slicer3mf import SLICERS
+
+            if self.slicer_project not in SLICERS:
+                raise ValueError(f"slicer_project must be one of {', '.join(SLICERS)}, "
+                                 f"got {self.slicer_project!r}")
+        if not (float(self.model_timeout_s) >= 0):
+            raise ValueError(f"model timeout must be >= 0 s (0 = none), got "
+                             f"{self.model_timeout_s}")
+        if int(self.max_sections) < 1:
+            raise ValueError(f"max sections must be >= 1, got {self.max_sections}")
         if self.engine_threads < 0:
             raise ValueError(f"engine_threads must be >= 0, got {self.engine_threads}")

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..settings import SECTION_LIMIT, min_thickness_mm
+from ..settings import SECTION_LIMIT, min_thickness_mm, section_budget
 from .settings import BatchSettings
 
 #: ``status`` values: analysed; not analysed because the model has no skeleton (and no automatic
@@ -184,6 +184,8 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
             flags.append("auto skeleton")
         if model.weights is None:
             flags.append("nearest-bone weights")
+        if model.warnings:
+            flags.append(f"warnings:{len(model.warnings)}")
         boundary, nonmanifold = mesh_boundary(model.faces, len(model.vertices))
         if boundary:  # corners stored apart (STL)? the topology of the merged positions counts
             Vw, Fw = welded_faces(model.vertices, model.faces)
@@ -201,6 +203,11 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
         engine = s.engine_kwargs(model.bone_names)
         positional = (model.vertices, model.faces, model.skeleton, model.weights)
         n_sections = osteon.estimate_sections(model.skeleton, engine["interval"])
+        ext_mm = model.vertices.max(0) - model.vertices.min(0)
+        over = section_budget(n_sections, len(model.vertices), engine["interval"],
+                              float(ext_mm.max()), s.max_sections)
+        if over:  # refused before the work: a scale or setting that would run for minutes
+            raise ValueError(f"refused: {over}")
         if n_sections > SECTION_LIMIT:  # a setting or scale that makes this model slow
             flags.append(f"many sections:{n_sections}")
         t = time.perf_counter()
@@ -211,6 +218,9 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
         else:
             analysis = osteon.analyze(*positional, **engine)
         times["analysis_seconds"] = time.perf_counter() - t
+        from ..cli.common import check_overflow
+
+        check_overflow(analysis if fix is None else fix.before, engine["force"])
         rep = _report(path, model, s, analysis, times["analysis_seconds"], fix)
         rep["bone_count"] = len(model.bone_names)
         for name, n in _section_flag_counts(analysis).items():
@@ -225,8 +235,11 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
             _write_mesh_bytes(write_mesh, tmp, fix.vertices, model.faces, ext)
             files[f"{rec['id']}_corrected{ext}"] = tmp.getvalue()
             rep["output"] = f"{rec['id']}_corrected{ext}"
+        if s.slicer_project:
+            files.update(_slicer_project(rec["id"], model, s, engine, rep))
         rec.update(rep)
         rec["flags"] = flags
+        rec["warnings"] = [*rec.get("warnings", []), *model.warnings]  # the report's + reader's
         if s.png:
             t = time.perf_counter()
             material = s.settings.material_and_strength()[0]
@@ -248,6 +261,36 @@ def process_model(path: str, settings, model_id: str | None = None) -> dict:
     rec["seconds"] = time.perf_counter() - t0
     rec["_files"] = files
     return rec
+
+
+def _slicer_project(model_id: str, model, s: BatchSettings, engine: dict, rep: dict) -> dict:
+    """Reinforce the model under the settings' print profile (:func:`osteon.reinforce`); the
+    report's ``reinforcement`` and ``{ID.3mf: bytes}`` (the slicer project)."""
+    import os
+    import tempfile
+
+    import osteon
+
+    from ..report import reinforcement_section
+
+    kw = {k: v for k, v in engine.items() if k not in ("max_scale", "max_rounds", "scaling")}
+    profile = kw.pop("print_profile", None)
+    if profile is None:
+        profile = s.settings.profile() if hasattr(s.settings, "profile") else None
+    if profile is None or profile.kind != "fdm":
+        raise ValueError("slicer_project needs an FDM print profile (walls and infill)")
+    r = osteon.reinforce(model.vertices, model.faces, model.skeleton, model.weights,
+                         print_profile=profile, **kw)
+    name = f"{model_id}.3mf"
+    fd, tmp = tempfile.mkstemp(suffix=".3mf")
+    os.close(fd)
+    try:
+        r.write_3mf(tmp, slicer=s.slicer_project, name=model_id)
+        data = Path(tmp).read_bytes()
+    finally:
+        os.unlink(tmp)
+    rep["reinforcement"] = reinforcement_section(r, s.slicer_project, name)
+    return {name: data}
 
 
 def _write_mesh_bytes(write_mesh, buf, vertices, faces, ext):

@@ -2,19 +2,16 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import numpy as np
-
 from .. import doubt
 from . import common, orient
 
 
-def analyze_model(model, settings, source):
+def analyze_model(model, settings, source, max_sections=None):
     """Analyse a read model (``osteon.io.RiggedModel``, mm) with the settings
     (:class:`osteon.settings.Settings`) -> (Analysis, report dict, seconds). ``source`` names
-    the model in the report (its file)."""
-    a, secs = common.run_analysis(settings, model)
+    the model in the report (its file); ``max_sections``: the global budget (default
+    :data:`osteon.settings.MAX_SECTIONS`)."""
+    a, secs = common.run_analysis(settings, model, max_sections=max_sections)
     return a, common.report_of(source, model, settings, a, secs), secs
 
 
@@ -24,10 +21,13 @@ def cmd_analyze(args, out):
     try:
         settings = common.settings_from_args(args)
         common.check(settings)
+        common.check_outputs(args, "json", "png", "orient-out")
         material, allowable = settings.material_and_strength()[0], settings.allowable_stress_mpa()
         model = common.load_model_of(args)
         prog.next()
-        a, rep, secs = analyze_model(model, settings, args.model)
+        common.print_warnings(model, args)
+        a, rep, secs = analyze_model(model, settings, args.model,
+                                     max_sections=common.max_sections_of(args))
         best = orient.best_orientation_of(args, model, a) if (args.orient or args.orient_out) \
             else None
         if best is not None:
@@ -41,7 +41,7 @@ def cmd_analyze(args, out):
                 model,
                 a,
                 allowable,
-                title=f"{Path(args.model).name}: F = {args.force:g} N, {material} "
+                title=f"{common.display_name(args.model)}: F = {args.force:g} N, {material} "
                 f"[σ] = {allowable:g} MPa",
                 orientation=best,
             )
@@ -50,16 +50,12 @@ def cmd_analyze(args, out):
         prog.close()
     if not args.quiet:
         print(
-            f"{Path(args.model).name}: {len(model.vertices)} vertices, {len(model.faces)} "
+            f"{common.display_name(args.model)}: {len(model.vertices)} vertices, {len(model.faces)} "
             f"faces, {model.n_bones} bones, size {args.height_mm:g} mm",
             file=out,
         )
-        print(
-            f"{len(a.stress)} sections in {1000 * secs:.1f} ms; max stress "
-            f"{a.max_stress:.2f} MPa; {int(np.sum(a.weak))} weak, {int(np.sum(a.culled))} "
-            "culled (safe for sure)",
-            file=out,
-        )
+        print(common.headline(a, secs), file=out)
+        print(common.profile_line(rep["print_profile"]), file=out)
         doubt_text = doubt.analysis_text(a, model.bone_names)
         if doubt_text:
             print(f"NOT A CLEAN RESULT: {doubt_text}", file=out)

@@ -12,6 +12,7 @@ examples:
   osteon batch library/ --out report                   # all cores
   osteon batch 'scans/**/*.stl' figures/*.glb --out report --material PETG --force 10
   osteon batch library/ --out report --resume          # after an interruption
+  osteon batch library/ --out report --profile prusaslicer   # as PrusaSlicer prints them
   osteon batch library/ --out report --dask local      # a local Dask cluster
   osteon batch library/ --out report --dask tcp://scheduler:8786
 """
@@ -20,7 +21,8 @@ examples:
 def add_batch_parser(sub) -> argparse.ArgumentParser:
     """Add the ``batch`` subcommand to the ``osteon`` parser's subparsers."""
     from .. import materials
-    from .options import MATERIALS, add_junction_switch
+    from ..batch.settings import DEFAULT_MODEL_TIMEOUT_S
+    from .options import MATERIALS, add_junction_switch, add_max_sections, add_print_options
 
     p = sub.add_parser(
         "batch",
@@ -56,6 +58,11 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--layer-ratio", type=float, metavar="R",
                    help="layer / in-plane strength (default: the material preset's)")
     add_junction_switch(p)
+    add_print_options(p)
+    add_max_sections(p)
+    p.add_argument("--model-timeout", type=float, default=DEFAULT_MODEL_TIMEOUT_S, metavar="S",
+                   help="seconds one model may take; over it the model fails with that reason "
+                   f"and its worker is stopped (default {DEFAULT_MODEL_TIMEOUT_S:g}; 0 = none)")
     p.add_argument("--correct", action="store_true",
                    help="also thicken weak bones and write each corrected mesh")
     p.add_argument("--max-scale", type=float, default=3.0, metavar="S",
@@ -64,6 +71,9 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
                    help="with --correct: most scaling rounds (default 100)")
     p.add_argument("--scaling", choices=("thin", "uniform"), default=None,
                    help="with --correct: thin (default) or uniform scaling")
+    p.add_argument("--slicer-project", choices=("prusaslicer", "bambu", "orca"), default=None,
+                   help="also reinforce each model under --profile (more walls / infill where "
+                   "weak) and write ID.3mf for this slicer (docs/correction.md)")
     p.add_argument("--allow-open", action="store_true",
                    help="analyse open meshes too (flagged) instead of failing them")
     p.add_argument("--no-png", action="store_true", help="no stress pictures (faster)")
@@ -82,12 +92,16 @@ def settings_from_args(args):
     """The batch settings: the shared Settings built as ``analyze`` builds them, plus the
     batch's own options."""
     from ..batch.settings import BatchSettings
-    from .common import check, settings_from_args
+    from .common import check, max_sections_of, settings_from_args
 
     shared = settings_from_args(args)
     check(shared, correct=args.correct)  # errors name the option
+    if not args.model_timeout >= 0:
+        raise ValueError(f"--model-timeout must be >= 0 s (0 = none), got {args.model_timeout}")
     return BatchSettings(settings=shared, correct=args.correct, png=not args.no_png,
-                         allow_open=args.allow_open)
+                         allow_open=args.allow_open, model_timeout_s=args.model_timeout,
+                         max_sections=max_sections_of(args),
+                         slicer_project=getattr(args, "slicer_project", None))
 
 
 def cmd_batch(args, out=sys.stdout) -> int:

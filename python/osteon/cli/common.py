@@ -3,6 +3,7 @@ report, the terminal table, the picture, the progress bar. Units: mm, N, MPa."""
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from dataclasses import replace
@@ -11,6 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import materials
+from ..io.atomic import check_output_path, write_atomic
+from ..io.model import printable
 from ..report import bone_table as _bone_rows
 from ..report import build_report, to_json
 from ..settings import Settings, engine_arguments, min_thickness_mm
@@ -38,7 +41,23 @@ def settings_from_args(args) -> Settings:
         build_direction=_build_direction(getattr(args, "build_direction", "0,0,1")),
         layer_strength_ratio=getattr(args, "layer_ratio", None),  # None: the material preset's
         junctions=getattr(args, "junction_cores", True),  # --no-junction-cores
+        print_profile=getattr(args, "profile", "solid"),
+        perimeters=getattr(args, "perimeters", None),
+        infill=getattr(args, "infill", None),  # --infill is in percent, a fraction here
+        infill_pattern=getattr(args, "infill_pattern", None),
+        line_width_mm=getattr(args, "line_width", None),
+        layer_height_mm=getattr(args, "layer_height", None),
+        top_bottom_layers=getattr(args, "top_bottom_layers", None),
+        shell_mm=getattr(args, "shell", None),
     )
+
+
+def profile_line(profile: dict) -> str:
+    """One line on the report's ``print_profile``: what the sections are."""
+    if profile["kind"] == "solid":
+        return ("sections as cut (solid); --profile NAME analyses them as printed "
+                "(--list-profiles)")
+    return f"sections as printed: {profile['name']}"
 
 
 def _build_direction(text) -> tuple:
@@ -149,7 +168,9 @@ def load_model_of(args):
 
 def bone_table(analysis, top=10, scales=None):
     """Rows (worst first) of per-bone results (:func:`osteon.report.bone_table`)."""
-    rows = _bone_rows(analysis.section_bone, analysis.stress, analysis.weak,
+    # too-thin sections are out of the max stress and the weak count: out of the rows too
+    stress = np.where(too_thin_mask(analysis), np.nan, np.asarray(analysis.stress, float))
+    rows = _bone_rows(analysis.section_bone, stress, analysis.weak,
                       analysis.bone_names, analysis.allowable_stress, scales,
                       analysis.stress_ratio, analysis.across_layers)
     return [r for r in rows if r["max_stress_mpa"] is not None][:top]
@@ -183,7 +204,13 @@ def format_table(rows, allowable, scales=False, layer_ratio=1.0):
 _OPTIONS = {"force": "--force", "section interval": "--interval",
             "material strength": "--strength-mpa", "safety factor": "--safety-factor",
             "max scale": "--max-scale", "max rounds": "--max-rounds", "Held bone": "--root",
-            "layer strength ratio": "--layer-ratio", "build direction": "--build-direction"}
+            "layer strength ratio": "--layer-ratio", "build direction": "--build-direction",
+            # print profile (osteon.settings.resolve_profile, osteon.profiles.PrintProfile)
+            "print profile": "--profile", "unknown print profile": "--profile",
+            "perimeters": "--perimeters", "infill_pattern": "--infill-pattern",
+            "infill": "--infill", "line_width": "--line-width",
+            "layer_height": "--layer-height", "top_bottom_layers": "--top-bottom-layers",
+            "shell": "--shell"}
 
 
 def _arguments(settings: Settings, bone_names, correct: bool) -> dict:
@@ -200,60 +227,148 @@ def check(settings: Settings, correct: bool = False) -> None:
     _arguments(replace(settings, held_bone=None), [], correct)
 
 
-def engine_args(settings: Settings, model, correct: bool = False) -> tuple[tuple, dict]:
+def engine_args(settings: Settings, model, correct: bool = False,
+                max_sections: int | None = None) -> tuple[tuple, dict]:
     """The model and settings every command passes to the engine: (positional, keyword).
-    Warns on stderr when they would make more than ``SECTION_LIMIT`` sections."""
+    Warns on stderr when they would make more than ``SECTION_LIMIT`` sections; refuses
+    (ValueError with the estimate) above ``max_sections`` for the whole model (default
+    :data:`osteon.settings.MAX_SECTIONS`)."""
     positional = (model.vertices, model.faces, model.skeleton, model.weights)
     keyword = _arguments(settings, model.bone_names, correct)
-    warn_many_sections(model, keyword["interval"])
+    warn_many_sections(model, keyword["interval"], max_sections)
     return positional, keyword
 
 
-def warn_many_sections(model, interval_mm: float) -> str | None:
-    """The section guard's warning (``osteon.settings.section_guard``) on stderr, if any."""
+def max_sections_of(args) -> int:
+    """``--max-sections`` (the global section budget), or the default."""
+    from ..settings import MAX_SECTIONS
+
+    n = getattr(args, "max_sections", None)
+    n = MAX_SECTIONS if n is None else int(n)
+    if n < 1:
+        raise ValueError(f"--max-sections must be >= 1, got {n}")
+    return n
+
+
+def print_warnings(model, args) -> None:
+    """The reader's warnings (repaired weights, bones without weight) on stderr."""
+    if getattr(args, "quiet", False):
+        return
+    for w in model.warnings:
+        print(f"osteon: warning: {printable(w)}", file=sys.stderr)
+
+
+def warn_many_sections(model, interval_mm: float, max_sections: int | None = None) -> str | None:
+    """The section guard's warning (``osteon.settings.section_guard``) on stderr, if any;
+    ValueError above the global budget (``osteon.settings.section_budget``)."""
     import numpy as np
 
     import osteon
-    from osteon.settings import section_guard
+    from osteon.settings import MAX_SECTIONS, section_budget, section_guard
 
     v = np.asarray(model.vertices)
     size = float(np.max(v.max(axis=0) - v.min(axis=0))) if len(v) else 0.0
-    msg = section_guard(osteon.estimate_sections(model.skeleton, interval_mm), interval_mm, size)
+    n = osteon.estimate_sections(model.skeleton, interval_mm)
+    over = section_budget(n, len(v), interval_mm, size,
+                          MAX_SECTIONS if max_sections is None else max_sections)
+    if over:
+        raise ValueError(f"{printable(model.source or 'model')}: refused: {over}")
+    msg = section_guard(n, interval_mm, size)
     if msg:
         print(f"osteon: warning: {msg}; this may take long (Ctrl+C stops it)", file=sys.stderr)
     return msg
 
 
-def run_analysis(settings: Settings, model):
+def run_analysis(settings: Settings, model, max_sections: int | None = None):
     """Run the analysis with the command's settings; returns (Analysis, seconds)."""
     import osteon
 
-    positional, keyword = engine_args(settings, model)
+    positional, keyword = engine_args(settings, model, max_sections=max_sections)
     t = time.perf_counter()
     a = osteon.analyze(*positional, **keyword)
+    check_overflow(a, keyword["force"])
     return a, time.perf_counter() - t
+
+
+def check_overflow(analysis, force_n: float) -> None:
+    """ValueError when the stresses overflowed floating point (a force like 1e308 N): an
+    ``inf`` stress is no result, and reads as "could not be cut" further on."""
+    stress = np.asarray(analysis.stress, dtype=np.float64)
+    moment = np.asarray(analysis.moment, dtype=np.float64)
+    n = int(np.count_nonzero(np.isinf(stress) | np.isinf(moment)))
+    if n:
+        raise ValueError(f"--force {force_n:g} N: {n} of {len(stress)} section stresses overflow "
+                         "(inf); use a force a print can meet (newtons, e.g. 1 .. 1000)")
+
+
+def too_thin_mask(analysis) -> np.ndarray:
+    """(S,) bool: sections too thin to print; the engine leaves them out of the max stress and
+    the weak count, so the tables must too (they are listed on their own)."""
+    import osteon
+
+    flags = np.asarray(analysis.section_flags)
+    return (flags & osteon.SECTION_FLAGS["too_thin"]) != 0
+
+
+def headline(analysis, seconds: float) -> str:
+    """The summary line: sections, max stress, weak, culled; the too-thin sections counted
+    apart, so that it never contradicts the table."""
+    thin = int(np.count_nonzero(too_thin_mask(analysis)))
+    n = len(analysis.stress)
+    text = f"{n} sections in {1000 * seconds:.1f} ms; "
+    if thin == n and n:
+        text += "no printable section (all too thin): no max stress"
+    else:
+        text += f"max stress {analysis.max_stress:.2f} MPa"
+        if thin:
+            text += f" over the {n - thin} printable sections"
+    text += (f"; {int(np.sum(analysis.weak))} weak, {int(np.sum(analysis.culled))} culled "
+             "(safe for sure)")
+    if thin:
+        text += f"; {thin} too thin to print (not counted, listed below)"
+    return text
 
 
 def report_of(source, model, settings: Settings, analysis, seconds, correction=None, output=None):
     """The one report (:func:`osteon.report.build_report`) of a model read from ``source``."""
-    return build_report(
+    rep = build_report(
         analysis=analysis, bone_names=model.bone_names,
         allowable_mpa=settings.allowable_stress_mpa(), settings=settings.as_dict(),
-        front_end="cli", model=str(source), mm_per_unit=model.scale,
+        front_end="cli", model=printable(source), mm_per_unit=model.scale,
         vertices=len(model.vertices), faces=len(model.faces), seconds=seconds,
         correction=correction, output=output)
+    # the reader's warnings (weights repaired, bones without weight, no skin) stay with the
+    # numbers they qualify
+    rep["warnings"] = [*rep.get("warnings", []), *(printable(w) for w in model.warnings)]
+    return rep
 
 
 def write_json(path, data):
-    Path(path).write_text(to_json(data))
+    """The report as JSON, written atomically (a kill leaves the previous report whole)."""
+    write_atomic(path, to_json(data))
+
+
+def check_outputs(args, *options) -> None:
+    """Check the output paths of the given options (``"json"``, ``"png"``, ``"out"``…) before
+    the work: a folder, a missing folder or a read-only place is an error now, not after a
+    long analysis."""
+    for opt in options:
+        value = getattr(args, opt.replace("-", "_"), None)
+        if value:
+            check_output_path(value, "--" + opt)
+
+
+def display_name(path) -> str:
+    """A file's name for titles and messages, undecodable bytes shown as U+FFFD."""
+    return printable(Path(os.fspath(path)).name)
 
 
 def save_png(args, model, analysis, allowable, before=None, vertices=None, marks=None, title="",
              orientation=None):
     from ..plots import save_stress_png
 
-    save_stress_png(
-        args.png,
+    write_atomic(args.png, writer=lambda tmp: save_stress_png(
+        tmp,
         model.vertices if vertices is None else vertices,
         model.faces,
         analysis,
@@ -262,9 +377,9 @@ def save_png(args, model, analysis, allowable, before=None, vertices=None, marks
         model.parents,
         model.bone_names,
         allowable,
-        title=title,
+        title=printable(title),
         before=before,
         marks=marks,
         orientation=orientation,
         bones=any("auto_skeleton" in n for n in model.notes),
-    )
+    ))

@@ -20,11 +20,15 @@ def cmd_correct(args, out):
         allowable = settings.allowable_stress_mpa()
         if Path(args.out).suffix.lower() not in (".obj", ".off", ".ply", ".stl"):
             raise ValueError(f"--out {args.out}: use an .obj, .off, .ply or .stl file name")
+        common.check_outputs(args, "out", "json", "png")
         model = common.load_model_of(args)
+        common.print_warnings(model, args)
         prog.next()
-        positional, keyword = common.engine_args(settings, model, correct=True)
+        positional, keyword = common.engine_args(settings, model, correct=True,
+                                                 max_sections=common.max_sections_of(args))
         t = time.perf_counter()
         fix = osteon.correct(*positional, **keyword)
+        common.check_overflow(fix.before, keyword["force"])
         secs = time.perf_counter() - t
         prog.next()
         write_mesh(args.out, fix.vertices, model.faces)
@@ -41,7 +45,7 @@ def cmd_correct(args, out):
                 allowable,
                 before=fix.before,
                 vertices=fix.vertices,
-                title=f"{Path(args.model).name} corrected: F = {args.force:g} N, "
+                title=f"{common.display_name(args.model)} corrected: F = {args.force:g} N, "
                 f"[σ] = {allowable:g} MPa",
             )
         prog.next()
@@ -50,11 +54,12 @@ def cmd_correct(args, out):
     if not args.quiet:
         status = "converged" if fix.converged else "NOT converged"
         print(
-            f"{Path(args.model).name}: max stress {fix.before.max_stress:.2f} -> "
+            f"{common.display_name(args.model)}: max stress {fix.before.max_stress:.2f} -> "
             f"{fix.after.max_stress:.2f} MPa ([σ] = {allowable:g} MPa); {rounds} rounds, "
             f"{status} in {1000 * secs:.1f} ms",
             file=out,
         )
+        print(common.profile_line(settings.profile().as_dict()), file=out)
         reason = fix.reason
         if reason and not fix.converged:
             print(f"why: {reason}", file=out)

@@ -17,11 +17,22 @@ def best_orientation_of(args, model, analysis):
         ".obj", ".off", ".ply", ".stl"
     ):
         raise ValueError(f"--orient-out {args.orient_out}: use an .obj, .off, .ply or .stl name")
+    from .common import settings_from_args
+
+    settings = settings_from_args(args)
+    profile = settings.profile()
+    printed = {} if profile.is_solid else {
+        # the printed section turns with the build direction: the best candidates are analysed
+        # again with the profile (osteon.best_orientation, docs/printing.md)
+        "print_profile": profile,
+        "model": (model.vertices, model.faces, model.skeleton, model.weights),
+        "engine_options": {"junctions": settings.junctions}}
     o = best_orientation(
         analysis,
         samples=args.orient_samples,
         base="flat" if args.orient_flat else None,
         vertices=model.vertices if args.orient_flat else None,
+        **printed,
     )
     if args.orient_out:
         from ..io import write_mesh

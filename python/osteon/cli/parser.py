@@ -5,7 +5,14 @@ from __future__ import annotations
 import argparse
 
 from .. import materials
-from .options import DEFAULT_SAFETY_FACTOR, MATERIALS, add_junction_switch
+from .options import (
+    DEFAULT_SAFETY_FACTOR,
+    MATERIALS,
+    ListProfiles,
+    add_junction_switch,
+    add_max_sections,
+    add_print_options,
+)
 
 __all__ = ["DEFAULT_SAFETY_FACTOR", "EXAMPLES", "MATERIALS", "add_junction_switch",
            "build_parser"]
@@ -94,6 +101,7 @@ def _add_common(p: argparse.ArgumentParser):
         metavar="BONE",
         help="bone (name or index) held at its head (default: the main root bone)",
     )
+    add_max_sections(a)
     pr = p.add_argument_group("print direction (FDM layers; docs/printing.md)")
     pr.add_argument(
         "--build-direction",
@@ -108,6 +116,7 @@ def _add_common(p: argparse.ArgumentParser):
         help="layer / in-plane strength (default: the material preset's, e.g. PLA 0.55; "
         "1 with --strength-mpa)",
     )
+    add_print_options(p)
     o = p.add_argument_group("output")
     o.add_argument("--json", metavar="FILE", help="write a JSON report")
     o.add_argument("--png", metavar="FILE", help="write a PNG of the stress map and chain plot")
@@ -130,6 +139,8 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"osteon {_version()}")
+    p.add_argument("--list-profiles", action=ListProfiles,
+                   help="list the print profiles (--profile) with their sources and exit")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     pa = sub.add_parser(
         "analyze",
@@ -235,6 +246,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="threads for gmsh and CalculiX (default 2)",
     )
+    from .reinforce import add_parser as _add_reinforce
+
+    _add_reinforce(sub, _add_common)
     from .skeleton import add_parser as _add_skeleton
 
     _add_skeleton(sub)

@@ -18,11 +18,18 @@ def cmd_validate(args, out):
     try:
         settings = common.settings_from_args(args)
         common.check(settings)
+        if args.fem and not settings.profile().is_solid:
+            # the FEM mesh is the solid part: its stresses are not those of printed walls
+            raise ValueError("--fem checks the solid part against FEM: use it without "
+                             "--profile (or --profile solid)")
+        common.check_outputs(args, "json", "png")
         allowable = settings.allowable_stress_mpa()
         model = common.load_model_of(args)
+        common.print_warnings(model, args)
         checks = model_checks(model)
         prog.next()
-        a, secs = common.run_analysis(settings, model)
+        a, secs = common.run_analysis(settings, model,
+                                      max_sections=common.max_sections_of(args))
         prog.next()
         rep = {
             "model": str(args.model),
@@ -79,13 +86,14 @@ def cmd_validate(args, out):
                 a,
                 allowable,
                 marks=marks,
-                title=f"{Path(args.model).name}: F = {args.force:g} N",
+                title=f"{common.display_name(args.model)}: F = {args.force:g} N",
             )
             if fem_rep is not None:
                 from ..plots import save_fem_png
 
                 p = Path(args.png)
-                save_fem_png(p.with_name(p.stem + "_fem" + p.suffix), fem_rep)
+                common.write_atomic(p.with_name(p.stem + "_fem" + p.suffix),
+                                    writer=lambda tmp: save_fem_png(tmp, fem_rep))
         prog.next()
     finally:
         prog.close()
@@ -122,6 +130,21 @@ def format_fem_table(rep, bone_names):
     return "\n".join(lines)
 
 
+def weight_text(found: dict) -> str:
+    """What the reader found in the file's weights, in words ("clean" when nothing)."""
+    if not found:
+        return "not checked (no per-entry weights in the file)"
+    parts = []
+    if found.get("nonfinite"):
+        parts.append(f"{found['nonfinite']} NaN/inf entries set to 0")
+    if found.get("negative"):
+        parts.append(f"{found['negative']} negative entries set to 0")
+    if found.get("rows_far_from_1"):
+        parts.append(f"{found['rows_far_from_1']} rows summed to {found['row_sum_min']:.3g} .. "
+                     f"{found['row_sum_max']:.3g}, rescaled to 1")
+    return "; ".join(parts) if parts else "clean (every weighted row sums to 1)"
+
+
 def model_checks(model):
     """Cheap input checks: closed mesh, pieces, weights, bones inside the bounding box."""
     import trimesh
@@ -138,7 +161,13 @@ def model_checks(model):
     if model.weights is not None:
         s = np.asarray(model.weights.sum(axis=1)).ravel()
         res["unweighted_vertices"] = int(np.sum(s == 0))
-        res["weight_rows_sum_to_1"] = bool(np.allclose(s[s > 0], 1.0))
+        # what the file held, before the reader cleaned it (the cleaned rows always sum to 1)
+        found = model.weight_findings
+        res["weight_rows_sum_to_1"] = not found.get("rows_far_from_1", 0)
+        res["weights_in_file"] = weight_text(found)
+        bare = [n for n, c in zip(model.bone_names,
+                                  np.asarray(model.weights.sum(axis=0)).ravel()) if c == 0]
+        res["bones_without_weight"] = ", ".join(bare) if bare else 0
     else:
         res["weights"] = "none (nearest bone)"
     return res

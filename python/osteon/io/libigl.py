@@ -16,6 +16,9 @@ import os
 
 import numpy as np
 
+from .atomic import write_atomic
+from .model import check_tree
+
 
 def read_tgf(path):
     """Read a TGF skeleton → ``(joints (J,3), bone_joints (B,2) 0-based, heads, tails, parents)``."""
@@ -58,8 +61,13 @@ def read_tgf(path):
     if not np.all(np.isfinite(joints)):
         raise ValueError(f"{path}: joint coordinates contain NaN or inf")
     # TGF indices are 1-based positions in the joint list
-    E = np.asarray(edges, dtype=np.int64) - 1
     J = len(joints)
+    big = next((e for e in edges if not (-2**62 < e[0] < 2**62 and -2**62 < e[1] < 2**62)),
+               None)
+    if big is not None:
+        raise ValueError(f"{path}: bone {big[0]} {big[1]} refers to a joint index outside "
+                         f"1..{J} (too big for an integer)")
+    E = np.asarray(edges, dtype=np.int64) - 1
     if E.min() < 0 or E.max() >= J:
         raise ValueError(f"{path}: bone refers to joint index outside 1..{J}")
     heads, tails = joints[E[:, 0]], joints[E[:, 1]]
@@ -69,29 +77,17 @@ def read_tgf(path):
             raise ValueError(f"{path}: joint {c + 1} is the child of two bones; not a tree")
         ends_at[int(c)] = b
     parents = np.array([ends_at.get(int(p), -1) for p, _ in E], dtype=np.int64)
-    _check_acyclic(parents, path)
+    check_tree(parents, path, "bone", [f"{a + 1}->{c + 1}" for a, c in E])
     return joints, E, heads, tails, parents
-
-
-def _check_acyclic(parents, path):
-    B = len(parents)
-    for b in range(B):
-        k, steps = b, 0
-        while k >= 0:
-            k = parents[k]
-            steps += 1
-            if steps > B:
-                raise ValueError(f"{path}: bone parents form a cycle")
 
 
 def write_tgf(path, joints, bone_joints):
     """Write joints (J,3) and 0-based bone joint pairs (B,2) as TGF."""
     joints = np.asarray(joints, dtype=np.float64)
-    with open(path, "w") as f:
-        f.writelines(f"{i} {p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n" for i, p in enumerate(joints, 1))
-        f.write("#\n")
-        f.writelines(f"{a + 1} {b + 1}\n" for a, b in np.asarray(bone_joints, dtype=np.int64))
-        f.write("#\n")
+    text = "".join(f"{i} {p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n" for i, p in enumerate(joints, 1))
+    text += "#\n" + "".join(f"{a + 1} {b + 1}\n"
+                            for a, b in np.asarray(bone_joints, dtype=np.int64)) + "#\n"
+    write_atomic(path, text)
 
 
 def read_dmat(path) -> np.ndarray:
@@ -136,12 +132,8 @@ def write_dmat(path, matrix, binary=False):
     if m.ndim != 2:
         raise ValueError("DMAT holds a 2-D matrix")
     rows, cols = m.shape
-    with open(path, "wb") as f:
-        if binary:
-            f.write(b"0 0\n")
-            f.write(f"{cols} {rows}\n".encode())
-            f.write(np.asarray(m.T, dtype="<f8").tobytes())
-        else:
-            f.write(f"{cols} {rows}\n".encode())
-            f.write("\n".join(f"{v:.17g}" for v in m.T.ravel()).encode())
-            f.write(b"\n")
+    if binary:
+        data = b"0 0\n" + f"{cols} {rows}\n".encode() + np.asarray(m.T, dtype="<f8").tobytes()
+    else:
+        data = (f"{cols} {rows}\n" + "\n".join(f"{v:.17g}" for v in m.T.ravel()) + "\n").encode()
+    write_atomic(path, data)

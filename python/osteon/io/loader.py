@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
+from .atomic import write_atomic
 from .libigl import read_dmat, read_tgf
-from .model import RiggedModel, normalize_rows
+from .model import RiggedModel, dense_weights
 
 MESH_EXTENSIONS = (".obj", ".off", ".ply", ".stl")
 GLTF_EXTENSIONS = (".gltf", ".glb")
@@ -35,17 +36,55 @@ def read_mesh(path):
             f"{p}: unknown mesh format {ext!r}; supported: "
             + ", ".join(MESH_EXTENSIONS + GLTF_EXTENSIONS)
         )
-    import trimesh
-
     try:
-        m = trimesh.load(
-            str(p), file_type=ext[1:], process=False, maintain_order=True, force="mesh"
-        )
+        with open(p, "rb") as fh:
+            raw = fh.read()
+    except OSError as e:
+        raise ValueError(f"{p}: cannot read ({e.strerror or e})") from None
+    from .fastmesh import parse_mesh
+
+    fast = parse_mesh(raw, ext, str(p))
+    if fast is not None:
+        return fast
+    try:
+        import trimesh
+    except ModuleNotFoundError:
+        raise ValueError(f"{p}: reading {ext} meshes needs the Python package 'trimesh' "
+                         "(pip install trimesh)") from None
+    try:
+        # the bytes, not the name: any file name, UTF-8 or not
+        m = trimesh.load(io.BytesIO(raw), file_type=ext[1:], process=False,
+                         maintain_order=True, force="mesh")
+    except ModuleNotFoundError as e:  # an optional package of one trimesh loader
+        raise ValueError(f"{p}: reading {ext} meshes needs the Python package {e.name!r} "
+                         f"(pip install {e.name})") from None
     except Exception as e:  # noqa: BLE001 - trimesh loaders raise many kinds
-        raise ValueError(f"{p}: cannot read mesh ({type(e).__name__}: {e})") from None
+        raise ValueError(f"{p}: cannot read mesh ({_plain(e)})") from None
     if not isinstance(m, trimesh.Trimesh) or len(m.faces) == 0:
         raise ValueError(f"{p}: no triangles found in the mesh file")
     return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int32)
+
+
+def plain_words(text: str) -> str:
+    """A third-party error message in plain words where it is one of the known cryptic ones
+    (NumPy's reshape, LinAlg's singular matrix, a Qhull code), else the message itself."""
+    low = text.lower()
+    if "cannot reshape array" in low:
+        return "the numbers do not fill whole rows (a truncated or malformed file)"
+    if "singular matrix" in low:
+        return "a transform that cannot be inverted (singular matrix)"
+    if text.startswith("QH") or "qhull" in low:
+        return "the points are flat or degenerate (convex hull failed)"
+    return text
+
+
+def _plain(e: Exception) -> str:
+    """An exception of a third-party reader in plain words, one line."""
+    text = str(e).strip().splitlines()[0] if str(e).strip() else ""
+    plain = plain_words(text)
+    if plain != text:
+        return plain
+    return f"{type(e).__name__}: {text}" if text else type(e).__name__
 
 
 def write_mesh(path, vertices, faces):
@@ -56,7 +95,7 @@ def write_mesh(path, vertices, faces):
     if ext not in MESH_EXTENSIONS:
         raise ValueError(f"{path}: cannot write mesh format {ext!r}; use one of {MESH_EXTENSIONS}")
     m = trimesh.Trimesh(np.asarray(vertices), np.asarray(faces), process=False)
-    m.export(str(path), file_type=ext[1:])
+    write_atomic(path, writer=lambda tmp: m.export(tmp, file_type=ext[1:]))
 
 
 def _sidecar(mesh: Path, suffixes):
@@ -86,9 +125,26 @@ def load_model(
     height_mm : printed size in mm of the model's largest bounding-box extent (or of its extent
         along ``axis``: 'x', 'y' or 'z'); ``None`` keeps the file's units.
 
-    Raises ValueError naming the problem for missing files, unknown formats, bad skeleton files
-    and weights that do not match the vertex or bone count.
+    Every problem of the files is a ValueError naming the file and what is wrong (missing files,
+    unknown formats, bad indices, cycles, weights that do not match); repaired weights and bones
+    without weight are listed in the model's ``warnings``.
     """
+    try:
+        return _load_model(path, skeleton, weights, height_mm, axis)
+    except (ValueError, MemoryError, KeyboardInterrupt):
+        raise
+    except RecursionError:
+        raise ValueError(f"{os.fspath(path)}: the file nests too deeply to read") from None
+    except OSError as e:  # unreadable, a folder, a symlink loop
+        raise ValueError(f"{e.filename or os.fspath(path)}: cannot read "
+                         f"({e.strerror or type(e).__name__})") from None
+    except Exception as e:  # noqa: BLE001 - a malformed file that a check above missed
+        text = str(e).strip().splitlines()[0] if str(e).strip() else ""
+        raise ValueError(f"{os.fspath(path)}: malformed file ({type(e).__name__}"
+                         f"{': ' + text if text else ''})") from None
+
+
+def _load_model(path, skeleton, weights, height_mm, axis) -> RiggedModel:
     p = _exists(path, "model file")
     ext = p.suffix.lower()
     notes = []
@@ -99,8 +155,10 @@ def load_model(
             )
         from .gltf import read_gltf
 
-        V, F, heads, tails, parents, names, W = read_gltf(p)
-        m = RiggedModel(V, F, heads, tails, parents, names, W, source=str(p), notes=notes)
+        info = {"notes": notes}
+        V, F, heads, tails, parents, names, W = read_gltf(p, info)
+        m = RiggedModel(V, F, heads, tails, parents, names, W, source=str(p), notes=notes,
+                        warnings=info["warnings"], weight_findings=info.get("findings", {}))
         return m.scaled_to(height_mm, axis)
     V, F = read_mesh(p)
     if skeleton is None:
@@ -112,6 +170,7 @@ def load_model(
             )
         notes.append(f"skeleton: {skeleton}")
     sk = _exists(skeleton, "skeleton file")
+    info = {"notes": notes, "warnings": []}
     sname = sk.name.lower()
     if sname.endswith(".tgf"):
         _, _, heads, tails, parents = read_tgf(sk)
@@ -131,7 +190,8 @@ def load_model(
                     f"{wp}: weights are {Wd.shape[0]} rows x {Wd.shape[1]} columns but the mesh "
                     f"has {len(V)} vertices and the skeleton {len(parents)} bones"
                 )
-            W = normalize_rows(sp.csr_matrix(Wd))
+            W, info["findings"], warns = dense_weights(Wd, str(wp), names)
+            info["warnings"].extend(warns)
     elif sname.endswith(".txt"):
         if weights is not None:
             raise ValueError(
@@ -140,8 +200,9 @@ def load_model(
         from .rignet import read_rignet_rig, rignet_skeleton
 
         rig = read_rignet_rig(sk)
-        heads, tails, parents, names, W = rignet_skeleton(rig, V)
+        heads, tails, parents, names, W = rignet_skeleton(rig, V, info, str(sk))
     else:
         raise ValueError(f"{sk}: unknown skeleton format; use a .tgf or a RigNet _rig.txt file")
-    m = RiggedModel(V, F, heads, tails, parents, names, W, source=str(p), notes=notes)
+    m = RiggedModel(V, F, heads, tails, parents, names, W, source=str(p), notes=notes,
+                    warnings=info["warnings"], weight_findings=info.get("findings", {}))
     return m.scaled_to(height_mm, axis)

@@ -83,6 +83,11 @@ class MomentArmIndex {
   std::unique_ptr<double[]> packed_xyz_;   // vertices grouped by (bone, slab), xyz interleaved, mm
   std::unique_ptr<Index[]> packed_index_;  // original vertex index of each packed vertex
   Index packed_capacity_ = 0;              // vertices packed_xyz_ and packed_index_ have room for
+  // The steps of build(): vertices into groups (slabs), groups into buckets, the box trees.
+  void group_vertices(const MeshView& mesh, const Skeleton& skeleton,
+                      const std::vector<int>& vertex_bone, const std::vector<std::uint8_t>* skip);
+  void pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip);
+  void build_box_trees(const LoadTree& tree);
   // Scratch of build(), kept for its storage.
   std::unique_ptr<Index[]> vertex_group_;
   std::unique_ptr<double[]> vertex_angle_;

@@ -110,9 +110,9 @@ class FitLayout:
         op = getattr(getattr(bpy.ops, mod), name)
         if text is None:
             text = op.get_rna_type().name
-        # a row's button whose tooltip (the operator's description()) has the full text
-        clip = "/" in self.where and "description" in vars(getattr(bpy.types, op.idname()))
-        self._add(Item("operator", text, icon not in ("NONE", ""), clip_ok=clip))
+        # no text may be cut, result rows included: their names come fitted to the column
+        # (ui/widgets.fit_text keeps the distinguishing end; the tooltip has the full text)
+        self._add(Item("operator", text, icon not in ("NONE", "")))
         return _Props()
 
     def prop(self, data, name, text=None, icon="NONE", toggle=False, expand=False,

@@ -7,14 +7,14 @@ no bone-heat solver).  At osteon's default load (20 N, PLA, safety factor 2,
 printed height 120 mm) the antenna and the tail come out weak, the body safe.
 
 Run:
-    blender -b --factory-startup --python scripts/make_sample_rig.py -- \
+    blender -b --factory-startup --python blender_addon/osteon_blender/sample.py -- \
         --out out/sample_rig.blend [--levels 2] [--cuts 0]
 
 ``--levels L`` (Catmull-Clark levels of the skin, default 2: 2987 vertices) and
 ``--cuts C`` (extra edge cuts per quad edge, x(C+1)^2 faces) make denser copies of the
 same shape: ``--levels 3 --cuts 2`` gives ~107k vertices for the benchmark.  Weights
 are computed from the final geometry.  Works in Blender 3.4+ and in the ``bpy``
-wheel (``python scripts/make_sample_rig.py -- --out ...``).
+wheel (``python blender_addon/osteon_blender/sample.py -- --out ...``).
 """
 
 from __future__ import annotations
@@ -74,6 +74,26 @@ for s in ("L", "R"):
     })
 
 
+#: a bone that ends a limb stops this many skin radii of its end joint inside the mesh: the
+#: Skin modifier's rounded, subdivided end cap lies inside the joint's sphere, and a bone
+#: reaching past it has sections that cut nothing (the analysis would rightly flag them)
+LEAF_INSET_RADII = 1.5
+
+
+def bone_segments() -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Bone name -> (head, tail) in Blender units: the joints, with the bones that end a limb
+    (no child bone) shortened by LEAF_INSET_RADII radii of their end joint."""
+    parents = {p for _h, _t, p in BONES.values() if p is not None}
+    out = {}
+    for b, (h, t, _p) in BONES.items():
+        head, tail = np.array(JOINTS[h][0]), np.array(JOINTS[t][0])
+        if b not in parents:
+            axis = tail - head
+            tail = tail - axis / np.linalg.norm(axis) * LEAF_INSET_RADII * JOINTS[t][1]
+        out[b] = (head, tail)
+    return out
+
+
 def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     ab = b - a
     t = np.clip(((p - a) @ ab) / float(ab @ ab), 0.0, 1.0)
@@ -131,10 +151,11 @@ def build(levels: int = 2, cuts: int = 0, name: str = "Figurine") -> tuple[bpy.t
     scene.collection.objects.link(arm)
     bpy.context.view_layer.objects.active = arm
     bpy.ops.object.mode_set(mode="EDIT")
-    for bname, (h, t, _p) in BONES.items():
+    segments = bone_segments()
+    for bname in BONES:
         eb = arm_data.edit_bones.new(bname)
-        eb.head = JOINTS[h][0]
-        eb.tail = JOINTS[t][0]
+        eb.head = tuple(segments[bname][0])
+        eb.tail = tuple(segments[bname][1])
         eb.roll = 0.0
     for bname, (h, _t, p) in BONES.items():
         if p is not None:

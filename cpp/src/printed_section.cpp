@@ -1,0 +1,268 @@
+// The printed section (docs/printing.md, "The printed section"): walls, skins and sparse infill
+// of an FDM print, or the shell of a hollowed resin print, in one section plane, and the
+// transformed section's modulus.
+//
+// Geometry, for a part that is locally a prism along the section normal n, with b the build
+// direction, theta = angle(n, b), e_s the unit projection of b into the plane and e_t the
+// in-plane axis across it: a boundary point whose in-plane outward normal is w lies in the walls
+// within in-plane depth t_w sqrt(1 - (w.b)^2) (the slicer insets each layer's contour by t_w in
+// the layer plane, and the layer contour's normal is w's projection into that plane), which is
+// the support function of the ellipse with semi-axes t_w cos(theta) along e_s and t_w along e_t:
+// the walls are the cut minus its erosion by that ellipse (an isotropic inset by t_w where s is
+// stretched by 1 / cos(theta)). A point lies in a skin when the layers within the skin depth t_s
+// above or below do not cover it (PrusaSlicer's top/bottom solid layers): in the plane those
+// layers are the cut shifted by t_s sin(theta) along e_s. Islands of the sparse region whose
+// layer area (section area / cos(theta)) is under solid_infill_below_area are filled solid.
+#include "osteon/printed_section.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "clipper2/clipper.h"
+#include "simplify_path.hpp"
+
+namespace osteon {
+namespace {
+
+using Clipper2Lib::Path64;
+using Clipper2Lib::Paths64;
+using Clipper2Lib::PolyPath64;
+
+constexpr double kScale = 1e4;  // Clipper units per mm (0.1 um)
+// Smallest cos(theta) used: a section nearly along the build direction erodes by an ellipse
+// 1000 times flatter than its walls (the walls' depth along e_s is then t_w / 1000).
+constexpr double kMinCos = 1e-3;
+constexpr double kSimplify = 0.005;  // mm: the outline is simplified within this before offsets
+
+// The section's loops in Clipper units of the (s, t) axes; outer boundary counter-clockwise,
+// holes clockwise (what Clipper's offset expects).
+Paths64 to_clipper(const SectionPolygon& cut, const Vec2& es, const Vec2& et) {
+  Paths64 out;
+  auto add = [&](const std::vector<Vec2>& loop, bool hole) {
+    if (loop.size() < 3) return;
+    Path64 path;
+    path.reserve(loop.size());
+    for (const Vec2& p : loop)
+      path.emplace_back(std::llround(p.dot(es) * kScale), std::llround(p.dot(et) * kScale));
+    if ((Clipper2Lib::Area(path) > 0) == hole) std::reverse(path.begin(), path.end());
+    out.push_back(std::move(path));
+  };
+  add(cut.outer, false);
+  for (const auto& hole : cut.holes) add(hole, true);
+  return out;
+}
+
+// Stretches s by `stretch` (Clipper units; 1 / stretch undoes it).
+Paths64 stretched(Paths64 paths, double stretch) {
+  if (stretch != 1.0)
+    for (Path64& path : paths)
+      for (auto& q : path) q.x = std::llround(static_cast<double>(q.x) * stretch);
+  return paths;
+}
+
+double area_mm2(const Paths64& paths) { return Clipper2Lib::Area(paths) / (kScale * kScale); }
+
+std::vector<Vec2> to_plane(const Path64& path, const Vec2& es, const Vec2& et) {
+  std::vector<Vec2> loop(path.size());
+  for (std::size_t k = 0; k < path.size(); ++k)
+    loop[k] = (static_cast<double>(path[k].x) * es + static_cast<double>(path[k].y) * et) / kScale;
+  return loop;
+}
+
+// Moments of a set of regions about a reference point c: area, first moment, second moment.
+struct Moments {
+  double area = 0.0;
+  Vec2 first = Vec2::Zero();
+  Mat2 second = Mat2::Zero();
+  void add(const SectionProperties& p, const Vec2& c, double sign = 1.0) {
+    if (!(p.area > 0)) return;
+    const Vec2 d = p.centroid - c;
+    area += sign * p.area;
+    first += sign * p.area * d;
+    second += sign * (p.second_moment + p.area * d * d.transpose());
+  }
+};
+
+// The islands of a Clipper tree (an outer boundary and its holes each; islands in holes too),
+// those whose layer area is at least `min_area` (mm^2) kept, in plane coordinates.
+void collect_islands(const PolyPath64& node, double layer_per_section, double min_area,
+                     const Vec2& es, const Vec2& et, std::vector<SectionPolygon>& islands) {
+  for (const auto& outer : node) {
+    double a = Clipper2Lib::Area(outer->Polygon());
+    for (const auto& hole : *outer) a += Clipper2Lib::Area(hole->Polygon());
+    if (a / (kScale * kScale) * layer_per_section >= min_area) {
+      SectionPolygon island;
+      island.outer = to_plane(outer->Polygon(), es, et);
+      for (const auto& hole : *outer) island.holes.push_back(to_plane(hole->Polygon(), es, et));
+      islands.push_back(std::move(island));
+    }
+    for (const auto& hole : *outer)
+      collect_islands(*hole, layer_per_section, min_area, es, et, islands);
+  }
+}
+
+// Skins under the surfaces at most `max_slope` steep from the layer plane: each such boundary
+// edge swept `depth` into the section along the in-plane build axis s (Clipper units, s not
+// stretched). The surface's slope follows from its in-plane normal w: |w.b| = |w_s| sin(theta).
+Paths64 flat_skins(const Paths64& section, double depth, double sin_theta, double max_slope) {
+  Paths64 quads;
+  const double min_cos = std::cos(max_slope);
+  for (const Path64& loop : section) {
+    // Outer loops run counter-clockwise and holes clockwise: the material is on the left.
+    for (std::size_t k = 0; k < loop.size(); ++k) {
+      const auto& p = loop[k];
+      const auto& q = loop[k + 1 == loop.size() ? 0 : k + 1];
+      const double dx = static_cast<double>(q.x - p.x), dy = static_cast<double>(q.y - p.y);
+      const double len = std::hypot(dx, dy);
+      if (!(len > 0)) continue;
+      const double ws = dy / len;  // outward normal (dy, -dx) / len, its s component
+      if (std::abs(ws) * sin_theta < min_cos) continue;
+      const auto shift = static_cast<std::int64_t>(std::llround(ws > 0 ? -depth : depth));
+      quads.push_back({p, q, {q.x + shift, q.y}, {p.x + shift, p.y}});
+    }
+  }
+  return Clipper2Lib::Union(quads, Clipper2Lib::FillRule::NonZero);
+}
+
+// W of the transformed section (whole cut minus (1 - eta) x the sparse islands) at the cut's
+// own boundary points (the solid fibres); 0 when degenerate.
+double transformed_modulus(const SectionPolygon& cut, const SectionProperties& solid,
+                           const Moments& sparse, double eta) {
+  const double k = 1.0 - eta;
+  const double area = solid.area - k * sparse.area;
+  if (!(area > 1e-12 * solid.area)) return 0.0;
+  const Vec2 shift = -k * sparse.first / area;  // centroid of the transformed section - solid's
+  const Mat2 J = solid.second_moment - k * sparse.second - area * shift * shift.transpose();
+  const double det = J.determinant();
+  if (!(det > 1e-14 * J(0, 0) * J(1, 1)) || !(J(0, 0) > 0) || !(J(1, 1) > 0)) return 0.0;
+  const Mat2 Jinv = J.inverse();
+  const Vec2 c = solid.centroid + shift;
+  double peak = 0.0;
+  auto scan = [&](const std::vector<Vec2>& loop) {
+    for (const Vec2& p : loop) peak = std::max(peak, (Jinv * (p - c)).squaredNorm());
+  };
+  scan(cut.outer);
+  for (const auto& hole : cut.holes) scan(hole);
+  return peak > 0 ? 1.0 / std::sqrt(peak) : 0.0;
+}
+
+}  // namespace
+
+void validate_print_options(const PrintOptions& o) {
+  if (o.kind != PrintOptions::kSolid && o.kind != PrintOptions::kLayered &&
+      o.kind != PrintOptions::kShell)
+    throw std::invalid_argument("print kind must be 0 (solid), 1 (FDM) or 2 (resin shell)");
+  auto length = [](double v, const char* what) {
+    if (!(v >= 0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string(what) + " must be a finite number >= 0");
+  };
+  length(o.wall_depth, "print wall depth (mm)");
+  length(o.skin_depth, "print skin depth (mm)");
+  length(o.solid_infill_below_area, "print solid_infill_below_area (mm^2)");
+  length(o.skin_max_slope, "print skin_max_slope (radians)");
+  if (!(o.infill_build >= 0 && o.infill_build <= 1) ||
+      !(o.infill_layer >= 0 && o.infill_layer <= 1))
+    throw std::invalid_argument("print infill stiffness fractions must be within 0..1");
+}
+
+double infill_stiffness(double cos_theta, double eta_build, double eta_layer) {
+  const double c2 = std::min(cos_theta * cos_theta, 1.0), s2 = 1.0 - c2;
+  if ((c2 > 0 && !(eta_build > 0)) || (s2 > 0 && !(eta_layer > 0))) return 0.0;
+  const double compliance = (c2 > 0 ? c2 / eta_build : 0.0) + (s2 > 0 ? s2 / eta_layer : 0.0);
+  return compliance > 0 ? 1.0 / compliance : 1.0;
+}
+
+PrintedSection printed_section(const SectionPolygon& cut, const SectionProperties& solid,
+                               const Vec2& build_in_plane, double cos_theta,
+                               const PrintOptions& options, bool keep_sparse) {
+  PrintedSection out;
+  const bool layered = options.kind == PrintOptions::kLayered;
+  const double c = std::clamp(std::abs(cos_theta), 0.0, 1.0);
+  const double sin_theta = std::sqrt(std::max(0.0, 1.0 - c * c));
+  // In-plane axes: s along the build direction's projection (any axis when it has none).
+  const double b_len = build_in_plane.norm();
+  const Vec2 es = layered && b_len > 1e-12 ? Vec2(build_in_plane / b_len) : Vec2(1.0, 0.0);
+  const Vec2 et(-es.y(), es.x());
+  const double stretch = layered ? 1.0 / std::max(c, kMinCos) : 1.0;
+  // The cut's outline within kSimplify of it (a mesh cut is finely faceted; the slicer
+  // itself simplifies its slices to ~0.01 mm): what the offsets cost scales with its vertices.
+  Paths64 section = to_clipper(cut, es, et);
+  for (Path64& path : section) path = detail::simplify_closed(path, kSimplify * kScale);
+  // Walls: the cut eroded by the wall ellipse (FDM) or by the shell (resin), as an isotropic
+  // inset in stretched coordinates; round joins within 0.005 mm or 1 % of the depth.
+  Paths64 eroded = section;
+  if (options.wall_depth > 0) {
+    const double delta = options.wall_depth * kScale;
+    eroded =
+        stretched(Clipper2Lib::InflatePaths(
+                      stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
+                      Clipper2Lib::EndType::Polygon, 2.0, std::max(0.005 * kScale, 0.01 * delta)),
+                  1.0 / stretch);
+  }
+  const auto shift =
+      static_cast<std::int64_t>(std::llround(options.skin_depth * sin_theta * kScale));
+  const bool skins = layered && shift > 0;
+  const double layer_per_section = layered ? 1.0 / std::max(c, kMinCos) : 1.0;
+  const double min_area = layered ? options.solid_infill_below_area : 0.0;
+  const double eroded_area = std::min(area_mm2(eroded), solid.area);
+  out.infill_eta = layered ? infill_stiffness(c, options.infill_build, options.infill_layer)
+                           : std::clamp(options.infill_build, 0.0, 1.0);
+  out.wall_area = solid.area - eroded_area;
+  std::vector<SectionPolygon> islands;
+  Moments sparse;
+  const auto outers = std::count_if(eroded.begin(), eroded.end(),
+                                    [](const Path64& p) { return Clipper2Lib::Area(p) > 0; });
+  if (!skins && (outers <= 1 || !(min_area > 0))) {
+    // The inset is the sparse region (one island, or no small-area rule): its loops as they
+    // are (outer boundaries positive, holes negative), no Clipper pass more.
+    if (!(outers == 1 && eroded_area * layer_per_section < min_area))
+      for (const Path64& path : eroded) {
+        SectionPolygon loop{to_plane(path, es, et), {}};
+        sparse.add(section_properties(loop), solid.centroid,
+                   Clipper2Lib::Area(path) > 0 ? 1.0 : -1.0);
+        if (keep_sparse) out.sparse.push_back(std::move(loop.outer));
+      }
+    out.infill_area = std::clamp(sparse.area, 0.0, eroded_area);
+    out.skin_area = eroded_area - out.infill_area;
+    out.modulus = transformed_modulus(cut, solid, sparse, out.infill_eta);
+    out.valid = out.modulus > 0 && std::isfinite(out.modulus);
+    return out;
+  }
+  // Skins: where the layers within skin_depth above and below (the cut shifted by
+  // +-skin_depth sin(theta) along s) do not both cover the point.
+  Clipper2Lib::Clipper64 clipper;
+  clipper.AddSubject(eroded);
+  const bool all_slopes = options.skin_max_slope >= M_PI / 2;
+  if (skins && all_slopes)
+    clipper.AddClip(Clipper2Lib::Intersect(Clipper2Lib::TranslatePaths(section, shift, 0),
+                                           Clipper2Lib::TranslatePaths(section, -shift, 0),
+                                           Clipper2Lib::FillRule::NonZero));
+  else if (skins)
+    clipper.AddClip(
+        flat_skins(section, static_cast<double>(shift), sin_theta, options.skin_max_slope));
+  Clipper2Lib::PolyTree64 tree;
+  const auto op = !skins       ? Clipper2Lib::ClipType::Union
+                  : all_slopes ? Clipper2Lib::ClipType::Intersection
+                               : Clipper2Lib::ClipType::Difference;
+  clipper.Execute(op, Clipper2Lib::FillRule::NonZero, tree);
+  // Small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
+  collect_islands(tree, layer_per_section, min_area, es, et, islands);
+  for (const SectionPolygon& island : islands)
+    sparse.add(section_properties(island), solid.centroid);
+  out.infill_area = std::min(sparse.area, eroded_area);
+  out.skin_area = eroded_area - out.infill_area;
+  out.modulus = transformed_modulus(cut, solid, sparse, out.infill_eta);
+  out.valid = out.modulus > 0 && std::isfinite(out.modulus);
+  if (keep_sparse)
+    for (SectionPolygon& island : islands) {
+      out.sparse.push_back(std::move(island.outer));
+      for (auto& hole : island.holes) out.sparse.push_back(std::move(hole));
+    }
+  return out;
+}
+
+}  // namespace osteon
