@@ -7,9 +7,13 @@ unreliable / too-thin sections left out) with the real rig vs the auto skeleton 
 2 mm interval; position distance in % of the model size). Where they disagree, the second table
 says what the auto skeleton's weakest section is (kind, thickness, lever arm) and how far the
 real rig's nearest analysed section is from it. Then the skeleton extraction time on the cow
-subdivided to ~93k faces, per stage (cProfile). Reads ../shared/data (or OSTEON_DATA).
+subdivided to ~93k faces, per stage (cProfile). With --pieces: the RigNet models in several
+pieces (pieces joined / loose, bones, CPU time, and for each leaf joint of the real rig the
+distance to the nearest auto bone end in limb radii: the radius being the median distance from
+the real leaf bone to the nearest vertex). Reads ../shared/data (or OSTEON_DATA).
 
     python bench/bench_autoskeleton.py [--repeat 3] [--models arm cow ...] [--skip-big]
+    python bench/bench_autoskeleton.py --pieces [--data ../shared/data]
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ import time
 
 import numpy as np
 import osteon
-from models import load
+from models import DATA, load
 
 MODELS = ["arm", "elephant", "cow", "cheburashka", "rignet2982", "rignet11814"]
 
@@ -79,7 +83,12 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--models", nargs="*", default=MODELS)
     ap.add_argument("--skip-big", action="store_true", help="skip the ~93k-face cow")
+    ap.add_argument("--pieces", action="store_true", help="the RigNet models in several pieces")
+    ap.add_argument("--data", default=str(DATA), help="folder with RigNet/ (default: tests/data)")
     args = ap.parse_args()
+    if args.pieces:
+        pieces_table(args.data)
+        return
     print("| model | faces | real bones | auto bones | time wall / CPU (s) | real leaf tips within 10 % "
           "| tip dist. median / max (% size) | max stress real / auto (MPa) "
           "| max-stress section distance (% size) |")
@@ -102,6 +111,58 @@ def main() -> None:
               f"{r['real_near_stress']:.1f} |")
     if not args.skip_big:
         big(args.repeat)
+
+
+def limb_radii(v: np.ndarray, sk: osteon.Skeleton, ends: np.ndarray) -> np.ndarray:
+    """For each leaf bone of ``sk``: distance from its tail to the nearest of ``ends`` (mm) over
+    the limb's radius (median distance from points along the bone to the nearest vertex)."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(v)
+    has_child = np.zeros(sk.num_bones, bool)
+    has_child[sk.parents[sk.parents >= 0]] = True
+    out = []
+    for b in np.flatnonzero(~has_child):
+        s = np.linspace(0.1, 0.9, 9)[:, None]
+        rad = float(np.median(tree.query(sk.heads[b] + s * (sk.tails[b] - sk.heads[b]))[0]))
+        out.append(np.linalg.norm(ends - sk.tails[b], axis=1).min() / max(rad, 1e-9))
+    return np.array(out)
+
+
+def pieces_table(data: str) -> None:
+    """auto_skeleton on every RigNet model of ``data`` in several pieces (120 mm tall)."""
+    import warnings
+    from pathlib import Path
+
+    from osteon.autoskeleton import split_pieces
+    from osteon.autoskeleton.mesh import check_mesh
+    from osteon.io import load_model
+
+    print("| model | faces | pieces: joined / loose | auto bones | CPU s | real leaf tips within "
+          "1.5 limb radii | tip distance median / max (limb radii) |")
+    print("|---|---|---|---|---|---|---|")
+    for obj in sorted(Path(data, "RigNet").glob("*_ori.obj")):
+        m = load_model(obj, skeleton=obj.with_name(obj.stem + "_rig.txt"), height_mm=120)
+        v, f = np.asarray(m.vertices), np.asarray(m.faces)
+        wv, wf, _ = check_mesh(v, f)
+        p = split_pieces(wv, wf)
+        if not p.joined and not p.loose:
+            continue
+        c = time.process_time()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                sk, _w = osteon.auto_skeleton(v, f)
+        except ValueError as exc:
+            print(f"| {obj.stem} | {len(f)} | {len(p.joined)} / {len(p.loose)} | ValueError: {exc} |")
+            continue
+        cpu = time.process_time() - c
+        real = m.skeleton if isinstance(m.skeleton, osteon.Skeleton) else osteon.Skeleton(
+            m.heads, m.tails, m.parents)
+        d = limb_radii(v, real, np.concatenate([sk.heads, sk.tails]))
+        print(f"| {obj.stem} | {len(f)} | {len(p.joined)} / {len(p.loose)} | {sk.num_bones} | "
+              f"{cpu:.2f} | {(d <= 1.5).sum()}/{len(d)} | {np.median(d):.1f} / {d.max():.1f} |",
+              flush=True)
 
 
 def big(repeat: int) -> None:

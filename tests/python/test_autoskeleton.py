@@ -9,9 +9,9 @@ a round end's centre), the T's junction sits at the bars' meeting point."""
 import numpy as np
 import osteon
 import pytest
-from osteon.autoskeleton import END_RATIO
+from osteon.autoskeleton import END_RATIO, LoosePiecesWarning, split_pieces
 from scipy import sparse
-from shapes import merge, revolve
+from shapes import capsule_along, merge, revolve
 
 pytest.importorskip("pygel3d")
 
@@ -197,11 +197,126 @@ def test_torus_loop_is_cut_into_a_tree():
     assert covered.max() < 20.0
 
 
-def test_two_pieces_raise_a_clear_error():
-    v, f = merge(capsule(), capsule())
-    v[len(v) // 2 :, 1] += 40.0
-    with pytest.raises(ValueError, match="2 separate pieces"):
-        osteon.auto_skeleton(v, f)
+def sphere(centre, r, n=16, m=8):
+    """Closed UV sphere of radius r (mm) about centre."""
+    t = np.linspace(0, np.pi, m + 1)
+    radii = r * np.sin(t)
+    radii[0] = radii[-1] = 0.05 * r
+    v, f = revolve(-r * np.cos(t), radii, n)
+    return v + np.asarray(centre, float), f
+
+
+def creature():
+    """A head (capsule along x, r = 10 mm, tip at x = 90) with two eyes poking out of its
+    surface, a third eye wholly inside it, a beak overlapping its tip, and a loose prop 30 mm
+    away: (parts (list of (v, f)), index of the loose part)."""
+    head = capsule_along((0, 0, 0), (80, 0, 0), 10.0, n=16, cap_stations=5, stations=10)
+    parts = [head, sphere((84, 4, 5), 3), sphere((84, -4, 5), 3), sphere((70, 0, 0), 2),
+             capsule_along((86, 0, 0), (100, 0, 0), 3.0, n=8, cap_stations=3, stations=4),
+             sphere((40, 40, 0), 5)]
+    return parts, 5
+
+
+def test_pieces_touching_the_body_join_it_and_loose_ones_are_reported():
+    parts, loose = creature()
+    v, f = merge(*parts)
+    counts = np.cumsum([0] + [len(p[0]) for p in parts])
+    p = split_pieces(v, f)
+    assert len(p.joined) == 4 and len(p.loose) == 1  # 2 eyes + inner eye + beak; the prop
+    assert set(p.labels[counts[loose] : counts[loose + 1]]) == set(p.loose)
+    assert set(p.labels[: counts[1]]) == {p.main}
+    with pytest.warns(LoosePiecesWarning, match="1 loose piece"):
+        sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    # the head is rigged as it would be alone: same bones (the small pieces get none)
+    sk_head, w_head = osteon.auto_skeleton(*parts[0])
+    assert np.array_equal(sk.heads, sk_head.heads) and np.array_equal(sk.tails, sk_head.tails)
+    assert (w[: counts[1]] != w_head).nnz == 0
+    # the loose prop is bound whole to one bone (the one nearest it)
+    prop = w[counts[loose] : counts[loose + 1]].toarray()
+    assert np.all(prop.max(1) == 1.0) and len(set(prop.argmax(1))) == 1
+    # an eye moves with the head next to it: its weights are the head's nearest vertex's
+    eye = slice(counts[1], counts[2])
+    nearest = np.linalg.norm(v[eye][:, None] - parts[0][0][None], axis=2).argmin(1)
+    assert (w[eye] != w_head[nearest]).nnz == 0
+
+
+def test_a_limb_modelled_apart_gets_bones_of_its_own():
+    """Two capsules crossing (an X of two separate closed pieces, both as big): the second is
+    joined to the first and gets its own bones, hung from the first's; each of the 4 ends has
+    a bone ending END_RATIO radii inside it."""
+    r = 6.0
+    a = capsule_along((-40, 0, 0), (40, 0, 0), r, n=12, cap_stations=4, stations=12)
+    b = capsule_along((0, -40, 0), (0, 40, 0), r, n=12, cap_stations=4, stations=12)
+    v, f = merge(a, b)
+    p = split_pieces(v, f)
+    assert len(p.joined) == 1 and not p.loose
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1  # one tree
+    ends = np.concatenate([sk.heads, sk.tails])
+    for tip in ([-46, 0, 0], [46, 0, 0], [0, -46, 0], [0, 46, 0]):
+        assert np.linalg.norm(ends - tip, axis=1).min() < (END_RATIO + 0.5) * r, tip
+
+
+@pytest.mark.parametrize("name,joined,loose", [("8184", 2, 0), ("8333", 1, 0)])
+def test_rignet_models_in_several_pieces_are_rigged_whole(name, joined, loose):
+    """RigNet 8184 (3 pieces) and 8333 (2 pieces; tests/data/RigNet): pieces counted as the
+    checked mesh has them (the smaller pieces touch the body), one tree, every vertex weighted;
+    before, auto_skeleton refused them ("mesh is in 3 separate pieces")."""
+    from osteon.autoskeleton.mesh import check_mesh
+    from osteon.io import load_model
+    from rigged_models import DATA
+
+    obj = DATA / "RigNet" / f"{name}_ori.obj"
+    m = load_model(obj, skeleton=obj.with_name(f"{name}_ori_rig.txt"), height_mm=120)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    p = split_pieces(*check_mesh(v, f)[:2])
+    assert (len(p.joined), len(p.loose)) == (joined, loose)
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1 and sk.num_bones >= 5
+
+
+def segment_distance(p, a, b):
+    """Distance (mm) from points p (..., 3) to the segment a-b."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    d = b - a
+    t = np.clip(((p - a) @ d) / (d @ d), 0.0, 1.0)
+    return np.linalg.norm(p - (a + t[..., None] * d), axis=-1)
+
+
+def hand(r=4.0, h=1.5):
+    """A hand as one closed mesh: a palm (ellipsoid 80 x 90 x 28 mm) and five capsule fingers
+    of radius r (4 mm: 0.05 of the hand's 157 mm length, 0.1 of the palm's width), the thumb
+    at 40 degrees; voxelised at h mm. Returns (v, f, finger axes [(base, end)], r)."""
+    fingers = [((-27, 30, 0), (-30, 85, 0)), ((-9, 35, 0), (-9, 100, 0)),
+               ((9, 35, 0), (9, 105, 0)), ((27, 30, 0), (30, 92, 0)),
+               ((-30, -15, 0), (-75, 25, 0))]
+    xs, ys, zs = (np.arange(lo, hi, h) + h / 2 for lo, hi in ((-90, 50), (-55, 120), (-20, 20)))
+    X, Y, Z = np.meshgrid(xs, ys, zs, indexing="ij")
+    occ = (X / 40) ** 2 + (Y / 45) ** 2 + (Z / 14) ** 2 <= 1
+    for a, b in fingers:
+        occ |= segment_distance(np.stack([X, Y, Z], -1), a, b) <= r
+    v, f = voxel_mesh(occ, h, (xs[0] - h / 2, ys[0] - h / 2, zs[0] - h / 2))
+    return v, f, fingers, r
+
+
+def test_every_finger_of_a_hand_gets_a_bone_reaching_its_tip():
+    """Fingers 8 mm wide and 60-70 mm long are limbs: a bone runs along each (within a radius
+    of its axis half-way out) and ends within 1.5 radii of its tip (END_RATIO = 1.25 radii
+    inside a round end)."""
+    v, f, fingers, r = hand()
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    ends = np.concatenate([sk.heads, sk.tails])
+    for a, b in fingers:
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        tip = b + r * (b - a) / np.linalg.norm(b - a)
+        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * r, (tip, ends)
+        middle = 0.5 * (a + b)
+        along = min(segment_distance(middle, h, t) for h, t in zip(sk.heads, sk.tails))
+        assert along < r, (middle, along)
 
 
 @pytest.mark.parametrize(

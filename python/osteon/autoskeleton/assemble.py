@@ -1,0 +1,119 @@
+"""Step 7: one skeleton for a mesh in several pieces (units: mm).
+
+The main body and every joined piece enclosing at least ``BIG_PIECE`` × the body's volume (a
+head or a limb modelled apart) get bones of their own, rooted where the piece meets the pieces
+rigged before it and hung from the nearest bone there. Smaller joined pieces (eyes, teeth, a
+beak) take the weights of the nearest rigged vertex; loose pieces are bound whole to their
+nearest bone and reported with a :class:`LoosePiecesWarning`."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .._api import Skeleton
+from .pieces import Pieces
+
+#: a joined closed piece enclosing at least BIG_PIECE x the main body's volume gets bones
+BIG_PIECE = 0.1
+
+#: rig(vertices (n,3) mm, faces (m,3), root) -> (Skeleton, (n,B) dense weights)
+RigOne = Callable[[np.ndarray, np.ndarray, "str | np.ndarray"], tuple[Skeleton, np.ndarray]]
+
+
+class LoosePiecesWarning(UserWarning):
+    """Some pieces of the mesh neither touch nor overlap the body: they have no load path."""
+
+
+def submesh(v: np.ndarray, f: np.ndarray, verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The faces of ``f`` whose vertices are all in ``verts`` (sorted indices), renumbered:
+    (vertices (n,3) mm, faces (m,3) int32)."""
+    keep = np.zeros(len(v), bool)
+    keep[verts] = True
+    sf = f[keep[f].all(1)]
+    index = np.full(len(v), -1, np.int64)
+    index[verts] = np.arange(len(verts))
+    return v[verts], index[sf].astype(np.int32)
+
+
+def nearest_bone(sk: Skeleton, pts: np.ndarray) -> np.ndarray:
+    """(P,) index of the bone (segment) nearest each point (P,3) mm."""
+    d = sk.tails - sk.heads
+    ll = np.maximum((d * d).sum(1), 1e-300)
+    t = np.clip(np.einsum("pbk,bk->pb", pts[:, None] - sk.heads[None], d) / ll, 0.0, 1.0)
+    near = sk.heads[None] + t[..., None] * d[None]
+    return np.argmin(((pts[:, None] - near) ** 2).sum(2), axis=1)
+
+
+def _join(parts: list[tuple[Skeleton, np.ndarray, np.ndarray]], nv: int
+          ) -> tuple[Skeleton, np.ndarray]:
+    """One skeleton and (nv,B) weights from the rigged pieces (skeleton, vertices, weights);
+    each later piece's root bones hang from the nearest earlier bone."""
+    heads, tails, parents, blocks = [], [], [], []
+    for sk, verts, w in parts:
+        off = sum(len(h) for h in heads)
+        par = np.where(sk.parents >= 0, sk.parents + off, -1)
+        if off:
+            so_far = Skeleton(np.concatenate(heads), np.concatenate(tails),
+                              np.concatenate(parents))
+            roots = np.flatnonzero(sk.parents < 0)
+            par[roots] = nearest_bone(so_far, sk.heads[roots])
+        heads.append(sk.heads)
+        tails.append(sk.tails)
+        parents.append(par)
+        blocks.append((off, verts, w))
+    nb = sum(len(h) for h in heads)
+    full = np.zeros((nv, nb))
+    for off, verts, w in blocks:
+        full[verts, off : off + w.shape[1]] = w
+    sk = Skeleton(np.concatenate(heads), np.concatenate(tails), np.concatenate(parents),
+                  [f"auto_{i:02d}" for i in range(nb)])
+    return sk, full
+
+
+def _warn_loose(pieces: Pieces, sk: Skeleton, v: np.ndarray) -> None:
+    sizes = [int((pieces.labels == k).sum()) for k in pieces.loose]
+    bones = [sk.names[b] for b in nearest_bone(sk, np.array(
+        [v[pieces.labels == k].mean(0) for k in pieces.loose]))]
+    listed = ", ".join(f"{n} vertices at {b}" for n, b in zip(sizes[:6], bones, strict=False))
+    warnings.warn(LoosePiecesWarning(
+        f"{len(pieces.loose)} loose piece{'s' if len(sizes) > 1 else ''} of the mesh neither "
+        f"touch nor overlap the body ({listed}{', …' if len(sizes) > 6 else ''}): bound whole "
+        "to the nearest bone; nothing holds them when printed (the analysis reports them as "
+        "loose pieces)"), stacklevel=4)
+
+
+def rig_pieces(v: np.ndarray, f: np.ndarray, pieces: Pieces, root: str, rig: RigOne
+               ) -> tuple[Skeleton, np.ndarray]:
+    """Skeleton and (V,B) dense weights of the welded mesh ``v``, ``f`` in several pieces."""
+    big = [k for k in pieces.joined if pieces.closed[k]
+           and pieces.volume[k] >= BIG_PIECE * pieces.volume[pieces.main]]
+    parts, rigged = [], np.zeros(0, np.int64)
+    for k in [pieces.main, *big]:
+        verts = pieces.vertices_of([k])
+        pv, pf = submesh(v, f, verts)
+        at: str | np.ndarray = root
+        if len(rigged):  # rooted where the piece meets the pieces rigged before it
+            d, _ = cKDTree(v[rigged]).query(pv)
+            at = pv[int(np.argmin(d))]
+        sk, w = rig(pv, pf, at)
+        parts.append((sk, verts, w))
+        rigged = np.concatenate([rigged, verts])
+    sk, full = _join(parts, len(v))
+    small = pieces.vertices_of([k for k in pieces.joined if k not in big])
+    if len(small):  # eyes, teeth, a beak: the weights of the body next to them
+        full[small] = full[rigged[cKDTree(v[rigged]).query(v[small])[1]]]
+    for k in pieces.loose:  # a loose piece: whole to the bone nearest its centre
+        verts = pieces.vertices_of([k])
+        full[verts] = 0.0
+        full[verts, nearest_bone(sk, v[verts].mean(0)[None])[0]] = 1.0
+    free = np.flatnonzero(pieces.labels < 0)
+    if len(free):  # vertices in no face: their nearest bone
+        full[free] = 0.0
+        full[free, nearest_bone(sk, v[free])] = 1.0
+    if pieces.loose:
+        _warn_loose(pieces, sk, v)
+    return sk, full

@@ -1,0 +1,105 @@
+"""Step 0b: a mesh in several pieces (units: mm).
+
+Most character models are several pieces: eyes and teeth inside the head, a beak or a hat
+overlapping it, sometimes a loose prop. The main body is the piece enclosing the largest
+volume; a piece is joined to the body when it touches or overlaps a piece already joined (some
+vertex of one lies inside the other or within ``TOUCH`` × the smaller piece's size of its
+surface), repeatedly; the rest are loose pieces, in the sense of the analysis's
+``loose_pieces``: nothing holds them to the body, so they would fall off the print."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .mesh import piece_labels
+
+#: two pieces touch when a vertex of one is within TOUCH x the smaller piece's size (largest
+#: bounding-box side) of the other's surface, or inside it
+TOUCH = 0.02
+
+
+@dataclass
+class Pieces:
+    """The pieces of a welded mesh.
+
+    labels (V,) int: piece of each vertex (-1: in no face); main: the body's label; joined:
+    labels of pieces touching the body (directly or through another joined piece); loose:
+    labels of the others; volume (P,) mm³, size (P,) mm, closed (P,) bool: per label."""
+
+    labels: np.ndarray
+    main: int
+    joined: list[int]
+    loose: list[int]
+    volume: np.ndarray
+    size: np.ndarray
+    closed: np.ndarray
+
+    def vertices_of(self, labels: list[int]) -> np.ndarray:
+        """Indices of the vertices in the pieces ``labels``."""
+        return np.flatnonzero(np.isin(self.labels, labels))
+
+
+def _piece_measures(v: np.ndarray, f: np.ndarray, labels: np.ndarray, n: int):
+    """Per piece: enclosed volume (mm³, 0 if open), bounding box low and high corners (n,3) mm,
+    closed (every edge in 2 faces)."""
+    fl = labels[f[:, 0]]
+    signed = np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])) / 6.0
+    volume = np.abs(np.bincount(fl, signed, minlength=n))
+    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    uniq, counts = np.unique(edges, axis=0, return_counts=True)
+    closed = np.bincount(labels[uniq[counts != 2, 0]], minlength=n) == 0
+    lo, hi = np.full((n, 3), np.inf), np.full((n, 3), -np.inf)
+    inside = labels >= 0
+    np.minimum.at(lo, labels[inside], v[inside])
+    np.maximum.at(hi, labels[inside], v[inside])
+    return np.where(closed, volume, 0.0), lo, hi, closed
+
+
+def _distance_field(v: np.ndarray, f: np.ndarray):
+    """pygel3d ``MeshDistance`` of the triangles ``f`` (signed distance mm, < 0 inside)."""
+    from pygel3d import hmesh
+
+    used, inv = np.unique(f, return_inverse=True)
+    return hmesh.MeshDistance(hmesh.Manifold.from_triangles(v[used], inv.reshape(f.shape)))
+
+
+def _touch(v, f, labels, closed, size, a: int, b: int, fields: dict) -> bool:
+    """Whether pieces ``a`` and ``b`` touch or overlap."""
+    tol = TOUCH * min(size[a], size[b])
+    for p, q in ((a, b), (b, a)):
+        if p not in fields:
+            fields[p] = _distance_field(v, f[labels[f[:, 0]] == p])
+        d = np.asarray(fields[p].signed_distance(v[labels == q]), dtype=np.float64)
+        if (np.abs(d) <= tol).any() or (closed[p] and (d < 0).any()):
+            return True
+    return False
+
+
+def split_pieces(v: np.ndarray, f: np.ndarray) -> Pieces:
+    """The main body, the pieces joined to it and the loose pieces of the welded mesh
+    ``v`` (V,3) mm, ``f`` (F,3)."""
+    n, labels = piece_labels(f, len(v))
+    in_face = np.zeros(len(v), bool)
+    in_face[f.ravel()] = True
+    # relabel pieces that hold a face 0..n-1 (vertices in no face: -1)
+    _, dense = np.unique(labels[in_face], return_inverse=True)
+    lab = np.full(len(v), -1, np.int64)
+    lab[in_face] = dense.ravel()
+    volume, lo, hi, closed = _piece_measures(v, f, lab, n)
+    size = (hi - lo).max(1)
+    main = int(np.argmax(np.where(volume > 0, volume, -1.0 / (1.0 + size))))
+    held, todo, fields = [main], [main], {}
+    rest = np.array([k for k in range(n) if k != main], np.int64)
+    while todo and len(rest):
+        a = todo.pop()
+        tol = TOUCH * np.minimum(size[a], size[rest])[:, None]
+        boxes = np.all((lo[a] - tol <= hi[rest]) & (lo[rest] - tol <= hi[a]), axis=1)
+        near = [int(b) for b in rest[boxes]
+                if _touch(v, f, lab, closed, size, a, int(b), fields)]
+        rest = rest[~np.isin(rest, near)]
+        held += near
+        todo += near
+    return Pieces(lab, main, sorted(held[1:]), sorted(int(k) for k in rest), volume, size,
+                  closed)
