@@ -7,6 +7,7 @@ import zipfile
 
 import bpy
 import numpy as np
+from osteon_blender import bridge
 
 
 def _closed(mesh) -> bool:
