@@ -347,7 +347,8 @@ def test_cli_correct_and_batch_take_the_switch(tmp_path):
         out = tmp_path / f"batch-{name}"
         assert main(["batch", str(obj), "--out", str(out), *common, "--no-png", "-j", "1",
                      *extra]) == 0
-        (rep_path,) = out.rglob("*.json")
+        # the model's report (beside it the run's batch_settings.json, which --resume reads)
+        (rep_path,) = (p for p in out.rglob("*.json") if p.name != "batch_settings.json")
         rep = json.loads(rep_path.read_text())
         assert rep["settings"]["junctions"] is (name == "on")
         assert len(rep["junction_sections"]) == rep["weak_sections"] == (3 if name == "on" else 0)
