@@ -18,7 +18,7 @@ namespace {
 // bounding_diagonal: a minimum and maximum per axis, exact in any order), over chunks of vertices
 // on all workers (with 1.5M faces these two passes were ~2 % of a run's instructions, serial).
 bool finite_diagonal(const MeshView& mesh, int threads, double& diag) {
-  const Index block = 32768;
+  const Index block = detail::kVerticesPerPass;
   const long chunks = static_cast<long>((mesh.num_vertices + block - 1) / block);
   std::vector<Vec3> lo(chunks), hi(chunks);
   std::vector<std::uint8_t> finite(chunks, 1);

@@ -137,8 +137,8 @@ void Analyzer::Impl::prepare_cuts(RunState& run) {
   std::vector<double>& reach = run.reach;
   for (int b = 0; b < nb; ++b) run.axis[b] = sk.direction(b);
   // Each bone's farthest vertex from its axis, over chunks of vertices on all workers: a
-  // maximum, so the same bits in any order (this pass was serial, ~1 % of a run).
-  const Index block = 16384;
+  // maximum, so the same bits in any order (large meshes only: see kVerticesPerPass).
+  const Index block = detail::kVerticesPerPass;
   const long chunks = static_cast<long>((num_vertices + block - 1) / block);
   std::vector<std::vector<double>> chunk_reach(chunks, std::vector<double>(nb, 0.0));
   detail::parallel_for(chunks, threads, [&](long chunk, int) {

@@ -46,7 +46,9 @@ FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int 
   Vec3& hi = grid.hi;
   lo = Vec3::Constant(std::numeric_limits<double>::infinity());
   hi = -lo;
-  // The box over `parts` workers: a minimum and maximum per axis, the same bits in any order.
+  // The box over `parts` workers (large meshes only: see kVerticesPerPass): a minimum and
+  // maximum per axis, the same bits in any order.
+  if (mesh.num_vertices < detail::kVerticesPerPass) parts = 1;
   std::vector<Vec3> part_lo(parts, lo), part_hi(parts, hi);
   detail::parallel_for(parts, parts, [&](long part, int) {
     const Index begin = mesh.num_vertices * part / parts;
