@@ -1,14 +1,52 @@
 #include "osteon/analysis.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "analysis_impl.hpp"
+#include "parallel.hpp"
 #include "thickness.hpp"
 
 namespace osteon {
+
+namespace {
+
+// Whether every coordinate is finite and, if so, the bounding-box diagonal (mm; the same bits as
+// bounding_diagonal: a minimum and maximum per axis, exact in any order), over chunks of vertices
+// on all workers (with 1.5M faces these two passes were ~2 % of a run's instructions, serial).
+bool finite_diagonal(const MeshView& mesh, int threads, double& diag) {
+  const Index block = detail::kVerticesPerPass;
+  const long chunks = static_cast<long>((mesh.num_vertices + block - 1) / block);
+  std::vector<Vec3> lo(chunks), hi(chunks);
+  std::vector<std::uint8_t> finite(chunks, 1);
+  detail::parallel_for(chunks, threads, [&](long chunk, int) {
+    const Index begin = chunk * block, end = std::min(mesh.num_vertices, begin + block);
+    bool ok = true;
+    for (Index i = 3 * begin; i < 3 * end; ++i) ok &= std::isfinite(mesh.vertices[i]);
+    finite[chunk] = ok;
+    if (!ok) return;
+    Vec3 l = mesh.vertex(begin), h = l;
+    for (Index i = begin + 1; i < end; ++i) {
+      const Vec3 p = mesh.vertex(i);
+      l = l.cwiseMin(p);
+      h = h.cwiseMax(p);
+    }
+    lo[chunk] = l;
+    hi[chunk] = h;
+  });
+  if (std::find(finite.begin(), finite.end(), 0) != finite.end()) return false;
+  for (long c = 1; c < chunks; ++c) {
+    lo[0] = lo[0].cwiseMin(lo[c]);
+    hi[0] = hi[0].cwiseMax(hi[c]);
+  }
+  diag = chunks > 0 ? (hi[0] - lo[0]).norm() : 0.0;
+  return true;
+}
+
+}  // namespace
 
 void validate_options(const AnalysisOptions& o, const Skeleton& skeleton) {
   if (!(o.force > 0) || !std::isfinite(o.force))
@@ -166,11 +204,11 @@ void Analyzer::Impl::check_inputs(RunState& run) {
   validate_options(options, sk);
   run.mesh =
       MeshView{run.vertices, num_vertices, faces.data(), static_cast<Index>(faces.size() / 3)};
-  for (Index i = 0; i < 3 * num_vertices; ++i)
-    if (!std::isfinite(run.vertices[i]))
-      throw std::invalid_argument("vertices contain NaN or infinity (vertex " +
-                                  std::to_string(i / 3) + ")");
-  run.diag = bounding_diagonal(run.mesh);
+  if (!finite_diagonal(run.mesh, options.threads, run.diag))
+    for (Index i = 0; i < 3 * num_vertices; ++i)
+      if (!std::isfinite(run.vertices[i]))
+        throw std::invalid_argument("vertices contain NaN or infinity (vertex " +
+                                    std::to_string(i / 3) + ")");
   run.gap = options.gap_tolerance >= 0 ? options.gap_tolerance : 0.01 * run.diag;
 }
 

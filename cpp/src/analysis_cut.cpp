@@ -149,12 +149,22 @@ void Analyzer::Impl::prepare_cuts(RunState& run) {
   run.axis.resize(nb);
   std::vector<double>& reach = run.reach;
   for (int b = 0; b < nb; ++b) run.axis[b] = sk.direction(b);
-  for (Index v = 0; v < num_vertices; ++v) {
-    const int b = run.vertex_bone[v];
-    const Vec3 rel = mesh.vertex(v) - sk.heads[b];
-    const Vec3& d = run.axis[b];
-    reach[b] = std::max(reach[b], (rel - rel.dot(d) * d).squaredNorm());
-  }
+  // Each bone's farthest vertex from its axis, over chunks of vertices on all workers: a
+  // maximum, so the same bits in any order (large meshes only: see kVerticesPerPass).
+  const Index block = detail::kVerticesPerPass;
+  const long chunks = static_cast<long>((num_vertices + block - 1) / block);
+  std::vector<std::vector<double>> chunk_reach(chunks, std::vector<double>(nb, 0.0));
+  detail::parallel_for(chunks, threads, [&](long chunk, int) {
+    std::vector<double>& far = chunk_reach[chunk];
+    for (Index v = chunk * block, end = std::min(num_vertices, (chunk + 1) * block); v < end; ++v) {
+      const int b = run.vertex_bone[v];
+      const Vec3 rel = mesh.vertex(v) - sk.heads[b];
+      const Vec3& d = run.axis[b];
+      far[b] = std::max(far[b], (rel - rel.dot(d) * d).squaredNorm());
+    }
+  });
+  for (const std::vector<double>& far : chunk_reach)
+    for (int b = 0; b < nb; ++b) reach[b] = std::max(reach[b], far[b]);
   for (int b = 0; b < nb; ++b) reach[b] = 2.5 * std::sqrt(reach[b]) + 2.0 * h;
   run.crossings.assign(nb, {});
   std::vector<std::uint8_t> need_crossings(nb, 0);

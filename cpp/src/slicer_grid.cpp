@@ -39,17 +39,32 @@ struct FaceGrid::Layout {
   }
 };
 
-FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell) const {
+FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int parts) const {
   const Index nf = mesh.num_faces;
   Layout grid;
   Vec3& lo = grid.lo;
   Vec3& hi = grid.hi;
   lo = Vec3::Constant(std::numeric_limits<double>::infinity());
   hi = -lo;
-  for (Index i = 0; i < mesh.num_vertices; ++i) {
-    const Vec3 p = mesh.vertex(i);
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
+  // The box over `parts` workers (large meshes only: see kVerticesPerPass): a minimum and
+  // maximum per axis, the same bits in any order.
+  if (mesh.num_vertices < detail::kVerticesPerPass) parts = 1;
+  std::vector<Vec3> part_lo(parts, lo), part_hi(parts, hi);
+  detail::parallel_for(parts, parts, [&](long part, int) {
+    const Index begin = mesh.num_vertices * part / parts;
+    const Index end = mesh.num_vertices * (part + 1) / parts;
+    Vec3 l = part_lo[part], h = part_hi[part];
+    for (Index i = begin; i < end; ++i) {
+      const Vec3 p = mesh.vertex(i);
+      l = l.cwiseMin(p);
+      h = h.cwiseMax(p);
+    }
+    part_lo[part] = l;
+    part_hi[part] = h;
+  });
+  for (int p = 0; p < parts; ++p) {
+    lo = lo.cwiseMin(part_lo[p]);
+    hi = hi.cwiseMax(part_hi[p]);
   }
   const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-12 * (1.0 + (hi - lo).norm())));
   // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
@@ -93,13 +108,13 @@ FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell) cons
 
 void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   const Index nf = mesh.num_faces;
-  const Layout grid = layout(mesh, faces_per_cell);
+  const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
+  const Layout grid = layout(mesh, faces_per_cell, parts);
   // Boxes are widened by a few ulps of the coordinates so that a plane through a box's face is
   // never rounded out of it (the plane tests compute n.center +- |n|.half).
   slack_ = 64 * std::numeric_limits<double>::epsilon() *
            std::max(grid.lo.cwiseAbs().maxCoeff(), grid.hi.cwiseAbs().maxCoeff());
   tight_on_ = false;
-  const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
   bin_faces(mesh, grid, parts);
   sort_faces_by_cell(mesh, grid.total, parts);
   collect_cells(grid);

@@ -232,7 +232,7 @@ class FaceGrid {
   // the cell of its centroid (per worker part), the faces sorted by cell, the non-empty cells and
   // blocks with their boxes, and each cell's vertex entries.
   struct Layout;
-  Layout layout(const MeshView& mesh, int faces_per_cell) const;
+  Layout layout(const MeshView& mesh, int faces_per_cell, int parts) const;
   void bin_faces(const MeshView& mesh, const Layout& grid, int parts);
   void sort_faces_by_cell(const MeshView& mesh, Index total, int parts);
   void collect_cells(const Layout& grid);
