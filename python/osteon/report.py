@@ -311,7 +311,8 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     ``analysis``: the ``osteon.Analysis`` of the model as it was. With a correction
     (``osteon.Correction``), ``corrected_analysis`` is the state after it (default
     ``correction.after``), which ``max_stress_mpa``, ``bones`` ... describe; ``weak_bones`` then
-    lists every bone weak before or after, with its ``scale``, its stress now and before.
+    lists every bone weak before or after or scaled, with its ``scale``, its stress now and
+    before.
     ``settings``: :meth:`osteon.settings.Settings.as_dict` (or the front end's own dict);
     ``mm_per_unit``: mm of the print per model unit (file unit or Blender unit);
     ``print_profile``: the :class:`osteon.profiles.PrintProfile` analysed with (default: the
@@ -341,7 +342,10 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
              "stress_concentration": r["stress_concentration"],
              "max_stress_before_mpa": before[r["bone"]]["max_stress_mpa"]
              if r["bone"] in before else None}
+            # weak before or after, or scaled (a bone can become weak during the loop, when
+            # re-skinning a neighbour changes its corner or junction sections)
             for r in rows if r["weak"] or (r["bone"] in before and before[r["bone"]]["weak"])
+            or (r["scale"] is not None and abs(float(r["scale"]) - 1.0) > 1e-12)
         ]
     max_stress = finite(shown.max_stress)
     report = {

@@ -66,7 +66,8 @@ def test_report_has_spec_keys_and_is_json():
         assert key in rep
     assert rep["weak_bones"] == [{"bone": "b1", "max_stress_mpa": 45.0, "ratio": 1.5,
                                   "stress_mpa": 45.0, "allowable_mpa": 30.0,
-                                  "limit": "along layers", "scale": 1.0, "weak": True}]
+                                  "limit": "along layers", "scale": 1.0, "weak": True,
+                                  "stress_concentration": None}]  # no corner data given
     assert rep["worst"] == {"bone": "b1", "stress_mpa": 45.0, "allowable_mpa": 30.0,
                             "ratio": 1.5, "limit": "along layers"}
     assert rep["sections"] == 4 and rep["converged"] is False
@@ -86,7 +87,7 @@ def test_report_after_correction():
     assert rep["weak_bones"] == [{"bone": "x", "max_stress_mpa": 29.0, "ratio": 29.0 / 30.0,
                                   "stress_mpa": 29.0, "allowable_mpa": 30.0,
                                   "limit": "along layers", "scale": 1.2, "weak": False,
-                                  "max_stress_before_mpa": 45.0}]
+                                  "stress_concentration": None, "max_stress_before_mpa": 45.0}]
     assert rep["correction"]["rounds"] == 1
     assert rep["correction"]["bone_scale"] == {"x": 1.2}
     assert rep["max_stress_mpa"] == 29.0 and rep["correction"]["max_stress_before_mpa"] == 45.0

@@ -78,7 +78,12 @@ class OSTEON_UL_weak_bones(bpy.types.UIList):
         uncut = item.status == "not analysed"
         cell = split.row()
         cell.alignment = "LEFT"            # the name reads from the left, like a label
-        name = widgets.fit_text(item.name, name_px, widgets._scale(context))
+        # "K " before the name: the ratio includes a corner's stress concentration (docs/notch.md;
+        # the tooltip says so); in the name cell, whose text is fitted, so the numbers keep
+        # their narrow fixed column
+        corner = item.stress_concentration > 1.0
+        name = widgets.fit_text(("K " if corner else "") + item.name, name_px,
+                                widgets._scale(context))
         op = cell.operator("osteon.select_bone", text=name, emboss=False)
         op.bone = item.name
         nums = split.split(factor=1.0 / ncols, align=True) if ncols > 1 else split.row()
@@ -89,8 +94,7 @@ class OSTEON_UL_weak_bones(bpy.types.UIList):
             return
         col = nums.row()
         col.alert = item.weak
-        corner = item.stress_concentration > 1.0  # the peak at a corner (docs/notch.md)
-        col.label(text=_ratio_text(item.ratio) + (" K" if corner else ""))
+        col.label(text=_ratio_text(item.ratio))
         if ncols > 1:
             scaled = abs(item.scale - 1.0) > 1e-6
             nums.label(text=f"{item.scale:.2f}" if scaled else "-")
