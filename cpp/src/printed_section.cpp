@@ -249,18 +249,28 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   Clipper2Lib::Clipper64 clipper;
   clipper.AddSubject(eroded);
   const bool all_slopes = options.skin_max_slope >= M_PI / 2;
-  if (skins && all_slopes)
-    clipper.AddClip(Clipper2Lib::Intersect(Clipper2Lib::TranslatePaths(section, shift, 0),
-                                           Clipper2Lib::TranslatePaths(section, -shift, 0),
-                                           Clipper2Lib::FillRule::NonZero));
-  else if (skins)
+  if (skins && all_slopes) {
+    // inset ∩ shifted ∩ shifted in one pass (no boolean for the two shifted cuts first): the
+    // clip is both shifted cuts (winding 1 in each's material) and a reversed box around them
+    // (winding -1 everywhere), so the clip's winding is positive where both cover the point.
+    clipper.AddClip(Clipper2Lib::TranslatePaths(section, shift, 0));
+    clipper.AddClip(Clipper2Lib::TranslatePaths(section, -shift, 0));
+    const Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(section);
+    const std::int64_t pad = shift + 1;
+    clipper.AddClip(Paths64{{{box.left - pad, box.top - pad},
+                             {box.left - pad, box.bottom + pad},
+                             {box.right + pad, box.bottom + pad},
+                             {box.right + pad, box.top - pad}}});
+  } else if (skins)
     clipper.AddClip(
         flat_skins(section, static_cast<double>(shift), sin_theta, options.skin_max_slope));
   Clipper2Lib::PolyTree64 tree;
   const auto op = !skins       ? Clipper2Lib::ClipType::Union
                   : all_slopes ? Clipper2Lib::ClipType::Intersection
                                : Clipper2Lib::ClipType::Difference;
-  clipper.Execute(op, Clipper2Lib::FillRule::NonZero, tree);
+  clipper.Execute(
+      op, skins && all_slopes ? Clipper2Lib::FillRule::Positive : Clipper2Lib::FillRule::NonZero,
+      tree);
   // Small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
   collect_islands(tree, layer_per_section, min_area, es, et, islands);
   for (const SectionPolygon& island : islands)
