@@ -65,9 +65,10 @@ struct LocalMesh {
 };
 
 // Faces of the cells the slab lo <= u.x <= hi and the region reach that have a vertex inside
-// both (the only ones a candidate's normal and neighbours need), and their vertices' normals.
+// both (the only ones a candidate's normal and neighbours need), and the normals of their
+// vertices at least `min_t` from the axis (closer ones are no candidate: theirs stay 0).
 LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, double lo,
-                     double hi, const CutRegion& region, std::vector<int>& slot) {
+                     double hi, const CutRegion& region, double min_t, std::vector<int>& slot) {
   LocalMesh m;
   m.slot = &slot;
   const double r2 = region.radius * region.radius;
@@ -95,16 +96,32 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
       }
     }
   }
+  // Only a vertex that can be a candidate needs its normal (a neighbour's position is enough):
+  // the candidate's own tests (measure_corner) with a margin, so the normals they read are summed
+  // from the same faces in the same order as for every vertex (bit for bit), and the angle
+  // weights (atan2, most of the search's cost) of the other vertices are not computed.
+  const double margin = 1e-9 * region.radius;
+  std::vector<char> need(m.vertices.size());
+  for (std::size_t k = 0; k < m.vertices.size(); ++k) {
+    const Vec3 d = mesh.vertex(m.vertices[k]) - region.point;
+    const double a = u.dot(mesh.vertex(m.vertices[k]));
+    const double t = (d - d.dot(u) * u).norm();
+    need[k] =
+        a >= lo - margin && a <= hi + margin && t >= min_t - margin && t <= region.radius + margin;
+  }
   m.normals.assign(m.vertices.size(), Vec3::Zero());
   for (std::size_t f = 0; f < m.faces.size(); f += 3) {
+    const int at[3] = {m.at(m.faces[f]), m.at(m.faces[f + 1]), m.at(m.faces[f + 2])};
+    if (!need[at[0]] && !need[at[1]] && !need[at[2]]) continue;
     const Vec3 p[3] = {mesh.vertex(m.faces[f]), mesh.vertex(m.faces[f + 1]),
                        mesh.vertex(m.faces[f + 2])};
     const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
     const double len = n.norm();
     if (!(len > 0)) continue;
     for (int k = 0; k < 3; ++k) {
+      if (!need[at[k]]) continue;
       const Vec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-      m.normals[m.at(m.faces[f + k])] += std::atan2(e1.cross(e2).norm(), e1.dot(e2)) / len * n;
+      m.normals[at[k]] += std::atan2(e1.cross(e2).norm(), e1.dot(e2)) / len * n;
     }
   }
   for (Vec3& n : m.normals)
@@ -194,7 +211,7 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
   region.axis = u;
   region.radius = 2.5 * r_thin;
   const double at = u.dot(origin);
-  LocalMesh local = local_mesh(mesh, grid, u, at + lo, at + hi, region, slot);
+  LocalMesh local = local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, slot);
   // Fillet points: normal mostly in the meridian plane, turned 8..82 degrees from radial
   // towards the thin side (the shoulder face, at 90 degrees, and the thin part, at 0, left out).
   const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);

@@ -195,17 +195,29 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   // Walls: the cut eroded by the wall ellipse (FDM) or by the shell (resin), as an isotropic
   // inset in stretched coordinates; round joins within 0.005 mm or 1 % of the depth.
   Paths64 eroded = section;
+  double wall_reach = 0.0;  // Clipper units along s that every inset point keeps inside the cut
   if (options.wall_depth > 0) {
     const double delta = options.wall_depth * kScale;
-    eroded =
-        stretched(Clipper2Lib::InflatePaths(
-                      stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
-                      Clipper2Lib::EndType::Polygon, 2.0, std::max(0.005 * kScale, 0.01 * delta)),
-                  1.0 / stretch);
+    const double arc_tolerance = std::max(0.005 * kScale, 0.01 * delta);
+    eroded = stretched(
+        Clipper2Lib::InflatePaths(stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
+                                  Clipper2Lib::EndType::Polygon, 2.0, arc_tolerance),
+        1.0 / stretch);
+    // Less the arcs' chords and 4 units for the rounding of the stretch there and back.
+    wall_reach = (delta - arc_tolerance) / stretch - 4.0;
   }
   const auto shift =
       static_cast<std::int64_t>(std::llround(options.skin_depth * sin_theta * kScale));
-  const bool skins = layered && shift > 0;
+  // Skins that the walls already hold leave the sparse region as it is: an inset point q keeps
+  // q + l e_s inside the cut for |l| <= wall_reach (the wall ellipse's half-axis along s is
+  // wall_depth cos(theta), i.e. delta / stretch; the flattened round joins come at most
+  // arc_tolerance closer to the boundary), so with shift <= wall_reach the interior of the inset
+  // lies in both shifted cuts (all slopes: inset ∩ shifted ∩ shifted = inset) and meets no
+  // swept edge quad (flat_skins: a point q of a quad has q -+ mu e_s on the boundary, mu <=
+  // shift, which an interior inset point cannot have). Exact up to measure zero, so the same
+  // region: the Clipper passes of the skins are skipped (most sections of a limb along the
+  // build direction: tan(theta) <= wall_depth / skin_depth).
+  const bool skins = layered && shift > 0 && static_cast<double>(shift) > wall_reach;
   const double layer_per_section = layered ? 1.0 / std::max(c, kMinCos) : 1.0;
   const double min_area = layered ? options.solid_infill_below_area : 0.0;
   const double eroded_area = std::min(area_mm2(eroded), solid.area);
@@ -237,18 +249,28 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   Clipper2Lib::Clipper64 clipper;
   clipper.AddSubject(eroded);
   const bool all_slopes = options.skin_max_slope >= M_PI / 2;
-  if (skins && all_slopes)
-    clipper.AddClip(Clipper2Lib::Intersect(Clipper2Lib::TranslatePaths(section, shift, 0),
-                                           Clipper2Lib::TranslatePaths(section, -shift, 0),
-                                           Clipper2Lib::FillRule::NonZero));
-  else if (skins)
+  if (skins && all_slopes) {
+    // inset ∩ shifted ∩ shifted in one pass (no boolean for the two shifted cuts first): the
+    // clip is both shifted cuts (winding 1 in each's material) and a reversed box around them
+    // (winding -1 everywhere), so the clip's winding is positive where both cover the point.
+    clipper.AddClip(Clipper2Lib::TranslatePaths(section, shift, 0));
+    clipper.AddClip(Clipper2Lib::TranslatePaths(section, -shift, 0));
+    const Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(section);
+    const std::int64_t pad = shift + 1;
+    clipper.AddClip(Paths64{{{box.left - pad, box.top - pad},
+                             {box.left - pad, box.bottom + pad},
+                             {box.right + pad, box.bottom + pad},
+                             {box.right + pad, box.top - pad}}});
+  } else if (skins)
     clipper.AddClip(
         flat_skins(section, static_cast<double>(shift), sin_theta, options.skin_max_slope));
   Clipper2Lib::PolyTree64 tree;
   const auto op = !skins       ? Clipper2Lib::ClipType::Union
                   : all_slopes ? Clipper2Lib::ClipType::Intersection
                                : Clipper2Lib::ClipType::Difference;
-  clipper.Execute(op, Clipper2Lib::FillRule::NonZero, tree);
+  clipper.Execute(
+      op, skins && all_slopes ? Clipper2Lib::FillRule::Positive : Clipper2Lib::FillRule::NonZero,
+      tree);
   // Small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
   collect_islands(tree, layer_per_section, min_area, es, et, islands);
   for (const SectionPolygon& island : islands)
