@@ -202,10 +202,15 @@ def test_skin_axis_scales_need_axes():
 @pytest.mark.parametrize("name", ["arm", "elephant", "cheburashka", "cow", "rignet2982",
                                   "rignet11814"])
 def test_real_models_converge_under_a_load_that_makes_them_weak(name, scaling, data_dir):
+    """The scaling loop on the beam stresses (notch_sensitivity=0): with the corner model on,
+    a corner at a joint whose sections lie under blended weights can stop the loop ("scaling
+    does not thicken it"; the elephant's bone_4/bone_5, docs/notch.md), which
+    test_the_corner_model_stops_with_its_reason checks."""
     v, f, sk, w = load(name, height_mm=120.0)
-    before = osteon.analyze(v, f, sk, w, force=20.0)
+    before = osteon.analyze(v, f, sk, w, force=20.0, notch_sensitivity=0.0)
     allowable = before.max_stress / 2  # twice over the limit somewhere
-    fix = osteon.correct(v, f, sk, w, force=20.0, allowable_stress=allowable, scaling=scaling)
+    fix = osteon.correct(v, f, sk, w, force=20.0, allowable_stress=allowable, scaling=scaling,
+                         notch_sensitivity=0.0)
     assert fix.before.weak.any()
     assert fix.converged, fix.reason
     assert not fix.after.weak.any()
@@ -214,3 +219,17 @@ def test_real_models_converge_under_a_load_that_makes_them_weak(name, scaling, d
     scaled = np.flatnonzero(fix.bone_scale != 1.0)
     touched = np.asarray(w[:, scaled].sum(axis=1)).ravel() > 0
     assert np.array_equal(fix.vertices[~touched], v[~touched])
+
+
+def test_the_corner_model_stops_with_its_reason(data_dir):
+    """With the corner model (q = 1) the elephant's loop ends on joint sections that scaling
+    cannot thicken, and says so by bone; every section it leaves weak is named."""
+    v, f, sk, w = load("elephant", height_mm=120.0)
+    before = osteon.analyze(v, f, sk, w, force=20.0, notch_sensitivity=0.0)
+    fix = osteon.correct(v, f, sk, w, force=20.0, allowable_stress=before.max_stress / 2)
+    if fix.converged:
+        assert not fix.after.weak.any()
+    else:
+        assert "cannot be fixed by scaling" in fix.reason
+        named = {fix.after.bone_names[fix.after.section_bone[s]] for s in fix.unfixed_sections}
+        assert named and all(f"bone '{b}'" in fix.reason for b in named)

@@ -96,8 +96,9 @@ class OsteonSettings(bpy.types.PropertyGroup):
     scaling: EnumProperty(name="Scaling", items=core.SCALING_MODES, default="THIN",
                           description="How Correct thickens a weak part")
     reinforce_first: BoolProperty(
-        name="Reinforce first (keep shape)", default=False,
-        description="Correct gives weak regions more walls / denser infill first (shown as "
+        name="Reinforce first", default=False,
+        description="Keep the shape: Correct gives weak regions more walls / denser infill "
+        "first (shown as "
         "modifier volumes; Export for slicer writes them) and thickens only what even solid "
         "cannot carry (needs an FDM print profile; docs/correction.md)")
     # print direction (FDM layers, docs/printing.md); the engine mapping is osteon.settings'
