@@ -271,9 +271,9 @@ struct Analyzer::Impl {
   void find_loose_pieces_and_arms(RunState& run);
   void retry_joint(RunState& run, int job, int worker);
   void retry_family(RunState& run, int job, int worker);
-  /// 3d. Junctions (SPEC §3, docs/junctions.md): sections whose whole cut is much larger than
-  /// their bone's typical section are re-cut at +-delta; where only a core continues through
-  /// the plane, the section's properties are the core's (flag kFlagJunction).
+  /// 3d. Junctions (docs/method.md, Sections; docs/junctions.md): sections whose whole cut is
+  /// much larger than their bone's typical section are re-cut at +-delta; where only a core
+  /// continues through the plane, the section's properties are the core's (flag kFlagJunction).
   void find_junction_cores(RunState& run);
   /// Steps of find_junction_cores: each bone's typical section, the candidates, the planes of a
   /// candidate's neighbours (its family's sections m intervals away, or two planes cut), and

@@ -1,4 +1,4 @@
-// Stage 3d of a run: the effective section at junctions (SPEC §3, docs/junctions.md)
+// Stage 3d of a run: the effective section at junctions (docs/method.md, Sections; docs/junctions.md)
 // (Analyzer::Impl).
 //
 // Where a side branch grows out of a bone, the plane through the junction also cuts the stub of

@@ -1,4 +1,4 @@
-"""Public Python API of osteon (SPEC §7). Units: millimetres, newtons, MPa.
+"""Public Python API of osteon (README "Python", docs/method.md). Units: millimetres, newtons, MPa.
 
 The heavy lifting happens in the C++ engine (``osteon._core``); this module checks and converts
 inputs (NumPy arrays, SciPy sparse weights) and wraps the results.
@@ -573,7 +573,7 @@ def _set_thickness(self: Analysis, value: np.ndarray) -> None:
 # first read, in one call into the engine.
 Analysis.section_thickness = property(  # type: ignore[assignment]
     _thickness, _set_thickness,
-    doc="(S,) mm: each section's thickness (regions.hpp); NaN for skipped sections.")
+    doc="(S,) mm: each section's thickness (cpp/src/thickness.hpp); NaN for skipped sections.")
 
 
 @dataclass

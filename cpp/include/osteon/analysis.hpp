@@ -1,4 +1,4 @@
-// Skeleton-sectional stress analysis (paper §4, SPEC §3-5): sections, loads, stress.
+// Skeleton-sectional stress analysis (paper §4, docs/method.md): sections, loads, stress.
 #pragma once
 
 #include <cstdint>

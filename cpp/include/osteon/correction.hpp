@@ -1,4 +1,4 @@
-// Local scaling correction (paper §5, SPEC §6): thicken weak bones until no section is weak.
+// Local scaling correction (paper §5, docs/method.md): thicken weak bones until none is weak.
 #pragma once
 
 #include <string>

@@ -16,7 +16,7 @@ class Cancelled : public std::runtime_error {
 };
 
 /// Progress of a run, readable from any thread while it works, and its cancel switch.
-/// Counters are sections (one count per section plane, SPEC §3), not time.
+/// Counters are sections (one count per section plane, docs/method.md), not time.
 struct Progress {
   /// Sections of the current analysis whose cut (geometry) is done, 0 .. sections_total.
   std::atomic<std::int64_t> sections_done{0};

@@ -40,7 +40,7 @@
     "width / thickness, sqrt of the second moments' eigenvalue ratio (1 for a circle or square)") \
   X(std::vector<double>, section_thickness, {}, "(S,)", "mm",                                     \
     "the region's minimum width: narrowest distance between two parallel lines enclosing it "   \
-    "(a solid round section's diameter, a plate's thickness; regions.hpp); NaN when skipped; "  \
+    "(a solid round section's diameter, a plate's thickness; thickness.hpp); NaN when skipped; "  \
     "in Python computed on first read, except where the too_thin check needed it")             \
   X(std::vector<double>, section_cut_area, {}, "(S,)", "mm^2",                                    \
     "area of the whole cut around the bone point; differs from section_area only at a "         \

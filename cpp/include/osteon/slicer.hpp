@@ -1,4 +1,5 @@
-// Plane-mesh slicing into closed loops, and the choice of the section around a bone (SPEC §3).
+// Plane-mesh slicing into closed loops, and the choice of the section around a bone
+// (docs/method.md, Sections).
 // Implemented in cpp/src/slicer_grid.cpp (FaceGrid, line_crossings), slicer_cut.cpp (PlaneFrame,
 // cut_mesh, cut_mesh_parallel), slicer_loops.cpp (assemble_loops) and slicer.cpp
 // (select_section, slice_section).
@@ -274,9 +275,9 @@ std::vector<double> line_crossings(const MeshView& mesh, const FaceGrid& grid, c
 /// (mm).
 PlaneCut assemble_loops(const std::vector<CutSegment>& segments, double gap_tolerance);
 
-/// The material region around the plane origin (the bone point), SPEC §3: select_region
-/// (cpp/src/region_choice.hpp) without a bone domain (the non-zero-winding union of the loops; a
-/// bone outside the mesh gets the nearest region, flagged kFlagOutside).
+/// The material region around the plane origin (the bone point; docs/method.md, Sections):
+/// select_region (cpp/src/region_choice.hpp) without a bone domain (the non-zero-winding union
+/// of the loops; a bone outside the mesh gets the nearest region, flagged kFlagOutside).
 SectionGeometry select_section(const PlaneCut& cut);
 
 /// Convenience: cut, assemble and select the section of one plane (origin = bone point).
