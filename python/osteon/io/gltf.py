@@ -310,9 +310,8 @@ def read_gltf(path, info: dict | None = None):
 
     from .model import (
         clean_weights,
-        drop_unweighted_roots,
+        finish_joint_rig,
         normalize_rows,
-        unweighted_bones,
     )
 
     info = {} if info is None else info
@@ -343,14 +342,8 @@ def read_gltf(path, info: dict | None = None):
     W = joint_weights_to_bones(V, rows, jidx, vals, targets, heads, tails, names)
     M = sp.csr_matrix((np.ones(len(V)), (o2n, np.arange(len(V)))), shape=(len(Vw), len(V)))
     W = normalize_rows(M @ W)
-    heads, tails, parents, bnames, W, dropped = drop_unweighted_roots(heads, tails, parents,
-                                                                      bnames, W)
-    if dropped:
-        info["notes"].append(f"root bones without weight left out: {', '.join(dropped)}")
-    bare = unweighted_bones(W, bnames)
-    if bare:
-        info["warnings"].append(f"{path}: {len(bare)} bone(s) without any weight (nothing of "
-                                f"the mesh follows them): {', '.join(bare[:10])}")
+    heads, tails, parents, bnames, W = finish_joint_rig(heads, tails, parents, bnames, W, info,
+                                                        str(path))
     return Vw, Fw, heads, tails, parents, bnames, W
 
 

@@ -168,6 +168,15 @@ def unweighted_bones(weights, names) -> list[str]:
     return [names[b] for b in np.flatnonzero(col == 0)]
 
 
+def bare_bones_warning(bare: list[str], source: str) -> list[str]:
+    """The warning that names bones without any weight (``[]`` when there are none)."""
+    if not bare:
+        return []
+    text = (f"{source}: {len(bare)} bone(s) without any weight (nothing of the mesh follows "
+            f"them): {', '.join(bare[:10])}")
+    return [text]
+
+
 def clean_weights(rows, values, n_vertices: int, source: str):
     """Findings and warnings for triplet weights; raises ValueError when no usable weight is
     left (every entry NaN, negative or 0), where nothing sensible can be done."""
@@ -210,10 +219,7 @@ def dense_weights(w: np.ndarray, source: str, names):
     np.cumsum(np.bincount(rows, minlength=V), out=indptr[1:])
     out = sp.csr_matrix((data, cols, indptr), shape=w.shape)
     colsum = np.bincount(cols, data, minlength=w.shape[1])
-    bare = [names[b] for b in np.flatnonzero(colsum == 0)]
-    if bare:
-        warns.append(f"{source}: {len(bare)} bone(s) without any weight (nothing of the mesh "
-                     f"follows them): {', '.join(bare[:10])}")
+    warns += bare_bones_warning([names[b] for b in np.flatnonzero(colsum == 0)], source)
     return out, found, warns
 
 
@@ -421,6 +427,18 @@ def joint_weights_to_bones(
     w = sp.coo_matrix((values, (rows, out_bone)), shape=(V, B)).tocsr()
     w.sum_duplicates()
     return normalize_rows(w)
+
+
+def finish_joint_rig(heads, tails, parents, names, weights, info: dict, source: str):
+    """The last step of a joint-rig reader (glTF, RigNet): root bones without weight left out
+    (a note in ``info``), the bones still without weight named in a warning. Returns
+    ``heads, tails, parents, names, weights``."""
+    heads, tails, parents, names, weights, dropped = drop_unweighted_roots(
+        heads, tails, parents, names, weights)
+    if dropped:
+        info["notes"].append(f"root bones without weight left out: {', '.join(dropped)}")
+    info["warnings"].extend(bare_bones_warning(unweighted_bones(weights, names), source))
+    return heads, tails, parents, names, weights
 
 
 def drop_unweighted_roots(heads, tails, parents, names, weights):

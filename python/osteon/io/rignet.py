@@ -22,9 +22,8 @@ from .model import (
     bones_from_joint_tree,
     check_tree,
     clean_weights,
-    drop_unweighted_roots,
+    finish_joint_rig,
     joint_weights_to_bones,
-    unweighted_bones,
 )
 
 _DUP = re.compile(r"_dup_\d+$")
@@ -180,12 +179,4 @@ def rignet_skeleton(rig, vertices, info: dict | None = None, source: str = "RigN
     w = joint_weights_to_bones(
         vertices, r, rig["skin_joints"], rig["skin_values"], targets, heads, tails, names
     )
-    heads, tails, parents, bnames, w, dropped = drop_unweighted_roots(heads, tails, parents,
-                                                                      bnames, w)
-    if dropped:
-        info["notes"].append(f"root bones without weight left out: {', '.join(dropped)}")
-    bare = unweighted_bones(w, bnames)
-    if bare:
-        info["warnings"].append(f"{source}: {len(bare)} bone(s) without any weight (nothing of "
-                                f"the mesh follows them): {', '.join(bare[:10])}")
-    return heads, tails, parents, bnames, w
+    return finish_joint_rig(heads, tails, parents, bnames, w, info, source)
