@@ -113,7 +113,8 @@ class Settings:
         d["junctions"] = _switch(self.junctions, "junctions")
         d["print_profile"] = str(self.print_profile).strip().lower()
         d["notch_sensitivity"] = notch_sensitivity(self)
-        d["min_notch_radius_mm"] = min_notch_radius_mm(self)
+        # the radius the engine is given (an FDM profile's half line width; engine_arguments)
+        d["min_notch_radius_mm"] = min_notch_radius_mm(self, self.profile())
         return d
 
 

@@ -233,3 +233,5 @@ def test_the_corner_model_stops_with_its_reason(data_dir):
         assert "cannot be fixed by scaling" in fix.reason
         named = {fix.after.bone_names[fix.after.section_bone[s]] for s in fix.unfixed_sections}
         assert named and all(f"bone '{b}'" in fix.reason for b in named)
+        # every section left weak is one the reason lists, and it is a corner or a joint one
+        assert set(np.flatnonzero(fix.after.weak)) <= set(fix.unfixed_sections)

@@ -227,3 +227,12 @@ def test_terminal_and_correction_follow_the_profile(rod_files, tmp_path, capsys)
         assert rep["converged"] and rep["max_stress_before_mpa"] > rep["allowable_stress_mpa"]
         scales[name] = rep["bone_scale"][0]
     assert scales["printed"] > scales["solid"] > 1.0
+
+
+def test_the_report_states_the_corner_radius_the_engine_was_given():
+    """An FDM profile sets the smallest corner to half its line width (docs/notch.md): the
+    report's settings say the radius engine_arguments passed, not the material's."""
+    s = Settings(force_n=20, interval_mm=2, print_profile="prusaslicer")
+    given = engine_arguments(s, [])["min_notch_radius"]
+    assert given == pytest.approx(0.5 * profiles.get_profile("prusaslicer").line_width)
+    assert s.as_dict()["min_notch_radius_mm"] == pytest.approx(given)
