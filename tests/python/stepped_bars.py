@@ -10,7 +10,7 @@ import numpy as np
 D_SMALL = 6.0  # d, mm
 FORCE = 1.0  # N
 #: quadratic tets with straight edges (midside nodes not moved onto the curved surface): the
-#: retry when CalculiX stops on a nonpositive jacobian (scripts/study_notch.py --straight-midside)
+#: retry when CalculiX stops on a nonpositive jacobian (scripts/study_notch.py does it itself)
 STRAIGHT_MIDSIDE = False
 
 
