@@ -139,14 +139,18 @@ struct Corner {
 // Smallest moment arm / equivalent radius of a thin side the fit is applied to.
 constexpr double kMinSlenderness = 2.0;
 
+// A sharp edge's ring spreads axially by less than this fraction of the local mesh edge length
+// (docs/notch.md: a resolved fillet spreads by at least 0.13 of it).
+constexpr double kSharpEdge = 0.05;
+
 // Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
 constexpr double kMinTurn = 45.0 * kPi / 180.0;
 
 // Fillet points grouped in angular sectors around the axis: axial position a and the normal's
-// axial component n_a of each point (mm, unit).
+// axial component n_a of each point (mm, unit), and the mean length of its mesh edges (mm).
 constexpr int kSectors = 8;
 struct SectorPoints {
-  std::array<std::vector<double>, kSectors> a, na;
+  std::array<std::vector<double>, kSectors> a, na, edge;
   std::array<double, kSectors> turn{};  // the largest normal turn from radial, radians
 };
 
@@ -154,9 +158,9 @@ struct SectorPoints {
 // normal to the axis is a circle whose points satisfy a = c_a - rho n_a (the outward normal
 // points to the circle's centre), whatever the section's shape: rho = -cov(a, n_a) / var(n_a).
 // Returns false when the sector says nothing (under two points, a straight taper, a convex
-// turn).
-bool sector_radius(const std::vector<double>& a, const std::vector<double>& na, double scale,
-                   double& rho, double& axial) {
+// turn). `edge`: the points' mesh edge lengths (mm), what the mesh can resolve there.
+bool sector_radius(const std::vector<double>& a, const std::vector<double>& na,
+                   const std::vector<double>& edge, double scale, double& rho, double& axial) {
   const std::size_t n = a.size();
   // One point tells neither a ring (a sharp edge) nor a curve (a fillet): a lone point's zero
   // spread would read as a sharp edge, the worst Kt, from noise (a symmetric rig's two thighs
@@ -171,7 +175,12 @@ bool sector_radius(const std::vector<double>& a, const std::vector<double>& na, 
     san += (a[i] - ma) * (na[i] - mn);
   }
   const double sd_a = std::sqrt(saa / n), sd_n = std::sqrt(snn / n);
-  if (sd_a < 0.02 * scale) {  // every fillet point on one ring: a sharp edge
+  // Every fillet point on one ring: a sharp edge. The ring may wander by 0.02 r (a crease on a
+  // shoulder that is not quite flat), but never by kSharpEdge of the mesh's own edge length:
+  // a fillet the mesh resolves (two candidate rings or more) spreads by at least 0.13 of it
+  // (docs/notch.md), however narrow the fillet is.
+  const double h = std::accumulate(edge.begin(), edge.end(), 0.0) / n;
+  if (sd_a < std::min(0.02 * scale, kSharpEdge * h)) {
     rho = 0.0;
     axial = ma;
     return true;
@@ -229,7 +238,8 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
   // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
   // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
   // shoulder has the same normal turn and is left out by this).
-  std::vector<double> bend(local.vertices.size(), 0.0);
+  std::vector<double> bend(local.vertices.size(), 0.0), edge(local.vertices.size(), 0.0);
+  std::vector<int> edges(local.vertices.size(), 0);
   for (std::size_t f = 0; f < local.faces.size(); f += 3) {
     int slots[3];
     for (int j = 0; j < 3; ++j) slots[j] = local.at(local.faces[f + j]);
@@ -239,16 +249,20 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
       for (int k = 1; k < 3; ++k) {
         const Meridian& q = merid[slots[(j + k) % 3]];
         bend[slots[j]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
+        edge[slots[j]] +=
+            (mesh.vertex(local.faces[f + (j + k) % 3]) - mesh.vertex(local.faces[f + j])).norm();
+        ++edges[slots[j]];
       }
     }
   }
   local.release();
   std::vector<Index> candidates;
-  std::vector<double> bends;
+  std::vector<double> bends, edge_means;
   for (std::size_t k = 0; k < local.vertices.size(); ++k)
     if (candidate[k]) {
       candidates.push_back(static_cast<Index>(k));
       bends.push_back(bend[k]);
+      edge_means.push_back(edges[k] > 0 ? edge[k] / edges[k] : 0.0);
     }
   SectorPoints pts;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
@@ -259,13 +273,14 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
     const int sector =
         std::min(kSectors - 1, static_cast<int>((angle + kPi) / (2 * kPi) * kSectors));
     pts.a[sector].push_back(m.a);
+    pts.edge[sector].push_back(edge_means[c]);
     pts.na[sector].push_back(m.na / std::hypot(m.na, m.nr));
     pts.turn[sector] = std::max(pts.turn[sector], std::atan2(-m.na, m.nr));
   }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
     double rho = 0, axial = 0;
-    if (!sector_radius(pts.a[s], pts.na[s], r_thin, rho, axial)) continue;
+    if (!sector_radius(pts.a[s], pts.na[s], pts.edge[s], r_thin, rho, axial)) continue;
     // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
     // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
     // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:
