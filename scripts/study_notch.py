@@ -143,13 +143,15 @@ def run_fem(args):
     rnd = cache["rounds"].setdefault(args.round, {"shapes": {}})
     if args.round == "1":
         sys.exit("round 1's FEM is stored as its run printed it (docs/notch.md); not re-run")
-    rnd["settings"] = settings()
+    rnd.setdefault("settings", settings())  # the first run's; each shape names its own commit
     shapes = ROUNDS[args.round] if args.only is None else [ROUNDS[args.round][args.only]]
     for step, rel_r in shapes:
         if key(step, rel_r) in rnd["shapes"] and not args.again:
             continue
         with tempfile.TemporaryDirectory(prefix="osteon_notch_") as work:
             row = fem_shape(step, rel_r, work)
+        now = settings()
+        row["commit"], row["stepped_bars_sha1"] = now["commit"], now["stepped_bars_sha1"]
         rnd["shapes"][key(step, rel_r)] = row
         save_cache(cache)  # after each shape: a stopped run keeps what it finished
         # Only the cost is printed: the values are read when osteon is evaluated.
