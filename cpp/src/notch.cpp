@@ -140,19 +140,28 @@ struct Corner {
 constexpr double kMinSlenderness = 2.0;
 
 // A sharp edge's ring spreads axially by less than this fraction of the local mesh edge length
-// (docs/notch.md: a resolved fillet spreads by at least 0.13 of it).
-constexpr double kSharpEdge = 0.05;
+// (the median in the meridian at the fillet points; docs/notch.md: a fillet the mesh resolves
+// spreads by at least 0.13 of it).
+constexpr double kSharpEdge = 0.1;
 
 // Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
 constexpr double kMinTurn = 45.0 * kPi / 180.0;
 
 // Fillet points grouped in angular sectors around the axis: axial position a and the normal's
-// axial component n_a of each point (mm, unit), and the mean length of its mesh edges (mm).
+// axial component n_a of each point (mm, unit), and the lengths of their mesh edges in the
+// meridian plane (mm).
 constexpr int kSectors = 8;
 struct SectorPoints {
   std::array<std::vector<double>, kSectors> a, na, edge;
   std::array<double, kSectors> turn{};  // the largest normal turn from radial, radians
 };
+
+// A sector's verdict "sharp edge" at axial position `at` (always true).
+bool sharp_edge(double& rho, double& axial, double at) {
+  rho = 0.0;
+  axial = at;
+  return true;
+}
 
 // The fillet radius of one sector: a fillet of radius rho tangent to a thin part and a shoulder
 // normal to the axis is a circle whose points satisfy a = c_a - rho n_a (the outward normal
@@ -175,20 +184,24 @@ bool sector_radius(const std::vector<double>& a, const std::vector<double>& na,
     san += (a[i] - ma) * (na[i] - mn);
   }
   const double sd_a = std::sqrt(saa / n), sd_n = std::sqrt(snn / n);
-  // Every fillet point on one ring: a sharp edge. The ring may wander by 0.02 r (a crease on a
-  // shoulder that is not quite flat), but never by kSharpEdge of the mesh's own edge length:
-  // a fillet the mesh resolves (two candidate rings or more) spreads by at least 0.13 of it
-  // (docs/notch.md), however narrow the fillet is.
-  const double h = std::accumulate(edge.begin(), edge.end(), 0.0) / n;
-  if (sd_a < std::min(0.02 * scale, kSharpEdge * h)) {
-    rho = 0.0;
-    axial = ma;
-    return true;
-  }
-  if (sd_n < 0.05) return false;  // one normal direction along a length: a straight taper
+  // Every fillet point on one ring: a sharp edge. A ring may wander axially (a crease on a
+  // shoulder that is not quite flat), so up to 0.02 r it is a ring; but a fillet the mesh
+  // resolves (two candidate rings or more) spreads by at least 0.13 of the mesh's own edge
+  // length h there, however narrow it is (docs/notch.md): points spread by kSharpEdge h or more
+  // are measured as a fillet first, and read as a ring only when they make no fillet.
+  // h: the median edge length (the long edges of a flat face next to a fillet do not count).
+  std::vector<double> lengths = edge;
+  auto mid = lengths.begin() + lengths.size() / 2;
+  std::nth_element(lengths.begin(), mid, lengths.end());
+  const double h = lengths.empty() ? 0.0 : *mid;
+  const bool ring = sd_a < 0.02 * scale;
+  if (ring && sd_a < kSharpEdge * h) return sharp_edge(rho, axial, ma);
+  // One normal direction along a length: a straight taper (or a wandering ring).
+  if (sd_n < 0.05) return ring && sharp_edge(rho, axial, ma);
   rho = -san / snn;
-  if (!(rho > 0)) return false;  // the surface turns the other way: no inside corner
-  axial = ma + rho * mn;         // the circle's centre: where the fillet leaves the thin side
+  // The surface turns the other way: no inside corner (or a ring).
+  if (!(rho > 0)) return ring && sharp_edge(rho, axial, ma);
+  axial = ma + rho * mn;  // the circle's centre: where the fillet leaves the thin side
   return true;
 }
 
@@ -238,8 +251,10 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
   // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
   // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
   // shoulder has the same normal turn and is left out by this).
-  std::vector<double> bend(local.vertices.size(), 0.0), edge(local.vertices.size(), 0.0);
-  std::vector<int> edges(local.vertices.size(), 0);
+  std::vector<double> bend(local.vertices.size(), 0.0);
+  // The candidates' edges in the meridian plane (the plane a fillet curves in): their lengths
+  // there are what the mesh resolves of a fillet (a ring's own edges count ~0).
+  std::vector<std::vector<double>> edges(local.vertices.size());
   for (std::size_t f = 0; f < local.faces.size(); f += 3) {
     int slots[3];
     for (int j = 0; j < 3; ++j) slots[j] = local.at(local.faces[f + j]);
@@ -249,20 +264,17 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
       for (int k = 1; k < 3; ++k) {
         const Meridian& q = merid[slots[(j + k) % 3]];
         bend[slots[j]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
-        edge[slots[j]] +=
-            (mesh.vertex(local.faces[f + (j + k) % 3]) - mesh.vertex(local.faces[f + j])).norm();
-        ++edges[slots[j]];
+        edges[slots[j]].push_back(std::hypot(q.a - p.a, q.t - p.t));
       }
     }
   }
   local.release();
   std::vector<Index> candidates;
-  std::vector<double> bends, edge_means;
+  std::vector<double> bends;
   for (std::size_t k = 0; k < local.vertices.size(); ++k)
     if (candidate[k]) {
       candidates.push_back(static_cast<Index>(k));
       bends.push_back(bend[k]);
-      edge_means.push_back(edges[k] > 0 ? edge[k] / edges[k] : 0.0);
     }
   SectorPoints pts;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
@@ -273,7 +285,8 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
     const int sector =
         std::min(kSectors - 1, static_cast<int>((angle + kPi) / (2 * kPi) * kSectors));
     pts.a[sector].push_back(m.a);
-    pts.edge[sector].push_back(edge_means[c]);
+    const std::vector<double>& lengths = edges[candidates[c]];
+    pts.edge[sector].insert(pts.edge[sector].end(), lengths.begin(), lengths.end());
     pts.na[sector].push_back(m.na / std::hypot(m.na, m.nr));
     pts.turn[sector] = std::max(pts.turn[sector], std::atan2(-m.na, m.nr));
   }
