@@ -194,7 +194,7 @@ def evaluate(args):
         failed += not ok
         straight = " straight" if fem.get("straight_midside") else ""
         print(f"| {step:g} | {rel_r:g} | {kt_fit:.3f} | {r_meas / D_SMALL:.3f} | {kt_used:.3f} | "
-              f"{coarse:.3f} ({fem.get('nodes_r4', '?')}) | {fine:.3f} ({fem.get('nodes_r6', '?')}"
+              f"{coarse:.3f} ({fem.get('nodes_r4', '—')}) | {fine:.3f} ({fem.get('nodes_r6', '—')}"
               f"{straight}) | {100 * (fine - coarse) / coarse:+.1f} % | {fit:.3f} "
               f"({100 * (fit - ref) / ref:+.1f} %) | {ost:.3f} | {100 * err:+.1f} % | "
               f"{'yes' if ok else '**no**'} |", flush=True)
