@@ -10,8 +10,9 @@ The cache is ``scripts/study_notch_fem.json`` (a small JSON table: per shape the
 r/4 and r/6 on the fillet, node counts, seconds, whether the straight-edged retry was needed;
 with the settings below, the gmsh and CalculiX versions and the commit the FEM ran on).
 
-Round 2 (PRE-REGISTERED 2026-11-27: this list and the acceptance below were committed before
-any osteon run on these shapes; none of them was used before, to write or tune any rule).
+Round 2 (PRE-REGISTERED 2026-11-27 in 0f7b7d5: this list and the acceptance below were committed
+before any osteon run on these shapes; none of them was used before, to write or tune any rule;
+results and what was disclosed after: docs/notch.md, "Round 2").
 Stepped round bars, small diameter d = 6 mm, big diameter D, shoulder fillet radius r; the
 issue's range D/d 1.2 .. 3, r/d 0.02 .. 0.3, buildable only where r < (D - d)/2 (OCC cannot
 make a fillet larger than the step), so r/d < (D/d - 1)/2:
@@ -36,8 +37,9 @@ coarser away; CalculiX linear elastic (E = 3500 MPa, nu = 0.35). Peak = the larg
 principal stress over the nodes of the fillet (z in [-0.1 r, 1.1 r], radius < d/2 + 1.1 r).
 Convergence: each shape solved again with elements r/6 on the fillet; the change is reported
 and the r/6 value is the reference. A shape whose curved quadratic mesh CalculiX rejects
-(nonpositive jacobian) is solved with straight-edged quadratic tets, at both sizes, and the
-cache says so (round 1 needed it for (1.5, 0.02)).
+(registered for a nonpositive jacobian; the code retries on any CalculiX failure and keeps its
+message) is solved with straight-edged quadratic tets, at both sizes, and the cache says so
+(round 1 needed it for (1.5, 0.02)).
 
 osteon: the surface mesh of the same geometry (gmsh 2-D mesh, element size r/2 on the fillet,
 d/8 elsewhere), one bone from z = -1.5 D (held, its head) to the thin tip, F = 1 N, interval
