@@ -120,6 +120,25 @@ def test_a_narrow_fillet_the_mesh_resolves_is_a_fillet_and_a_ring_is_a_sharp_edg
     assert a.notch_radius[i] == 0.01
 
 
+def test_a_sharp_edge_that_wanders_along_the_axis_is_still_a_sharp_edge():
+    # A sharp step whose edge ring waves +-0.05 mm along the axis (8 waves around; a shoulder
+    # that is not quite flat), meshed finely along the meridian near it (rings 0.25 mm apart):
+    # its points spread axially by 0.035 mm, over 0.1 of the edge length, like a narrow fillet's,
+    # but not radially (all at t = 3 mm): one ring, a sharp edge (docs/notch.md).
+    xs, ts = list(np.arange(-15.0, 0.0, 1.0)), [6.0] * 15
+    face = np.arange(6.0, 3.0 - 1e-9, -0.25)  # the shoulder face down to the edge at t = 3
+    near = np.arange(0.25, 2.0, 0.25)
+    tail = np.arange(2.0, 30.0 + 1e-9, 0.5)
+    xs += [0.0] * len(face) + list(near) + list(tail)
+    ts += list(face) + [3.0] * (len(near) + len(tail))
+    v, f = revolve(xs, ts, 96)
+    edge = 15 + len(face) - 1  # the profile index of the edge ring
+    v[96 * edge:96 * (edge + 1), 0] += 0.05 * np.sin(8 * np.linspace(0, 2 * np.pi, 96, endpoint=False))
+    a = analyse(v, f, min_notch_radius=0.01)
+    (i,) = np.flatnonzero(a.notch)
+    assert a.notch_radius[i] == 0.01  # radius 0, clamped
+
+
 def test_a_sharp_corner_is_taken_at_the_print_resolution():
     v, f = stepped_bar(0.0)
     a = analyse(v, f)
