@@ -4,7 +4,14 @@
 // dozen calls per run (live mode: per update), and every new thread allocated its thread_local
 // scratch (the family cuts' heights and buckets, the loop assembly's tables) anew. The pool's
 // threads wait on a condition variable between calls and keep their scratch.
+#ifdef _WIN32
+#include <process.h>
+#define OSTEON_GETPID _getpid
+using pid_t = int;
+#else
 #include <unistd.h>
+#define OSTEON_GETPID getpid
+#endif
 
 #include <condition_variable>
 #include <cstdint>
@@ -58,7 +65,7 @@ class WorkerPool {
     }
   }
 
-  const pid_t pid_ = getpid();
+  const pid_t pid_ = OSTEON_GETPID();
   std::mutex busy_;   // held by the call using the pool
   std::mutex mutex_;  // guards the members below
   std::condition_variable wake_, done_;
@@ -79,7 +86,7 @@ bool pool_run(int workers, const std::function<void(int)>& body) {
     std::lock_guard<std::mutex> lock(guard);
     // A forked child has none of its parent's threads: it starts a pool of its own (the
     // parent's object is left as it is, never freed; so are the pool's threads at exit).
-    if (pool == nullptr || pool->pid() != getpid()) pool = new WorkerPool();
+    if (pool == nullptr || pool->pid() != OSTEON_GETPID()) pool = new WorkerPool();
     current = pool;
   }
   return current->run(workers, body);
