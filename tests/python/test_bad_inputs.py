@@ -138,6 +138,33 @@ def test_absurd_force_is_an_error_not_inf(tmp_path, capsys):
                      capsys.readouterr().err)
 
 
+def test_json_bone_rows_leave_too_thin_sections_out():
+    """A bar 0.5 mm thick over its first 20 mm (under the 0.8 mm printable minimum), 10 mm
+    after. The engine leaves the thin sections out of the max stress; the JSON bone rows (one
+    builder for the CLI table, batch and add-on: osteon.report) must too, else the thin bone's
+    row shows a stress far above the headline's maximum (the rows used the raw stresses)."""
+    import osteon
+    from osteon.report import build_report
+    from shapes import revolve
+
+    xs = [0.0, 19.9, 20.1, 60.0]
+    v, f = revolve(xs, [0.25, 0.25, 5.0, 5.0])
+    sk = osteon.Skeleton([[0, 0, 0], [30, 0, 0]], [[30, 0, 0], [60, 0, 0]], [-1, 0])
+    a = osteon.analyze(v, f, sk, None, force=20.0, min_thickness=0.8)
+    thin = (a.section_flags & osteon.SECTION_FLAGS["too_thin"]) != 0
+    assert thin.any() and (~thin).any()
+    assert np.nanmax(np.where(thin, a.stress, np.nan)) > 10 * a.max_stress  # what rows showed
+    rep = build_report(analysis=a, bone_names=["thin", "thick"], allowable_mpa=60.0,
+                       settings={"force_n": 20.0}, front_end="test", model="bar")
+    expected = np.where(thin, np.nan, a.stress)
+    for row in rep["bones"]:
+        on = a.section_bone == row["index"]
+        assert row["max_stress_mpa"] == pytest.approx(np.nanmax(expected[on]))
+        assert row["max_stress_mpa"] <= rep["max_stress_mpa"] * (1 + 1e-12)
+    assert rep["worst"]["stress_mpa"] == pytest.approx(rep["max_stress_mpa"])
+    assert len(rep["too_thin_sections"]) == int(thin.sum())  # listed apart
+
+
 def test_tiny_model_headline_agrees_with_rows(tmp_path, capsys):
     """0.12 mm tall: every section too thin. The engine leaves them out of the max stress
     ("0.00 MPa, 0 weak"); the rows said WEAK at 1e6 MPa. Now neither counts them."""
