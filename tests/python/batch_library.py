@@ -90,3 +90,26 @@ def hanging_task(path, settings, model_id=None):
         while True:  # one core at 100 %, as the glTF joint loop did
             pass
     return process_model(path, settings, model_id)
+
+
+def pid_task(path, settings, model_id=None):
+    """A stand-in task that reads nothing: its record names the worker process (``pid``);
+    a model named "crash…" ends its worker (os._exit), "segv…" crashes it with a segmentation
+    fault, "hang…" sleeps for ever (each that model's failure, the run goes on)."""
+    import ctypes
+    import os
+    import time
+
+    name = os.path.basename(path)
+    if name.startswith("crash"):
+        os._exit(3)
+    if name.startswith("segv"):
+        import faulthandler
+
+        faulthandler.disable()  # pytest's handler would print the crash's stack: expected here
+        ctypes.string_at(0)
+    if name.startswith("hang"):
+        while True:
+            time.sleep(1)
+    return {"model": path, "id": model_id, "status": "ok", "reason": None, "seconds": 0.0,
+            "pid": os.getpid(), "_files": {}}

@@ -167,6 +167,28 @@ def test_a_crashing_worker_fails_only_its_model(tmp_path):
     assert all(r["status"] == "ok" for k, r in recs.items() if k != "crash.obj")
 
 
+def test_workers_live_on_and_only_a_failed_model_costs_a_new_one(tmp_path):
+    """2 workers, 12 models: each worker takes model after model (2 processes for the good
+    ones, not one per model); a model that exits its worker, one that segfaults and one over
+    the time limit each fail with their reason and cost one fresh worker; every other model
+    is ok."""
+    from batch_library import pid_task
+    from osteon.batch.runner import _pool
+
+    names = [f"m{i}" for i in range(9)] + ["crash", "segv", "hang"]
+    for n in names:
+        (tmp_path / f"{n}.stl").write_bytes(b"")
+    s = batch.BatchSettings.from_any({**SETTINGS, "model_timeout_s": 2.0})
+    recs = _by_name(_pool(batch.discover([tmp_path]), s, 2, task=pid_task, timeout=2.0))
+    assert len(recs) == 12
+    assert "crashed" in recs["crash.stl"]["reason"] and "exit code 3" in recs["crash.stl"]["reason"]
+    assert "crashed" in recs["segv.stl"]["reason"] and "exit code -11" in recs["segv.stl"]["reason"]
+    assert "over the time limit of 2 s" in recs["hang.stl"]["reason"]
+    ok = [r for r in recs.values() if r["status"] == "ok"]
+    assert len(ok) == 9
+    assert len({r["pid"] for r in ok}) <= 2 + 3  # the first two workers and the replacements
+
+
 def test_bad_settings_raise_before_reading(library):
     lib, _ = library
     with pytest.raises(ValueError, match="unknown material"):

@@ -14,6 +14,7 @@ from .discover import ModelFile, discover
 from .outputs import (
     OutputWriter,
     check_resume_settings,
+    finish_record,
     read_results,
     save_settings,
     write_summaries,
@@ -75,9 +76,35 @@ def _alarm(timeout):
         signal.signal(signal.SIGALRM, old)
 
 
-def _pool_context():
+def _forkable() -> bool:
+    """True when a worker may be forked from this process (Linux, one Python thread).
+
+    Forking copies a process whose only running thread is the caller, so no lock can be left
+    held by another thread; the engine starts its threads inside a call and joins them before
+    returning, and OpenBLAS's idle threads are stopped and restarted around ``fork`` by its own
+    ``pthread_atfork`` handlers. A forked worker starts in milliseconds with everything this
+    process imported (a fresh interpreter importing osteon costs ~1 s of CPU, as much as
+    ~30 models). Any other Python thread (a progress bar's monitor, a Dask client, a caller's
+    threads): the fork server instead."""
+    import threading
+
+    return (sys.platform.startswith("linux") and threading.active_count() == 1
+            and "fork" in _mp().get_all_start_methods())
+
+
+def _mp():
     import multiprocessing as mp
 
+    return mp
+
+
+def _pool_context(fork: bool):
+    mp = _mp()
+    if fork:
+        for stream in (sys.stdout, sys.stderr):  # a child must not write our buffers again
+            with contextlib.suppress(Exception):
+                stream.flush()
+        return mp.get_context("fork")
     if sys.platform.startswith("linux"):
         # forkserver: workers are forked from a clean server that has imported osteon once
         # (no fork of a process whose engine threads are running, no re-import per worker)
@@ -87,21 +114,42 @@ def _pool_context():
     return mp.get_context("spawn")
 
 
+def _preload(s) -> None:
+    """Import in this process what every worker needs, before forking them, so that it is
+    imported once (matplotlib when pictures are drawn; the readers are imported already).
+    trimesh (glTF, unusual mesh layouts) stays lazy: a worker imports it if a model needs it."""
+    from . import task  # noqa: F401
+
+    if s.png:
+        with contextlib.suppress(ImportError):
+            from ..plots import _mpl
+
+            _mpl()
+
+
 def _watch_parent(parent_pid: int):
     """In a worker: end the worker's process group when the batch process is gone (killed),
     so that no worker keeps spinning on a model nobody waits for."""
     import threading
     import time
 
+    forked = os.getppid() == parent_pid  # forked by the batch process itself
+
+    def gone() -> bool:
+        if forked and os.getppid() != parent_pid:  # reparented: the batch process died
+            return True
+        try:
+            os.kill(parent_pid, 0)
+        except ProcessLookupError:
+            return True
+        except PermissionError:  # pid reused by another user's process: ours is gone
+            return True
+        return False
+
     def watch():
         while True:
             time.sleep(0.5)
-            try:
-                os.kill(parent_pid, 0)
-            except ProcessLookupError:
-                _kill_group(os.getpid())
-                os._exit(1)
-            except PermissionError:  # pid reused by another user's process: ours is gone
+            if gone():
                 _kill_group(os.getpid())
                 os._exit(1)
 
@@ -110,10 +158,13 @@ def _watch_parent(parent_pid: int):
 
 def _worker_loop(conn, task, parent_pid):
     """A pool worker: its own process group (so that stopping it stops whatever it started),
-    then tasks from ``conn`` until None or EOF."""
+    then models from ``conn`` one by one until None or EOF, each result sent back (with
+    ``finish``: as the output folder keeps it, its JSON report already serialised, so that the
+    batch process only writes bytes)."""
     with contextlib.suppress(OSError):
         os.setsid()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl+C is the batch process's to handle
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _watch_parent(parent_pid)
     while True:
         try:
@@ -122,9 +173,11 @@ def _worker_loop(conn, task, parent_pid):
             return
         if job is None:
             return
-        path, s, model_id = job
+        path, s, model_id, finish = job
         try:
             rec = task(path, s, model_id)
+            if finish:
+                rec = finish_record(rec)
         except Exception as e:  # noqa: BLE001 - process_model never raises; a test task may
             rec = {"model": path, "id": model_id, "status": "failed",
                    "reason": f"{type(e).__name__}: {e}", "seconds": 0.0, "_files": {}}
@@ -143,7 +196,8 @@ def _kill_group(pid: int):
 
 
 class _Worker:
-    """One worker process and the model it works on (``deadline``: when it is over time)."""
+    """One long-lived worker process (started once, then given models one by one through a
+    pipe) and the model it works on (``deadline``: when it is over time)."""
 
     def __init__(self, ctx, task):
         self.conn, child = ctx.Pipe()
@@ -154,12 +208,12 @@ class _Worker:
         self.model: ModelFile | None = None
         self.deadline: float | None = None
 
-    def give(self, m: ModelFile, s, timeout):
+    def give(self, m: ModelFile, s, timeout, finish: bool):
         import time
 
         self.model = m
         self.deadline = time.monotonic() + timeout if timeout else None
-        self.conn.send((m.path, s, m.id))
+        self.conn.send((m.path, s, m.id, finish))
 
     def stop(self):
         """Kill the worker and its process group; wait for it."""
@@ -179,23 +233,44 @@ class _Worker:
             self.conn.close()
 
 
-def _pool(models, s, workers: int, task=process_model, timeout=None):
-    """``workers`` worker processes, one model each at a time. A worker that dies (a crash in a
-    reader or the engine) fails only its model; a model over ``timeout`` seconds is that
-    model's failure: its worker's process group is killed and a fresh worker takes over. When
-    the run ends or is stopped, every worker is ended (no orphan process)."""
+def _pool(models, s, workers: int, task=process_model, timeout=None, finish=False):
+    """``workers`` long-lived worker processes, started now (before the caller starts any
+    thread: they are forked from this process when :func:`_forkable`), each given one model at
+    a time; returns the iterator of records. A worker that dies (a crash in a reader or the
+    engine) fails only its model; a model over ``timeout`` seconds is that model's failure: its
+    worker's process group is killed and a fresh worker takes over. When the run ends or is
+    stopped, every worker is ended (no orphan process). ``finish``: the workers return records
+    as :func:`osteon.batch.outputs.finish_record` makes them (for an output folder)."""
+    todo = list(models)[::-1]  # a stack: pop() takes the next model
+    if not todo:
+        return iter(())
+    fork = _forkable()
+    if fork:
+        _preload(s)
+    ctx = _pool_context(fork)
+    idle = [_Worker(ctx, task) for _ in range(min(workers, len(todo)))]
+
+    def fresh():
+        # a replacement: forked again while this process still has one thread (a progress
+        # bar's monitor thread may have started since), else from the fork server
+        nonlocal ctx, fork
+        if fork and not _forkable():
+            fork, ctx = False, _pool_context(False)
+        return _Worker(_pool_context(True) if fork else ctx, task)
+
+    return _pool_loop(todo, idle, fresh, s, timeout, finish)
+
+
+def _pool_loop(todo, idle, fresh, s, timeout, finish):
     import time
     from multiprocessing.connection import wait
 
-    ctx = _pool_context()
-    todo = list(models)[::-1]  # a stack: pop() takes the next model
-    idle = [_Worker(ctx, task) for _ in range(min(workers, len(todo)))]
     busy: dict = {}
     try:
         while todo or busy:
             while todo and idle:
                 w = idle.pop()
-                w.give(todo.pop(), s, timeout)
+                w.give(todo.pop(), s, timeout, finish)
                 busy[w.conn] = w
             deadlines = [w.deadline for w in busy.values() if w.deadline is not None]
             wait_s = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
@@ -208,7 +283,7 @@ def _pool(models, s, workers: int, task=process_model, timeout=None):
                     rec = _crash_record(w.model, "the worker process crashed on this model "
                                         f"(exit code {w.proc.exitcode})")
                     w.stop()
-                    w = _Worker(ctx, task) if todo else None
+                    w = fresh() if todo else None
                 if w is not None:
                     idle.append(w)
                 yield rec
@@ -218,7 +293,7 @@ def _pool(models, s, workers: int, task=process_model, timeout=None):
                     del busy[conn]
                     w.stop()
                     if todo:
-                        idle.append(_Worker(ctx, task))
+                        idle.append(fresh())
                     yield _crash_record(w.model, _over_time(timeout))
     finally:
         for w in list(busy.values()):
@@ -227,7 +302,12 @@ def _pool(models, s, workers: int, task=process_model, timeout=None):
             w.close()
 
 
-def _dask(models, s, client):
+def _finished_task(path, s, model_id):
+    """:func:`process_model`, its record as the output folder keeps it (on a Dask worker)."""
+    return finish_record(process_model(path, s, model_id))
+
+
+def _dask(models, s, client, finish=False):
     """Same tasks on a Dask ``distributed`` client, with a bounded window of tasks in flight."""
     try:
         from distributed import as_completed
@@ -239,7 +319,8 @@ def _dask(models, s, client):
     pending = {}
 
     def submit(m):
-        f = client.submit(process_model, m.path, s, m.id, pure=False,
+        f = client.submit(_finished_task if finish else process_model, m.path, s, m.id,
+                          pure=False,
                           key=f"osteon-batch-{m.id}-{uuid.uuid4().hex}")
         pending[f.key] = m
         return f
@@ -311,18 +392,21 @@ def run(
             check_resume_settings(out, s)
             skip = {r["model"] for r in read_results(out)}
     todo = [m for m in models if m.path not in skip]
-    writer = OutputWriter(out, resume=resume) if out is not None else None
-    if writer is not None:
-        save_settings(out, s)
+    finish = out is not None  # records as the output folder keeps them, made by the workers
     if client is not None:
-        it = _dask(todo, s, client)
+        it = _dask(todo, s, client, finish)
     else:
         n = workers if workers is not None else (os.cpu_count() or 1)
         if n < 1:
             raise ValueError(f"workers must be >= 1, got {n}")
         n = min(n, max(len(todo), 1))
         timeout = s.model_timeout_s or None
-        it = _serial(todo, s, timeout) if n == 1 else _pool(todo, s, n, timeout=timeout)
+        # the pool starts here, before the output file and the progress bar (a thread) exist
+        it = (_serial(todo, s, timeout) if n == 1
+              else _pool(todo, s, n, timeout=timeout, finish=finish))
+    writer = OutputWriter(out, resume=resume) if out is not None else None
+    if writer is not None:
+        save_settings(out, s)
     bar = _bar(len(todo), len(skip & {m.path for m in models})) if progress else None
     failures = 0
     try:
