@@ -189,6 +189,19 @@ def test_workers_live_on_and_only_a_failed_model_costs_a_new_one(tmp_path):
     assert len({r["pid"] for r in ok}) <= 2 + 3  # the first two workers and the replacements
 
 
+def test_mesh_boundary_counts_edges():
+    """A closed bar has no boundary and no non-manifold edge; one face taken away leaves its
+    3 edges on the boundary; a face doubled makes its 3 edges shared by 3 faces."""
+    from batch_library import bar
+    from osteon.batch import mesh_boundary
+
+    V, F = bar()
+    assert mesh_boundary(F, len(V)) == (0, 0)
+    assert mesh_boundary(F[1:], len(V)) == (3, 0)
+    assert mesh_boundary(np.vstack([F, F[:1]]), len(V)) == (0, 3)
+    assert mesh_boundary(np.zeros((0, 3), np.int32), 0) == (0, 0)
+
+
 def test_bad_settings_raise_before_reading(library):
     lib, _ = library
     with pytest.raises(ValueError, match="unknown material"):
