@@ -113,3 +113,24 @@ def pid_task(path, settings, model_id=None):
             time.sleep(1)
     return {"model": path, "id": model_id, "status": "ok", "reason": None, "seconds": 0.0,
             "pid": os.getpid(), "_files": {}}
+
+
+def unstoppable_task(path, settings, model_id=None):
+    """Spins with SIGALRM blocked: like a run in the engine's C++, which no signal handler can
+    interrupt (an in-process alarm never fires); only stopping its process ends it."""
+    import signal
+
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})
+    while True:
+        pass
+
+
+def hang_or_real_task(path, settings, model_id=None):
+    """:func:`unstoppable_task` for a model named "hang…", the real batch task otherwise."""
+    import os
+
+    from osteon.batch import process_model
+
+    if os.path.basename(path).startswith("hang"):
+        return unstoppable_task(path, settings, model_id)
+    return process_model(path, settings, model_id)

@@ -75,7 +75,8 @@ def test_unrigged_mesh_uses_auto_skeleton_when_there_is_one(library, monkeypatch
         return sk, None
 
     monkeypatch.setattr(osteon, "auto_skeleton", fake_auto_skeleton, raising=False)
-    (r,) = batch.run_all([lib / "unrigged.stl"], SETTINGS, workers=1)
+    # in this process (no time limit: -j 1 with a limit runs in a worker process)
+    (r,) = batch.run_all([lib / "unrigged.stl"], {**SETTINGS, "model_timeout_s": 0}, workers=1)
     assert r["status"] == "ok", r["reason"]
     assert "auto skeleton" in r["flags"]
     assert calls and r["bone_count"] == 2

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import sys
 import uuid
 from collections.abc import Iterator
@@ -21,6 +20,7 @@ from .outputs import (
 )
 from .settings import BatchSettings
 from .task import process_model
+from .worker import _crash_record, _kill_group, _over_time, _worker_loop
 
 DASK_MISSING = (
     "the Dask path needs the 'distributed' package (a dependency of osteon): "
@@ -28,52 +28,11 @@ DASK_MISSING = (
 )
 
 
-def _crash_record(m: ModelFile, why: str) -> dict:
-    return {"model": m.path, "id": m.id, "status": "failed", "reason": why, "seconds": 0.0,
-            "_files": {}}
-
-
-def _serial(models, s, timeout=None):
-    """In this process. A model over ``timeout`` seconds is stopped by SIGALRM (main thread,
-    POSIX) at its next Python instruction; the engine's C++ runs finish first."""
+def _serial(models, s):
+    """In this process, one model after the other (no time limit: a limit needs a process it
+    can stop, see :func:`run`)."""
     for m in models:
-        with _alarm(timeout):
-            try:
-                rec = process_model(m.path, s, m.id)
-            except _OverTime:
-                rec = _crash_record(m, _over_time(timeout))
-        yield rec
-
-
-class _OverTime(BaseException):  # BaseException: process_model's `except Exception` lets it by
-    pass
-
-
-def _over_time(timeout) -> str:
-    return (f"stopped: over the time limit of {timeout:g} s per model (model_timeout_s, "
-            "--model-timeout)")
-
-
-@contextlib.contextmanager
-def _alarm(timeout):
-    import threading
-
-    usable = (timeout and hasattr(signal, "setitimer")
-              and threading.current_thread() is threading.main_thread())
-    if not usable:
-        yield
-        return
-
-    def ring(signum, frame):
-        raise _OverTime
-
-    old = signal.signal(signal.SIGALRM, ring)
-    signal.setitimer(signal.ITIMER_REAL, float(timeout))
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
+        yield process_model(m.path, s, m.id)
 
 
 def _forkable() -> bool:
@@ -125,74 +84,6 @@ def _preload(s) -> None:
             from ..plots import _mpl
 
             _mpl()
-
-
-def _watch_parent(parent_pid: int):
-    """In a worker: end the worker's process group when the batch process is gone (killed),
-    so that no worker keeps spinning on a model nobody waits for."""
-    import threading
-    import time
-
-    forked = os.getppid() == parent_pid  # forked by the batch process itself
-
-    def gone() -> bool:
-        if forked and os.getppid() != parent_pid:  # reparented: the batch process died
-            return True
-        try:
-            os.kill(parent_pid, 0)
-        except ProcessLookupError:
-            return True
-        except PermissionError:  # pid reused by another user's process: ours is gone
-            return True
-        return False
-
-    def watch():
-        while True:
-            time.sleep(0.5)
-            if gone():
-                _kill_group(os.getpid())
-                os._exit(1)
-
-    threading.Thread(target=watch, daemon=True).start()
-
-
-def _worker_loop(conn, task, parent_pid):
-    """A pool worker: its own process group (so that stopping it stops whatever it started),
-    then models from ``conn`` one by one until None or EOF, each result sent back (with
-    ``finish``: as the output folder keeps it, its JSON report already serialised, so that the
-    batch process only writes bytes)."""
-    with contextlib.suppress(OSError):
-        os.setsid()
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl+C is the batch process's to handle
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    _watch_parent(parent_pid)
-    while True:
-        try:
-            job = conn.recv()
-        except (EOFError, OSError):
-            return
-        if job is None:
-            return
-        path, s, model_id, finish = job
-        try:
-            rec = task(path, s, model_id)
-            if finish:
-                rec = finish_record(rec)
-        except Exception as e:  # noqa: BLE001 - process_model never raises; a test task may
-            rec = {"model": path, "id": model_id, "status": "failed",
-                   "reason": f"{type(e).__name__}: {e}", "seconds": 0.0, "_files": {}}
-        conn.send(rec)
-
-
-def _kill_group(pid: int):
-    """SIGKILL the process group led by ``pid`` (a worker after its setsid), then ``pid``."""
-    if os.name != "posix":
-        return
-    with contextlib.suppress(ProcessLookupError, PermissionError):
-        if os.getpgid(pid) == pid:
-            os.killpg(pid, signal.SIGKILL)
-    with contextlib.suppress(ProcessLookupError, PermissionError):
-        os.kill(pid, signal.SIGKILL)
 
 
 class _Worker:
@@ -302,12 +193,19 @@ def _pool_loop(todo, idle, fresh, s, timeout, finish):
             w.close()
 
 
-def _finished_task(path, s, model_id):
-    """:func:`process_model`, its record as the output folder keeps it (on a Dask worker)."""
-    return finish_record(process_model(path, s, model_id))
+def _dask_task(path, s, model_id, finish, timeout, task=None):
+    """The task of a Dask run: :func:`process_model` (or ``task``; with ``finish``: the record
+    as the output folder keeps it); with a time limit in a child process that can be stopped
+    (:mod:`osteon.batch.isolated`)."""
+    if timeout:
+        from .isolated import run_isolated
+
+        return run_isolated(path, s, model_id, timeout, finish, task)
+    rec = (task or process_model)(path, s, model_id)
+    return finish_record(rec) if finish else rec
 
 
-def _dask(models, s, client, finish=False):
+def _dask(models, s, client, finish=False, timeout=None, task=None):
     """Same tasks on a Dask ``distributed`` client, with a bounded window of tasks in flight."""
     try:
         from distributed import as_completed
@@ -319,8 +217,7 @@ def _dask(models, s, client, finish=False):
     pending = {}
 
     def submit(m):
-        f = client.submit(_finished_task if finish else process_model, m.path, s, m.id,
-                          pure=False,
+        f = client.submit(_dask_task, m.path, s, m.id, finish, timeout, task, pure=False,
                           key=f"osteon-batch-{m.id}-{uuid.uuid4().hex}")
         pending[f.key] = m
         return f
@@ -393,17 +290,19 @@ def run(
             skip = {r["model"] for r in read_results(out)}
     todo = [m for m in models if m.path not in skip]
     finish = out is not None  # records as the output folder keeps them, made by the workers
+    timeout = s.model_timeout_s or None
     if client is not None:
-        it = _dask(todo, s, client, finish)
+        it = _dask(todo, s, client, finish, timeout)
     else:
         n = workers if workers is not None else (os.cpu_count() or 1)
         if n < 1:
             raise ValueError(f"workers must be >= 1, got {n}")
         n = min(n, max(len(todo), 1))
-        timeout = s.model_timeout_s or None
-        # the pool starts here, before the output file and the progress bar (a thread) exist
-        it = (_serial(todo, s, timeout) if n == 1
-              else _pool(todo, s, n, timeout=timeout, finish=finish))
+        # the pool starts here, before the output file and the progress bar (a thread) exist;
+        # one model at a time with a time limit is a pool of one worker (only a process can be
+        # stopped in the engine's C++); without a limit it runs in this process
+        it = (_serial(todo, s) if n == 1 and timeout is None
+              else _pool(todo, s, n, task=process_model, timeout=timeout, finish=finish))
     writer = OutputWriter(out, resume=resume) if out is not None else None
     if writer is not None:
         save_settings(out, s)

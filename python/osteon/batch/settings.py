@@ -103,6 +103,7 @@ class BatchSettings:
         """The engine's keyword arguments for one model (``osteon.settings.engine_arguments``)."""
         kw = engine_arguments(self.settings, bone_names, correct=self.correct)
         kw["threads"] = int(self.engine_threads)
+        kw["max_sections"] = int(self.max_sections)  # the engine's own check, same limit
         return kw
 
     def check(self) -> None:

@@ -239,9 +239,13 @@ def engine_args(settings: Settings, model, correct: bool = False,
     Warns on stderr when they would make more than ``SECTION_LIMIT`` sections; refuses
     (ValueError with the estimate) above ``max_sections`` for the whole model (default
     :data:`osteon.settings.MAX_SECTIONS`)."""
+    from ..settings import MAX_SECTIONS
+
     positional = (model.vertices, model.faces, model.skeleton, model.weights)
     keyword = _arguments(settings, model.bone_names, correct)
     warn_many_sections(model, keyword["interval"], max_sections)
+    # the engine's own check of the budget (AnalysisOptions.max_sections) with the same limit
+    keyword["max_sections"] = MAX_SECTIONS if max_sections is None else int(max_sections)
     return positional, keyword
 
 
