@@ -266,7 +266,10 @@ def run(
 
     ``settings``: a :class:`BatchSettings` or a dict of its fields (mm, N, MPa).
     ``client``: a ``distributed.Client``; the tasks then run on its cluster. Otherwise
-    ``workers`` processes of a local pool (default: all cores; 1 = in this process).
+    ``workers`` long-lived processes of a local pool (default: all cores). The settings'
+    ``model_timeout_s`` holds for every runner: with ``workers=1`` the models run in one worker
+    process (in this process when the limit is 0), on Dask each in a child process of the Dask
+    worker (:mod:`osteon.batch.isolated`).
     ``out``: folder for the outputs (see :mod:`osteon.batch.outputs`); then ``resume=True``
     skips the models already in ``out/results.jsonl``, and ``summary.csv`` / ``summary.html``
     are written when the iterator is exhausted or closed. ``progress``: a tqdm bar on stderr.

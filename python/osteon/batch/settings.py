@@ -36,7 +36,8 @@ class BatchSettings:
     the settings' FDM print profile (:func:`osteon.reinforce`) and write ``ID.3mf`` for that
     slicer, the report's ``reinforcement`` listing the regions.
     ``model_timeout_s`` (seconds one model may take; over it the model fails with that reason
-    and its worker process is stopped; 0 = no limit); ``max_sections`` (a model whose section
+    and its worker process is killed with its process group, on every runner: the pool, one
+    worker process for ``workers=1``, a child of the Dask worker on Dask; 0 = no limit); ``max_sections`` (a model whose section
     estimate is above it fails before the analysis, the estimate and memory in its reason:
     :func:`osteon.settings.section_budget`).
     """
