@@ -261,12 +261,14 @@ def main(argv=None):
     runs: dict = {"1 process": [], f"pool, {args.jobs} processes": []}
     if args.write:
         runs.update({"1 process, --out": [], f"pool, {args.jobs} processes, --out": []})
+    # "1 process": in this process (no time limit; with one, -j 1 runs in one worker process)
+    one = {**settings, "model_timeout_s": 0}
     for k in range(args.repeat):  # alternating, so that all see the same machine load
-        runs["1 process"].append(timed_run(lib, settings, workers=1))
+        runs["1 process"].append(timed_run(lib, one, workers=1))
         runs[f"pool, {args.jobs} processes"].append(timed_run(lib, settings, workers=args.jobs))
         if args.write:  # the CLI's path: a JSON report per model, results.jsonl, summaries
             runs["1 process, --out"].append(
-                timed_run(lib, settings, workers=1, out=tmp / f"out1_{k}"))
+                timed_run(lib, one, workers=1, out=tmp / f"out1_{k}"))
             runs[f"pool, {args.jobs} processes, --out"].append(
                 timed_run(lib, settings, workers=args.jobs, out=tmp / f"outp_{k}"))
     for name, rr in runs.items():
@@ -340,7 +342,7 @@ def main(argv=None):
         sample = [Path(r["model"]) for r in ok[: args.png_sample]]
         out = tmp / "png_out"
         t = time.perf_counter()
-        pr = list(batch.run(sample, {**settings, "png": True}, workers=1, out=out))
+        pr = list(batch.run(sample, {**one, "png": True}, workers=1, out=out))
         wall = time.perf_counter() - t
         png = [r["png_seconds"] for r in pr if r["status"] == "ok"]
         print(f"with pictures (1 process, {len(pr)} models): {len(pr) / wall:.1f} models/s; "
