@@ -134,7 +134,7 @@ def _pool(models, s, workers: int, task=process_model, timeout=None, finish=Fals
     as :func:`osteon.batch.outputs.finish_record` makes them (for an output folder)."""
     todo = list(models)[::-1]  # a stack: pop() takes the next model
     if not todo:
-        return iter(())
+        return (rec for rec in ())  # a generator: the caller closes it
     fork = _forkable()
     if fork:
         _preload(s)
