@@ -6,6 +6,7 @@ import contextlib
 import os
 import sys
 import uuid
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -94,7 +95,12 @@ class _Worker:
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_worker_loop, args=(child, task, os.getpid()),
                                 daemon=True)
-        self.proc.start()
+        with warnings.catch_warnings():
+            # Python >= 3.12 warns on fork when the process has other OS threads: here only
+            # OpenBLAS's idle ones, which its pthread_atfork handlers take care of (_forkable)
+            warnings.filterwarnings("ignore", message=r".*use of fork\(\) may lead to deadlocks",
+                                    category=DeprecationWarning)
+            self.proc.start()
         child.close()
         self.model: ModelFile | None = None
         self.deadline: float | None = None
