@@ -162,6 +162,8 @@ def test_json_bone_rows_leave_too_thin_sections_out():
         assert row["max_stress_mpa"] == pytest.approx(np.nanmax(expected[on]))
         assert row["max_stress_mpa"] <= rep["max_stress_mpa"] * (1 + 1e-12)
     assert rep["worst"]["stress_mpa"] == pytest.approx(rep["max_stress_mpa"])
+    # the doubt of the maximum is the doubt of the section that gives it, not a thin one's
+    assert "too_thin" not in rep["max_stress_doubt"]
     assert len(rep["too_thin_sections"]) == int(thin.sum())  # listed apart
 
 
