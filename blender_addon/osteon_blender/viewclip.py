@@ -107,7 +107,8 @@ def fit(space, centre, distance: float, size: float) -> None:
     _held[key] = {"user": user, "set": _set(space, clip),
                   "centre": np.asarray(centre, dtype=np.float64).copy(),
                   "distance": float(distance), "size": float(size)}
-    if not bpy.app.timers.is_registered(_tick):
+    # (background Blender runs no timers: scripts and tests call check() themselves)
+    if not bpy.app.background and not bpy.app.timers.is_registered(_tick):
         bpy.app.timers.register(_tick, first_interval=CHECK_S)
 
 
