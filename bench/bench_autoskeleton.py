@@ -185,12 +185,16 @@ def big(repeat: int) -> None:
     prof.runcall(osteon.auto_skeleton, v, f)
     stats = pstats.Stats(prof).stats
     total = sum(tt for (_cc, _nc, tt, _ct, _callers) in stats.values())
-    stages = {"_check_mesh": "checks + weld", "from_triangles": "pygel3d mesh",
-              "__init__": "MeshDistance (+ other constructors)", "quadric_simplify": "simplify",
-              "LS_skeleton_and_map": "LS skeleton", "signed_distance": "distance queries",
-              "query": "k-d tree queries"}
-    print(f"stages (CPU s, one run, {total:.2f} s in all):", ", ".join(
-        f"{label} {sum(st[3] for key, st in stats.items() if key[2] == fn):.2f}"
+    # every named step of osteon.autoskeleton (cumulative CPU s), then pygel3d's share
+    stages = {"check_mesh": "mesh", "piece_labels": "pieces", "curve_skeleton": "curve",
+              "from_triangles": "  pygel3d mesh", "__init__": "  MeshDistance",
+              "quadric_simplify": "  simplify", "LS_skeleton_and_map": "  LS skeleton",
+              "make_body": "body (k-d tree)", "make_tree": "tree", "prune": "prune",
+              "recentre_junctions": "junctions", "make_bones": "bones (+ ends)",
+              "limb_end": "  ends", "skin_weights": "weights", "rig_pieces": "assemble",
+              "signed_distance": "(distance queries)"}
+    print(f"steps (CPU s, one run, {total:.2f} s in all):", ", ".join(
+        f"{label.strip()} {sum(st[3] for key, st in stats.items() if key[2] == fn):.2f}"
         for fn, label in stages.items()))
 
 

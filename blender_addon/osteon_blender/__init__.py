@@ -7,7 +7,7 @@ legacy add-on in Blender 3.4-4.1 (bl_info below).  Units: mm, N, MPa.
 
 import bpy
 
-from . import live, ops, overlay, prefs, state, ui
+from . import live, ops, overlay, prefs, state, ui, viewclip
 from .ui import live_panel
 
 bl_info = {
@@ -35,6 +35,7 @@ def register():
     bpy.types.Scene.osteon = bpy.props.PointerProperty(type=ui.properties.OsteonSettings)
     live.register(ui.live_properties.OsteonLiveSettings)  # scene.osteon_live, load_post handler (live mode, issue 7)
     overlay.register()
+    viewclip.register()  # load_pre handler: the clip ranges a row click moved (issue 35)
     if not bpy.app.binary_path and not _atexit_hooked:
         # bpy as a Python module (PyPI wheel) hangs at exit while classes are registered
         import atexit
@@ -49,6 +50,7 @@ def _unregister_at_exit():
 
 
 def unregister():
+    viewclip.unregister()  # the user's clip ranges back, timer and handler off
     overlay.unregister()  # draw handler off (live mode, issue 7)
     live.unregister()  # live handlers, timer, worker, scene.osteon_live
     if hasattr(bpy.types.Scene, "osteon"):

@@ -290,6 +290,8 @@ def run(argv: list[str]) -> int:
         r = service.run_make_skeleton(context)
         print(f"osteon: {obj.name}: skeleton made by osteon.auto_skeleton: {r['armature']}, "
               f"{r['bones']} bones in {r['seconds']:.1f} s")
+        for text in r["warnings"]:
+            print(f"osteon: warning: {text}")
     report = service.run_correct(context) if a.correct else service.run_analyze(context)
     report["run"].update(seconds=time.perf_counter() - t0,
                          blender_version=bpy.app.version_string, blend_file=bpy.data.filepath)

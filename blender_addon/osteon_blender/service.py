@@ -8,6 +8,7 @@ operator leaves the scene as it was."""
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -371,7 +372,9 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
     """Rig the active unrigged mesh: an Armature object from :func:`osteon.auto_skeleton`
     (computed in mm at the print size, built in Blender units), vertex groups with the engine's
     weights (or Blender's automatic weights) and an Armature modifier.  The mesh's vertices are
-    not changed.  Returns {"armature", "bones", "seconds", "weights"}."""
+    not changed.  Returns {"armature", "bones", "seconds", "weights", "warnings": the texts
+    of the wheel's :class:`osteon.autoskeleton.LoosePiecesWarning` (pieces touching nothing,
+    bound whole to their nearest bone), for a WARNING report}."""
     osteon = core.import_engine()
     obj = context.active_object
     if obj is None or obj.type != "MESH":
@@ -392,11 +395,19 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
     progress(0.1)
     t0 = time.perf_counter()
     try:
-        sk, w = osteon.auto_skeleton(verts * k, faces, root=root,
-                                     min_thickness=min_thickness_mm(
-                                         core.settings_of(s, state.of(context.scene).orientation)))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", osteon.autoskeleton.LoosePiecesWarning)
+            sk, w = osteon.auto_skeleton(verts * k, faces, root=root,
+                                         min_thickness=min_thickness_mm(
+                                             core.settings_of(s, state.of(context.scene).orientation)))
     except ValueError as e:
         raise OsteonError(f"Make skeleton: {e}") from e
+    # the wheel's own words, once: the operator reports them as a WARNING, batch prints them
+    loose = [f"Mesh '{obj.name}': {c.message} -- after Analyze, Select Loose Pieces selects them"
+             for c in caught if issubclass(c.category, osteon.autoskeleton.LoosePiecesWarning)]
+    for c in caught:  # any other warning goes where it would have gone
+        if not issubclass(c.category, osteon.autoskeleton.LoosePiecesWarning):
+            warnings.showwarning(c.message, c.category, c.filename, c.lineno)
     progress(0.7)
     names = list(sk.names)
     arm = bridge.build_armature(context, f"{obj.name}_skeleton", np.asarray(sk.heads) / k,
@@ -408,4 +419,4 @@ def run_make_skeleton(context, auto_weights: bool = False, root: str = "centre",
     obj.select_set(True)
     state.of(context.scene).weights.clear()
     return {"armature": arm.name, "bones": len(names), "seconds": time.perf_counter() - t0,
-            "weights": "Blender automatic" if auto_weights else "osteon"}
+            "weights": "Blender automatic" if auto_weights else "osteon", "warnings": loose}

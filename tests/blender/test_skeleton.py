@@ -3,6 +3,7 @@ groups and an Armature modifier; then Analyze gives a varied stress colour layer
 
 import json
 import os
+import re
 import shutil
 import subprocess
 
@@ -131,6 +132,36 @@ def test_make_skeleton_is_undone_by_ctrl_z(capsule):
     assert bridge.armature_of(obj) is None
     assert not any(m.type == "ARMATURE" for m in obj.modifiers)
     assert len(obj.vertex_groups) == 0
+
+
+def test_make_skeleton_reports_the_loose_pieces_it_bound(capsule, capfd):
+    """A capsule and a cube standing apart from it (issue 35): Make skeleton rigs the mesh and
+    says, as a WARNING, that the cube touches nothing (its 8 vertices, the bone they are bound
+    to) -- the wheel's LoosePiecesWarning, which the Python API emits, is not lost in Blender."""
+    from conftest import run_op
+
+    me = capsule.data
+    n0 = len(me.vertices)
+    co = np.vstack([bridge.local_positions(me),
+                    [(x, y, z) for x in (6.0, 6.5) for y in (-0.25, 0.25) for z in (-0.25, 0.25)]])
+    faces = [list(p.vertices) for p in me.polygons]
+    cube = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    faces += [[n0 + i for i in q] for q in cube]
+    me.clear_geometry()
+    me.from_pydata(co.tolist(), [], faces)
+    me.update()
+    res, out = run_op(bpy.ops.osteon.make_skeleton, capfd)
+    assert res == {"FINISHED"}
+    arm = bridge.armature_of(capsule)
+    names = [b.name for b in arm.data.bones]
+    w = bridge.sparse_weights(bridge.vertex_weights_csr(capsule, names), len(names)).toarray()
+    bound = names[int(w[n0:].argmax(1)[0])]
+    assert np.all(w[n0:].max(1) == 1.0) and len(set(w[n0:].argmax(1))) == 1
+    warning = [line for line in out.splitlines() if line.startswith("Warning")]
+    assert len(warning) == 1, out
+    assert f"Mesh '{capsule.name}': 1 loose piece" in warning[0]
+    assert f"8 vertices at {bound}" in warning[0] and "Select Loose Pieces" in warning[0]
+    assert re.search(r"Info: osteon: .*\d+ bones", out), out  # ... and the usual message
 
 
 def _capsule_tip_distance_mm(obj, arm, mm_per_unit):

@@ -410,3 +410,35 @@ def test_seed_gives_identical_results():
     assert (a_w != b_w).nnz == 0
     with pytest.raises(ValueError, match="seed"):
         osteon.auto_skeleton(v, f, seed="x")
+
+
+def test_coarsening_keeps_about_ten_vertices_round_a_limb():
+    """Issue 35: before the skeleton, edges shorter than SPACING x the local limb radius are
+    collapsed. ``local_radius`` on a capsule's cylinder is its radius R (closed form: the
+    deepest step t whose point is >= 0.8 t inside satisfies 2R - t >= 0.8 t, t <= 1.11 R; the
+    steps grow by 1.76); after coarsening a capsule tessellated with 48 vertices round, the
+    mesh is still a closed surface (V - E + F = 2) with about 2π / SPACING vertices round it."""
+    from osteon.autoskeleton import curve
+    from pygel3d import graph, hmesh
+
+    r = 6.0
+    v, f = capsule(length=80.0, radius=r, n=48, stations=41, cap=8)
+    m = hmesh.Manifold.from_triangles(v, f)
+    surface = hmesh.MeshDistance(m)
+    size = 80.0 + 2 * r
+    ring = (v[:, 0] > 20) & (v[:, 0] < 60)           # the cylinder, away from the caps
+    normals = v[ring] * [0.0, 1.0, 1.0] / r
+    rad = curve.local_radius(v[ring], normals, surface, size)
+    assert np.all(rad > r / 1.8) and np.all(rad <= 1.12 * r), (rad.min(), rad.max())
+    n_before = len(m.positions())
+    assert curve.coarsen_by_radius(m, surface, size) > 0
+    pos = np.asarray(m.positions())
+    n_faces = len(list(m.faces()))
+    n_edges = len(curve.graph_edges(graph.from_mesh(m), len(pos)))
+    assert len(pos) - n_edges + n_faces == 2                # still a closed surface
+    assert len(pos) < 0.5 * n_before
+    # vertices round the cylinder: those in a band one axial spacing wide, per band
+    mid = pos[(pos[:, 0] > 20) & (pos[:, 0] < 60)]
+    spacing = curve.SPACING * r
+    round_ = len(mid) / (40.0 / spacing)
+    assert 0.5 * 2 * np.pi / curve.SPACING < round_ < 2 * 2 * np.pi / curve.SPACING, round_

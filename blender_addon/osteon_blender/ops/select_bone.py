@@ -20,7 +20,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from .. import bridge, compat, overlay, state
+from .. import bridge, compat, overlay, state, viewclip
 from ..core import OsteonError
 from ._base import OsteonOperator
 
@@ -84,8 +84,6 @@ def weakest_section(scene, name: str) -> dict | None:
 #: how far the view stands from the section, in section radii (the section spans about a
 #: fifth of the view: the limb around it stays in sight)
 FRAME_RADII = 12.0
-#: the clip range kept when it has to move: end / start, Blender's default 1000 / 0.01
-CLIP_RATIO = 1.0e5
 
 
 def view_direction(centre, normal, radius: float, vertices) -> np.ndarray:
@@ -117,22 +115,23 @@ def view_direction(centre, normal, radius: float, vertices) -> np.ndarray:
     return cands[int(np.argmin(cost))]
 
 
-def frame(context, centre, radius: float, direction=None, model_size: float | None = None
-          ) -> int:
-    """Turn every 3D viewport of the window to ``centre`` (world, Blender units) at a distance
-    that shows ``radius`` around it, looking along ``-direction`` (from the section towards
-    the eye; None keeps the view's direction).  The viewport's clip range is moved where the
-    section would fall outside it (a model of 1 cm: the default near clip, 0.01, is farther
-    than the section), keeping Blender's default ratio of far to near.  Returns how many
-    viewports moved (0 headless)."""
+def frame(context, centre, radius: float, direction=None, model_size: float | None = None,
+          areas=None) -> int:
+    """Turn every 3D viewport of the window (or of ``areas``) to ``centre`` (world, Blender
+    units) at a distance that shows ``radius`` around it, looking along ``-direction`` (from
+    the section towards the eye; None keeps the view's direction).  Where the viewport's clip
+    range would cut the section (a model of 1 cm: the default near clip, 0.01, is farther
+    than the section) it is moved, and the user's range comes back when the view leaves the
+    section (``viewclip``).  Returns how many viewports moved (0 headless)."""
     from mathutils import Vector
 
-    win = getattr(context, "window", None)
-    screen = getattr(win, "screen", None)
+    if areas is None:
+        screen = getattr(getattr(context, "window", None), "screen", None)
+        areas = getattr(screen, "areas", None) or []
     distance = FRAME_RADII * float(radius)
     size = float(model_size) if model_size else distance
     moved = 0
-    for area in getattr(screen, "areas", None) or []:
+    for area in areas:
         if area.type != "VIEW_3D":
             continue
         space = area.spaces.active
@@ -143,16 +142,10 @@ def frame(context, centre, radius: float, direction=None, model_size: float | No
         if direction is not None:
             r3d.view_rotation = Vector(tuple(float(x) for x in direction)).to_track_quat("Z", "Y")
         r3d.view_distance = distance
-        if space.clip_start > 0.25 * distance:
-            space.clip_start = 0.05 * distance
-            space.clip_end = min(space.clip_end, max(space.clip_start * CLIP_RATIO,
-                                                     distance + 4.0 * size))
-        if space.clip_end < distance + 2.0 * size:
-            space.clip_end = distance + 4.0 * size
+        viewclip.fit(space, centre, distance, size)
         area.tag_redraw()
         moved += 1
     return moved
-
 
 def show_bone(context, arm, name: str) -> dict | None:
     """Select bone ``name``, outline it and its weakest section, frame it (module doc)."""

@@ -28,5 +28,7 @@ class OSTEON_OT_make_skeleton(OsteonOperator, bpy.types.Operator):
     def run(self, context):
         r = service.run_make_skeleton(context, auto_weights=self.blender_weights,
                                       root=self.root, progress=self.progress)
+        for text in r["warnings"]:  # loose pieces: the skeleton is made, but say so
+            self.report({"WARNING"}, text)
         return (f"osteon: {r['armature']}: {r['bones']} bones in {r['seconds']:.1f} s "
                 f"({r['weights']} weights)")
