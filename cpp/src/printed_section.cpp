@@ -23,7 +23,6 @@
 #include <utility>
 
 #include "clipper2/clipper.h"
-#include "printed_offset.hpp"
 #include "simplify_path.hpp"
 
 namespace osteon {
@@ -208,8 +207,10 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   if (options.wall_depth > 0) {
     const double delta = options.wall_depth * kScale;
     const double arc_tolerance = std::max(0.005 * kScale, 0.01 * delta);
-    eroded = stretched(detail::inset_paths(stretched(section, stretch), delta, arc_tolerance),
-                       1.0 / stretch);
+    eroded = stretched(
+        Clipper2Lib::InflatePaths(stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
+                                  Clipper2Lib::EndType::Polygon, 2.0, arc_tolerance),
+        1.0 / stretch);
     // Less the arcs' chords and 4 units for the rounding of the stretch there and back.
     wall_reach = (delta - arc_tolerance) / stretch - 4.0;
   }
