@@ -64,6 +64,36 @@ struct LocalMesh {
   }
 };
 
+// A candidate's normal, in its meridian plane (radial x, towards the thin side y), turns 8..82
+// degrees from radial (measure_corner). The angle-weighted normal is a positive combination of
+// its faces' normals, and so is its meridian projection: when every face's projection lies
+// below the 8-degree line (or every one above the 82-degree line), so does the vertex's, and it
+// is no candidate. Such vertices are dropped from `need` before their angle weights (atan2) are
+// computed; a margin of 1e-9 (unit normals) keeps every vertex the exact test could take.
+void keep_turning(const MeshView& mesh, const LocalMesh& m, const Vec3& u,
+                  const std::vector<Vec3>& radial, std::vector<char>& need) {
+  const double c8 = std::cos(8.0 * kPi / 180.0), s8 = std::sin(8.0 * kPi / 180.0);
+  const double c82 = std::cos(82.0 * kPi / 180.0), s82 = std::sin(82.0 * kPi / 180.0);
+  constexpr double kMargin = 1e-9;
+  std::vector<char> seen(m.vertices.size(), 0);  // bit 1: a face at/above 8, bit 2: at/below 82
+  for (std::size_t f = 0; f < m.faces.size(); f += 3) {
+    const int at[3] = {m.at(m.faces[f]), m.at(m.faces[f + 1]), m.at(m.faces[f + 2])};
+    if (!need[at[0]] && !need[at[1]] && !need[at[2]]) continue;
+    const Vec3 p0 = mesh.vertex(m.faces[f]);
+    const Vec3 n = (mesh.vertex(m.faces[f + 1]) - p0).cross(mesh.vertex(m.faces[f + 2]) - p0);
+    const double len = n.norm();
+    if (!(len > 0)) continue;
+    const double ny = -n.dot(u) / len;
+    for (int k = 0; k < 3; ++k) {
+      if (!need[at[k]]) continue;
+      const double nx = n.dot(radial[at[k]]) / len;
+      if (c8 * ny - s8 * nx >= -kMargin) seen[at[k]] |= 1;
+      if (c82 * ny - s82 * nx <= kMargin) seen[at[k]] |= 2;
+    }
+  }
+  for (std::size_t k = 0; k < need.size(); ++k) need[k] = need[k] && seen[k] == 3;
+}
+
 // Faces of the cells the slab lo <= u.x <= hi and the region reach that have a vertex inside
 // both (the only ones a candidate's normal and neighbours need), and the normals of their
 // vertices at least `min_t` from the axis (closer ones are no candidate: theirs stay 0).
@@ -102,13 +132,17 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   // weights (atan2, most of the search's cost) of the other vertices are not computed.
   const double margin = 1e-9 * region.radius;
   std::vector<char> need(m.vertices.size());
+  std::vector<Vec3> radial(m.vertices.size(), Vec3::Zero());  // unit, where needed
   for (std::size_t k = 0; k < m.vertices.size(); ++k) {
     const Vec3 d = mesh.vertex(m.vertices[k]) - region.point;
     const double a = u.dot(mesh.vertex(m.vertices[k]));
-    const double t = (d - d.dot(u) * u).norm();
+    const Vec3 r = d - d.dot(u) * u;
+    const double t = r.norm();
     need[k] =
         a >= lo - margin && a <= hi + margin && t >= min_t - margin && t <= region.radius + margin;
+    if (need[k] && t > 0) radial[k] = r / t;
   }
+  keep_turning(mesh, m, u, radial, need);
   m.normals.assign(m.vertices.size(), Vec3::Zero());
   for (std::size_t f = 0; f < m.faces.size(); f += 3) {
     const int at[3] = {m.at(m.faces[f]), m.at(m.faces[f + 1]), m.at(m.faces[f + 2])};
@@ -200,11 +234,21 @@ Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, cons
   return m;
 }
 
-// Measures the concave corner between a thin section (bone point `origin`, equivalent radius
-// r_thin) and the thick side along unit axis `u` (thin -> thick), within axial [lo, hi] of the
-// thin section's plane.
-Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<int>& slot,
-                      const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi) {
+// A vertex of a concave fillet: axial position a from the thin plane (mm), the axial component
+// na of its unit meridian normal, the normal's turn from radial towards the thin side (radians)
+// and its angle around the axis (radians, in the plane's frame).
+struct FilletPoint {
+  double a = 0, na = 0, turn = 0, angle = 0;
+};
+
+// The fillet points of the concave corner between a thin section (bone point `origin`,
+// equivalent radius r_thin) and the thick side along unit axis `u` (thin -> thick), within
+// axial [lo, hi] of the thin section's plane, in the mesh's order. A point's test does not
+// depend on the window beyond its own a (its normal and neighbours come from all its faces),
+// so the points of a narrower window are exactly those of this list inside it.
+std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& grid,
+                                       std::vector<int>& slot, const Vec3& origin, const Vec3& u,
+                                       double r_thin, double lo, double hi) {
   const Vec3 e1 = u.unitOrthogonal(), e2 = u.cross(e1);
   CutRegion region;  // the cylinder t <= 2.5 r_thin around the axis
   region.point = origin;
@@ -250,17 +294,32 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
       candidates.push_back(static_cast<Index>(k));
       bends.push_back(bend[k]);
     }
-  SectorPoints pts;
+  std::vector<FilletPoint> pts;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     if (!(bends[c] > 1e-9 * r_thin)) continue;
     const Meridian& m = merid[candidates[c]];
     const Vec3 radial = mesh.vertex(local.vertices[candidates[c]]) - origin - m.a * u;
-    const double angle = std::atan2(radial.dot(e2), radial.dot(e1));
+    FilletPoint p;
+    p.a = m.a;
+    p.na = m.na / std::hypot(m.na, m.nr);
+    p.turn = std::atan2(-m.na, m.nr);
+    p.angle = std::atan2(radial.dot(e2), radial.dot(e1));
+    pts.push_back(p);
+  }
+  return pts;
+}
+
+// The corner's radius from the fillet points within axial [lo, hi]: fitted per 45-degree
+// sector around the axis, the sharpest sector governs.
+Corner corner_in(const std::vector<FilletPoint>& points, double r_thin, double lo, double hi) {
+  SectorPoints pts;
+  for (const FilletPoint& p : points) {
+    if (p.a < lo || p.a > hi) continue;
     const int sector =
-        std::min(kSectors - 1, static_cast<int>((angle + kPi) / (2 * kPi) * kSectors));
-    pts.a[sector].push_back(m.a);
-    pts.na[sector].push_back(m.na / std::hypot(m.na, m.nr));
-    pts.turn[sector] = std::max(pts.turn[sector], std::atan2(-m.na, m.nr));
+        std::min(kSectors - 1, static_cast<int>((p.angle + kPi) / (2 * kPi) * kSectors));
+    pts.a[sector].push_back(p.a);
+    pts.na[sector].push_back(p.na);
+    pts.turn[sector] = std::max(pts.turn[sector], p.turn);
   }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
@@ -298,6 +357,98 @@ std::vector<std::vector<int>> bone_profiles(const AnalysisResult& r) {
 
 double equivalent_radius(double area) { return std::sqrt(area / kPi); }
 
+// One step of the equivalent radius along a bone, to be searched for its corner.
+struct Step {
+  int section = 0;            // the thin side's section
+  Vec3 point = Vec3::Zero();  // its bone point, mm
+  double r_thin = 0;          // its equivalent radius (its region), mm
+  double r_big = 0;           // the thick side's largest equivalent radius near the step, mm
+  double reach = 0;           // axial distance from the thin plane to the thick neighbour's, mm
+  Vec3 u = Vec3::Zero();      // unit axis, thin -> thick (the thin section's normal or its reverse)
+};
+
+// The steps along each bone (ratio >= kStepRatio between neighbours) whose thin side is slender,
+// in the order of the bones' sections.
+std::vector<Step> find_steps(const AnalysisResult& r) {
+  std::vector<Step> steps;
+  for (const std::vector<int>& chain : bone_profiles(r)) {
+    const int n = static_cast<int>(chain.size());
+    auto radius_of = [&](int k) { return equivalent_radius(r.section_cut_area[chain[k]]); };
+    for (int k = 0; k + 1 < n; ++k) {
+      const double ra = radius_of(k), rb = radius_of(k + 1);
+      if (std::max(ra, rb) < kStepRatio * std::min(ra, rb)) continue;
+      const int dir = rb > ra ? 1 : -1;  // along the chain, thin -> thick
+      int thin = rb > ra ? k : k + 1;
+      const int thick = thin + dir;
+      // A plane may cut the fillet itself: the thin side's smallest section within the largest
+      // fillet the study covers (r = 0.3 d, i.e. 0.6 of the thin radius) is the thin one.
+      const int first = thin;
+      for (int j = thin - dir; j >= 0 && j < n; j -= dir) {
+        if (radius_of(j) >= radius_of(thin)) break;
+        if (std::abs(r.section_param[chain[j]] - r.section_param[chain[first]]) >
+            0.6 * radius_of(first))
+          break;
+        thin = j;
+      }
+      Step st;
+      st.section = chain[thin];
+      const int i = st.section;
+      st.point = r.section_point[i];
+      st.r_thin = equivalent_radius(r.section_area[i]);
+      // The fit is for a shaft, a beam: the thin part must be slender where it is loaded (arm
+      // >= kMinSlenderness r, the FEM check's slenderness, docs/validation.md); a stubby or
+      // body-sized section gets no Kt (and costs no search).
+      if (r.moment_arm[i] < kMinSlenderness * st.r_thin) continue;
+      const double gap = std::abs(r.section_param[chain[thick]] - r.section_param[i]);
+      // The big dimension: the thick side's largest section within two thin radii of the step.
+      for (int j = thick; j >= 0 && j < n; j += dir) {
+        if (std::abs(r.section_param[chain[j]] - r.section_param[i]) > gap + 2 * st.r_thin) break;
+        st.r_big = std::max(st.r_big, radius_of(j));
+      }
+      st.u = r.section_normal[i];
+      const Vec3 towards = r.section_point[chain[thick]] - r.section_point[i];
+      if (towards.dot(st.u) < 0) st.u = -st.u;
+      st.reach = std::max(towards.dot(st.u), 0.0);
+      steps.push_back(st);
+    }
+  }
+  return steps;
+}
+
+// The corner of each step, measured on the mesh. The steps of one thin section towards one side
+// (its neighbours 1, 2, 3 ... planes on, where the walk to the thinnest section joins them) are
+// gathered once, over the widest window, and each step fitted on its own window's points.
+std::vector<Corner> measure_corners(const MeshView& mesh,
+                                    const std::function<const FaceGrid&()>& face_grid,
+                                    const std::vector<Step>& steps) {
+  std::vector<Corner> corners(steps.size());
+  std::vector<char> done(steps.size(), 0);
+  std::vector<int> slot;           // scratch of fillet_points, all -1 between calls
+  const FaceGrid* grid = nullptr;  // built on the first step
+  auto same_side = [&](std::size_t s, std::size_t t) {
+    return steps[s].section == steps[t].section && steps[s].u == steps[t].u;
+  };
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    if (done[s]) continue;
+    double reach = 0;
+    for (std::size_t t = s; t < steps.size(); ++t)
+      if (same_side(s, t)) reach = std::max(reach, steps[t].reach);
+    if (grid == nullptr) {
+      grid = &face_grid();
+      slot.assign(mesh.num_vertices, -1);
+    }
+    const Step& st = steps[s];
+    const std::vector<FilletPoint> points =
+        fillet_points(mesh, *grid, slot, st.point, st.u, st.r_thin, -0.25 * reach, 1.25 * reach);
+    for (std::size_t t = s; t < steps.size(); ++t) {
+      if (!same_side(s, t)) continue;
+      corners[t] = corner_in(points, st.r_thin, -0.25 * steps[t].reach, 1.25 * steps[t].reach);
+      done[t] = 1;
+    }
+  }
+  return corners;
+}
+
 }  // namespace
 
 double shoulder_fillet_kt(double big_diameter, double small_diameter, double radius) {
@@ -321,65 +472,26 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
   out.step.assign(ns, kNaN);
   out.effective.assign(ns, 1.0);
   out.arm_ratio.assign(ns, 1.0);
-  const FaceGrid* grid = nullptr;  // built on the first step found
-  std::vector<int> slot;           // scratch of measure_corner, all -1 between calls
-  for (const std::vector<int>& chain : bone_profiles(r)) {
-    const int n = static_cast<int>(chain.size());
-    auto radius_of = [&](int k) { return equivalent_radius(r.section_cut_area[chain[k]]); };
-    for (int k = 0; k + 1 < n; ++k) {
-      const double ra = radius_of(k), rb = radius_of(k + 1);
-      if (std::max(ra, rb) < kStepRatio * std::min(ra, rb)) continue;
-      const int dir = rb > ra ? 1 : -1;  // along the chain, thin -> thick
-      int thin = rb > ra ? k : k + 1;
-      const int thick = thin + dir;
-      // A plane may cut the fillet itself: the thin side's smallest section within the largest
-      // fillet the study covers (r = 0.3 d, i.e. 0.6 of the thin radius) is the thin one.
-      const int first = thin;
-      for (int j = thin - dir; j >= 0 && j < n; j -= dir) {
-        if (radius_of(j) >= radius_of(thin)) break;
-        if (std::abs(r.section_param[chain[j]] - r.section_param[chain[first]]) >
-            0.6 * radius_of(first))
-          break;
-        thin = j;
-      }
-      const int i = chain[thin];
-      const double r_thin = equivalent_radius(r.section_area[i]);
-      // The fit is for a shaft, a beam: the thin part must be slender where it is loaded (arm
-      // >= kMinSlenderness r, the FEM check's slenderness, docs/validation.md); a stubby or
-      // body-sized section gets no Kt (and costs no search).
-      if (r.moment_arm[i] < kMinSlenderness * r_thin) continue;
-      const double gap = std::abs(r.section_param[chain[thick]] - r.section_param[i]);
-      // The big dimension: the thick side's largest section within two thin radii of the step.
-      double r_big = 0;
-      for (int j = thick; j >= 0 && j < n; j += dir) {
-        if (std::abs(r.section_param[chain[j]] - r.section_param[i]) > gap + 2 * r_thin) break;
-        r_big = std::max(r_big, radius_of(j));
-      }
-      Vec3 u = r.section_normal[i];
-      const Vec3 towards = r.section_point[chain[thick]] - r.section_point[i];
-      if (towards.dot(u) < 0) u = -u;
-      const double reach = std::max(towards.dot(u), 0.0);
-      if (grid == nullptr) {
-        grid = &face_grid();
-        slot.assign(mesh.num_vertices, -1);
-      }
-      const Corner c = measure_corner(mesh, *grid, slot, r.section_point[i], u, r_thin,
-                                      -0.25 * reach, 1.25 * reach);
-      if (!c.found) continue;
-      const double rho = std::max(c.radius, min_radius);
-      const double kt = shoulder_fillet_kt(2 * r_big, 2 * r_thin, rho);
-      // Nominal stress at the corner: the same load point, the centroid moved to the corner.
-      const double shift = std::clamp(c.axial, 0.0, reach);
-      const double arm_c = (r.load_point[i] - (r.section_center[i] + shift * u)).norm();
-      const double arm_ratio = r.moment_arm[i] > 0 ? std::max(1.0, arm_c / r.moment_arm[i]) : 1.0;
-      const double effective = 1.0 + sensitivity * (kt - 1.0);
-      if (kt * arm_ratio > out.kt[i] * out.arm_ratio[i]) {  // a corner on each side: the worse
-        out.kt[i] = kt;
-        out.radius[i] = rho;
-        out.step[i] = r_big / r_thin;
-        out.effective[i] = effective;
-        out.arm_ratio[i] = arm_ratio;
-      }
+  const std::vector<Step> steps = find_steps(r);
+  const std::vector<Corner> corners = measure_corners(mesh, face_grid, steps);
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    const Step& st = steps[s];
+    const Corner& c = corners[s];
+    if (!c.found) continue;
+    const int i = st.section;
+    const double rho = std::max(c.radius, min_radius);
+    const double kt = shoulder_fillet_kt(2 * st.r_big, 2 * st.r_thin, rho);
+    // Nominal stress at the corner: the same load point, the centroid moved to the corner.
+    const double shift = std::clamp(c.axial, 0.0, st.reach);
+    const double arm_c = (r.load_point[i] - (r.section_center[i] + shift * st.u)).norm();
+    const double arm_ratio = r.moment_arm[i] > 0 ? std::max(1.0, arm_c / r.moment_arm[i]) : 1.0;
+    const double effective = 1.0 + sensitivity * (kt - 1.0);
+    if (kt * arm_ratio > out.kt[i] * out.arm_ratio[i]) {  // a corner on each side: the worse
+      out.kt[i] = kt;
+      out.radius[i] = rho;
+      out.step[i] = st.r_big / st.r_thin;
+      out.effective[i] = effective;
+      out.arm_ratio[i] = arm_ratio;
     }
   }
   return out;
