@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 namespace osteon {
 namespace {
@@ -236,9 +238,9 @@ Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, cons
 
 // A vertex of a concave fillet: axial position a from the thin plane (mm), the axial component
 // na of its unit meridian normal, the normal's turn from radial towards the thin side (radians)
-// and its angle around the axis (radians, in the plane's frame).
+// and its unit radial direction (x, y) in a frame of the plane.
 struct FilletPoint {
-  double a = 0, na = 0, turn = 0, angle = 0;
+  double a = 0, na = 0, turn = 0, x = 0, y = 0;
 };
 
 // The fillet points of the concave corner between a thin section (bone point `origin`,
@@ -303,23 +305,57 @@ std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& gri
     p.a = m.a;
     p.na = m.na / std::hypot(m.na, m.nr);
     p.turn = std::atan2(-m.na, m.nr);
-    p.angle = std::atan2(radial.dot(e2), radial.dot(e1));
+    const double t = std::hypot(radial.dot(e1), radial.dot(e2));
+    p.x = t > 0 ? radial.dot(e1) / t : 1.0;
+    p.y = t > 0 ? radial.dot(e2) / t : 0.0;
     pts.push_back(p);
   }
   return pts;
 }
 
+// Octant 0..7 of the direction (x, y), counter-clockwise from (1, 0).
+int octant(double x, double y) {
+  if (y >= 0) return x > 0 ? (y < x ? 0 : 1) : (y > -x ? 2 : 3);
+  return x < 0 ? (-y < -x ? 4 : 5) : (-y > x ? 6 : 7);
+}
+
+// Where the sectors start, as a unit direction (c, s) in the points' frame: taken from the
+// points themselves, so that it turns with the model. Their directions' resultant of order k,
+// sum (x + i y)^k, fixes an angle modulo 360/k degrees, a multiple of 45 for k = 1, 2, 4, 8, so
+// each gives one partition into 45-degree sectors whatever the branch; the order with the
+// largest resultant (the clearest: a one-sided corner k = 1, a two-sided one k = 2, ...) is
+// used. A ring with none (a round bar's even ring) fits alike in every sector.
+std::pair<double, double> sector_start(const std::vector<const FilletPoint*>& pts) {
+  std::array<std::complex<double>, 4> sum{};  // k = 1, 2, 4, 8
+  for (const FilletPoint* p : pts) {
+    std::complex<double> z(p->x, p->y);
+    for (auto& s : sum) {
+      s += z;
+      z *= z;
+    }
+  }
+  int best = 0;
+  for (int j = 1; j < 4; ++j)
+    if (std::abs(sum[j]) > std::abs(sum[best])) best = j;
+  if (!(std::abs(sum[best]) > 0)) return {1.0, 0.0};
+  const double phi = std::arg(sum[best]) / (1 << best);
+  return {std::cos(phi), std::sin(phi)};
+}
+
 // The corner's radius from the fillet points within axial [lo, hi]: fitted per 45-degree
-// sector around the axis, the sharpest sector governs.
+// sector around the axis (the sectors start where sector_start says), the sharpest sector
+// governs.
 Corner corner_in(const std::vector<FilletPoint>& points, double r_thin, double lo, double hi) {
+  std::vector<const FilletPoint*> inside;
+  for (const FilletPoint& p : points)
+    if (p.a >= lo && p.a <= hi) inside.push_back(&p);
+  const auto [c0, s0] = sector_start(inside);
   SectorPoints pts;
-  for (const FilletPoint& p : points) {
-    if (p.a < lo || p.a > hi) continue;
-    const int sector =
-        std::min(kSectors - 1, static_cast<int>((p.angle + kPi) / (2 * kPi) * kSectors));
-    pts.a[sector].push_back(p.a);
-    pts.na[sector].push_back(p.na);
-    pts.turn[sector] = std::max(pts.turn[sector], p.turn);
+  for (const FilletPoint* p : inside) {
+    const int sector = octant(p->x * c0 + p->y * s0, p->y * c0 - p->x * s0);
+    pts.a[sector].push_back(p->a);
+    pts.na[sector].push_back(p->na);
+    pts.turn[sector] = std::max(pts.turn[sector], p->turn);
   }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
