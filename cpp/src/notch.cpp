@@ -104,21 +104,32 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   LocalMesh m;
   m.slot = &slot;
   const double r2 = region.radius * region.radius;
-  auto inside = [&](std::int32_t v) {
-    const Vec3 p = mesh.vertex(v);
+  auto inside = [&](const Vec3& p) {
     const double a = u.dot(p);
     if (a < lo || a > hi) return false;
     Vec3 d = p - region.point;
     d -= d.dot(u) * u;
     return d.squaredNorm() <= r2;
   };
+  // Each cell's distinct vertices (its entries, bit-exact copies) are tested once, and a face
+  // reads its corners' verdicts (a vertex is shared by ~6 faces).
+  std::vector<char> in;
   for (Index k = 0; k < grid.num_blocks(); ++k) {
     if (!grid.block_near(k, region)) continue;
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
       if (!grid.meets(c, u, lo, hi, &region)) continue;
-      for (const std::int32_t* f = grid.faces() + 3 * grid.begin(c);
-           f != grid.faces() + 3 * grid.end(c); f += 3) {
-        if (!inside(f[0]) && !inside(f[1]) && !inside(f[2])) continue;
+      const Index e0 = grid.vertex_begin(c), e1 = grid.vertex_end(c);
+      in.assign(e1 - e0, 0);
+      bool any = false;
+      for (Index e = e0; e < e1; ++e) {
+        in[e - e0] = inside(Vec3(grid.entry_x()[e], grid.entry_y()[e], grid.entry_z()[e]));
+        any = any || in[e - e0];
+      }
+      if (!any) continue;
+      for (Index t = grid.begin(c); t < grid.end(c); ++t) {
+        const std::int32_t* fe = grid.face_entries() + 3 * t;
+        if (!in[fe[0] - e0] && !in[fe[1] - e0] && !in[fe[2] - e0]) continue;
+        const std::int32_t* f = grid.faces() + 3 * t;
         for (int j = 0; j < 3; ++j) {
           m.faces.push_back(f[j]);
           if (slot[f[j]] >= 0) continue;
