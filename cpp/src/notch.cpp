@@ -113,11 +113,16 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   };
   // Each cell's distinct vertices (its entries, bit-exact copies) are tested once, and a face
   // reads its corners' verdicts (a vertex is shared by ~6 faces).
+  // The blocks and cells are first tested against the ball around the slab's piece of the
+  // cylinder (the cylinder alone runs through the whole model).
+  CutRegion ball;
+  ball.point = region.point + (0.5 * (lo + hi) - u.dot(region.point)) * u;
+  ball.radius = std::hypot(region.radius, 0.5 * (hi - lo));
   std::vector<char> in;
   for (Index k = 0; k < grid.num_blocks(); ++k) {
-    if (!grid.block_near(k, region)) continue;
+    if (!grid.block_near(k, ball)) continue;
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
-      if (!grid.meets(c, u, lo, hi, &region)) continue;
+      if (!grid.near(c, ball) || !grid.meets(c, u, lo, hi, &region)) continue;
       const Index e0 = grid.vertex_begin(c), e1 = grid.vertex_end(c);
       in.assign(e1 - e0, 0);
       bool any = false;
