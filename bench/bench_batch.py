@@ -10,10 +10,14 @@ copies (OBJ without a skeleton: skipped until auto_skeleton exists); the Fox glT
 files (garbage bytes, truncated OBJ).
 
     python bench/bench_batch.py [--models 240] [--jobs N] [--no-dask] [--png-sample 12]
+        [--repeat 3] [--write] [--keep DIR]
 
 Reported: models/s for each runner; the per-task split (read, check, analysis, picture) summed
 over the models; and the analysis-only rate (osteon.analyze on the same models already in
-memory, same process), which is the ceiling a runner could reach if reading were free.
+memory, same process), which is the ceiling a runner could reach if reading were free. With
+``--repeat N`` the runners alternate N times and the table shows medians; the CPU seconds
+(user + system of this process and of every worker: a pool's fork server is stopped after each
+run so that it and its workers are counted) tell the cost apart from the machine's load.
 """
 
 from __future__ import annotations
@@ -166,12 +170,34 @@ def make_library(root: Path, n_models: int, seed: int = 0, unrigged: bool = True
     return kinds
 
 
+def _cpu_seconds() -> float:
+    """CPU seconds (user + system) of this process and of its children that have ended."""
+    import resource
+
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _stop_forkserver():
+    """End the pool's fork server (if one was started), so that its CPU time and its workers'
+    are counted, and the next run starts it again as a new ``osteon batch`` would."""
+    import multiprocessing.forkserver as fs
+
+    stop = getattr(fs._forkserver, "_stop", None)
+    if stop is not None:
+        stop()
+
+
 def timed_run(lib, settings, **kw):
+    """(wall s, CPU s of this process and every worker, records) of one ``batch.run``."""
     from osteon import batch
 
+    cpu = _cpu_seconds()
     t = time.perf_counter()
     recs = list(batch.run([lib], settings, **kw))
-    return time.perf_counter() - t, recs
+    wall = time.perf_counter() - t
+    _stop_forkserver()
+    return wall, _cpu_seconds() - cpu, recs
 
 
 def analysis_only_rate(lib, settings, repeat=3):
@@ -206,7 +232,12 @@ def main(argv=None):
     ap.add_argument("--no-dask", action="store_true")
     ap.add_argument("--png-sample", type=int, default=12,
                     help="models run with pictures on 1 process to time the picture (0: skip)")
-    ap.add_argument("--keep", metavar="DIR", help="make the library here and keep it")
+    ap.add_argument("--keep", metavar="DIR", help="make the library here and keep it "
+                    "(an existing DIR/lib is used as it is)")
+    ap.add_argument("--write", action="store_true",
+                    help="also time runs that write an output folder (as osteon batch --out)")
+    ap.add_argument("--repeat", type=int, default=1, metavar="N",
+                    help="runs of each runner, alternating (the table shows medians)")
     ap.add_argument("--no-unrigged", action="store_true",
                     help="no unrigged models (their auto_skeleton, seconds each, is not reading)")
     args = ap.parse_args(argv)
@@ -215,17 +246,36 @@ def main(argv=None):
     tmp = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="osteon-batch-"))
     lib = tmp / "lib"
     t = time.perf_counter()
-    kinds = make_library(lib, args.models, unrigged=not args.no_unrigged)
+    if args.keep and lib.is_dir():
+        from osteon import batch
+
+        kinds = {"existing": len(batch.discover([lib]))}
+    else:
+        kinds = make_library(lib, args.models, unrigged=not args.no_unrigged)
     gen = time.perf_counter() - t
     n_files = sum(kinds.values())
     print(f"osteon {osteon.__version__}; {os.cpu_count()} cores; library of {n_files} models "
           f"made in {gen:.1f} s in {lib}: " + ", ".join(f"{v} {k}" for k, v in kinds.items() if v))
     settings = {"force_n": 20.0, "material": "PLA", "png": False}
     rows = []
-    secs1, recs = timed_run(lib, settings, workers=1)
-    rows.append(("1 process", secs1, recs))
-    secsp, recsp = timed_run(lib, settings, workers=args.jobs)
-    rows.append((f"pool, {args.jobs} processes", secsp, recsp))
+    runs: dict = {"1 process": [], f"pool, {args.jobs} processes": []}
+    if args.write:
+        runs.update({"1 process, --out": [], f"pool, {args.jobs} processes, --out": []})
+    # "1 process": in this process (no time limit; with one, -j 1 runs in one worker process)
+    one = {**settings, "model_timeout_s": 0}
+    for k in range(args.repeat):  # alternating, so that all see the same machine load
+        runs["1 process"].append(timed_run(lib, one, workers=1))
+        runs[f"pool, {args.jobs} processes"].append(timed_run(lib, settings, workers=args.jobs))
+        if args.write:  # the CLI's path: a JSON report per model, results.jsonl, summaries
+            runs["1 process, --out"].append(
+                timed_run(lib, one, workers=1, out=tmp / f"out1_{k}"))
+            runs[f"pool, {args.jobs} processes, --out"].append(
+                timed_run(lib, settings, workers=args.jobs, out=tmp / f"outp_{k}"))
+    for name, rr in runs.items():
+        wall = statistics.median(r[0] for r in rr)
+        cpu = statistics.median(r[1] for r in rr)
+        rows.append((name, wall, rr[-1][2], cpu))
+    secs1, recs = rows[0][1], rows[0][2]
     if not args.no_dask:
         try:
             import distributed
@@ -239,9 +289,9 @@ def main(argv=None):
                     distributed.Client(cl) as client:
                 client.run(lambda: __import__("osteon.batch._warm"))  # as the pool's server
                 start = time.perf_counter() - t
-                secsd, recsd = timed_run(lib, settings, client=client)
+                secsd, _, recsd = timed_run(lib, settings, client=client)
             rows.append((f"Dask LocalCluster, {args.jobs} workers (+{start:.1f} s start)",
-                         secsd, recsd))
+                         secsd, recsd, None))
     n_ok, secs_a = analysis_only_rate(lib, settings)
     rate_a = n_ok / secs_a
     statuses = {}
@@ -258,18 +308,22 @@ def main(argv=None):
     same = all(
         {r["model"]: r.get("max_stress_mpa") for r in rr} == {r["model"]: r.get("max_stress_mpa")
                                                               for r in recs}
-        for _, _, rr in rows
+        for _, _, rr, _ in rows
     )
     print(f"every runner gives the same max stress per model: {same}")
     print()
-    print("| runner | models | wall s | models/s | analysed/s | vs analysis-only |")
-    print("|---|---|---|---|---|---|")
-    for name, secs, rr in rows:
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; medians of "
+          f"{args.repeat} alternating runs; CPU s: this process and every worker")
+    print("| runner | models | wall s | models/s | analysed/s | vs analysis-only | CPU s | "
+          "CPU ms/model |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, secs, rr, cpu in rows:
         n_an = sum(r["status"] == "ok" for r in rr)
+        cpu_text = "-" if cpu is None else f"{cpu:.2f} | {1000 * cpu / len(rr):.1f}"
         print(f"| {name} | {len(rr)} | {secs:.2f} | {len(rr) / secs:.1f} | {n_an / secs:.1f} | "
-              f"{(n_an / secs) / rate_a:.3f} |")
+              f"{(n_an / secs) / rate_a:.3f} | {cpu_text} |")
     print(f"| analysis only (models in memory, 1 thread) | {n_ok} | {secs_a:.2f} | - | "
-          f"{rate_a:.1f} | 1 |")
+          f"{rate_a:.1f} | 1 | - | - |")
     print()
     tot = {k: sum(r.get(k, 0.0) for r in recs) for k in
            ("read_seconds", "check_seconds", "analysis_seconds", "png_seconds", "seconds")}
@@ -288,7 +342,7 @@ def main(argv=None):
         sample = [Path(r["model"]) for r in ok[: args.png_sample]]
         out = tmp / "png_out"
         t = time.perf_counter()
-        pr = list(batch.run(sample, {**settings, "png": True}, workers=1, out=out))
+        pr = list(batch.run(sample, {**one, "png": True}, workers=1, out=out))
         wall = time.perf_counter() - t
         png = [r["png_seconds"] for r in pr if r["status"] == "ok"]
         print(f"with pictures (1 process, {len(pr)} models): {len(pr) / wall:.1f} models/s; "

@@ -409,7 +409,15 @@ PYBIND11_MODULE(_core, m) {
       .def_property(
           "print_skin_max_slope", [](const AnalysisOptions& o) { return o.print.skin_max_slope; },
           [](AnalysisOptions& o, double v) { o.print.skin_max_slope = v; },
-          "radians from the layer plane: skins only under surfaces this flat (pi/2: all)");
+          "radians from the layer plane: skins only under surfaces this flat (pi/2: all)")
+      .def_property(
+          "print_layer_height", [](const AnalysisOptions& o) { return o.print.layer_height; },
+          [](AnalysisOptions& o, double v) { o.print.layer_height = v; },
+          "mm: FDM layer height (the rows of the skin widening)")
+      .def_property(
+          "print_skin_growth", [](const AnalysisOptions& o) { return o.print.skin_growth; },
+          [](AnalysisOptions& o, double v) { o.print.skin_growth = v; },
+          "mm: a skin strip narrower than twice this is widened by it into the infill (0: off)");
 
   py::class_<CorrectionOptions>(m, "CorrectionOptions", "Limits of the correction loop.")
       .def(py::init<>())

@@ -255,9 +255,13 @@ def engine_params(s, arm, bone_names, correct: bool = False,
     """The engine's keyword arguments from ``scene.osteon`` (checked once, in the wheel);
     ``orientation`` as in :func:`settings_of`."""
     try:
-        return engine_arguments(settings_of(s, orientation), bone_names, correct=correct)
+        kw = engine_arguments(settings_of(s, orientation), bone_names, correct=correct)
     except ValueError as e:
         msg = str(e)
         if msg.startswith("Held bone"):
             msg = f"Held bone '{s.held_bone}' is not a deform bone of '{arm.name}'"
         raise OsteonError(msg) from e
+    # the add-on's own guard decides (the "Section limit" preference asks first, and OK or
+    # max_sections=0 runs it anyway), not the wheel's default budget for unattended runs
+    kw["max_sections"] = 2**31 - 1
+    return kw

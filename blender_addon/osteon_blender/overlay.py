@@ -1,7 +1,8 @@
 """Viewport overlay: the section outlines of the last analysis, coloured by stress ratio.
 
-By default only the weak sections (over the limit) and the doubtful ones (a suspect cut,
-``osteon.doubt``) are drawn, so that the colours on the surface stay visible; the live
+By default only the weak sections (over the limit), the doubtful ones (a suspect cut,
+``osteon.doubt``) and the corner sections (a stress concentration at a fillet or step,
+docs/notch.md) are drawn, so that the colours on the surface stay visible; the live
 settings' "All sections" adds every other outline, thin and half transparent.  The bone the
 result list shows (``ops/select_bone``) is drawn in yellow with its weakest section.
 
@@ -35,6 +36,8 @@ HIGHLIGHT_WIDTH = 4.0  # px, the shown bone and its weakest section
 WEAK_RGBA = (1.0, 0.0, 0.75, 1.0)      # magenta-red: stands out on the red (weak) surface
 DOUBT_RGBA = (1.0, 0.55, 0.0, 0.9)     # orange: a suspect cut
 HIGHLIGHT_RGBA = (1.0, 0.9, 0.1, 1.0)  # yellow: the bone shown from the result list
+NOTCH_WIDTH = 2.0  # px, corner sections (a stress concentration, issue 33)
+NOTCH_RGBA = (1.0, 1.0, 1.0, 0.9)      # white: on none of the stress colours
 CULLED_RGBA = (0.25, 0.25, 0.25, 0.5)
 SHADE = 0.55   # ordinary outlines: the stress colour darkened, to stand out on the surface
 ALPHA = 0.5    # ordinary outlines: half transparent over the colours
@@ -59,6 +62,9 @@ class Outlines:
     #: (2D, 3) float32 segments of the doubtful sections that are not weak (also in ``lines``)
     doubt_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
     version: int = field(default_factory=lambda: next(_versions))
+    #: (2C, 3) float32 segments of the corner sections (Kt > 1) that are not weak: where a
+    #: corner raises the stress (the weak ones are drawn as weak)
+    notch_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
     # the whole cut of junction sections: every other segment (dashed), dimmer
     cut_lines: np.ndarray = field(default_factory=lambda: np.empty((0, 3), np.float32))
     cut_colors: np.ndarray = field(default_factory=lambda: np.empty((0, 4), np.float32))
@@ -121,6 +127,7 @@ def compute_outlines(analysis, mm_per_unit: float = 1.0) -> Outlines:
     weak_lines, _ = lines_of(outlined & weak)
     weak_colors = np.broadcast_to(np.float32(WEAK_RGBA), (len(weak_lines), 4)).copy()
     doubt_lines, _ = lines_of(outlined & ~weak & doubtful_sections(analysis, len(stress)))
+    notch_lines, _ = lines_of(outlined & ~weak & notch_sections(analysis, len(stress)))
     cut_lines, cut_colors = _dashed_cuts(analysis, rgba, k)
     infill_lines, infill_colors = _infill_loops(analysis, rgba, k, ~weak)
     weak_infill_lines, _ = _infill_loops(analysis, rgba, k, weak)
@@ -130,6 +137,7 @@ def compute_outlines(analysis, mm_per_unit: float = 1.0) -> Outlines:
                     section_ids=np.flatnonzero(outlined).astype(np.int64),
                     weak_ids=np.flatnonzero(outlined & weak).astype(np.int64),
                     doubt_lines=np.ascontiguousarray(doubt_lines),
+                    notch_lines=np.ascontiguousarray(notch_lines),
                     cut_lines=cut_lines, cut_colors=cut_colors)
 
 
@@ -143,6 +151,16 @@ def doubtful_sections(analysis, n: int) -> np.ndarray:
     except Exception:  # noqa: BLE001 -- a drawing aid: no doubt outlines rather than no overlay
         return np.zeros(n, dtype=bool)
     return d if d.shape == (n,) else np.zeros(n, dtype=bool)
+
+
+def notch_sections(analysis, n: int) -> np.ndarray:
+    """(n,) bool: sections whose stress a corner raises (``stress_concentration`` > 1);
+    all False for a result without the corner fields."""
+    kt = getattr(analysis, "stress_concentration", None)
+    if kt is None:
+        return np.zeros(n, dtype=bool)
+    kt = np.asarray(kt, dtype=np.float64)
+    return kt > 1.0 if kt.shape == (n,) else np.zeros(n, dtype=bool)
 
 
 def highlight_lines(where: dict) -> np.ndarray:
@@ -309,6 +327,7 @@ def _make_batches(out: Outlines) -> dict:
                                                    "color": out.weak_colors})
                  if len(out.weak_lines) else None)
     b["doubt"] = _flat_batch(shader, out.doubt_lines, DOUBT_RGBA)
+    b["notch"] = _flat_batch(shader, out.notch_lines, NOTCH_RGBA)
     b["cut"] = (batch_for_shader(shader, "LINES", {"pos": out.cut_lines, "color": out.cut_colors})
                 if len(out.cut_lines) else None)
     b["infill"] = (batch_for_shader(shader, "LINES", {"pos": out.infill_lines,
@@ -375,6 +394,8 @@ def _draw():
             _draw_batch(_batches, _batches["infill"], INFILL_WIDTH, region)
         if _batches.get("weak_infill") is not None:
             _draw_batch(_batches, _batches["weak_infill"], INFILL_WIDTH, region)
+        if _batches.get("notch") is not None:
+            _draw_batch(_batches, _batches["notch"], NOTCH_WIDTH, region)
         if _batches.get("doubt") is not None:
             _draw_batch(_batches, _batches["doubt"], DOUBT_WIDTH, region)
         if _batches.get("weak") is not None:

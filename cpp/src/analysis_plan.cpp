@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "analysis_impl.hpp"
@@ -128,7 +129,9 @@ void Analyzer::Impl::plan_sections(RunState& run) {
                   last_parents == sk.parents;
   if (run.may_reuse) {
     run.prev_specs = specs;
-    run.prev_states = states;
+    // Moved, not copied (with outlines a section holds its loops): a reusing run is a full one,
+    // and below `states` is made anew for the new plan.
+    run.prev_states = std::move(states);
   }
   if (run.partial) return;  // the last run's plan stands
   tree = build_load_tree(sk, options.held_bone, run.per_bone);

@@ -1,6 +1,7 @@
 // What a run may keep from the last one: partial re-analysis (the correction loop) and exact
 // reuse of unchanged sections (live mode) (Analyzer::Impl).
 #include <algorithm>
+#include <utility>
 #include <vector>
 
 #include "analysis_impl.hpp"
@@ -40,7 +41,7 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
   const MeshView& mesh = run.mesh;
   const double* vertices = run.vertices;
   const std::vector<SectionSpec>& prev_specs = run.prev_specs;
-  const std::vector<SectionState>& prev_states = run.prev_states;
+  std::vector<SectionState>& prev_states = run.prev_states;  // moved into `states` once reused
   // Exact reuse: a section keeps its geometry when its bone, plane and downstream side are
   // bitwise the same and no moved triangle reaches the region its cut was proven in.
   Box3 moved_box;
@@ -83,7 +84,7 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
              !axis_line.meets_box(center, half);
     }
     if (same) {
-      states[i] = prev_states[i];
+      states[i] = std::move(prev_states[i]);
       run.section_dirty[i] = 0;
     } else {
       run.section_dirty[i] = 1;

@@ -210,23 +210,38 @@ struct Corner {
 // Smallest moment arm / equivalent radius of a thin side the fit is applied to.
 constexpr double kMinSlenderness = 2.0;
 
+// A sharp edge's ring spreads axially by less than this fraction of the local mesh edge length
+// (the median in the meridian at the fillet points; docs/notch.md: a fillet the mesh resolves
+// spreads by at least 0.13 of it).
+constexpr double kSharpEdge = 0.1;
+
 // Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
 constexpr double kMinTurn = 45.0 * kPi / 180.0;
 
-// Fillet points grouped in angular sectors around the axis: axial position a and the normal's
-// axial component n_a of each point (mm, unit).
+// Fillet points grouped in angular sectors around the axis: axial position a, distance t from
+// the axis and the normal's axial component n_a of each point (mm, unit), and the lengths of
+// their mesh edges in the meridian plane (mm).
 constexpr int kSectors = 8;
 struct SectorPoints {
-  std::array<std::vector<double>, kSectors> a, na;
+  std::array<std::vector<double>, kSectors> a, t, na, edge;
   std::array<double, kSectors> turn{};  // the largest normal turn from radial, radians
 };
+
+// A sector's verdict "sharp edge" at axial position `at` (always true).
+bool sharp_edge(double& rho, double& axial, double at) {
+  rho = 0.0;
+  axial = at;
+  return true;
+}
 
 // The fillet radius of one sector: a fillet of radius rho tangent to a thin part and a shoulder
 // normal to the axis is a circle whose points satisfy a = c_a - rho n_a (the outward normal
 // points to the circle's centre), whatever the section's shape: rho = -cov(a, n_a) / var(n_a).
 // Returns false when the sector says nothing (under two points, a straight taper, a convex
-// turn).
-bool sector_radius(const std::vector<double>& a, const std::vector<double>& na, double scale,
+// turn). `t`: the points' distances from the axis; `edge`: their mesh edge lengths (mm), what the
+// mesh can resolve there.
+bool sector_radius(const std::vector<double>& a, const std::vector<double>& t,
+                   const std::vector<double>& na, const std::vector<double>& edge, double scale,
                    double& rho, double& axial) {
   const std::size_t n = a.size();
   // One point tells neither a ring (a sharp edge) nor a curve (a fillet): a lone point's zero
@@ -235,22 +250,34 @@ bool sector_radius(const std::vector<double>& a, const std::vector<double>& na, 
   if (n < 2) return false;
   const double ma = std::accumulate(a.begin(), a.end(), 0.0) / n;
   const double mn = std::accumulate(na.begin(), na.end(), 0.0) / n;
-  double saa = 0, snn = 0, san = 0;
+  const double mt = std::accumulate(t.begin(), t.end(), 0.0) / n;
+  double saa = 0, stt = 0, snn = 0, san = 0;
   for (std::size_t i = 0; i < n; ++i) {
     saa += (a[i] - ma) * (a[i] - ma);
+    stt += (t[i] - mt) * (t[i] - mt);
     snn += (na[i] - mn) * (na[i] - mn);
     san += (a[i] - ma) * (na[i] - mn);
   }
-  const double sd_a = std::sqrt(saa / n), sd_n = std::sqrt(snn / n);
-  if (sd_a < 0.02 * scale) {  // every fillet point on one ring: a sharp edge
-    rho = 0.0;
-    axial = ma;
-    return true;
-  }
-  if (sd_n < 0.05) return false;  // one normal direction along a length: a straight taper
+  const double sd_a = std::sqrt(saa / n), sd_t = std::sqrt(stt / n), sd_n = std::sqrt(snn / n);
+  // Every fillet point on one ring: a sharp edge. A ring may wander axially (a crease on a
+  // shoulder that is not quite flat), so up to 0.02 r it is a ring; but a fillet the mesh
+  // resolves (two candidate rings or more) spreads by at least 0.13 of the mesh's own edge
+  // length h there, however narrow it is, along the axis and (the arc's other half) radially
+  // (docs/notch.md): a ring spreads by under kSharpEdge h along one of them; points spread by
+  // more along both are measured as a fillet first, and read as a ring only when they make none.
+  // h: the median edge length (the long edges of a flat face next to a fillet do not count).
+  std::vector<double> lengths = edge;
+  auto mid = lengths.begin() + lengths.size() / 2;
+  std::nth_element(lengths.begin(), mid, lengths.end());
+  const double h = lengths.empty() ? 0.0 : *mid;
+  const bool ring = sd_a < 0.02 * scale;
+  if (ring && std::min(sd_a, sd_t) < kSharpEdge * h) return sharp_edge(rho, axial, ma);
+  // One normal direction along a length: a straight taper (or a wandering ring).
+  if (sd_n < 0.05) return ring && sharp_edge(rho, axial, ma);
   rho = -san / snn;
-  if (!(rho > 0)) return false;  // the surface turns the other way: no inside corner
-  axial = ma + rho * mn;         // the circle's centre: where the fillet leaves the thin side
+  // The surface turns the other way: no inside corner (or a ring).
+  if (!(rho > 0)) return ring && sharp_edge(rho, axial, ma);
+  axial = ma + rho * mn;  // the circle's centre: where the fillet leaves the thin side
   return true;
 }
 
@@ -276,6 +303,8 @@ Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, cons
 // and its unit radial direction (x, y) in a frame of the plane.
 struct FilletPoint {
   double a = 0, na = 0, turn = 0, x = 0, y = 0;
+  double t = 0;               // distance from the axis, mm
+  std::vector<double> edges;  // lengths of its mesh edges in the meridian plane, mm
 };
 
 // The fillet points of the concave corner between a thin section (bone point `origin`,
@@ -311,6 +340,9 @@ std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& gri
   // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
   // shoulder has the same normal turn and is left out by this).
   std::vector<double> bend(local.vertices.size(), 0.0);
+  // The candidates' edges in the meridian plane (the plane a fillet curves in): their lengths
+  // there are what the mesh resolves of a fillet (a ring's own edges count ~0).
+  std::vector<std::vector<double>> edges(local.vertices.size());
   for (std::size_t f = 0; f < local.faces.size(); f += 3) {
     int slots[3];
     for (int j = 0; j < 3; ++j) slots[j] = local.at(local.faces[f + j]);
@@ -320,6 +352,7 @@ std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& gri
       for (int k = 1; k < 3; ++k) {
         const Meridian& q = merid[slots[(j + k) % 3]];
         bend[slots[j]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
+        edges[slots[j]].push_back(std::hypot(q.a - p.a, q.t - p.t));
       }
     }
   }
@@ -340,6 +373,8 @@ std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& gri
     p.a = m.a;
     p.na = m.na / std::hypot(m.na, m.nr);
     p.turn = std::atan2(-m.na, m.nr);
+    p.t = m.t;
+    p.edges = std::move(edges[candidates[c]]);
     const double t = std::hypot(radial.dot(e1), radial.dot(e2));
     p.x = t > 0 ? radial.dot(e1) / t : 1.0;
     p.y = t > 0 ? radial.dot(e2) / t : 0.0;
@@ -389,13 +424,15 @@ Corner corner_in(const std::vector<FilletPoint>& points, double r_thin, double l
   for (const FilletPoint* p : inside) {
     const int sector = octant(p->x * c0 + p->y * s0, p->y * c0 - p->x * s0);
     pts.a[sector].push_back(p->a);
+    pts.t[sector].push_back(p->t);
+    pts.edge[sector].insert(pts.edge[sector].end(), p->edges.begin(), p->edges.end());
     pts.na[sector].push_back(p->na);
     pts.turn[sector] = std::max(pts.turn[sector], p->turn);
   }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
     double rho = 0, axial = 0;
-    if (!sector_radius(pts.a[s], pts.na[s], r_thin, rho, axial)) continue;
+    if (!sector_radius(pts.a[s], pts.t[s], pts.na[s], pts.edge[s], r_thin, rho, axial)) continue;
     // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
     // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
     // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:

@@ -1,9 +1,11 @@
-// Minimal parallel-for over independent jobs (std::thread, dynamic scheduling).
+// Minimal parallel-for over independent jobs (a pool of threads kept between calls, dynamic
+// scheduling).
 #pragma once
 
 #include <algorithm>
 #include <atomic>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -26,6 +28,12 @@ inline int worker_count(int requested, long jobs) {
 /// within that machine's noise: the threshold is a precaution, not a measured optimum.)
 inline constexpr long kVerticesPerPass = 131072;
 
+/// Runs body(w) for w = 1 .. workers - 1 on threads kept from call to call and body(0) on the
+/// calling thread, and returns when all are done; `body` must not throw. False (nothing run)
+/// when the pool is in use (a nested parallel_for, or another thread's): the caller then starts
+/// threads of its own. (worker_pool.cpp)
+bool pool_run(int workers, const std::function<void(int)>& body);
+
 /// Calls fn(job, worker) for job in [0, jobs) on up to `threads` workers; rethrows the first error.
 template <class Fn>
 void parallel_for(long jobs, int threads, Fn&& fn) {
@@ -46,10 +54,12 @@ void parallel_for(long jobs, int threads, Fn&& fn) {
       next = jobs;
     }
   };
-  std::vector<std::thread> pool;
-  for (int w = 1; w < workers; ++w) pool.emplace_back(body, w);
-  body(0);
-  for (auto& t : pool) t.join();
+  if (!pool_run(workers, body)) {
+    std::vector<std::thread> threads;
+    for (int w = 1; w < workers; ++w) threads.emplace_back(body, w);
+    body(0);
+    for (auto& t : threads) t.join();
+  }
   if (error) std::rethrow_exception(error);
 }
 

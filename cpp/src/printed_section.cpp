@@ -24,6 +24,7 @@
 
 #include "clipper2/clipper.h"
 #include "simplify_path.hpp"
+#include "skin_growth.hpp"
 
 namespace osteon {
 namespace {
@@ -128,6 +129,52 @@ Paths64 flat_skins(const Paths64& section, double depth, double sin_theta, doubl
   return Clipper2Lib::Union(quads, Clipper2Lib::FillRule::NonZero);
 }
 
+detail::StLoops st_loops(const Paths64& paths) {
+  detail::StLoops out;
+  out.reserve(paths.size());
+  for (const Path64& path : paths) {
+    std::vector<Vec2> loop;
+    loop.reserve(path.size());
+    for (const auto& q : path)
+      loop.emplace_back(static_cast<double>(q.x) / kScale, static_cast<double>(q.y) / kScale);
+    out.push_back(std::move(loop));
+  }
+  return out;
+}
+
+// Narrow skins widened into the sparse islands (skin_growth.hpp): their strips leave `sparse`.
+void remove_widened_skins(const Paths64& section, const Paths64& eroded,
+                          const std::vector<SectionPolygon>& islands, double sin_theta,
+                          const PrintOptions& options, const Vec2& es, const Vec2& et,
+                          const Vec2& centre, Moments& sparse) {
+  detail::StLoops kept;
+  auto add = [&](const std::vector<Vec2>& loop) {
+    std::vector<Vec2> st(loop.size());
+    for (std::size_t k = 0; k < loop.size(); ++k) st[k] = Vec2(loop[k].dot(es), loop[k].dot(et));
+    kept.push_back(std::move(st));
+  };
+  for (const SectionPolygon& island : islands) {
+    add(island.outer);
+    for (const auto& hole : island.holes) add(hole);
+  }
+  const int layers = static_cast<int>(std::lround(options.skin_depth / options.layer_height));
+  const auto strips =
+      detail::widened_skin_strips(st_loops(section), st_loops(eroded), kept,
+                                  options.layer_height / sin_theta, layers, options.skin_growth);
+  Mat2 axes;
+  axes.col(0) = es;
+  axes.col(1) = et;
+  for (const auto& r : strips) {
+    const double ds = r.s1 - r.s0, dt = r.t1 - r.t0;
+    SectionProperties p;
+    p.area = ds * dt;
+    p.centroid = 0.5 * (r.s0 + r.s1) * es + 0.5 * (r.t0 + r.t1) * et;
+    const Vec2 diag(p.area * ds * ds / 12.0, p.area * dt * dt / 12.0);
+    p.second_moment = axes * diag.asDiagonal() * axes.transpose();
+    sparse.add(p, centre, -1.0);
+  }
+}
+
 // W of the transformed section (whole cut minus (1 - eta) x the sparse islands) at the cut's
 // own boundary points (the solid fibres); 0 when degenerate.
 double transformed_modulus(const SectionPolygon& cut, const SectionProperties& solid,
@@ -164,6 +211,8 @@ void validate_print_options(const PrintOptions& o) {
   length(o.skin_depth, "print skin depth (mm)");
   length(o.solid_infill_below_area, "print solid_infill_below_area (mm^2)");
   length(o.skin_max_slope, "print skin_max_slope (radians)");
+  length(o.layer_height, "print layer height (mm)");
+  length(o.skin_growth, "print skin growth (mm)");
   if (!(o.infill_build >= 0 && o.infill_build <= 1) ||
       !(o.infill_layer >= 0 && o.infill_layer <= 1))
     throw std::invalid_argument("print infill stiffness fractions must be within 0..1");
@@ -275,6 +324,9 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   collect_islands(tree, layer_per_section, min_area, es, et, islands);
   for (const SectionPolygon& island : islands)
     sparse.add(section_properties(island), solid.centroid);
+  if (skins && options.skin_growth > 0 && options.layer_height > 0 && sin_theta > 1e-6)
+    remove_widened_skins(section, eroded, islands, sin_theta, options, es, et, solid.centroid,
+                         sparse);
   out.infill_area = std::min(sparse.area, eroded_area);
   out.skin_area = eroded_area - out.infill_area;
   out.modulus = transformed_modulus(cut, solid, sparse, out.infill_eta);

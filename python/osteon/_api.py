@@ -25,6 +25,7 @@ from .options import (
     _switch,
     engine_options,
     option_docs,
+    section_budget,
 )
 
 __all__ = [
@@ -694,6 +695,7 @@ class Analyzer:
             raise ValueError(
                 f"vertices has {len(v)} rows, the analyzer was built for {self.num_vertices}"
             )
+        check_section_budget(sk, v, self.options)
         d = self._core.run(v, sk._engine(), progress)
         return Analysis._from_core(d, skeleton=sk, options=self.options)
 
@@ -808,6 +810,7 @@ def correct(
         raise ValueError("empty mesh: vertices has no rows")
     f = _faces(faces, len(v))
     options = AnalysisOptions.of(options, settings)
+    check_section_budget(skeleton, v, options)
     if not (float(max_scale) >= 1.0 and math.isfinite(float(max_scale))):
         raise ValueError(f"max_scale must be a finite number >= 1, got {max_scale!r}")
     max_rounds = _count(max_rounds, "max_rounds")
@@ -843,6 +846,20 @@ def shoulder_fillet_kt(big_diameter: float, small_diameter: float, radius: float
     small = _positive(small_diameter, "small_diameter", "mm")
     r = _positive(radius, "radius", "mm")
     return float(_core.shoulder_fillet_kt(big, small, r))
+
+
+def check_section_budget(skeleton: Skeleton, vertices: np.ndarray,
+                         options: AnalysisOptions) -> None:
+    """The global budget (``options.max_sections``), checked before any work: ValueError with
+    the estimate of sections and memory (:func:`osteon.options.section_budget`) when the
+    whole model would make more sections. The count is exact and takes microseconds."""
+    n = int(_core.count_sections(skeleton._engine(), options.interval))
+    if n <= options.max_sections:
+        return
+    size = float(np.max(vertices.max(axis=0) - vertices.min(axis=0))) if len(vertices) else 0.0
+    over = section_budget(n, len(vertices), options.interval, size, options.max_sections,
+                          setting="max_sections")
+    raise ValueError(f"refused: {over}")
 
 
 def estimate_sections(skeleton: Skeleton, interval: float = 2.0) -> int:

@@ -148,9 +148,13 @@ def bone_doubt(analysis, n_bones: int, share: float = NOT_ANALYSED_SHARE) -> lis
 
 
 def worst_section_doubt(analysis) -> list[str]:
-    """Flag names of the section that gives the maximum stress ([] if it is a plain result)."""
+    """Flag names of the section that gives the maximum stress ([] if it is a plain result);
+    as the engine's maximum, among the sections not too thin to print."""
     stress = np.asarray(analysis.stress, dtype=np.float64)
     ok = np.isfinite(stress)
+    flags = getattr(analysis, "section_flags", None)
+    if flags is not None:
+        ok &= ~_mask(np.asarray(flags, dtype=np.int64), ("too_thin",), flag_table())
     if not ok.any():
         return []
     i = int(np.flatnonzero(ok)[np.argmax(stress[ok])])

@@ -23,7 +23,8 @@ from . import _core
 from .printed import engine_print_options
 from .profiles import PrintProfile, get_profile
 
-__all__ = ["DEFAULT_MIN_THICKNESS", "AnalysisOptions", "engine_options"]
+__all__ = ["DEFAULT_MIN_THICKNESS", "MAX_SECTIONS", "AnalysisOptions", "engine_options",
+           "section_budget"]
 
 #: Default minimum printable thickness, mm (FDM: two perimeters of a 0.4 mm nozzle).
 DEFAULT_MIN_THICKNESS = 0.8
@@ -131,6 +132,53 @@ def _min_notch_radius(value: Any) -> float:
     return 0.2 if value is None else _positive(value, "min_notch_radius", "mm")
 
 
+#: Sections above which an analysis is refused before any work (``max_sections``; the CLI's and
+#: batch's ``--max-sections``, raised by the user): the whole model, not per bone. ~11 kB of
+#: memory per section was measured (616 659 sections took 6.9 GB), so 200 000 is about 2 GB.
+MAX_SECTIONS = 200_000
+#: memory per section (bytes): 6.9 GB / 616 659 sections on a model read 1000x too big
+#: (issue 36); a 2-bone bar of 10 001 and 30 001 sections peaked at 10.5 kB per section
+#: (readers branch, resource.getrusage)
+BYTES_PER_SECTION = 11_200
+
+
+def section_budget(sections: int, vertices: int, interval_mm: float, model_size_mm: float,
+                   limit: int = MAX_SECTIONS, setting: str = "--max-sections") -> str | None:
+    """``None`` when the whole model's ``sections`` (:func:`osteon.estimate_sections`) are
+    within ``limit``, else the reason to refuse it, with the estimate of sections and memory:
+    "616 659 sections (~6.9 GB) at 2 mm on a 120 m model: above the limit of 200 000 (check the
+    print size, or raise --max-sections)". ``vertices``: the mesh's vertex count (mm);
+    ``setting``: the name the caller raises the limit by (the CLI's option, the API's
+    ``max_sections``)."""
+    if int(sections) <= int(limit):
+        return None
+    gb = (int(sections) * BYTES_PER_SECTION + int(vertices) * 200) / 1e9
+
+    def grouped(n: int) -> str:
+        return f"{int(n):,}".replace(",", " ")
+
+    return (f"{grouped(sections)} sections (~{gb:.1f} GB of memory) at {float(interval_mm):g} "
+            f"mm on a {_length_text(float(model_size_mm))} model: above the limit of "
+            f"{grouped(limit)} sections (check the print size, or raise {setting})")
+
+
+def _length_text(mm: float) -> str:
+    """A length for a message: "120 mm", "2.45 m", "2.35 km"."""
+    if mm >= 1e6:
+        return f"{mm / 1e6:.3g} km"
+    if mm >= 1e3:
+        return f"{mm / 1e3:.3g} m"
+    return f"{mm:.3g} mm"
+
+
+def _max_sections(value: Any) -> int:
+    """``max_sections``: an integer >= 1 (the whole model's section budget)."""
+    n = _count(value, "max_sections")
+    if n < 1:
+        raise ValueError(f"max_sections must be an integer >= 1, got {value!r}")
+    return n
+
+
 def _option(default: Any, unit: str, doc: str, check=None):
     """A field of :class:`AnalysisOptions`: its default, unit, one-line doc and the function
     that checks and normalises a value (``ValueError`` naming the setting)."""
@@ -187,6 +235,10 @@ class AnalysisOptions:
     min_notch_radius: float = _option(
         0.2, "mm", "corners sharper than this are taken at this radius, the print rounds them "
         "(None: 0.2 mm, half a 0.4 mm nozzle's line; docs/notch.md)", _min_notch_radius)
+    max_sections: int = _option(
+        MAX_SECTIONS, "", "refuse before any work (ValueError with the estimate of sections "
+        "and memory, ~11 kB each) a run that would make more sections than this for the whole "
+        "model: a model in metres read as mm, a tiny interval", _max_sections)
 
     def __post_init__(self) -> None:
         # The one layer that checks: every value normalised here (the fields' order is the

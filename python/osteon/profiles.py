@@ -61,7 +61,9 @@ class PrintProfile:
     layers at the top and bottom surfaces (count); ``infill``: sparse infill density, fraction
     0…1; ``pattern``: infill pattern (one of :data:`PATTERNS`); ``solid_infill_below_area``: mm²,
     a layer region whose infill area is below this is filled solid (0 = never); ``shell``: mm,
-    the resin shell of a hollowed print; ``name`` and ``source``: the preset's name and where its
+    the resin shell of a hollowed print; ``skin_growth_lines``: with sparse infill, skin strips
+    narrower than twice this many line widths are widened by it into the infill (PrusaSlicer's
+    rule: 3; 0 = not modelled); ``name`` and ``source``: the preset's name and where its
     numbers come from.
     """
 
@@ -74,15 +76,19 @@ class PrintProfile:
     pattern: str = "gyroid"
     solid_infill_below_area: float = 0.0
     shell: float = 0.0
+    skin_growth_lines: float = 0.0
     name: str = "solid"
     source: str = ""
 
     @classmethod
     def fdm(cls, perimeters: int = 2, line_width: float = 0.45, layer_height: float = 0.2,
             top_bottom_layers: int = 4, infill: float = 0.15, pattern: str = "gyroid",
-            solid_infill_below_area: float = 70.0, *, name: str = "fdm",
-            source: str = "") -> PrintProfile:
-        """An FDM print: counts, mm, mm, layers, fraction 0…1, pattern name, mm²."""
+            solid_infill_below_area: float = 70.0, *, skin_growth_lines: float = 3.0,
+            name: str = "fdm", source: str = "") -> PrintProfile:
+        """An FDM print: counts, mm, mm, layers, fraction 0…1, pattern name, mm².
+        ``skin_growth_lines``: with sparse infill, a skin strip narrower than twice this many
+        line widths is widened by that much into the infill (PrusaSlicer's rule, 3; 0: not
+        modelled, the safe side)."""
         pattern = str(pattern).strip().lower()
         if pattern not in PATTERNS:
             raise ValueError(f"unknown infill pattern {pattern!r}; choose one of "
@@ -102,6 +108,8 @@ class PrintProfile:
                    solid_infill_below_area=_length(solid_infill_below_area,
                                                    "solid_infill_below_area", "mm²",
                                                    allow_zero=True),
+                   skin_growth_lines=_length(skin_growth_lines, "skin_growth_lines", "lines",
+                                             allow_zero=True),
                    name=str(name), source=str(source))
 
     @classmethod
@@ -128,7 +136,9 @@ class PrintProfile:
         if p.kind == "fdm":
             return PrintProfile.fdm(p.perimeters, p.line_width, p.layer_height,
                                     p.top_bottom_layers, p.infill, p.pattern,
-                                    p.solid_infill_below_area, name=p.name, source=p.source)
+                                    p.solid_infill_below_area,
+                                    skin_growth_lines=p.skin_growth_lines, name=p.name,
+                                    source=p.source)
         if p.kind == "resin_hollow":
             return PrintProfile.resin_hollow(p.shell, name=p.name, source=p.source)
         if p.kind == "solid":
@@ -171,17 +181,20 @@ def _presets() -> dict[str, PrintProfile]:
     return {
         "prusaslicer": PrintProfile.fdm(
             perimeters=2, line_width=0.45, layer_height=0.2, top_bottom_layers=4, infill=0.15,
-            pattern="gyroid", solid_infill_below_area=0.0,
+            pattern="gyroid", solid_infill_below_area=0.0, skin_growth_lines=0.0,
             name="PrusaSlicer 0.20mm QUALITY @MK3",
             source=(f"{_PRUSA_INI}: perimeters = 2, perimeter_extrusion_width = "
                     "external_perimeter_extrusion_width = 0.45 (*common*); layer_height = 0.2, "
                     "top_solid_layers = 5, bottom_solid_layers = 4 (*0.20mm*; the smaller, 4, "
                     "taken); fill_density = 15%, fill_pattern = gyroid (0.20mm QUALITY @MK3); "
                     "solid_infill_below_area = 0 (*common*; PrusaSlicer's built-in default "
-                    "without a profile is 70 mm², src/libslic3r/PrintConfig.cpp)")),
+                    "without a profile is 70 mm², src/libslic3r/PrintConfig.cpp); "
+                    "ensure_vertical_shell_thickness = 1 (*common*): PrusaSlicer then skips "
+                    "the narrow-skin widening of discover_horizontal_shells, so "
+                    "skin_growth_lines = 0")),
         "bambustudio": PrintProfile.fdm(
             perimeters=2, line_width=0.42, layer_height=0.2, top_bottom_layers=3, infill=0.15,
-            pattern="grid", solid_infill_below_area=15.0,
+            pattern="grid", solid_infill_below_area=15.0, skin_growth_lines=0.0,
             name="Bambu Studio 0.20mm Standard @BBL X1C",
             source=(f"{_BAMBU_DIR}0.20mm Standard @BBL X1C.json → fdm_process_single_0.20.json "
                     "→ fdm_process_common.json: wall_loops = 2, outer_wall_line_width = 0.42, "
@@ -189,10 +202,12 @@ def _presets() -> dict[str, PrintProfile]:
                     "0.2, top_shell_layers = 5 (fdm_process_single_0.20), bottom_shell_layers "
                     "= 3 (the smaller, 3, taken), sparse_infill_density = 15%, "
                     "sparse_infill_pattern = grid, minimum_sparse_infill_area = 15 (mm²; "
-                    "OrcaSlicer's own BBL copy has crosshatch and 0)")),
+                    "OrcaSlicer's own BBL copy has crosshatch and 0); "
+                    "ensure_vertical_shell_thickness = 1 (Bambu's G-code headers): no "
+                    "narrow-skin widening, skin_growth_lines = 0")),
         "cura": PrintProfile.fdm(
             perimeters=2, line_width=0.4, layer_height=0.2, top_bottom_layers=4, infill=0.20,
-            pattern="grid", solid_infill_below_area=0.0,
+            pattern="grid", solid_infill_below_area=0.0, skin_growth_lines=0.0,
             name="Cura defaults (fdmprinter) at 0.2 mm layers",
             source=(f"{_CURA_DEF}: line_width = machine_nozzle_size = 0.4; wall_thickness = "
                     "0.8 → wall_line_count = round((0.8 - 0.4) / 0.4) + 1 = 2; "

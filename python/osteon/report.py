@@ -111,8 +111,28 @@ def worst_of(rows: list[dict]) -> dict | None:
     return None
 
 
+def too_thin_mask(a) -> np.ndarray:
+    """(S,) bool: the sections of analysis ``a`` too thin to print (flag ``too_thin``). The
+    engine leaves them out of the max stress and the weak count; the bone rows (JSON report,
+    CLI table) leave them out too, so that no row contradicts the headline (issue 36), and the
+    report lists them apart (``too_thin_sections``)."""
+    flags = getattr(a, "section_flags", None)
+    if flags is None:
+        return np.zeros(len(a.stress), dtype=bool)
+    from . import SECTION_FLAGS
+
+    return (np.asarray(flags) & SECTION_FLAGS["too_thin"]) != 0
+
+
+def printable_stress(a) -> np.ndarray:
+    """(S,) MPa: the section stresses of ``a`` with the too-thin sections (:func:`too_thin_mask`)
+    as NaN, what the bone rows are made of."""
+    return np.where(too_thin_mask(a), np.nan, np.asarray(a.stress, dtype=np.float64))
+
+
 def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
-    rows = bone_table(a.section_bone, a.stress, a.weak, bone_names, allowable_mpa, bone_scale,
+    rows = bone_table(a.section_bone, printable_stress(a), a.weak, bone_names, allowable_mpa,
+                      bone_scale,
                       getattr(a, "stress_ratio", None), getattr(a, "across_layers", None),
                       getattr(a, "section_allowable", None),
                       getattr(a, "stress_concentration", None))

@@ -10,7 +10,14 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 from . import materials, profiles
-from .options import AnalysisOptions, _switch
+from .options import (  # noqa: F401 -- the global budget, re-exported for the front ends
+    BYTES_PER_SECTION,
+    MAX_SECTIONS,
+    AnalysisOptions,
+    _length_text,
+    _switch,
+    section_budget,
+)
 from .profiles import PrintProfile, resolve_profile
 from .report import allowable_stress
 
@@ -243,43 +250,6 @@ def engine_arguments(settings: Settings, bone_names, correct: bool = False) -> d
 #: "Section limit", the CLI's ``--max-sections``): ~10 s of analysis on a typical model, and
 #: a sign that the print size is wrong (a model in metres read as mm).
 SECTION_LIMIT = 20_000
-
-
-#: Sections above which the front ends refuse to start (the CLI's and batch's
-#: ``--max-sections``, raised by the user): the whole model, not per bone. ~11 kB of memory per
-#: section was measured (616 659 sections took 6.9 GB), so 200 000 is about 2 GB.
-MAX_SECTIONS = 200_000
-#: memory per section (bytes): 6.9 GB / 616 659 sections on a model read 1000x too big
-#: (issue 36); a 2-bone bar of 10 001 and 30 001 sections peaked at 10.5 kB per section
-#: (readers branch, resource.getrusage)
-BYTES_PER_SECTION = 11_200
-
-
-def section_budget(sections: int, vertices: int, interval_mm: float, model_size_mm: float,
-                   limit: int = MAX_SECTIONS) -> str | None:
-    """``None`` when the whole model's ``sections`` (:func:`osteon.estimate_sections`) are
-    within ``limit``, else the reason to refuse it, with the estimate of sections and memory:
-    "616 659 sections (~6.9 GB) at 2 mm on a 120 m model: above the limit of 200 000 (check the
-    print size, or raise --max-sections)". ``vertices``: the mesh's vertex count (mm)."""
-    if int(sections) <= int(limit):
-        return None
-    gb = (int(sections) * BYTES_PER_SECTION + int(vertices) * 200) / 1e9
-
-    def grouped(n: int) -> str:
-        return f"{int(n):,}".replace(",", " ")
-
-    return (f"{grouped(sections)} sections (~{gb:.1f} GB of memory) at {float(interval_mm):g} "
-            f"mm on a {_length_text(float(model_size_mm))} model: above the limit of "
-            f"{grouped(limit)} sections (check the print size, or raise --max-sections)")
-
-
-def _length_text(mm: float) -> str:
-    """A length for a message: "120 mm", "2.45 m", "2.35 km"."""
-    if mm >= 1e6:
-        return f"{mm / 1e6:.3g} km"
-    if mm >= 1e3:
-        return f"{mm / 1e3:.3g} m"
-    return f"{mm:.3g} mm"
 
 
 def section_guard(sections: int, interval_mm: float, model_size_mm: float,

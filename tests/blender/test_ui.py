@@ -240,6 +240,13 @@ def test_overlay_default_draws_weak_and_doubtful_only(sample):
     npts = sum(ls[ss[i + 1]] - ls[ss[i]] for i in np.flatnonzero(doubt))
     assert len(out.doubt_lines) == 2 * npts
     assert overlay.WIDTH < overlay.WEAK_WIDTH and out.colors[:, 3].max() <= overlay.ALPHA
+    # corner sections (issue 33): every outlined section with Kt > 1 that is not weak, and
+    # only those
+    kt = np.asarray(a.stress_concentration)
+    corners = (kt > 1.0) & ~weak & (np.diff(ss) > 0)
+    assert np.any(corners), "the sample has corners (its thighs, paws)"
+    npts = sum(ls[ss[i + 1]] - ls[ss[i]] for i in np.flatnonzero(corners))
+    assert len(out.notch_lines) == 2 * npts
 
 
 def test_apply_says_osteon_once(sample, capfd):

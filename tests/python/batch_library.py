@@ -90,3 +90,47 @@ def hanging_task(path, settings, model_id=None):
         while True:  # one core at 100 %, as the glTF joint loop did
             pass
     return process_model(path, settings, model_id)
+
+
+def pid_task(path, settings, model_id=None):
+    """A stand-in task that reads nothing: its record names the worker process (``pid``);
+    a model named "crash…" ends its worker (os._exit), "segv…" crashes it with a segmentation
+    fault, "hang…" sleeps for ever (each that model's failure, the run goes on)."""
+    import ctypes
+    import os
+    import time
+
+    name = os.path.basename(path)
+    if name.startswith("crash"):
+        os._exit(3)
+    if name.startswith("segv"):
+        import faulthandler
+
+        faulthandler.disable()  # pytest's handler would print the crash's stack: expected here
+        ctypes.string_at(0)
+    if name.startswith("hang"):
+        while True:
+            time.sleep(1)
+    return {"model": path, "id": model_id, "status": "ok", "reason": None, "seconds": 0.0,
+            "pid": os.getpid(), "_files": {}}
+
+
+def unstoppable_task(path, settings, model_id=None):
+    """Spins with SIGALRM blocked: like a run in the engine's C++, which no signal handler can
+    interrupt (an in-process alarm never fires); only stopping its process ends it."""
+    import signal
+
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})
+    while True:
+        pass
+
+
+def hang_or_real_task(path, settings, model_id=None):
+    """:func:`unstoppable_task` for a model named "hang…", the real batch task otherwise."""
+    import os
+
+    from osteon.batch import process_model
+
+    if os.path.basename(path).startswith("hang"):
+        return unstoppable_task(path, settings, model_id)
+    return process_model(path, settings, model_id)

@@ -138,6 +138,35 @@ def test_absurd_force_is_an_error_not_inf(tmp_path, capsys):
                      capsys.readouterr().err)
 
 
+def test_json_bone_rows_leave_too_thin_sections_out():
+    """A bar 0.5 mm thick over its first 20 mm (under the 0.8 mm printable minimum), 10 mm
+    after. The engine leaves the thin sections out of the max stress; the JSON bone rows (one
+    builder for the CLI table, batch and add-on: osteon.report) must too, else the thin bone's
+    row shows a stress far above the headline's maximum (the rows used the raw stresses)."""
+    import osteon
+    from osteon.report import build_report
+    from shapes import revolve
+
+    xs = [0.0, 19.9, 20.1, 60.0]
+    v, f = revolve(xs, [0.25, 0.25, 5.0, 5.0])
+    sk = osteon.Skeleton([[0, 0, 0], [30, 0, 0]], [[30, 0, 0], [60, 0, 0]], [-1, 0])
+    a = osteon.analyze(v, f, sk, None, force=20.0, min_thickness=0.8)
+    thin = (a.section_flags & osteon.SECTION_FLAGS["too_thin"]) != 0
+    assert thin.any() and (~thin).any()
+    assert np.nanmax(np.where(thin, a.stress, np.nan)) > 10 * a.max_stress  # what rows showed
+    rep = build_report(analysis=a, bone_names=["thin", "thick"], allowable_mpa=60.0,
+                       settings={"force_n": 20.0}, front_end="test", model="bar")
+    expected = np.where(thin, np.nan, a.stress)
+    for row in rep["bones"]:
+        on = a.section_bone == row["index"]
+        assert row["max_stress_mpa"] == pytest.approx(np.nanmax(expected[on]))
+        assert row["max_stress_mpa"] <= rep["max_stress_mpa"] * (1 + 1e-12)
+    assert rep["worst"]["stress_mpa"] == pytest.approx(rep["max_stress_mpa"])
+    # the doubt of the maximum is the doubt of the section that gives it, not a thin one's
+    assert "too_thin" not in rep["max_stress_doubt"]
+    assert len(rep["too_thin_sections"]) == int(thin.sum())  # listed apart
+
+
 def test_tiny_model_headline_agrees_with_rows(tmp_path, capsys):
     """0.12 mm tall: every section too thin. The engine leaves them out of the max stress
     ("0.00 MPa, 0 weak"); the rows said WEAK at 1e6 MPa. Now neither counts them."""
@@ -274,18 +303,46 @@ def test_killing_the_batch_leaves_no_worker_behind(tmp_path):
     assert _wait_dead(pids + [server]) == [], "a worker, its child or the fork server survived"
 
 
-def test_in_process_batch_stops_a_python_hang(tmp_path, monkeypatch):
+def test_dask_time_limit_stops_a_hanging_model(tmp_path):
+    """Dask cannot stop a running task; with a time limit each task runs its model in a child
+    process of the Dask worker (osteon.batch.isolated): the hanging model fails with the
+    limit's reason, the child and what it started are killed, the next model is analysed."""
+    distributed = pytest.importorskip("distributed")
+    from batch_library import hanging_task
+    from osteon.batch.runner import _dask
+
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    hang = rigged_bar(lib, "a_hang")
+    rigged_bar(lib, "b_good")
+    s = batch.BatchSettings.from_any(SETTINGS)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        recs = {Path(r["model"]).stem: r for r in
+                _dask(batch.discover([lib]), s, client, timeout=3.0, task=hanging_task)}
+    assert recs["a_hang"]["status"] == "failed"
+    assert "over the time limit of 3 s per model" in recs["a_hang"]["reason"]
+    assert recs["b_good"]["status"] == "ok", recs["b_good"]["reason"]
+    pids = [int(x) for x in Path(str(hang) + ".pids").read_text().split()]
+    assert _wait_dead(pids) == [], "the child or what it started is still running"
+
+
+def test_one_process_batch_stops_a_hang_the_alarm_cannot(tmp_path, monkeypatch):
+    """-j 1 with a time limit runs the models in one worker process: a model that no signal
+    handler can interrupt (the engine's C++, here a loop with SIGALRM blocked) is stopped at
+    the limit and the run goes on (an in-process alarm hung here for ever)."""
+    from batch_library import hang_or_real_task
     from osteon.batch import runner
 
     rigged_bar(tmp_path, "hang")
-
-    def spin(path, s, model_id=None):
-        while True:
-            pass
-
-    monkeypatch.setattr(runner, "process_model", spin)
-    (r,) = batch.run_all([tmp_path], {**SETTINGS, "model_timeout_s": 1.0}, workers=1)
-    assert r["status"] == "failed" and "over the time limit of 1 s" in r["reason"]
+    rigged_bar(tmp_path, "ok")
+    monkeypatch.setattr(runner, "process_model", hang_or_real_task)
+    recs = {Path(r["model"]).stem: r for r in batch.run_all(
+        [tmp_path], {**SETTINGS, "model_timeout_s": 1.0}, workers=1)}
+    assert recs["hang"]["status"] == "failed"
+    assert "over the time limit of 1 s" in recs["hang"]["reason"]
+    assert recs["ok"]["status"] == "ok"
 
 
 def test_resume_with_other_settings_is_refused(tmp_path):
@@ -307,6 +364,42 @@ def test_batch_refuses_a_model_over_the_section_budget(tmp_path):
     assert r["status"] == "failed"
     assert re.search(r"refused: \d+ sections \(~[\d.]+ GB of memory\) .* above the limit of 10",
                      r["reason"])
+
+
+def test_api_refuses_a_run_over_the_section_budget():
+    """The global budget is an analysis option (AnalysisOptions.max_sections, default the CLI's
+    200 000): analyze, Analyzer and correct refuse before any work, with the message of the
+    CLI and batch (the estimate, its memory at 11.2 kB per section, the setting to raise)."""
+    import osteon
+    from batch_library import bar
+    from osteon.options import MAX_SECTIONS, AnalysisOptions
+
+    assert AnalysisOptions().max_sections == MAX_SECTIONS == 200_000
+    V, F = bar()  # 60 mm along x
+    sk = osteon.Skeleton([[0, 0, 0], [30, 0, 0]], [[30, 0, 0], [60, 0, 0]], [-1, 0])
+    n = osteon.estimate_sections(sk, 2.0)
+    gb = (n * 11_200 + len(V) * 200) / 1e9
+    msg = (rf"refused: {n} sections \(~{gb:.1f} GB of memory\) at 2 mm on a 60 mm model: "
+           rf"above the limit of {n - 1} sections \(check the print size, or raise max_sections\)")
+    with pytest.raises(ValueError, match=msg):
+        osteon.analyze(V, F, sk, max_sections=n - 1)
+    with pytest.raises(ValueError, match=msg):
+        osteon.Analyzer(F, len(V), sk, max_sections=n - 1).run(V)
+    with pytest.raises(ValueError, match=msg):
+        osteon.correct(V, F, sk, None, max_sections=n - 1)
+    assert osteon.analyze(V, F, sk, max_sections=n).num_sections == n  # at the limit: runs
+    # the default: a model in metres read as mm (60 m, 2 x 15 000 sections at 2 mm: allowed;
+    # 600 m: 300 000, refused)
+    big = 10_000.0
+    n_big = osteon.estimate_sections(sk.scaled(big), 2.0)
+    assert n_big > 200_000 > osteon.estimate_sections(sk.scaled(big / 10), 2.0)
+    assert osteon.analyze(V * 1000.0, F, sk.scaled(1000.0)).num_sections > 20_000
+    with pytest.raises(ValueError, match=rf"refused: {n_big // 1000} {n_big % 1000:03d} sections "
+                       r".* on a 600 m model: above the limit of 200 000 sections"):
+        osteon.analyze(V * big, F, sk.scaled(big))
+    for bad in (0, -1, 1.5, True, "many"):
+        with pytest.raises(ValueError, match="max_sections must be an integer"):
+            AnalysisOptions(max_sections=bad)
 
 
 # --- atomic outputs --------------------------------------------------------------------

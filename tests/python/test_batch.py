@@ -75,7 +75,8 @@ def test_unrigged_mesh_uses_auto_skeleton_when_there_is_one(library, monkeypatch
         return sk, None
 
     monkeypatch.setattr(osteon, "auto_skeleton", fake_auto_skeleton, raising=False)
-    (r,) = batch.run_all([lib / "unrigged.stl"], SETTINGS, workers=1)
+    # in this process (no time limit: -j 1 with a limit runs in a worker process)
+    (r,) = batch.run_all([lib / "unrigged.stl"], {**SETTINGS, "model_timeout_s": 0}, workers=1)
     assert r["status"] == "ok", r["reason"]
     assert "auto skeleton" in r["flags"]
     assert calls and r["bone_count"] == 2
@@ -165,6 +166,41 @@ def test_a_crashing_worker_fails_only_its_model(tmp_path):
     assert recs["crash.obj"]["status"] == "failed"
     assert "crashed" in recs["crash.obj"]["reason"]
     assert all(r["status"] == "ok" for k, r in recs.items() if k != "crash.obj")
+
+
+def test_workers_live_on_and_only_a_failed_model_costs_a_new_one(tmp_path):
+    """2 workers, 12 models: each worker takes model after model (2 processes for the good
+    ones, not one per model); a model that exits its worker, one that segfaults and one over
+    the time limit each fail with their reason and cost one fresh worker; every other model
+    is ok."""
+    from batch_library import pid_task
+    from osteon.batch.runner import _pool
+
+    names = [f"m{i}" for i in range(9)] + ["crash", "segv", "hang"]
+    for n in names:
+        (tmp_path / f"{n}.stl").write_bytes(b"")
+    s = batch.BatchSettings.from_any({**SETTINGS, "model_timeout_s": 2.0})
+    recs = _by_name(_pool(batch.discover([tmp_path]), s, 2, task=pid_task, timeout=2.0))
+    assert len(recs) == 12
+    assert "crashed" in recs["crash.stl"]["reason"] and "exit code 3" in recs["crash.stl"]["reason"]
+    assert "crashed" in recs["segv.stl"]["reason"] and "exit code -11" in recs["segv.stl"]["reason"]
+    assert "over the time limit of 2 s" in recs["hang.stl"]["reason"]
+    ok = [r for r in recs.values() if r["status"] == "ok"]
+    assert len(ok) == 9
+    assert len({r["pid"] for r in ok}) <= 2 + 3  # the first two workers and the replacements
+
+
+def test_mesh_boundary_counts_edges():
+    """A closed bar has no boundary and no non-manifold edge; one face taken away leaves its
+    3 edges on the boundary; a face doubled makes its 3 edges shared by 3 faces."""
+    from batch_library import bar
+    from osteon.batch import mesh_boundary
+
+    V, F = bar()
+    assert mesh_boundary(F, len(V)) == (0, 0)
+    assert mesh_boundary(F[1:], len(V)) == (3, 0)
+    assert mesh_boundary(np.vstack([F, F[:1]]), len(V)) == (0, 3)
+    assert mesh_boundary(np.zeros((0, 3), np.int32), 0) == (0, 0)
 
 
 def test_bad_settings_raise_before_reading(library):

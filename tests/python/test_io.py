@@ -114,6 +114,29 @@ def test_sidecars_found():
     assert m2.n_bones > 0 and m2.weights is not None
 
 
+def test_sidecars_in_any_case_and_a_folder_listed_once(tmp_path, monkeypatch):
+    """A skeleton and weights whose names differ in letter case are found (the listing); a
+    model whose sidecars are named exactly needs no listing; a flat folder of many models is
+    listed once while it does not change (it was listed for every model: N² names)."""
+    from pathlib import Path
+
+    from batch_library import rigged_bar
+
+    rigged_bar(tmp_path, "bar")
+    (tmp_path / "bar.tgf").rename(tmp_path / "BAR.TGF")
+    (tmp_path / "bar.dmat").rename(tmp_path / "Bar.DMAT")
+    for i in range(3):
+        rigged_bar(tmp_path, f"exact{i}")
+    listed = []
+    real = Path.iterdir
+    monkeypatch.setattr(Path, "iterdir", lambda self: listed.append(self) or real(self))
+    m = load_model(tmp_path / "bar.obj")
+    assert m.n_bones == 2 and m.weights is not None
+    for i in range(3):
+        assert load_model(tmp_path / f"exact{i}.obj").weights is not None
+    assert len(listed) <= 1
+
+
 @needs_data
 def test_binary_and_ascii_dmat_agree(tmp_path):
     raw = read_dmat(LIBIGL / "elephant-weights.dmat")  # this one is binary

@@ -105,6 +105,40 @@ def test_the_corner_finder_measures_a_known_fillet(rho):
     assert np.array_equal(a.stress[others], a.nominal_stress[others], equal_nan=True)
 
 
+@pytest.mark.parametrize("rho", [0.12, 0.06])
+def test_a_narrow_fillet_the_mesh_resolves_is_a_fillet_and_a_ring_is_a_sharp_edge(rho):
+    # 0.12 and 0.06 mm fillets on d = 6 (r/d 0.02, 0.01), 9 vertices over the arc: their points
+    # spread axially by 0.035 / 0.018 mm, under 0.02 r = 0.06 mm (the sharp-edge tolerance that
+    # read the study's 0.12 mm fillet as a sharp edge, Kt 7.7), but far above 0.05 of the mesh's
+    # edge length there: the radius is measured (docs/notch.md).
+    a = analyse(*stepped_bar(rho), min_notch_radius=0.01)
+    (i,) = np.flatnonzero(a.notch)
+    assert a.notch_radius[i] == pytest.approx(rho, rel=0.03)
+    # The same bar with a sharp edge (one ring of vertices) still reads radius 0, i.e. the clamp.
+    a = analyse(*stepped_bar(0.0), min_notch_radius=0.01)
+    (i,) = np.flatnonzero(a.notch)
+    assert a.notch_radius[i] == 0.01
+
+
+def test_a_sharp_edge_that_wanders_along_the_axis_is_still_a_sharp_edge():
+    # A sharp step whose edge ring waves +-0.05 mm along the axis (8 waves around; a shoulder
+    # that is not quite flat), meshed finely along the meridian near it (rings 0.25 mm apart):
+    # its points spread axially by 0.035 mm, over 0.1 of the edge length, like a narrow fillet's,
+    # but not radially (all at t = 3 mm): one ring, a sharp edge (docs/notch.md).
+    xs, ts = list(np.arange(-15.0, 0.0, 1.0)), [6.0] * 15
+    face = np.arange(6.0, 3.0 - 1e-9, -0.25)  # the shoulder face down to the edge at t = 3
+    near = np.arange(0.25, 2.0, 0.25)
+    tail = np.arange(2.0, 30.0 + 1e-9, 0.5)
+    xs += [0.0] * len(face) + list(near) + list(tail)
+    ts += list(face) + [3.0] * (len(near) + len(tail))
+    v, f = revolve(xs, ts, 96)
+    edge = 15 + len(face) - 1  # the profile index of the edge ring
+    v[96 * edge:96 * (edge + 1), 0] += 0.05 * np.sin(8 * np.linspace(0, 2 * np.pi, 96, endpoint=False))
+    a = analyse(v, f, min_notch_radius=0.01)
+    (i,) = np.flatnonzero(a.notch)
+    assert a.notch_radius[i] == 0.01  # radius 0, clamped
+
+
 def test_a_sharp_corner_is_taken_at_the_print_resolution():
     v, f = stepped_bar(0.0)
     a = analyse(v, f)

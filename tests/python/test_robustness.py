@@ -640,8 +640,13 @@ def test_bad_settings(clean, name, unit, value):
 
 def test_interval_too_small(clean):
     v, f, sk, _ = clean
-    with pytest.raises(ValueError, match="interval too small"):
+    # the global budget (max_sections, issue 36) refuses first, naming the interval
+    with pytest.raises(ValueError, match=r"refused: .* sections .* at 1e-09 mm .* above the "
+                       r"limit of 200 000 sections"):
         osteon.analyze(v, f, sk, interval=1e-9)
+    # lifted, the engine's own per-bone limit still holds
+    with pytest.raises(ValueError, match="interval too small"):
+        osteon.analyze(v, f, sk, interval=1e-5, max_sections=2**31 - 1)
 
 
 @pytest.mark.parametrize("value", [-1.0, np.nan])

@@ -50,8 +50,9 @@ class OsteonLiveSettings(bpy.types.PropertyGroup):
                     "least as long as the previous one took)")
     show_sections: BoolProperty(
         name="Show sections", default=False, update=_on_show_sections,
-        description="Draw the outlines of the last analysis's weak sections (magenta) and "
-                    "doubtful ones (orange) in the viewport")
+        description="Draw the outlines of the last analysis's weak sections (magenta), "
+                    "doubtful ones (orange) and corner sections (white: a corner raises the "
+                    "stress) in the viewport")
     show_all_sections: BoolProperty(
         name="All sections", default=False, update=_on_show_sections,
         description="With Show sections: also draw every other section, thin, coloured by "

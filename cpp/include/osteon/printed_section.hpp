@@ -25,6 +25,10 @@ struct PrintOptions {
   /// FDM: skins lie only under surfaces at most this steep from the layer plane, radians
   /// (pi/2: all; PrusaSlicer drops a hollow print's skin strips narrower than two lines).
   double skin_max_slope = M_PI / 2;
+  double layer_height = 0.0;  ///< FDM: layer height, mm (the rows of the skin widening)
+  /// FDM: a skin strip narrower than twice this is widened by it into the sparse infill, mm
+  /// (PrusaSlicer / Bambu / Orca: 3 x the solid infill's line width; 0: not widened).
+  double skin_growth = 0.0;
 };
 
 /// A section as printed: the transformed section's properties and the sparse region.
@@ -46,7 +50,9 @@ struct PrintedSection {
 /// FDM: the sparse region is the cut eroded by the wall ellipse (semi-axes wall_depth cos(theta)
 /// along the in-plane build axis, wall_depth across it) intersected with the cut shifted by
 /// +-skin_depth sin(theta) along that axis; its islands whose layer area (area / cos(theta))
-/// is under solid_infill_below_area are solid. Shell: the cut eroded by wall_depth, hollow.
+/// is under solid_infill_below_area are solid; with skin_growth, skin strips narrower than
+/// 2 x skin_growth in a layer are widened by it (skin_growth.hpp). Shell: the cut eroded by
+/// wall_depth, hollow.
 /// `keep_sparse`: fill PrintedSection::sparse.
 PrintedSection printed_section(const SectionPolygon& cut, const SectionProperties& solid,
                                const Vec2& build_in_plane, double cos_theta,

@@ -5,9 +5,10 @@
 ...     print(rec["id"], rec["status"], rec.get("stress_ratio"))
 
 Each model is one task (:func:`process_model`) that takes a path and returns a record; tasks run
-in this process, on a local process pool (all cores by default) or on a Dask ``distributed``
-cluster (``client=``). Bad files get ``status`` / ``reason`` and never stop the run. Outputs:
-:mod:`osteon.batch.outputs`. Units: mm, N, MPa.
+on a local pool of long-lived worker processes (all cores by default; :mod:`.worker`), in this
+process (one worker and no time limit) or on a Dask ``distributed`` cluster (``client=``; the
+time limit through :mod:`.isolated`). Bad files get ``status`` / ``reason`` and never stop the
+run. Outputs: :mod:`osteon.batch.outputs`. Units: mm, N, MPa.
 """
 
 from .discover import MODEL_EXTENSIONS, ModelFile, discover

@@ -21,6 +21,7 @@ import html
 import io
 import json
 import os
+import re
 from pathlib import Path
 
 from ..io.atomic import write_atomic
@@ -127,6 +128,47 @@ def repair_results(out) -> None:
             fh.truncate(keep)
 
 
+_FINISHED = "_finished"
+#: in JSON text (ASCII: json.dumps escapes the rest): a UTF-16 surrogate, which a name that is
+#: not UTF-8 (a file name's undecodable bytes) leaves as a lone escape
+_SURROGATE = re.compile(r"\\ud[89a-f]", re.IGNORECASE)
+
+
+def _json_of(record: dict, report: bool) -> tuple[dict, str | None]:
+    """(the record JSON-safe, the text of its report when ``report``). The fast path writes the
+    record once (the common case: every number finite, every name UTF-8); otherwise it is made
+    JSON-safe first (:func:`_clean`, :func:`_printable`): the same text either way."""
+    try:
+        text = to_json(record) if report else None
+        if text is None:
+            json.dumps(record, allow_nan=False)
+            return record, None
+    except ValueError:  # a non-finite number
+        record = _clean(record)
+        text = to_json(_printable(record)) if report else None
+        return record, text
+    if _SURROGATE.search(text):  # rare: a surrogate pair or a name that is not UTF-8
+        text = to_json(_printable(record))
+    return record, text
+
+
+def finish_record(record: dict) -> dict:
+    """A task's record as the output folder keeps it: JSON-safe (non-finite numbers None) and,
+    for an analysed model, ``json`` naming its report, whose bytes (``models/ID.json``) join
+    the record's ``_files``. Made where the model was analysed (a pool or Dask worker), so that
+    the workers serialise the reports in parallel and the batch process only writes bytes."""
+    files = dict(record.pop("_files", None) or {})
+    ok = record.get("status") == "ok"
+    if ok:
+        record["json"] = f"{MODELS_DIR}/{record['id']}.json"
+    rec, text = _json_of(record, ok)
+    if ok:
+        files[f"{rec['id']}.json"] = text.encode("utf-8")
+    rec["_files"] = files
+    rec[_FINISHED] = True
+    return rec
+
+
 class OutputWriter:
     """Writes each finished model's files and its ``results.jsonl`` line."""
 
@@ -141,13 +183,11 @@ class OutputWriter:
 
     def write(self, record: dict) -> dict:
         """Write the model's files and append its line; returns the record without file bytes."""
-        files = record.pop("_files", None) or {}
-        for name, data in files.items():
+        rec = record if record.get(_FINISHED) else finish_record(record)
+        rec.pop(_FINISHED, None)
+        files = rec.pop("_files", None) or {}
+        for name, data in files.items():  # the report last: written means the model is done
             write_atomic(self.models / name, data)
-        rec = _clean(record)
-        if rec.get("status") == "ok":
-            rec["json"] = f"{MODELS_DIR}/{rec['id']}.json"
-            write_atomic(self.models / f"{rec['id']}.json", to_json(_printable(rec)))
         self._fh.write(json.dumps(summary_line(rec), allow_nan=False) + "\n")
         self._fh.flush()
         return rec

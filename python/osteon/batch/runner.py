@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import sys
 import uuid
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -14,12 +14,14 @@ from .discover import ModelFile, discover
 from .outputs import (
     OutputWriter,
     check_resume_settings,
+    finish_record,
     read_results,
     save_settings,
     write_summaries,
 )
 from .settings import BatchSettings
 from .task import process_model
+from .worker import _crash_record, _kill_group, _over_time, _worker_loop
 
 DASK_MISSING = (
     "the Dask path needs the 'distributed' package (a dependency of osteon): "
@@ -27,57 +29,42 @@ DASK_MISSING = (
 )
 
 
-def _crash_record(m: ModelFile, why: str) -> dict:
-    return {"model": m.path, "id": m.id, "status": "failed", "reason": why, "seconds": 0.0,
-            "_files": {}}
-
-
-def _serial(models, s, timeout=None):
-    """In this process. A model over ``timeout`` seconds is stopped by SIGALRM (main thread,
-    POSIX) at its next Python instruction; the engine's C++ runs finish first."""
+def _serial(models, s):
+    """In this process, one model after the other (no time limit: a limit needs a process it
+    can stop, see :func:`run`)."""
     for m in models:
-        with _alarm(timeout):
-            try:
-                rec = process_model(m.path, s, m.id)
-            except _OverTime:
-                rec = _crash_record(m, _over_time(timeout))
-        yield rec
+        yield process_model(m.path, s, m.id)
 
 
-class _OverTime(BaseException):  # BaseException: process_model's `except Exception` lets it by
-    pass
+def _forkable() -> bool:
+    """True when a worker may be forked from this process (Linux, one Python thread).
 
-
-def _over_time(timeout) -> str:
-    return (f"stopped: over the time limit of {timeout:g} s per model (model_timeout_s, "
-            "--model-timeout)")
-
-
-@contextlib.contextmanager
-def _alarm(timeout):
+    Forking copies a process whose only running thread is the caller, so no lock can be left
+    held by another thread; the engine starts its threads inside a call and joins them before
+    returning, and OpenBLAS's idle threads are stopped and restarted around ``fork`` by its own
+    ``pthread_atfork`` handlers. A forked worker starts in milliseconds with everything this
+    process imported (a fresh interpreter importing osteon costs ~1 s of CPU, as much as
+    ~30 models). Any other Python thread (a progress bar's monitor, a Dask client, a caller's
+    threads): the fork server instead."""
     import threading
 
-    usable = (timeout and hasattr(signal, "setitimer")
-              and threading.current_thread() is threading.main_thread())
-    if not usable:
-        yield
-        return
-
-    def ring(signum, frame):
-        raise _OverTime
-
-    old = signal.signal(signal.SIGALRM, ring)
-    signal.setitimer(signal.ITIMER_REAL, float(timeout))
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
+    return (sys.platform.startswith("linux") and threading.active_count() == 1
+            and "fork" in _mp().get_all_start_methods())
 
 
-def _pool_context():
+def _mp():
     import multiprocessing as mp
 
+    return mp
+
+
+def _pool_context(fork: bool):
+    mp = _mp()
+    if fork:
+        for stream in (sys.stdout, sys.stderr):  # a child must not write our buffers again
+            with contextlib.suppress(Exception):
+                stream.flush()
+        return mp.get_context("fork")
     if sys.platform.startswith("linux"):
         # forkserver: workers are forked from a clean server that has imported osteon once
         # (no fork of a process whose engine threads are running, no re-import per worker)
@@ -87,79 +74,43 @@ def _pool_context():
     return mp.get_context("spawn")
 
 
-def _watch_parent(parent_pid: int):
-    """In a worker: end the worker's process group when the batch process is gone (killed),
-    so that no worker keeps spinning on a model nobody waits for."""
-    import threading
-    import time
+def _preload(s) -> None:
+    """Import in this process what every worker needs, before forking them, so that it is
+    imported once (matplotlib when pictures are drawn; the readers are imported already).
+    trimesh (glTF, unusual mesh layouts) stays lazy: a worker imports it if a model needs it."""
+    from . import task  # noqa: F401
 
-    def watch():
-        while True:
-            time.sleep(0.5)
-            try:
-                os.kill(parent_pid, 0)
-            except ProcessLookupError:
-                _kill_group(os.getpid())
-                os._exit(1)
-            except PermissionError:  # pid reused by another user's process: ours is gone
-                _kill_group(os.getpid())
-                os._exit(1)
+    if s.png:
+        with contextlib.suppress(ImportError):
+            from ..plots import _mpl
 
-    threading.Thread(target=watch, daemon=True).start()
-
-
-def _worker_loop(conn, task, parent_pid):
-    """A pool worker: its own process group (so that stopping it stops whatever it started),
-    then tasks from ``conn`` until None or EOF."""
-    with contextlib.suppress(OSError):
-        os.setsid()
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl+C is the batch process's to handle
-    _watch_parent(parent_pid)
-    while True:
-        try:
-            job = conn.recv()
-        except (EOFError, OSError):
-            return
-        if job is None:
-            return
-        path, s, model_id = job
-        try:
-            rec = task(path, s, model_id)
-        except Exception as e:  # noqa: BLE001 - process_model never raises; a test task may
-            rec = {"model": path, "id": model_id, "status": "failed",
-                   "reason": f"{type(e).__name__}: {e}", "seconds": 0.0, "_files": {}}
-        conn.send(rec)
-
-
-def _kill_group(pid: int):
-    """SIGKILL the process group led by ``pid`` (a worker after its setsid), then ``pid``."""
-    if os.name != "posix":
-        return
-    with contextlib.suppress(ProcessLookupError, PermissionError):
-        if os.getpgid(pid) == pid:
-            os.killpg(pid, signal.SIGKILL)
-    with contextlib.suppress(ProcessLookupError, PermissionError):
-        os.kill(pid, signal.SIGKILL)
+            _mpl()
 
 
 class _Worker:
-    """One worker process and the model it works on (``deadline``: when it is over time)."""
+    """One long-lived worker process (started once, then given models one by one through a
+    pipe) and the model it works on (``deadline``: when it is over time)."""
 
     def __init__(self, ctx, task):
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_worker_loop, args=(child, task, os.getpid()),
                                 daemon=True)
-        self.proc.start()
+        with warnings.catch_warnings():
+            # Python >= 3.12 warns on fork when the process has other OS threads: here only
+            # OpenBLAS's idle ones, which its pthread_atfork handlers take care of (_forkable)
+            warnings.filterwarnings("ignore", message=r".*use of fork\(\) may lead to deadlocks",
+                                    category=DeprecationWarning)
+            self.proc.start()
         child.close()
         self.model: ModelFile | None = None
         self.deadline: float | None = None
 
-    def give(self, m: ModelFile, s, timeout):
+    def give(self, m: ModelFile, s, timeout, finish: bool):
         import time
 
         self.model = m
         self.deadline = time.monotonic() + timeout if timeout else None
-        self.conn.send((m.path, s, m.id))
+        self.conn.send((m.path, s, m.id, finish))
 
     def stop(self):
         """Kill the worker and its process group; wait for it."""
@@ -179,23 +130,44 @@ class _Worker:
             self.conn.close()
 
 
-def _pool(models, s, workers: int, task=process_model, timeout=None):
-    """``workers`` worker processes, one model each at a time. A worker that dies (a crash in a
-    reader or the engine) fails only its model; a model over ``timeout`` seconds is that
-    model's failure: its worker's process group is killed and a fresh worker takes over. When
-    the run ends or is stopped, every worker is ended (no orphan process)."""
+def _pool(models, s, workers: int, task=process_model, timeout=None, finish=False):
+    """``workers`` long-lived worker processes, started now (before the caller starts any
+    thread: they are forked from this process when :func:`_forkable`), each given one model at
+    a time; returns the iterator of records. A worker that dies (a crash in a reader or the
+    engine) fails only its model; a model over ``timeout`` seconds is that model's failure: its
+    worker's process group is killed and a fresh worker takes over. When the run ends or is
+    stopped, every worker is ended (no orphan process). ``finish``: the workers return records
+    as :func:`osteon.batch.outputs.finish_record` makes them (for an output folder)."""
+    todo = list(models)[::-1]  # a stack: pop() takes the next model
+    if not todo:
+        return (rec for rec in ())  # a generator: the caller closes it
+    fork = _forkable()
+    if fork:
+        _preload(s)
+    ctx = _pool_context(fork)
+    idle = [_Worker(ctx, task) for _ in range(min(workers, len(todo)))]
+
+    def fresh():
+        # a replacement: forked again while this process still has one thread (a progress
+        # bar's monitor thread may have started since), else from the fork server
+        nonlocal ctx, fork
+        if fork and not _forkable():
+            fork, ctx = False, _pool_context(False)
+        return _Worker(_pool_context(True) if fork else ctx, task)
+
+    return _pool_loop(todo, idle, fresh, s, timeout, finish)
+
+
+def _pool_loop(todo, idle, fresh, s, timeout, finish):
     import time
     from multiprocessing.connection import wait
 
-    ctx = _pool_context()
-    todo = list(models)[::-1]  # a stack: pop() takes the next model
-    idle = [_Worker(ctx, task) for _ in range(min(workers, len(todo)))]
     busy: dict = {}
     try:
         while todo or busy:
             while todo and idle:
                 w = idle.pop()
-                w.give(todo.pop(), s, timeout)
+                w.give(todo.pop(), s, timeout, finish)
                 busy[w.conn] = w
             deadlines = [w.deadline for w in busy.values() if w.deadline is not None]
             wait_s = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
@@ -208,7 +180,7 @@ def _pool(models, s, workers: int, task=process_model, timeout=None):
                     rec = _crash_record(w.model, "the worker process crashed on this model "
                                         f"(exit code {w.proc.exitcode})")
                     w.stop()
-                    w = _Worker(ctx, task) if todo else None
+                    w = fresh() if todo else None
                 if w is not None:
                     idle.append(w)
                 yield rec
@@ -218,7 +190,7 @@ def _pool(models, s, workers: int, task=process_model, timeout=None):
                     del busy[conn]
                     w.stop()
                     if todo:
-                        idle.append(_Worker(ctx, task))
+                        idle.append(fresh())
                     yield _crash_record(w.model, _over_time(timeout))
     finally:
         for w in list(busy.values()):
@@ -227,7 +199,19 @@ def _pool(models, s, workers: int, task=process_model, timeout=None):
             w.close()
 
 
-def _dask(models, s, client):
+def _dask_task(path, s, model_id, finish, timeout, task=None):
+    """The task of a Dask run: :func:`process_model` (or ``task``; with ``finish``: the record
+    as the output folder keeps it); with a time limit in a child process that can be stopped
+    (:mod:`osteon.batch.isolated`)."""
+    if timeout:
+        from .isolated import run_isolated
+
+        return run_isolated(path, s, model_id, timeout, finish, task)
+    rec = (task or process_model)(path, s, model_id)
+    return finish_record(rec) if finish else rec
+
+
+def _dask(models, s, client, finish=False, timeout=None, task=None):
     """Same tasks on a Dask ``distributed`` client, with a bounded window of tasks in flight."""
     try:
         from distributed import as_completed
@@ -239,7 +223,7 @@ def _dask(models, s, client):
     pending = {}
 
     def submit(m):
-        f = client.submit(process_model, m.path, s, m.id, pure=False,
+        f = client.submit(_dask_task, m.path, s, m.id, finish, timeout, task, pure=False,
                           key=f"osteon-batch-{m.id}-{uuid.uuid4().hex}")
         pending[f.key] = m
         return f
@@ -288,7 +272,10 @@ def run(
 
     ``settings``: a :class:`BatchSettings` or a dict of its fields (mm, N, MPa).
     ``client``: a ``distributed.Client``; the tasks then run on its cluster. Otherwise
-    ``workers`` processes of a local pool (default: all cores; 1 = in this process).
+    ``workers`` long-lived processes of a local pool (default: all cores). The settings'
+    ``model_timeout_s`` holds for every runner: with ``workers=1`` the models run in one worker
+    process (in this process when the limit is 0), on Dask each in a child process of the Dask
+    worker (:mod:`osteon.batch.isolated`).
     ``out``: folder for the outputs (see :mod:`osteon.batch.outputs`); then ``resume=True``
     skips the models already in ``out/results.jsonl``, and ``summary.csv`` / ``summary.html``
     are written when the iterator is exhausted or closed. ``progress``: a tqdm bar on stderr.
@@ -311,18 +298,23 @@ def run(
             check_resume_settings(out, s)
             skip = {r["model"] for r in read_results(out)}
     todo = [m for m in models if m.path not in skip]
-    writer = OutputWriter(out, resume=resume) if out is not None else None
-    if writer is not None:
-        save_settings(out, s)
+    finish = out is not None  # records as the output folder keeps them, made by the workers
+    timeout = s.model_timeout_s or None
     if client is not None:
-        it = _dask(todo, s, client)
+        it = _dask(todo, s, client, finish, timeout)
     else:
         n = workers if workers is not None else (os.cpu_count() or 1)
         if n < 1:
             raise ValueError(f"workers must be >= 1, got {n}")
         n = min(n, max(len(todo), 1))
-        timeout = s.model_timeout_s or None
-        it = _serial(todo, s, timeout) if n == 1 else _pool(todo, s, n, timeout=timeout)
+        # the pool starts here, before the output file and the progress bar (a thread) exist;
+        # one model at a time with a time limit is a pool of one worker (only a process can be
+        # stopped in the engine's C++); without a limit it runs in this process
+        it = (_serial(todo, s) if n == 1 and timeout is None
+              else _pool(todo, s, n, task=process_model, timeout=timeout, finish=finish))
+    writer = OutputWriter(out, resume=resume) if out is not None else None
+    if writer is not None:
+        save_settings(out, s)
     bar = _bar(len(todo), len(skip & {m.path for m in models})) if progress else None
     failures = 0
     try:

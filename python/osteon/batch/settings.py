@@ -36,7 +36,8 @@ class BatchSettings:
     the settings' FDM print profile (:func:`osteon.reinforce`) and write ``ID.3mf`` for that
     slicer, the report's ``reinforcement`` listing the regions.
     ``model_timeout_s`` (seconds one model may take; over it the model fails with that reason
-    and its worker process is stopped; 0 = no limit); ``max_sections`` (a model whose section
+    and its worker process is killed with its process group, on every runner: the pool, one
+    worker process for ``workers=1``, a child of the Dask worker on Dask; 0 = no limit); ``max_sections`` (a model whose section
     estimate is above it fails before the analysis, the estimate and memory in its reason:
     :func:`osteon.settings.section_budget`).
     """
@@ -103,6 +104,7 @@ class BatchSettings:
         """The engine's keyword arguments for one model (``osteon.settings.engine_arguments``)."""
         kw = engine_arguments(self.settings, bone_names, correct=self.correct)
         kw["threads"] = int(self.engine_threads)
+        kw["max_sections"] = int(self.max_sections)  # the engine's own check, same limit
         return kw
 
     def check(self) -> None:

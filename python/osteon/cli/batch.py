@@ -68,7 +68,10 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     add_max_sections(p)
     p.add_argument("--model-timeout", type=float, default=DEFAULT_MODEL_TIMEOUT_S, metavar="S",
                    help="seconds one model may take; over it the model fails with that reason "
-                   f"and its worker is stopped (default {DEFAULT_MODEL_TIMEOUT_S:g}; 0 = none)")
+                   "and its worker process is killed with what it started, the engine's C++ "
+                   "included (--jobs 1: one worker process; --dask: a child process of the "
+                   f"Dask worker) (default {DEFAULT_MODEL_TIMEOUT_S:g}; 0 = none, and --jobs 1 "
+                   "then runs in this process)")
     add_notch_options(p)
     p.add_argument("--correct", action="store_true",
                    help="also thicken weak bones and write each corrected mesh")
@@ -87,7 +90,8 @@ def add_batch_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true",
                    help="skip the models already in DIR/results.jsonl")
     p.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
-                   help="worker processes (default: all cores; 1 = no pool)")
+                   help="worker processes, started once (default: all cores; 1 = one "
+                   "worker, or this process with --model-timeout 0)")
     p.add_argument("--dask", metavar="ADDRESS",
                    help="run the tasks on a Dask scheduler (tcp://host:8786) or 'local' "
                    "(a LocalCluster of --jobs processes)")

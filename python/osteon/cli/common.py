@@ -15,7 +15,7 @@ from .. import materials
 from ..io.atomic import check_output_path, write_atomic
 from ..io.model import printable
 from ..report import bone_table as _bone_rows
-from ..report import build_report, to_json
+from ..report import build_report, printable_stress, to_json, too_thin_mask
 from ..settings import Settings, engine_arguments, min_thickness_mm
 
 
@@ -171,8 +171,7 @@ def load_model_of(args):
 def bone_table(analysis, top=10, scales=None):
     """Rows (worst first) of per-bone results (:func:`osteon.report.bone_table`)."""
     # too-thin sections are out of the max stress and the weak count: out of the rows too
-    stress = np.where(too_thin_mask(analysis), np.nan, np.asarray(analysis.stress, float))
-    rows = _bone_rows(analysis.section_bone, stress, analysis.weak,
+    rows = _bone_rows(analysis.section_bone, printable_stress(analysis), analysis.weak,
                       analysis.bone_names, analysis.allowable_stress, scales,
                       analysis.stress_ratio, analysis.across_layers,
                       stress_concentration=getattr(analysis, "stress_concentration", None))
@@ -240,9 +239,13 @@ def engine_args(settings: Settings, model, correct: bool = False,
     Warns on stderr when they would make more than ``SECTION_LIMIT`` sections; refuses
     (ValueError with the estimate) above ``max_sections`` for the whole model (default
     :data:`osteon.settings.MAX_SECTIONS`)."""
+    from ..settings import MAX_SECTIONS
+
     positional = (model.vertices, model.faces, model.skeleton, model.weights)
     keyword = _arguments(settings, model.bone_names, correct)
     warn_many_sections(model, keyword["interval"], max_sections)
+    # the engine's own check of the budget (AnalysisOptions.max_sections) with the same limit
+    keyword["max_sections"] = MAX_SECTIONS if max_sections is None else int(max_sections)
     return positional, keyword
 
 
@@ -306,15 +309,6 @@ def check_overflow(analysis, force_n: float) -> None:
     if n:
         raise ValueError(f"--force {force_n:g} N: {n} of {len(stress)} section stresses overflow "
                          "(inf); use a force a print can meet (newtons, e.g. 1 .. 1000)")
-
-
-def too_thin_mask(analysis) -> np.ndarray:
-    """(S,) bool: sections too thin to print; the engine leaves them out of the max stress and
-    the weak count, so the tables must too (they are listed on their own)."""
-    import osteon
-
-    flags = np.asarray(analysis.section_flags)
-    return (flags & osteon.SECTION_FLAGS["too_thin"]) != 0
 
 
 def headline(analysis, seconds: float) -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 from pathlib import Path
@@ -99,14 +100,41 @@ def write_mesh(path, vertices, faces):
 
 
 def _sidecar(mesh: Path, suffixes):
+    """The first file next to ``mesh`` named its stem + one of ``suffixes``, in any letter
+    case (``arm.TGF``); None when there is none. Exact names are looked up first (a stat
+    each); the folder is listed only when none exists, and that listing is kept while the
+    folder is unchanged, so a batch over a flat folder of N models lists it once, not N times
+    (N² names)."""
     stem = mesh.with_suffix("")
     folder = mesh.parent
-    names = {f.name.lower(): f for f in folder.iterdir()} if folder.is_dir() else {}
     for s in suffixes:
-        cand = (stem.name + s).lower()
-        if cand in names:
-            return names[cand]
+        exact = folder / (stem.name + s)
+        if exact.is_file():
+            return exact
+    names = _names_in(folder)
+    for s in suffixes:
+        cand = names.get((stem.name + s).lower())
+        if cand is not None and cand.is_file():  # a stale listing names no file
+            return cand
     return None
+
+
+def _names_in(folder: Path) -> dict:
+    """{lower-case name: path} of the files in ``folder`` ({} if it is not one), listed once per
+    state of the folder (its modification time)."""
+    try:
+        stamp = os.stat(folder).st_mtime_ns
+    except OSError:
+        return {}
+    return _listing(str(folder), stamp)
+
+
+@functools.lru_cache(maxsize=16)
+def _listing(folder: str, stamp: int) -> dict:
+    try:
+        return {f.name.lower(): f for f in Path(folder).iterdir()}
+    except OSError:
+        return {}
 
 
 def load_model(
