@@ -303,8 +303,15 @@ Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, cons
 // and its unit radial direction (x, y) in a frame of the plane.
 struct FilletPoint {
   double a = 0, na = 0, turn = 0, x = 0, y = 0;
-  double t = 0;               // distance from the axis, mm
-  std::vector<double> edges;  // lengths of its mesh edges in the meridian plane, mm
+  double t = 0;                              // distance from the axis, mm
+  std::size_t edge_begin = 0, edge_end = 0;  // its mesh edges' lengths in FilletPoints::edges
+};
+
+// The fillet points of a corner and the lengths of their mesh edges in the meridian plane (mm),
+// one run per point.
+struct FilletPoints {
+  std::vector<FilletPoint> points;
+  std::vector<double> edges;
 };
 
 // The fillet points of the concave corner between a thin section (bone point `origin`,
@@ -312,9 +319,8 @@ struct FilletPoint {
 // axial [lo, hi] of the thin section's plane, in the mesh's order. A point's test does not
 // depend on the window beyond its own a (its normal and neighbours come from all its faces),
 // so the points of a narrower window are exactly those of this list inside it.
-std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& grid,
-                                       std::vector<int>& slot, const Vec3& origin, const Vec3& u,
-                                       double r_thin, double lo, double hi) {
+FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vector<int>& slot,
+                           const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi) {
   const Vec3 e1 = u.unitOrthogonal(), e2 = u.cross(e1);
   CutRegion region;  // the cylinder t <= 2.5 r_thin around the axis
   region.point = origin;
@@ -342,7 +348,15 @@ std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& gri
   std::vector<double> bend(local.vertices.size(), 0.0);
   // The candidates' edges in the meridian plane (the plane a fillet curves in): their lengths
   // there are what the mesh resolves of a fillet (a ring's own edges count ~0).
-  std::vector<std::vector<double>> edges(local.vertices.size());
+  // (One run per candidate in one array: two per face at the candidate.)
+  std::vector<std::size_t> next(local.vertices.size() + 1, 0);
+  for (std::size_t f = 0; f < local.faces.size(); f += 3)
+    for (int j = 0; j < 3; ++j)
+      if (candidate[local.at(local.faces[f + j])]) next[local.at(local.faces[f + j]) + 1] += 2;
+  for (std::size_t k = 0; k < local.vertices.size(); ++k) next[k + 1] += next[k];
+  FilletPoints out;
+  out.edges.resize(next.back());
+  const std::vector<std::size_t> first(next.begin(), next.end() - 1);
   for (std::size_t f = 0; f < local.faces.size(); f += 3) {
     int slots[3];
     for (int j = 0; j < 3; ++j) slots[j] = local.at(local.faces[f + j]);
@@ -352,7 +366,8 @@ std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& gri
       for (int k = 1; k < 3; ++k) {
         const Meridian& q = merid[slots[(j + k) % 3]];
         bend[slots[j]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
-        edges[slots[j]].push_back(std::hypot(q.a - p.a, q.t - p.t));
+        const double da = q.a - p.a, dt = q.t - p.t;
+        out.edges[next[slots[j]]++] = std::sqrt(da * da + dt * dt);
       }
     }
   }
@@ -364,7 +379,6 @@ std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& gri
       candidates.push_back(static_cast<Index>(k));
       bends.push_back(bend[k]);
     }
-  std::vector<FilletPoint> pts;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     if (!(bends[c] > 1e-9 * r_thin)) continue;
     const Meridian& m = merid[candidates[c]];
@@ -374,13 +388,14 @@ std::vector<FilletPoint> fillet_points(const MeshView& mesh, const FaceGrid& gri
     p.na = m.na / std::hypot(m.na, m.nr);
     p.turn = std::atan2(-m.na, m.nr);
     p.t = m.t;
-    p.edges = std::move(edges[candidates[c]]);
+    p.edge_begin = first[candidates[c]];
+    p.edge_end = next[candidates[c]];
     const double t = std::hypot(radial.dot(e1), radial.dot(e2));
     p.x = t > 0 ? radial.dot(e1) / t : 1.0;
     p.y = t > 0 ? radial.dot(e2) / t : 0.0;
-    pts.push_back(p);
+    out.points.push_back(p);
   }
-  return pts;
+  return out;
 }
 
 // Octant 0..7 of the direction (x, y), counter-clockwise from (1, 0).
@@ -415,9 +430,9 @@ std::pair<double, double> sector_start(const std::vector<const FilletPoint*>& pt
 // The corner's radius from the fillet points within axial [lo, hi]: fitted per 45-degree
 // sector around the axis (the sectors start where sector_start says), the sharpest sector
 // governs.
-Corner corner_in(const std::vector<FilletPoint>& points, double r_thin, double lo, double hi) {
+Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi) {
   std::vector<const FilletPoint*> inside;
-  for (const FilletPoint& p : points)
+  for (const FilletPoint& p : fillet.points)
     if (p.a >= lo && p.a <= hi) inside.push_back(&p);
   const auto [c0, s0] = sector_start(inside);
   SectorPoints pts;
@@ -425,7 +440,8 @@ Corner corner_in(const std::vector<FilletPoint>& points, double r_thin, double l
     const int sector = octant(p->x * c0 + p->y * s0, p->y * c0 - p->x * s0);
     pts.a[sector].push_back(p->a);
     pts.t[sector].push_back(p->t);
-    pts.edge[sector].insert(pts.edge[sector].end(), p->edges.begin(), p->edges.end());
+    pts.edge[sector].insert(pts.edge[sector].end(), fillet.edges.begin() + p->edge_begin,
+                            fillet.edges.begin() + p->edge_end);
     pts.na[sector].push_back(p->na);
     pts.turn[sector] = std::max(pts.turn[sector], p->turn);
   }
@@ -546,7 +562,7 @@ std::vector<Corner> measure_corners(const MeshView& mesh,
       slot.assign(mesh.num_vertices, -1);
     }
     const Step& st = steps[s];
-    const std::vector<FilletPoint> points =
+    const FilletPoints points =
         fillet_points(mesh, *grid, slot, st.point, st.u, st.r_thin, -0.25 * reach, 1.25 * reach);
     for (std::size_t t = s; t < steps.size(); ++t) {
       if (!same_side(s, t)) continue;
