@@ -83,6 +83,19 @@ print(len(f), osteon.__file__)
 """
 
 
+def callgrind(code: str, env: dict, out: str) -> tuple[int, str]:
+    """Runs `code` in a child Python under callgrind, counting the engine's Analyzer
+    construction and run into the file `out`: (instructions counted, the child's stdout)."""
+    res = subprocess.run(
+        ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+         "--toggle-collect=osteon::Analyzer::Analyzer*",
+         "--toggle-collect=osteon::Analyzer::Impl::run*", sys.executable, "-c", code],
+        env=env, capture_output=True, text=True, check=True)
+    with open(out) as fh:
+        total = next(int(line.split()[1]) for line in fh if line.startswith("totals:"))
+    return total, res.stdout
+
+
 def count_instructions(pythonpath: str | None, model: str, sub: int, h: float,
                        no_junctions: bool) -> tuple[int, int, str]:
     """(instructions in the engine's Analyzer construction + run, faces, osteon's file)."""
@@ -94,15 +107,8 @@ def count_instructions(pythonpath: str | None, model: str, sub: int, h: float,
     code = INSTRUCTIONS_CHILD.format(here=str(HERE), model=model, sub=sub, h=float(h),
                                      no_junctions=no_junctions)
     with tempfile.TemporaryDirectory() as tmp:
-        out = os.path.join(tmp, "callgrind.out")
-        res = subprocess.run(
-            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-             "--toggle-collect=osteon::Analyzer::Analyzer*",
-             "--toggle-collect=osteon::Analyzer::Impl::run*", sys.executable, "-c", code],
-            env=env, capture_output=True, text=True, check=True)
-        with open(out) as fh:
-            total = next(int(line.split()[1]) for line in fh if line.startswith("totals:"))
-    faces, file = res.stdout.strip().splitlines()[-1].split(" ", 1)
+        total, stdout = callgrind(code, env, os.path.join(tmp, "callgrind.out"))
+    faces, file = stdout.strip().splitlines()[-1].split(" ", 1)
     return total, int(faces), file
 
 

@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 namespace osteon {
 namespace {
@@ -64,6 +66,55 @@ struct LocalMesh {
   }
 };
 
+// The angle atan2(s, c) in [0, pi] between two edges, s = |e1 x e2| >= 0 and c = e1 . e2 (the
+// angle weights below, most of the search's cost with libm's atan2): the octant reduced to
+// x = tan in [0, 1], the half-angle identity atan x = 2 atan(x / (1 + sqrt(1 + x^2))) applied
+// twice (x <= tan(pi/16) = 0.199), then the Taylor series to x^17 (truncation < 2.4e-15).
+double corner_angle(double s, double c) {
+  const double ac = std::abs(c);
+  if (!(s > 0) && !(ac > 0)) return 0.0;
+  const bool steep = s > ac;
+  double x = steep ? ac / s : s / ac;
+  x = x / (1.0 + std::sqrt(1.0 + x * x));
+  x = x / (1.0 + std::sqrt(1.0 + x * x));
+  const double x2 = x * x;
+  double series = 1.0 / 17.0;
+  for (int k = 7; k >= 0; --k) series = (k % 2 ? -1.0 : 1.0) / (2 * k + 1) + x2 * series;
+  double angle = 4.0 * x * series;
+  if (steep) angle = 0.5 * kPi - angle;
+  return c < 0 ? kPi - angle : angle;
+}
+
+// A candidate's normal, in its meridian plane (radial x, towards the thin side y), turns 8..82
+// degrees from radial (measure_corner). The angle-weighted normal is a positive combination of
+// its faces' normals, and so is its meridian projection: when every face's projection lies
+// below the 8-degree line (or every one above the 82-degree line), so does the vertex's, and it
+// is no candidate. Such vertices are dropped from `need` before their angle weights (atan2) are
+// computed; a margin of 1e-9 (unit normals) keeps every vertex the exact test could take.
+void keep_turning(const MeshView& mesh, const LocalMesh& m, const Vec3& u,
+                  const std::vector<Vec3>& radial, std::vector<char>& need) {
+  const double c8 = std::cos(8.0 * kPi / 180.0), s8 = std::sin(8.0 * kPi / 180.0);
+  const double c82 = std::cos(82.0 * kPi / 180.0), s82 = std::sin(82.0 * kPi / 180.0);
+  constexpr double kMargin = 1e-9;
+  std::vector<char> seen(m.vertices.size(), 0);  // bit 1: a face at/above 8, bit 2: at/below 82
+  for (std::size_t f = 0; f < m.faces.size(); f += 3) {
+    const int at[3] = {m.at(m.faces[f]), m.at(m.faces[f + 1]), m.at(m.faces[f + 2])};
+    if (!need[at[0]] && !need[at[1]] && !need[at[2]]) continue;
+    const Vec3 p0 = mesh.vertex(m.faces[f]);
+    const Vec3 n = (mesh.vertex(m.faces[f + 1]) - p0).cross(mesh.vertex(m.faces[f + 2]) - p0);
+    const double len = n.norm();
+    if (!(len > 0)) continue;
+    const double ny = -n.dot(u) / len;
+    for (int k = 0; k < 3; ++k) {
+      if (!need[at[k]]) continue;
+      const double nx = n.dot(radial[at[k]]) / len;
+      if (c8 * ny - s8 * nx >= -kMargin) seen[at[k]] |= 1;
+      if (c82 * ny - s82 * nx <= kMargin) seen[at[k]] |= 2;
+    }
+  }
+  for (std::size_t k = 0; k < need.size(); ++k) need[k] = need[k] && seen[k] == 3;
+}
+
 // Faces of the cells the slab lo <= u.x <= hi and the region reach that have a vertex inside
 // both (the only ones a candidate's normal and neighbours need), and the normals of their
 // vertices at least `min_t` from the axis (closer ones are no candidate: theirs stay 0).
@@ -72,21 +123,37 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   LocalMesh m;
   m.slot = &slot;
   const double r2 = region.radius * region.radius;
-  auto inside = [&](std::int32_t v) {
-    const Vec3 p = mesh.vertex(v);
+  auto inside = [&](const Vec3& p) {
     const double a = u.dot(p);
     if (a < lo || a > hi) return false;
     Vec3 d = p - region.point;
     d -= d.dot(u) * u;
     return d.squaredNorm() <= r2;
   };
+  // Each cell's distinct vertices (its entries, bit-exact copies) are tested once, and a face
+  // reads its corners' verdicts (a vertex is shared by ~6 faces).
+  // The blocks and cells are first tested against the ball around the slab's piece of the
+  // cylinder (the cylinder alone runs through the whole model).
+  CutRegion ball;
+  ball.point = region.point + (0.5 * (lo + hi) - u.dot(region.point)) * u;
+  ball.radius = std::hypot(region.radius, 0.5 * (hi - lo));
+  std::vector<char> in;
   for (Index k = 0; k < grid.num_blocks(); ++k) {
-    if (!grid.block_near(k, region)) continue;
+    if (!grid.block_near(k, ball)) continue;
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
-      if (!grid.meets(c, u, lo, hi, &region)) continue;
-      for (const std::int32_t* f = grid.faces() + 3 * grid.begin(c);
-           f != grid.faces() + 3 * grid.end(c); f += 3) {
-        if (!inside(f[0]) && !inside(f[1]) && !inside(f[2])) continue;
+      if (!grid.near(c, ball) || !grid.meets(c, u, lo, hi, &region)) continue;
+      const Index e0 = grid.vertex_begin(c), e1 = grid.vertex_end(c);
+      in.assign(e1 - e0, 0);
+      bool any = false;
+      for (Index e = e0; e < e1; ++e) {
+        in[e - e0] = inside(Vec3(grid.entry_x()[e], grid.entry_y()[e], grid.entry_z()[e]));
+        any = any || in[e - e0];
+      }
+      if (!any) continue;
+      for (Index t = grid.begin(c); t < grid.end(c); ++t) {
+        const std::int32_t* fe = grid.face_entries() + 3 * t;
+        if (!in[fe[0] - e0] && !in[fe[1] - e0] && !in[fe[2] - e0]) continue;
+        const std::int32_t* f = grid.faces() + 3 * t;
         for (int j = 0; j < 3; ++j) {
           m.faces.push_back(f[j]);
           if (slot[f[j]] >= 0) continue;
@@ -102,13 +169,17 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   // weights (atan2, most of the search's cost) of the other vertices are not computed.
   const double margin = 1e-9 * region.radius;
   std::vector<char> need(m.vertices.size());
+  std::vector<Vec3> radial(m.vertices.size(), Vec3::Zero());  // unit, where needed
   for (std::size_t k = 0; k < m.vertices.size(); ++k) {
     const Vec3 d = mesh.vertex(m.vertices[k]) - region.point;
     const double a = u.dot(mesh.vertex(m.vertices[k]));
-    const double t = (d - d.dot(u) * u).norm();
+    const Vec3 r = d - d.dot(u) * u;
+    const double t = r.norm();
     need[k] =
         a >= lo - margin && a <= hi + margin && t >= min_t - margin && t <= region.radius + margin;
+    if (need[k] && t > 0) radial[k] = r / t;
   }
+  keep_turning(mesh, m, u, radial, need);
   m.normals.assign(m.vertices.size(), Vec3::Zero());
   for (std::size_t f = 0; f < m.faces.size(); f += 3) {
     const int at[3] = {m.at(m.faces[f]), m.at(m.faces[f + 1]), m.at(m.faces[f + 2])};
@@ -121,7 +192,7 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
     for (int k = 0; k < 3; ++k) {
       if (!need[at[k]]) continue;
       const Vec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-      m.normals[at[k]] += std::atan2(e1.cross(e2).norm(), e1.dot(e2)) / len * n;
+      m.normals[at[k]] += corner_angle(len, e1.dot(e2)) / len * n;
     }
   }
   for (Vec3& n : m.normals)
@@ -227,11 +298,29 @@ Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, cons
   return m;
 }
 
-// Measures the concave corner between a thin section (bone point `origin`, equivalent radius
-// r_thin) and the thick side along unit axis `u` (thin -> thick), within axial [lo, hi] of the
-// thin section's plane.
-Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<int>& slot,
-                      const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi) {
+// A vertex of a concave fillet: axial position a from the thin plane (mm), the axial component
+// na of its unit meridian normal, the normal's turn from radial towards the thin side (radians)
+// and its unit radial direction (x, y) in a frame of the plane.
+struct FilletPoint {
+  double a = 0, na = 0, turn = 0, x = 0, y = 0;
+  double t = 0;                              // distance from the axis, mm
+  std::size_t edge_begin = 0, edge_end = 0;  // its mesh edges' lengths in FilletPoints::edges
+};
+
+// The fillet points of a corner and the lengths of their mesh edges in the meridian plane (mm),
+// one run per point.
+struct FilletPoints {
+  std::vector<FilletPoint> points;
+  std::vector<double> edges;
+};
+
+// The fillet points of the concave corner between a thin section (bone point `origin`,
+// equivalent radius r_thin) and the thick side along unit axis `u` (thin -> thick), within
+// axial [lo, hi] of the thin section's plane, in the mesh's order. A point's test does not
+// depend on the window beyond its own a (its normal and neighbours come from all its faces),
+// so the points of a narrower window are exactly those of this list inside it.
+FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vector<int>& slot,
+                           const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi) {
   const Vec3 e1 = u.unitOrthogonal(), e2 = u.cross(e1);
   CutRegion region;  // the cylinder t <= 2.5 r_thin around the axis
   region.point = origin;
@@ -259,7 +348,15 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
   std::vector<double> bend(local.vertices.size(), 0.0);
   // The candidates' edges in the meridian plane (the plane a fillet curves in): their lengths
   // there are what the mesh resolves of a fillet (a ring's own edges count ~0).
-  std::vector<std::vector<double>> edges(local.vertices.size());
+  // (One run per candidate in one array: two per face at the candidate.)
+  std::vector<std::size_t> next(local.vertices.size() + 1, 0);
+  for (std::size_t f = 0; f < local.faces.size(); f += 3)
+    for (int j = 0; j < 3; ++j)
+      if (candidate[local.at(local.faces[f + j])]) next[local.at(local.faces[f + j]) + 1] += 2;
+  for (std::size_t k = 0; k < local.vertices.size(); ++k) next[k + 1] += next[k];
+  FilletPoints out;
+  out.edges.resize(next.back());
+  const std::vector<std::size_t> first(next.begin(), next.end() - 1);
   for (std::size_t f = 0; f < local.faces.size(); f += 3) {
     int slots[3];
     for (int j = 0; j < 3; ++j) slots[j] = local.at(local.faces[f + j]);
@@ -269,7 +366,8 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
       for (int k = 1; k < 3; ++k) {
         const Meridian& q = merid[slots[(j + k) % 3]];
         bend[slots[j]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
-        edges[slots[j]].push_back(std::hypot(q.a - p.a, q.t - p.t));
+        const double da = q.a - p.a, dt = q.t - p.t;
+        out.edges[next[slots[j]]++] = std::sqrt(da * da + dt * dt);
       }
     }
   }
@@ -281,20 +379,71 @@ Corner measure_corner(const MeshView& mesh, const FaceGrid& grid, std::vector<in
       candidates.push_back(static_cast<Index>(k));
       bends.push_back(bend[k]);
     }
-  SectorPoints pts;
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     if (!(bends[c] > 1e-9 * r_thin)) continue;
     const Meridian& m = merid[candidates[c]];
     const Vec3 radial = mesh.vertex(local.vertices[candidates[c]]) - origin - m.a * u;
-    const double angle = std::atan2(radial.dot(e2), radial.dot(e1));
-    const int sector =
-        std::min(kSectors - 1, static_cast<int>((angle + kPi) / (2 * kPi) * kSectors));
-    pts.a[sector].push_back(m.a);
-    pts.t[sector].push_back(m.t);
-    const std::vector<double>& lengths = edges[candidates[c]];
-    pts.edge[sector].insert(pts.edge[sector].end(), lengths.begin(), lengths.end());
-    pts.na[sector].push_back(m.na / std::hypot(m.na, m.nr));
-    pts.turn[sector] = std::max(pts.turn[sector], std::atan2(-m.na, m.nr));
+    FilletPoint p;
+    p.a = m.a;
+    p.na = m.na / std::hypot(m.na, m.nr);
+    p.turn = std::atan2(-m.na, m.nr);
+    p.t = m.t;
+    p.edge_begin = first[candidates[c]];
+    p.edge_end = next[candidates[c]];
+    const double t = std::hypot(radial.dot(e1), radial.dot(e2));
+    p.x = t > 0 ? radial.dot(e1) / t : 1.0;
+    p.y = t > 0 ? radial.dot(e2) / t : 0.0;
+    out.points.push_back(p);
+  }
+  return out;
+}
+
+// Octant 0..7 of the direction (x, y), counter-clockwise from (1, 0).
+int octant(double x, double y) {
+  if (y >= 0) return x > 0 ? (y < x ? 0 : 1) : (y > -x ? 2 : 3);
+  return x < 0 ? (-y < -x ? 4 : 5) : (-y > x ? 6 : 7);
+}
+
+// Where the sectors start, as a unit direction (c, s) in the points' frame: taken from the
+// points themselves, so that it turns with the model. Their directions' resultant of order k,
+// sum (x + i y)^k, fixes an angle modulo 360/k degrees, a multiple of 45 for k = 1, 2, 4, 8, so
+// each gives one partition into 45-degree sectors whatever the branch; the order with the
+// largest resultant (the clearest: a one-sided corner k = 1, a two-sided one k = 2, ...) is
+// used. A ring with none (a round bar's even ring) fits alike in every sector.
+std::pair<double, double> sector_start(const std::vector<const FilletPoint*>& pts) {
+  std::array<std::complex<double>, 4> sum{};  // k = 1, 2, 4, 8
+  for (const FilletPoint* p : pts) {
+    std::complex<double> z(p->x, p->y);
+    for (auto& s : sum) {
+      s += z;
+      z *= z;
+    }
+  }
+  int best = 0;
+  for (int j = 1; j < 4; ++j)
+    if (std::abs(sum[j]) > std::abs(sum[best])) best = j;
+  if (!(std::abs(sum[best]) > 0)) return {1.0, 0.0};
+  const double phi = std::arg(sum[best]) / (1 << best);
+  return {std::cos(phi), std::sin(phi)};
+}
+
+// The corner's radius from the fillet points within axial [lo, hi]: fitted per 45-degree
+// sector around the axis (the sectors start where sector_start says), the sharpest sector
+// governs.
+Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi) {
+  std::vector<const FilletPoint*> inside;
+  for (const FilletPoint& p : fillet.points)
+    if (p.a >= lo && p.a <= hi) inside.push_back(&p);
+  const auto [c0, s0] = sector_start(inside);
+  SectorPoints pts;
+  for (const FilletPoint* p : inside) {
+    const int sector = octant(p->x * c0 + p->y * s0, p->y * c0 - p->x * s0);
+    pts.a[sector].push_back(p->a);
+    pts.t[sector].push_back(p->t);
+    pts.edge[sector].insert(pts.edge[sector].end(), fillet.edges.begin() + p->edge_begin,
+                            fillet.edges.begin() + p->edge_end);
+    pts.na[sector].push_back(p->na);
+    pts.turn[sector] = std::max(pts.turn[sector], p->turn);
   }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
@@ -332,6 +481,98 @@ std::vector<std::vector<int>> bone_profiles(const AnalysisResult& r) {
 
 double equivalent_radius(double area) { return std::sqrt(area / kPi); }
 
+// One step of the equivalent radius along a bone, to be searched for its corner.
+struct Step {
+  int section = 0;            // the thin side's section
+  Vec3 point = Vec3::Zero();  // its bone point, mm
+  double r_thin = 0;          // its equivalent radius (its region), mm
+  double r_big = 0;           // the thick side's largest equivalent radius near the step, mm
+  double reach = 0;           // axial distance from the thin plane to the thick neighbour's, mm
+  Vec3 u = Vec3::Zero();      // unit axis, thin -> thick (the thin section's normal or its reverse)
+};
+
+// The steps along each bone (ratio >= kStepRatio between neighbours) whose thin side is slender,
+// in the order of the bones' sections.
+std::vector<Step> find_steps(const AnalysisResult& r) {
+  std::vector<Step> steps;
+  for (const std::vector<int>& chain : bone_profiles(r)) {
+    const int n = static_cast<int>(chain.size());
+    auto radius_of = [&](int k) { return equivalent_radius(r.section_cut_area[chain[k]]); };
+    for (int k = 0; k + 1 < n; ++k) {
+      const double ra = radius_of(k), rb = radius_of(k + 1);
+      if (std::max(ra, rb) < kStepRatio * std::min(ra, rb)) continue;
+      const int dir = rb > ra ? 1 : -1;  // along the chain, thin -> thick
+      int thin = rb > ra ? k : k + 1;
+      const int thick = thin + dir;
+      // A plane may cut the fillet itself: the thin side's smallest section within the largest
+      // fillet the study covers (r = 0.3 d, i.e. 0.6 of the thin radius) is the thin one.
+      const int first = thin;
+      for (int j = thin - dir; j >= 0 && j < n; j -= dir) {
+        if (radius_of(j) >= radius_of(thin)) break;
+        if (std::abs(r.section_param[chain[j]] - r.section_param[chain[first]]) >
+            0.6 * radius_of(first))
+          break;
+        thin = j;
+      }
+      Step st;
+      st.section = chain[thin];
+      const int i = st.section;
+      st.point = r.section_point[i];
+      st.r_thin = equivalent_radius(r.section_area[i]);
+      // The fit is for a shaft, a beam: the thin part must be slender where it is loaded (arm
+      // >= kMinSlenderness r, the FEM check's slenderness, docs/validation.md); a stubby or
+      // body-sized section gets no Kt (and costs no search).
+      if (r.moment_arm[i] < kMinSlenderness * st.r_thin) continue;
+      const double gap = std::abs(r.section_param[chain[thick]] - r.section_param[i]);
+      // The big dimension: the thick side's largest section within two thin radii of the step.
+      for (int j = thick; j >= 0 && j < n; j += dir) {
+        if (std::abs(r.section_param[chain[j]] - r.section_param[i]) > gap + 2 * st.r_thin) break;
+        st.r_big = std::max(st.r_big, radius_of(j));
+      }
+      st.u = r.section_normal[i];
+      const Vec3 towards = r.section_point[chain[thick]] - r.section_point[i];
+      if (towards.dot(st.u) < 0) st.u = -st.u;
+      st.reach = std::max(towards.dot(st.u), 0.0);
+      steps.push_back(st);
+    }
+  }
+  return steps;
+}
+
+// The corner of each step, measured on the mesh. The steps of one thin section towards one side
+// (its neighbours 1, 2, 3 ... planes on, where the walk to the thinnest section joins them) are
+// gathered once, over the widest window, and each step fitted on its own window's points.
+std::vector<Corner> measure_corners(const MeshView& mesh,
+                                    const std::function<const FaceGrid&()>& face_grid,
+                                    const std::vector<Step>& steps) {
+  std::vector<Corner> corners(steps.size());
+  std::vector<char> done(steps.size(), 0);
+  std::vector<int> slot;           // scratch of fillet_points, all -1 between calls
+  const FaceGrid* grid = nullptr;  // built on the first step
+  auto same_side = [&](std::size_t s, std::size_t t) {
+    return steps[s].section == steps[t].section && steps[s].u == steps[t].u;
+  };
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    if (done[s]) continue;
+    double reach = 0;
+    for (std::size_t t = s; t < steps.size(); ++t)
+      if (same_side(s, t)) reach = std::max(reach, steps[t].reach);
+    if (grid == nullptr) {
+      grid = &face_grid();
+      slot.assign(mesh.num_vertices, -1);
+    }
+    const Step& st = steps[s];
+    const FilletPoints points =
+        fillet_points(mesh, *grid, slot, st.point, st.u, st.r_thin, -0.25 * reach, 1.25 * reach);
+    for (std::size_t t = s; t < steps.size(); ++t) {
+      if (!same_side(s, t)) continue;
+      corners[t] = corner_in(points, st.r_thin, -0.25 * steps[t].reach, 1.25 * steps[t].reach);
+      done[t] = 1;
+    }
+  }
+  return corners;
+}
+
 }  // namespace
 
 double shoulder_fillet_kt(double big_diameter, double small_diameter, double radius) {
@@ -355,65 +596,26 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
   out.step.assign(ns, kNaN);
   out.effective.assign(ns, 1.0);
   out.arm_ratio.assign(ns, 1.0);
-  const FaceGrid* grid = nullptr;  // built on the first step found
-  std::vector<int> slot;           // scratch of measure_corner, all -1 between calls
-  for (const std::vector<int>& chain : bone_profiles(r)) {
-    const int n = static_cast<int>(chain.size());
-    auto radius_of = [&](int k) { return equivalent_radius(r.section_cut_area[chain[k]]); };
-    for (int k = 0; k + 1 < n; ++k) {
-      const double ra = radius_of(k), rb = radius_of(k + 1);
-      if (std::max(ra, rb) < kStepRatio * std::min(ra, rb)) continue;
-      const int dir = rb > ra ? 1 : -1;  // along the chain, thin -> thick
-      int thin = rb > ra ? k : k + 1;
-      const int thick = thin + dir;
-      // A plane may cut the fillet itself: the thin side's smallest section within the largest
-      // fillet the study covers (r = 0.3 d, i.e. 0.6 of the thin radius) is the thin one.
-      const int first = thin;
-      for (int j = thin - dir; j >= 0 && j < n; j -= dir) {
-        if (radius_of(j) >= radius_of(thin)) break;
-        if (std::abs(r.section_param[chain[j]] - r.section_param[chain[first]]) >
-            0.6 * radius_of(first))
-          break;
-        thin = j;
-      }
-      const int i = chain[thin];
-      const double r_thin = equivalent_radius(r.section_area[i]);
-      // The fit is for a shaft, a beam: the thin part must be slender where it is loaded (arm
-      // >= kMinSlenderness r, the FEM check's slenderness, docs/validation.md); a stubby or
-      // body-sized section gets no Kt (and costs no search).
-      if (r.moment_arm[i] < kMinSlenderness * r_thin) continue;
-      const double gap = std::abs(r.section_param[chain[thick]] - r.section_param[i]);
-      // The big dimension: the thick side's largest section within two thin radii of the step.
-      double r_big = 0;
-      for (int j = thick; j >= 0 && j < n; j += dir) {
-        if (std::abs(r.section_param[chain[j]] - r.section_param[i]) > gap + 2 * r_thin) break;
-        r_big = std::max(r_big, radius_of(j));
-      }
-      Vec3 u = r.section_normal[i];
-      const Vec3 towards = r.section_point[chain[thick]] - r.section_point[i];
-      if (towards.dot(u) < 0) u = -u;
-      const double reach = std::max(towards.dot(u), 0.0);
-      if (grid == nullptr) {
-        grid = &face_grid();
-        slot.assign(mesh.num_vertices, -1);
-      }
-      const Corner c = measure_corner(mesh, *grid, slot, r.section_point[i], u, r_thin,
-                                      -0.25 * reach, 1.25 * reach);
-      if (!c.found) continue;
-      const double rho = std::max(c.radius, min_radius);
-      const double kt = shoulder_fillet_kt(2 * r_big, 2 * r_thin, rho);
-      // Nominal stress at the corner: the same load point, the centroid moved to the corner.
-      const double shift = std::clamp(c.axial, 0.0, reach);
-      const double arm_c = (r.load_point[i] - (r.section_center[i] + shift * u)).norm();
-      const double arm_ratio = r.moment_arm[i] > 0 ? std::max(1.0, arm_c / r.moment_arm[i]) : 1.0;
-      const double effective = 1.0 + sensitivity * (kt - 1.0);
-      if (kt * arm_ratio > out.kt[i] * out.arm_ratio[i]) {  // a corner on each side: the worse
-        out.kt[i] = kt;
-        out.radius[i] = rho;
-        out.step[i] = r_big / r_thin;
-        out.effective[i] = effective;
-        out.arm_ratio[i] = arm_ratio;
-      }
+  const std::vector<Step> steps = find_steps(r);
+  const std::vector<Corner> corners = measure_corners(mesh, face_grid, steps);
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    const Step& st = steps[s];
+    const Corner& c = corners[s];
+    if (!c.found) continue;
+    const int i = st.section;
+    const double rho = std::max(c.radius, min_radius);
+    const double kt = shoulder_fillet_kt(2 * st.r_big, 2 * st.r_thin, rho);
+    // Nominal stress at the corner: the same load point, the centroid moved to the corner.
+    const double shift = std::clamp(c.axial, 0.0, st.reach);
+    const double arm_c = (r.load_point[i] - (r.section_center[i] + shift * st.u)).norm();
+    const double arm_ratio = r.moment_arm[i] > 0 ? std::max(1.0, arm_c / r.moment_arm[i]) : 1.0;
+    const double effective = 1.0 + sensitivity * (kt - 1.0);
+    if (kt * arm_ratio > out.kt[i] * out.arm_ratio[i]) {  // a corner on each side: the worse
+      out.kt[i] = kt;
+      out.radius[i] = rho;
+      out.step[i] = st.r_big / st.r_thin;
+      out.effective[i] = effective;
+      out.arm_ratio[i] = arm_ratio;
     }
   }
   return out;

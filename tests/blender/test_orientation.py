@@ -43,10 +43,10 @@ def test_find_and_apply_orientation_lowers_the_worst_ratio(sample, engine):
     after = st.last["report"]["stress_ratio"]
     assert list(st.last["report"]["build_direction"]) == [0.0, 0.0, 1.0]
     assert after <= before
-    # the turned model is analysed anew: the beam stresses are the same to 1e-4, but the corner
-    # finder (docs/notch.md, "Limits") measures a corner's radius in sectors fixed in each
-    # section's plane frame, so a turned mesh can read another radius (sample: 1.97 against
-    # the search's 1.81)
+    # the turned model is analysed anew: the beam stresses are the same to 1e-4; the corner
+    # finder's sectors turn with the model now (docs/notch.md), but the turned mesh is stored by
+    # Blender in float32, and a corner's sharpest sector can change with such rounding (before
+    # the sectors turned, the sample read 1.97 against the search's 1.81; not re-measured)
     assert after == pytest.approx(res.worst_ratio, rel=0.1)
     assert bpy.data.objects.get(orient.PREVIEW) is None
     # undo: the stored matrices back, re-analysis gives the first ratio
