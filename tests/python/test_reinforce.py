@@ -30,8 +30,12 @@ def _inside(v, f, pts, tol=1e-9):
 
 def test_modifier_volume_is_closed_and_encloses_the_weak_span():
     v, f, sk = _l_shape()
-    # 14 MPa: the post's lower sections (17.2 .. 14.3 MPa under 10 N) are weak, the arm is not
-    a = osteon.analyze(v, f, sk, force=10, allowable_stress=14, interval=2, keep_outlines=True)
+    # 14 MPa: the post's lower sections (17.2 .. 14.3 MPa under 10 N) are weak, the arm is not.
+    # Beam stresses (notch_sensitivity=0): the L's sharp inner corner makes its 45° joint section
+    # weak too (Kt 2.2 since the corner finder's sectors turn with the model), which would take
+    # the region round the corner; this test is about the volume of a straight weak span.
+    a = osteon.analyze(v, f, sk, force=10, allowable_stress=14, interval=2, keep_outlines=True,
+                       notch_sensitivity=0.0)
     (region,) = weak_regions(a)
     assert set(a.section_bone[region]) == {1}
     assert len(region) == int(a.weak.sum()) >= 3
