@@ -48,8 +48,8 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
     run.build_grid(options.threads);
     return run.grid;
   };
-  NotchField notch =
-      find_notches(run.mesh, grid, r, options.min_notch_radius, options.notch_sensitivity);
+  NotchField notch = find_notches(run.mesh, grid, r, options.min_notch_radius,
+                                  options.notch_sensitivity, options.threads);
   for (int i = 0; i < ns; ++i) {
     if (!(notch.kt[i] > 1.0) || !std::isfinite(r.stress[i])) continue;
     r.stress[i] *= notch.effective[i] * notch.arm_ratio[i];

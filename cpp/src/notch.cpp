@@ -9,6 +9,8 @@
 #include <numeric>
 #include <utility>
 
+#include "parallel.hpp"
+
 namespace osteon {
 namespace {
 
@@ -544,32 +546,40 @@ std::vector<Step> find_steps(const AnalysisResult& r) {
 // gathered once, over the widest window, and each step fitted on its own window's points.
 std::vector<Corner> measure_corners(const MeshView& mesh,
                                     const std::function<const FaceGrid&()>& face_grid,
-                                    const std::vector<Step>& steps) {
+                                    const std::vector<Step>& steps, int threads) {
   std::vector<Corner> corners(steps.size());
-  std::vector<char> done(steps.size(), 0);
-  std::vector<int> slot;           // scratch of fillet_points, all -1 between calls
-  const FaceGrid* grid = nullptr;  // built on the first step
   auto same_side = [&](std::size_t s, std::size_t t) {
     return steps[s].section == steps[t].section && steps[s].u == steps[t].u;
   };
+  // One job per gathering: the first step of each thin section and side.
+  std::vector<std::size_t> firsts;
+  std::vector<char> taken(steps.size(), 0);
   for (std::size_t s = 0; s < steps.size(); ++s) {
-    if (done[s]) continue;
+    if (taken[s]) continue;
+    firsts.push_back(s);
+    for (std::size_t t = s; t < steps.size(); ++t)
+      if (same_side(s, t)) taken[t] = 1;
+  }
+  if (firsts.empty()) return corners;
+  const FaceGrid& grid = face_grid();  // built here, before the workers read it
+  // The jobs are independent (each writes its own steps' corners): the same corners whatever
+  // the number of workers. Each worker has its own scratch (all -1 between calls).
+  const int workers = detail::worker_count(threads, static_cast<long>(firsts.size()));
+  std::vector<std::vector<int>> slots(static_cast<std::size_t>(workers));
+  detail::parallel_for(static_cast<long>(firsts.size()), workers, [&](long job, int worker) {
+    const std::size_t s = firsts[static_cast<std::size_t>(job)];
+    std::vector<int>& slot = slots[static_cast<std::size_t>(worker)];
+    if (slot.empty()) slot.assign(mesh.num_vertices, -1);
     double reach = 0;
     for (std::size_t t = s; t < steps.size(); ++t)
       if (same_side(s, t)) reach = std::max(reach, steps[t].reach);
-    if (grid == nullptr) {
-      grid = &face_grid();
-      slot.assign(mesh.num_vertices, -1);
-    }
     const Step& st = steps[s];
     const FilletPoints points =
-        fillet_points(mesh, *grid, slot, st.point, st.u, st.r_thin, -0.25 * reach, 1.25 * reach);
-    for (std::size_t t = s; t < steps.size(); ++t) {
-      if (!same_side(s, t)) continue;
-      corners[t] = corner_in(points, st.r_thin, -0.25 * steps[t].reach, 1.25 * steps[t].reach);
-      done[t] = 1;
-    }
-  }
+        fillet_points(mesh, grid, slot, st.point, st.u, st.r_thin, -0.25 * reach, 1.25 * reach);
+    for (std::size_t t = s; t < steps.size(); ++t)
+      if (same_side(s, t))
+        corners[t] = corner_in(points, st.r_thin, -0.25 * steps[t].reach, 1.25 * steps[t].reach);
+  });
   return corners;
 }
 
@@ -588,7 +598,8 @@ double shoulder_fillet_kt(double big_diameter, double small_diameter, double rad
 }
 
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
-                        const AnalysisResult& r, double min_radius, double sensitivity) {
+                        const AnalysisResult& r, double min_radius, double sensitivity,
+                        int threads) {
   const int ns = static_cast<int>(r.section_bone.size());
   NotchField out;
   out.kt.assign(ns, 1.0);
@@ -597,7 +608,7 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
   out.effective.assign(ns, 1.0);
   out.arm_ratio.assign(ns, 1.0);
   const std::vector<Step> steps = find_steps(r);
-  const std::vector<Corner> corners = measure_corners(mesh, face_grid, steps);
+  const std::vector<Corner> corners = measure_corners(mesh, face_grid, steps, threads);
   for (std::size_t s = 0; s < steps.size(); ++s) {
     const Step& st = steps[s];
     const Corner& c = corners[s];

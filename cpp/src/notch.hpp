@@ -29,8 +29,10 @@ struct NotchField {
 /// moment_arm. `min_radius` (mm): a corner is never sharper than the printer makes it;
 /// `sensitivity` q (0..1): governing stress = (1 + q (Kt - 1)) x nominal.
 /// `face_grid` returns the run's face grid over `mesh` (built on first call): a corner is
-/// measured from the faces near it only.
+/// measured from the faces near it only. `threads`: workers for the corners' searches (each
+/// thin section's search is one job; the result does not depend on it).
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
-                        const AnalysisResult& r, double min_radius, double sensitivity);
+                        const AnalysisResult& r, double min_radius, double sensitivity,
+                        int threads = 1);
 
 }  // namespace osteon
