@@ -165,7 +165,9 @@ void remove_widened_skins(const Paths64& section, const Paths64& eroded,
     add(island.outer);
     for (const auto& hole : island.holes) add(hole);
   }
-  const int layers = static_cast<int>(std::lround(options.skin_depth / options.layer_height));
+  // Skin layers, at most the rows a section may have (widened_skin_strips' max_rows).
+  const int layers =
+      static_cast<int>(std::lround(std::min(options.skin_depth / options.layer_height, 20000.0)));
   const auto strips =
       detail::widened_skin_strips(st_loops(section), st_loops(eroded), kept,
                                   options.layer_height / sin_theta, layers, options.skin_growth);

@@ -153,6 +153,7 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   const double rows_needed = std::ceil((s_hi - s_lo) / pitch);
   if (!(rows_needed >= 1) || rows_needed > max_rows) return strips;
   const int rows = static_cast<int>(rows_needed);
+  layers = std::min(layers, rows);  // sources farther than the section's rows do not exist
   const double s_first = s_lo + 0.5 * pitch;  // each row stands for the layer around it
   const RowIntervals kept = row_intervals(sparse, s_first, pitch, rows);
   if (kept.intervals.empty()) return strips;
