@@ -55,15 +55,20 @@ def remove_point_colors(mesh, name: str = LAYER) -> bool:
 SHADING_BEFORE: dict[int, str] = {}
 
 
-def _view3d_spaces():
+def _view3d_areas():
+    """Every 3D viewport area of the open windows (none headless)."""
     wm = getattr(bpy.context, "window_manager", None)
     for win in getattr(wm, "windows", None) or []:
         for area in win.screen.areas:
-            if area.type != "VIEW_3D":
-                continue
-            for space in area.spaces:
-                if space.type == "VIEW_3D":
-                    yield space
+            if area.type == "VIEW_3D":
+                yield area
+
+
+def _view3d_spaces():
+    for area in _view3d_areas():
+        for space in area.spaces:
+            if space.type == "VIEW_3D":
+                yield space
 
 
 def show_colors_in_viewports(screen_owner=None):
@@ -90,11 +95,7 @@ def restore_viewport_colors() -> int:
 
 def tag_redraw_view3d(region_types: tuple = ("UI", "WINDOW")):
     """Redraw the sidebars / main regions of every open 3D viewport (UI only; no-op headless)."""
-    wm = getattr(bpy.context, "window_manager", None)
-    for win in getattr(wm, "windows", None) or []:
-        for area in win.screen.areas:
-            if area.type != "VIEW_3D":
-                continue
-            for region in area.regions:
-                if region.type in region_types:
-                    region.tag_redraw()
+    for area in _view3d_areas():
+        for region in area.regions:
+            if region.type in region_types:
+                region.tag_redraw()
