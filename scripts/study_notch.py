@@ -36,6 +36,10 @@ these shapes was used before). Eight new bars, same bars, FEM, osteon side and a
     inside:                                  (1.45, 0.15) (2.1, 0.07)
     ((2.9, 0.03) also puts a plane 0.1 mm below the shoulder, in the thick part)
 
+The rule under test in round 3 (trained on rounds 1 and 2 and the tests/data models only): a
+plane inside the fillet refers Kt to the thin diameter taken from the thin side's profile
+(cpp/src/notch.cpp ``nominal_radius``; docs/notch.md "Governing stress"); the Kt fit unchanged.
+
 Round 1 (pre-registered with f030df8; NO LONGER HELD OUT: its shapes were used to fix the
 sharp-edge tolerance in cpp/src/notch.cpp, docs/notch.md). Its FEM values are the ones that
 round's run printed (docs/notch.md), stored in the cache as they were, not re-run.
