@@ -501,8 +501,8 @@ struct Step {
 
 // The thin side's profile beyond the thin section (chain[thin], the step towards +dir) carried
 // back to its plane: the line through the next two sections' equivalent radii (their regions),
-// or the next one's alone; NaN if there is none. A shaft beyond a fillet gives its own radius; a
-// taper gives about the thin section's own (nominal_radius then changes nothing).
+// or the next one's alone, never below the next one's; NaN if there is none. A shaft beyond a
+// fillet gives its own radius; a taper about the thin section's own (then nothing changes).
 double profile_beyond(const AnalysisResult& r, const std::vector<int>& chain, int thin, int dir) {
   const int n = static_cast<int>(chain.size()), j1 = thin - dir, j2 = thin - 2 * dir;
   if (j1 < 0 || j1 >= n) return kNaN;
@@ -511,7 +511,8 @@ double profile_beyond(const AnalysisResult& r, const std::vector<int>& chain, in
   const double r2 = equivalent_radius(r.section_area[chain[j2]]);
   const double p0 = r.section_param[chain[thin]], p1 = r.section_param[chain[j1]],
                p2 = r.section_param[chain[j2]];
-  return p1 != p2 ? r1 + (r1 - r2) * (p0 - p1) / (p1 - p2) : r1;
+  // Never below the next section itself (a bulge beyond, a hand or a paw, would tip the line).
+  return p1 != p2 ? std::max(r1, r1 + (r1 - r2) * (p0 - p1) / (p1 - p2)) : r1;
 }
 
 // The steps along each bone (ratio >= kStepRatio between neighbours) whose thin side is slender,
