@@ -12,7 +12,8 @@ with the settings below, the gmsh and CalculiX versions and the commit the FEM r
 
 Round 2 (PRE-REGISTERED 2026-11-27 in 0f7b7d5: this list and the acceptance below were committed
 before any osteon run on these shapes; none of them was used before, to write or tune any rule;
-results and what was disclosed after: docs/notch.md, "Round 2").
+results and what was disclosed after: docs/notch.md, "Round 2"; NO LONGER HELD OUT: its results
+are the training data of round 3's rule).
 Stepped round bars, small diameter d = 6 mm, big diameter D, shoulder fillet radius r; the
 issue's range D/d 1.2 .. 3, r/d 0.02 .. 0.3, buildable only where r < (D - d)/2 (OCC cannot
 make a fillet larger than the step), so r/d < (D/d - 1)/2:
@@ -21,6 +22,23 @@ make a fillet larger than the step), so r/d < (D/d - 1)/2:
     (1.2, 0.09) is the largest fillet at D/d 1.2 (r/d < 0.1); (1.2, 0.3) cannot be built
     sharp ones (r/d <= 0.03):               (1.2, 0.02) (3, 0.02) (2.2, 0.03)
     inside:                                 (1.35, 0.06) (1.75, 0.25) (2.5, 0.12)
+
+Round 3 (shapes registered 2026-11-27 in the commit that adds this paragraph, before the rule
+under test was changed and before any osteon run on them; the rule is committed, in a commit
+whose message says "pre-registration", before the ``osteon`` step runs on round 3; none of
+these shapes was used before). Eight new bars, same bars, FEM, osteon side and acceptance:
+
+    sharp (r/d <= 0.03):                     (1.25, 0.025) (1.7, 0.02) (2.9, 0.03)
+    a plane of the 2 mm interval cuts the fillet (sections at z = -1.5 D + 2 k):
+                                             (1.9, 0.28) z = 0.9 in r = 1.68, r_eq 3.19
+                                             (2.6, 0.22) z = 0.6 in r = 1.32, r_eq 3.21
+                                             (1.3, 0.12) z = 0.3 in r = 0.72, r_eq 3.14
+    inside:                                  (1.45, 0.15) (2.1, 0.07)
+    ((2.9, 0.03) also puts a plane 0.1 mm below the shoulder, in the thick part)
+
+The rule under test in round 3 (trained on rounds 1 and 2 and the tests/data models only): a
+plane inside the fillet refers Kt to the thin diameter taken from the thin side's profile
+(cpp/src/notch.cpp ``nominal_radius``; docs/notch.md "Governing stress"); the Kt fit unchanged.
 
 Round 1 (pre-registered with f030df8; NO LONGER HELD OUT: its shapes were used to fix the
 sharp-edge tolerance in cpp/src/notch.cpp, docs/notch.md). Its FEM values are the ones that
@@ -74,6 +92,8 @@ CACHE = Path(__file__).with_name("study_notch_fem.json")
 SCRIPT_VERSION = 2  # the FEM side's settings below; a change of them is a new version
 
 ROUNDS = {  # (D/d, r/d)
+    "3": [(1.25, 0.025), (1.7, 0.02), (2.9, 0.03), (1.9, 0.28), (2.6, 0.22), (1.3, 0.12),
+          (1.45, 0.15), (2.1, 0.07)],
     "2": [(1.2, 0.02), (1.2, 0.09), (3.0, 0.02), (3.0, 0.3), (2.2, 0.03), (1.35, 0.06),
           (1.75, 0.25), (2.5, 0.12)],
     "1": [(1.2, 0.05), (1.2, 0.2), (1.5, 0.02), (1.5, 0.1), (2.0, 0.05), (2.0, 0.3),

@@ -212,6 +212,11 @@ struct Corner {
 // Smallest moment arm / equivalent radius of a thin side the fit is applied to.
 constexpr double kMinSlenderness = 2.0;
 
+// A plane inside the fillet: the nominal (thin) radius is at most this fraction below the cut's
+// equivalent radius (nominal_radius). Judgement, not a source: a bound on what a noisy profile
+// can do, about twice the drop of the study's training shape (D/d 3, r/d 0.3: 3.18 -> 3 mm).
+constexpr double kMaxNominalDrop = 0.1;
+
 // A sharp edge's ring spreads axially by less than this fraction of the local mesh edge length
 // (the median in the meridian at the fillet points; docs/notch.md: a fillet the mesh resolves
 // spreads by at least 0.13 of it).
@@ -491,7 +496,24 @@ struct Step {
   double r_big = 0;           // the thick side's largest equivalent radius near the step, mm
   double reach = 0;           // axial distance from the thin plane to the thick neighbour's, mm
   Vec3 u = Vec3::Zero();      // unit axis, thin -> thick (the thin section's normal or its reverse)
+  double r_beyond = kNaN;     // the thin side's profile extrapolated to the thin plane, mm
 };
+
+// The thin side's profile beyond the thin section (chain[thin], the step towards +dir) carried
+// back to its plane: the line through the next two sections' equivalent radii (their regions),
+// or the next one's alone, never below the next one's; NaN if there is none. A shaft beyond a
+// fillet gives its own radius; a taper about the thin section's own (then nothing changes).
+double profile_beyond(const AnalysisResult& r, const std::vector<int>& chain, int thin, int dir) {
+  const int n = static_cast<int>(chain.size()), j1 = thin - dir, j2 = thin - 2 * dir;
+  if (j1 < 0 || j1 >= n) return kNaN;
+  const double r1 = equivalent_radius(r.section_area[chain[j1]]);
+  if (j2 < 0 || j2 >= n) return r1;
+  const double r2 = equivalent_radius(r.section_area[chain[j2]]);
+  const double p0 = r.section_param[chain[thin]], p1 = r.section_param[chain[j1]],
+               p2 = r.section_param[chain[j2]];
+  // Never below the next section itself (a bulge beyond, a hand or a paw, would tip the line).
+  return p1 != p2 ? std::max(r1, r1 + (r1 - r2) * (p0 - p1) / (p1 - p2)) : r1;
+}
 
 // The steps along each bone (ratio >= kStepRatio between neighbours) whose thin side is slender,
 // in the order of the bones' sections.
@@ -521,6 +543,7 @@ std::vector<Step> find_steps(const AnalysisResult& r) {
       const int i = st.section;
       st.point = r.section_point[i];
       st.r_thin = equivalent_radius(r.section_area[i]);
+      st.r_beyond = profile_beyond(r, chain, thin, dir);
       // The fit is for a shaft, a beam: the thin part must be slender where it is loaded (arm
       // >= kMinSlenderness r, the FEM check's slenderness, docs/validation.md); a stubby or
       // body-sized section gets no Kt (and costs no search).
@@ -583,6 +606,20 @@ std::vector<Corner> measure_corners(const MeshView& mesh,
   return corners;
 }
 
+// The thin diameter's radius that Kt and its nominal stress refer to (mm). A plane inside the
+// fillet (the measured corner leaves the thin side beyond it: axial < 0) cuts a section larger
+// than the thin part; the thin side's profile beyond the fillet, carried back to the plane
+// (profile_beyond), says how much. The drop is taken from that profile, never more than the
+// fillet can add at the plane (a fillet of radius rho tangent at e = -axial beyond the plane:
+// rho - sqrt(rho^2 - e^2)), nor than kMaxNominalDrop of the radius (noisy meshes: the profile and
+// the circle only bound each other).
+double nominal_radius(const Step& st, const Corner& c) {
+  if (!(c.axial < 0) || !(c.radius > 0) || !(st.r_beyond < st.r_thin)) return st.r_thin;
+  const double e = std::min(-c.axial, c.radius);
+  const double fillet_excess = c.radius - std::sqrt(c.radius * c.radius - e * e);
+  return std::max({st.r_beyond, st.r_thin - fillet_excess, (1.0 - kMaxNominalDrop) * st.r_thin});
+}
+
 }  // namespace
 
 double shoulder_fillet_kt(double big_diameter, double small_diameter, double radius) {
@@ -607,6 +644,7 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
   out.step.assign(ns, kNaN);
   out.effective.assign(ns, 1.0);
   out.arm_ratio.assign(ns, 1.0);
+  std::vector<double> peak(ns, 1.0);  // Kt x modulus ratio x arm ratio of the corner taken
   const std::vector<Step> steps = find_steps(r);
   const std::vector<Corner> corners = measure_corners(mesh, face_grid, steps, threads);
   for (std::size_t s = 0; s < steps.size(); ++s) {
@@ -619,9 +657,20 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
     // Nominal stress at the corner: the same load point, the centroid moved to the corner.
     const double shift = std::clamp(c.axial, 0.0, st.reach);
     const double arm_c = (r.load_point[i] - (r.section_center[i] + shift * st.u)).norm();
+    // A plane inside the fillet: Kt refers to the thin diameter's beam stress where the fillet
+    // meets the thin side (beyond the plane); the plane's own is lower by the moduli's ratio (a
+    // round part: the cube of the radii), a little less by the moments'. 1 otherwise.
+    double modulus_ratio = 1.0;
+    const double r_nominal = nominal_radius(st, c);
+    if (r_nominal < st.r_thin && arm_c > 0) {
+      const Vec3 meet = r.section_center[i] + std::max(c.axial, -st.reach) * st.u;
+      const double arm_t = (r.load_point[i] - meet).norm();
+      modulus_ratio = std::max(1.0, std::pow(st.r_thin / r_nominal, 3) * arm_t / arm_c);
+    }
     const double arm_ratio = r.moment_arm[i] > 0 ? std::max(1.0, arm_c / r.moment_arm[i]) : 1.0;
-    const double effective = 1.0 + sensitivity * (kt - 1.0);
-    if (kt * arm_ratio > out.kt[i] * out.arm_ratio[i]) {  // a corner on each side: the worse
+    const double effective = 1.0 + sensitivity * (kt * modulus_ratio - 1.0);
+    if (kt * modulus_ratio * arm_ratio > peak[i]) {  // a corner on each side: the worse
+      peak[i] = kt * modulus_ratio * arm_ratio;
       out.kt[i] = kt;
       out.radius[i] = rho;
       out.step[i] = st.r_big / st.r_thin;

@@ -17,7 +17,7 @@ struct NotchField {
   std::vector<double> kt;         ///< Kt, 1 where no corner
   std::vector<double> radius;     ///< corner radius used (measured, at least min_radius), mm; NaN
   std::vector<double> step;       ///< D/d of the step, NaN where no corner
-  std::vector<double> effective;  ///< 1 + q (Kt - 1), 1 where no corner
+  std::vector<double> effective;  ///< 1 + q (Kt m - 1), m: plane-in-fillet ratio (1: none)
   std::vector<double> arm_ratio;  ///< moment at the corner / the section's moment (>= 1), 1: none
 };
 

@@ -159,6 +159,37 @@ def test_a_plain_bar_and_a_shallow_taper_have_no_corner():
         assert np.array_equal(a.stress, a.nominal_stress, equal_nan=True)
 
 
+def test_a_plane_inside_the_fillet_refers_kt_to_the_thin_diameter():
+    # D/d 3 with a 1.8 mm fillet (round 2's D/d 3, r/d 0.3): the plane at x = 1 cuts the fillet
+    # (its section 6.39 mm across, the thin part 6), so its own beam stress is ~15 % under the
+    # thin part's. Kt's nominal stress is the thin diameter's where the fillet meets the thin
+    # side (x = 1.8): the governing stress is Kt F (30 - 1.8) / (pi d^3 / 32), d = 6
+    # (docs/notch.md, "A plane inside the fillet"). With q = 0 the plane's own beam stress.
+    v, f = stepped_bar(1.8, big=18.0)
+    a = analyse(v, f, min_notch_radius=0.01)
+    (i,) = np.flatnonzero(a.notch)
+    assert 2 * math.sqrt(a.section_area[i] / math.pi) > 6.3  # the plane is inside the fillet
+    thin_nominal = 1.0 * (30.0 - 1.8) / (math.pi * D_SMALL**3 / 32)
+    assert a.stress[i] == pytest.approx(a.stress_concentration[i] * thin_nominal, rel=0.02)
+    assert a.nominal_stress[i] < 0.9 * thin_nominal  # before this rule, Kt x that: -15 %
+    q0 = analyse(v, f, min_notch_radius=0.01, notch_sensitivity=0.0)
+    assert q0.stress[i] == pytest.approx(q0.nominal_stress[i])
+
+
+def test_the_plane_in_fillet_rule_keeps_the_corrected_cheburashka_converging(data_dir):
+    # With the corner model on (q = 1), the cheburashka's hand (bone_3, s41: a plane inside a
+    # large fillet, the hand bulging beyond it) once made the loop stop: the line through the
+    # next two sections, tipped by the bulge, carried the thin radius 8 % down and let it jump
+    # between rounds. The thin radius is never below the next section's (docs/notch.md).
+    from rigged_models import load
+
+    v, f, sk, w = load("cheburashka", height_mm=120.0)
+    before = osteon.analyze(v, f, sk, w, force=20.0)
+    fix = osteon.correct(v, f, sk, w, force=20.0, allowable_stress=before.max_stress / 2)
+    assert fix.converged, fix.reason
+    assert not fix.after.weak.any()
+
+
 def test_notch_sensitivity_scales_the_peak_and_drives_weak_and_culled():
     v, f = stepped_bar(0.6)
     q1, q0, qh = (analyse(v, f, notch_sensitivity=q) for q in (1.0, 0.0, 0.5))
