@@ -74,13 +74,19 @@ def local_radius(pos: np.ndarray, normals: np.ndarray, surface, size: float) -> 
     """(n,) radius mm of the largest ball inside the mesh touching each surface point ``pos``
     (n,3) mm with outward unit ``normals`` (n,3), to within a factor 1.8: the deepest of the
     depths t (geometric steps from 1e-3 to 0.5 x ``size``) whose point ``pos - t normals`` is
-    still at least 0.8 t from the surface (``surface``: pygel3d ``MeshDistance``)."""
+    still at least 0.8 t deeper than ``pos`` itself (``surface``: pygel3d ``MeshDistance``).
+
+    Depths are counted from the point's own signed distance: the points are vertices of the
+    simplified copy, which sit up to ~0.002 x ``size`` off the full mesh's surface, so counted
+    from the surface half of them failed the first step and kept the smallest radius (issue 35:
+    on the cow the median radius was that first step and few edges were collapsed)."""
     steps = size * np.geomspace(1e-3, 0.5, 12)
     r = np.full(len(pos), steps[0])
     alive = np.arange(len(pos))
+    offset = np.asarray(surface.signed_distance(pos), dtype=np.float64).reshape(-1)
     for t in steps:
         d = np.asarray(surface.signed_distance(pos[alive] - t * normals[alive]), dtype=np.float64)
-        alive = alive[-d.reshape(-1) >= 0.8 * t]
+        alive = alive[offset[alive] - d.reshape(-1) >= 0.8 * t]
         if not len(alive):
             break
         r[alive] = t
