@@ -37,11 +37,17 @@ struct Quadric {
   double error(const Vec3& p) const { return p.dot(a * p) + 2.0 * b.dot(p) + c; }
 };
 
-/// An edge's collapse, as priced when it was queued (stale once either end has changed).
+/// An edge's collapse, as priced when it was queued: stale once either end has changed (the
+/// ends' stamps only grow, so their sum tells). Small, as the queue holds ~4 per face.
 struct Candidate {
   double cost;
   std::int32_t a, b;
-  std::uint32_t stamp_a, stamp_b;
+  std::uint32_t stamps;
+};
+
+/// Where a collapse puts the merged vertex, and its quadric error there, mm².
+struct Placement {
+  double cost;
   Vec3 pos;
 };
 
@@ -73,10 +79,11 @@ class Decimator {
   mutable std::vector<std::int32_t> ring_a_, ring_b_, common_;  // scratch (no allocation)
 
   void neighbours(std::int32_t v, std::vector<std::int32_t>& out) const;
-  void push_edge(std::int32_t a, std::int32_t b);
+  Placement place(std::int32_t a, std::int32_t b) const;
+  Candidate price(std::int32_t a, std::int32_t b) const;
   bool keeps_topology(std::int32_t a, std::int32_t b) const;
-  bool keeps_orientation(const Candidate& c) const;
-  void collapse(const Candidate& c);
+  bool keeps_orientation(std::int32_t a, std::int32_t b, const Vec3& pos) const;
+  void collapse(std::int32_t a, std::int32_t b, const Vec3& pos);
 };
 
 Decimator::Decimator(const MeshView& mesh)
@@ -128,7 +135,11 @@ void Decimator::lock_open_edges() {
       locked_[edges[i].first] = locked_[edges[i].second] = 1;
     i = j;
   }
-  for (const auto& [a, b] : manifold) push_edge(a, b);
+  std::vector<Candidate> all;
+  all.reserve(manifold.size());
+  for (const auto& [a, b] : manifold)
+    if (!locked_[a] && !locked_[b]) all.push_back(price(a, b));
+  queue_ = decltype(queue_)(Costlier(), std::move(all));  // heapified at once
 }
 
 /// The vertices sharing a live face with v (ascending, each once), into out.
@@ -143,9 +154,9 @@ void Decimator::neighbours(std::int32_t v, std::vector<std::int32_t>& out) const
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
-/// Queues the collapse of edge a-b at the position of least quadric error.
-void Decimator::push_edge(std::int32_t a, std::int32_t b) {
-  if (locked_[a] || locked_[b]) return;
+/// The position of least quadric error for merging a and b: the planes' common point when they
+/// fix one near the edge, else the better of the ends and the midpoint.
+Placement Decimator::place(std::int32_t a, std::int32_t b) const {
   const Quadric q = quadric_[a] + quadric_[b];
   const Vec3 mid = 0.5 * (pos_[a] + pos_[b]);
   Vec3 best = mid;
@@ -165,8 +176,13 @@ void Decimator::push_edge(std::int32_t a, std::int32_t b) {
     if (p.allFinite() && (p - mid).norm() <= (pos_[a] - pos_[b]).norm() && e < cost)
       cost = e, best = p;
   }
-  queue_.push(Candidate{std::max(cost, 0.0), std::min(a, b), std::max(a, b), stamp_[std::min(a, b)],
-                        stamp_[std::max(a, b)], best});
+  return Placement{std::max(cost, 0.0), best};
+}
+
+/// The queue entry of edge a-b (a < b or not).
+Candidate Decimator::price(std::int32_t a, std::int32_t b) const {
+  const std::int32_t lo = std::min(a, b), hi = std::max(a, b);
+  return Candidate{place(lo, hi).cost, lo, hi, stamp_[lo] + stamp_[hi]};
 }
 
 /// The link condition on a closed manifold: a and b share exactly the two neighbours opposite
@@ -189,19 +205,19 @@ bool Decimator::keeps_topology(std::int32_t a, std::int32_t b) const {
   return ring_a_.size() + ring_b_.size() - common_.size() >= 5;
 }
 
-/// No face left by the collapse turns over (or shrinks to a line) when a and b move to c.pos.
-bool Decimator::keeps_orientation(const Candidate& c) const {
-  for (std::int32_t v : {c.a, c.b}) {
+/// No face left by the collapse turns over (or shrinks to a line) when a and b move to pos.
+bool Decimator::keeps_orientation(std::int32_t a, std::int32_t b, const Vec3& pos) const {
+  for (std::int32_t v : {a, b}) {
     for (std::int32_t f : vertex_faces_[v]) {
       if (!face_alive_[f]) continue;
       const Face& t = faces_[f];
-      const bool has_a = t[0] == c.a || t[1] == c.a || t[2] == c.a;
-      const bool has_b = t[0] == c.b || t[1] == c.b || t[2] == c.b;
+      const bool has_a = t[0] == a || t[1] == a || t[2] == a;
+      const bool has_b = t[0] == b || t[1] == b || t[2] == b;
       if (has_a && has_b) continue;  // removed by the collapse
       std::array<Vec3, 3> p{pos_[t[0]], pos_[t[1]], pos_[t[2]]};
       const Vec3 before = (p[1] - p[0]).cross(p[2] - p[0]);
       for (int k = 0; k < 3; ++k)
-        if (t[k] == v) p[k] = c.pos;
+        if (t[k] == v) p[k] = pos;
       const Vec3 after = (p[1] - p[0]).cross(p[2] - p[0]);
       if (after.dot(before) <= 0.2 * after.norm() * before.norm()) return false;
     }
@@ -209,9 +225,8 @@ bool Decimator::keeps_orientation(const Candidate& c) const {
   return true;
 }
 
-/// Merges b into a at c.pos and requeues a's edges.
-void Decimator::collapse(const Candidate& c) {
-  const std::int32_t a = c.a, b = c.b;
+/// Merges b into a at pos and requeues a's edges.
+void Decimator::collapse(std::int32_t a, std::int32_t b, const Vec3& pos) {
   for (std::int32_t f : vertex_faces_[b]) {
     if (!face_alive_[f]) continue;
     Face& t = faces_[f];
@@ -229,12 +244,13 @@ void Decimator::collapse(const Candidate& c) {
            fa.end());
   vertex_faces_[b].clear();
   vertex_alive_[b] = 0;
-  pos_[a] = c.pos;
+  pos_[a] = pos;
   quadric_[a] = quadric_[a] + quadric_[b];
   ++stamp_[a];
   ++stamp_[b];
   neighbours(a, ring_a_);
-  for (std::int32_t n : ring_a_) push_edge(a, n);
+  for (std::int32_t n : ring_a_)
+    if (!locked_[n]) queue_.push(price(a, n));
 }
 
 void Decimator::run(Index target_faces) {
@@ -242,9 +258,10 @@ void Decimator::run(Index target_faces) {
     const Candidate c = queue_.top();
     queue_.pop();
     if (!vertex_alive_[c.a] || !vertex_alive_[c.b]) continue;
-    if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b) continue;  // requeued since
-    if (!keeps_topology(c.a, c.b) || !keeps_orientation(c)) continue;
-    collapse(c);
+    if (stamp_[c.a] + stamp_[c.b] != c.stamps) continue;  // requeued since
+    if (!keeps_topology(c.a, c.b)) continue;
+    const Vec3 pos = place(c.a, c.b).pos;  // (the same quadrics as when it was queued)
+    if (keeps_orientation(c.a, c.b, pos)) collapse(c.a, c.b, pos);
   }
 }
 
