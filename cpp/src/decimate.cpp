@@ -16,7 +16,7 @@ namespace {
 
 using Face = std::array<std::int32_t, 3>;
 
-/// Sum of squared distances to weighted planes n·x + d = 0: x'Ax + 2b'x + c, mm².
+/// Sum of squared distances to planes n·x + d = 0, each weighted by an area: x'Ax + 2b'x + c, mm⁴.
 struct Quadric {
   Mat3 a = Mat3::Zero();
   Vec3 b = Vec3::Zero();
@@ -45,7 +45,7 @@ struct Candidate {
   std::uint32_t stamps;
 };
 
-/// Where a collapse puts the merged vertex, and its quadric error there, mm².
+/// Where a collapse puts the merged vertex, and its quadric error there, mm⁴.
 struct Placement {
   double cost;
   Vec3 pos;
@@ -205,7 +205,8 @@ bool Decimator::keeps_topology(std::int32_t a, std::int32_t b) const {
   return ring_a_.size() + ring_b_.size() - common_.size() >= 5;
 }
 
-/// No face left by the collapse turns over (or shrinks to a line) when a and b move to pos.
+/// No face left by the collapse turns by more than 78° (cos 0.2), over, or to a line when a
+/// and b move to pos: a sliver folded into its neighbours would pinch the surface.
 bool Decimator::keeps_orientation(std::int32_t a, std::int32_t b, const Vec3& pos) const {
   for (std::int32_t v : {a, b}) {
     for (std::int32_t f : vertex_faces_[v]) {
