@@ -187,8 +187,9 @@ def big(repeat: int) -> None:
     total = sum(tt for (_cc, _nc, tt, _ct, _callers) in stats.values())
     # every named step of osteon.autoskeleton (cumulative CPU s), then pygel3d's share
     stages = {"check_mesh": "mesh", "piece_labels": "pieces", "curve_skeleton": "curve",
-              "from_triangles": "  pygel3d mesh", "__init__": "  MeshDistance",
-              "quadric_simplify": "  simplify", "LS_skeleton_and_map": "  LS skeleton",
+              "predecimate": "  engine decimation", "from_triangles": "  pygel3d mesh",
+              "__init__": "  MeshDistance", "quadric_simplify": "  simplify",
+              "coarsen_by_radius": "  coarsen", "LS_skeleton_and_map": "  LS skeleton",
               "make_body": "body (k-d tree)", "make_tree": "tree", "prune": "prune",
               "recentre_junctions": "junctions", "make_bones": "bones (+ ends)",
               "limb_end": "  ends", "skin_weights": "weights", "rig_pieces": "assemble",

@@ -14,6 +14,7 @@
 
 #include "osteon/analysis.hpp"
 #include "osteon/correction.hpp"
+#include "osteon/decimate.hpp"
 #include "osteon/notch.hpp"
 #include "osteon/progress.hpp"
 #include "osteon/readers.hpp"
@@ -602,6 +603,26 @@ PYBIND11_MODULE(_core, m) {
       py::arg("vertices"), py::arg("faces"), py::arg("origin"), py::arg("normal"),
       py::arg("gap_tolerance"),
       "The section region of one plane around its origin (3D loops, mm).");
+
+  m.def(
+      "decimate_mesh",
+      [](const DoubleArray& vertices, const Int32Array& faces, Index target_faces) {
+        require_rows3(vertices, "vertices");
+        require_rows3(faces, "faces");
+        const MeshView mesh{vertices.data(), vertices.shape(0), faces.data(), faces.shape(0)};
+        DecimatedMesh out;
+        {
+          py::gil_scoped_release release;
+          out = decimate_mesh(mesh, target_faces);
+        }
+        const auto nf = static_cast<py::ssize_t>(out.faces.size() / 3);
+        py::array_t<std::int32_t> f({nf, py::ssize_t(3)});
+        std::copy(out.faces.begin(), out.faces.end(), f.mutable_data());
+        return py::make_tuple(to_numpy_rows3(std::move(out.vertices)), f);
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("target_faces"),
+      "Quadric edge-collapse decimation to at most target_faces faces, keeping a closed "
+      "manifold closed and manifold: (vertices (V',3) mm, faces (F',3) int32).");
 
   m.attr("FLAG_GAP_CLOSED") = static_cast<int>(kFlagGapClosed);
   m.attr("FLAG_OPEN") = static_cast<int>(kFlagOpen);

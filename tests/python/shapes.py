@@ -132,3 +132,19 @@ def merge(*meshes):
         fs.append(f + off)
         off += len(v)
     return np.concatenate(vs), np.concatenate(fs).astype(np.int32)
+
+
+def torus(R: float = 30.0, r: float = 8.0, n: int = 48, m: int = 16):
+    """Closed torus about z (ring radius R, tube radius r, mm): n x m quads, 2 n m triangles,
+    outward normals."""
+    u = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    w = np.linspace(0, 2 * np.pi, m, endpoint=False)
+    U, W = np.meshgrid(u, w, indexing="ij")
+    v = np.column_stack([((R + r * np.cos(W)) * np.cos(U)).ravel(),
+                         ((R + r * np.cos(W)) * np.sin(U)).ravel(), (r * np.sin(W)).ravel()])
+    i, j = np.meshgrid(np.arange(n), np.arange(m), indexing="ij")
+    a, b = i * m + j, ((i + 1) % n) * m + j
+    c, d = ((i + 1) % n) * m + (j + 1) % m, i * m + (j + 1) % m
+    f = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
+                        np.stack([a, c, d], -1).reshape(-1, 3)])
+    return v, f.astype(np.int32)

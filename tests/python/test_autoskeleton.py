@@ -11,7 +11,7 @@ import osteon
 import pytest
 from osteon.autoskeleton import END_RATIO, LoosePiecesWarning, split_pieces
 from scipy import sparse
-from shapes import capsule_along, merge, revolve
+from shapes import capsule_along, merge, revolve, torus
 
 pytest.importorskip("pygel3d")
 
@@ -77,19 +77,6 @@ def t_shape(h=3.0):
     X, Y, Z = np.meshgrid(xs, ys, zs, indexing="ij")
     occ = ((Z >= 30) | (np.abs(X) <= 6)) & (np.abs(Y) <= 6)
     return voxel_mesh(occ, h, (xs[0] - h / 2, ys[0] - h / 2, zs[0] - h / 2))
-
-
-def torus(R=30.0, r=8.0, n=48, m=16):
-    u = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    w = np.linspace(0, 2 * np.pi, m, endpoint=False)
-    U, W = np.meshgrid(u, w, indexing="ij")
-    v = np.column_stack([((R + r * np.cos(W)) * np.cos(U)).ravel(),
-                         ((R + r * np.cos(W)) * np.sin(U)).ravel(), (r * np.sin(W)).ravel()])
-    i, j = np.meshgrid(np.arange(n), np.arange(m), indexing="ij")
-    a, b = i * m + j, ((i + 1) % n) * m + j
-    c, d = ((i + 1) % n) * m + (j + 1) % m, i * m + (j + 1) % m
-    f = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
-    return v, f.astype(np.int32)
 
 
 def free_ends(sk):

@@ -32,12 +32,12 @@ def _check_volume(v: np.ndarray, f: np.ndarray) -> None:
     """ValueError for a mesh with no size, no area, no thickness or no enclosed volume."""
     a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
     area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    size = float(np.ptp(v[np.unique(f)], axis=0).max())
+    pts = v[np.unique(f)]
+    size = float(np.ptp(pts, axis=0).max())
     if not size > 0:
         raise ValueError("degenerate mesh: all vertices coincide (size 0 mm)")
     if not area.sum() > 1e-12 * size * size:
         raise ValueError("degenerate mesh: total face area is zero")
-    pts = v[np.unique(f)]
     thickness = np.linalg.svd(pts - pts.mean(0), compute_uv=False)[-1] / math.sqrt(len(pts))
     if thickness < 1e-6 * size:
         raise ValueError("degenerate mesh: all vertices lie in one plane (flat, no volume)")
