@@ -43,11 +43,10 @@ FIELDS = ("notch", "stress_concentration", "notch_radius", "notch_step", "stress
 
 def _models():
     """(name, vertices, faces, skeleton, weights) of the 16 models, 120 mm tall."""
+    import osteon
     from identity_dump import DATA, MODELS
     from osteon.io import load_model
     from rigged_models import subdivide
-
-    import osteon
 
     for name, mesh, skel, weights in MODELS:
         m = load_model(DATA / mesh, skeleton=skel and DATA / skel,
@@ -127,25 +126,18 @@ def main(argv=None) -> int:
     keys = sorted(set(this) | set(other))
     differ = [k for k in keys if k not in this or k not in other or not _same(this[k], other[k])]
     print(f"{len(keys)} arrays; {len(differ)} differ between the builds")
-    for k in differ:
-        if not k.endswith("|notch") or k not in this or k not in other:
-            continue
-        run = k.rsplit("|", 1)[0]
-        changed = np.flatnonzero(
-            ~np.isclose(this[run + "|stress_concentration"], other[run + "|stress_concentration"],
-                        rtol=0, atol=0) | (this[k] != other[k])
-            | ~((this[run + "|notch_radius"] == other[run + "|notch_radius"])
-                | (np.isnan(this[run + "|notch_radius"]) & np.isnan(other[run + "|notch_radius"]))))
-        for i in changed:
-            def row(d):
-                return (f"Kt {d[run + '|stress_concentration'][i]:.6g} r "
-                        f"{d[run + '|notch_radius'][i]:.6g} D/d {d[run + '|notch_step'][i]:.6g}")
-            print(f"  {run} s{i}: other {row(other)} -> this {row(this)}")
-    for k in differ:
-        if k.endswith("|stress"):
-            run = k.rsplit("|", 1)[0]
-            print(f"  {k}: stress differs (max rel "
-                  f"{np.nanmax(np.abs(this[k] / other[k] - 1)):.2e})")
+    for run in sorted({k.rsplit("|", 1)[0] for k in differ if k in this and k in other}):
+        fields = {f: (this[f"{run}|{f}"], other[f"{run}|{f}"]) for f in FIELDS}
+        changed = np.zeros(len(fields["notch"][0]), bool)
+        for f in ("notch", "stress_concentration", "notch_radius", "notch_step"):
+            changed |= [not _same(x, y) for x, y in zip(*fields[f])]
+        for i in np.flatnonzero(changed):
+            before, after = ("Kt {:.6g} r {:.6g} D/d {:.6g}".format(
+                *(fields[f][side][i] for f in ("stress_concentration", "notch_radius",
+                                               "notch_step"))) for side in (1, 0))
+            print(f"  {run} s{i}: other {before} -> this {after}")
+        if not _same(*fields["stress"]):
+            print(f"  {run}: stress differs")
     return 1 if differ or bad else 0
 
 
