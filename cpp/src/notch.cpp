@@ -98,17 +98,20 @@ void keep_turning(const MeshView& mesh, const LocalMesh& m, const Vec3& u,
   const double c8 = std::cos(8.0 * kPi / 180.0), s8 = std::sin(8.0 * kPi / 180.0);
   const double c82 = std::cos(82.0 * kPi / 180.0), s82 = std::sin(82.0 * kPi / 180.0);
   constexpr double kMargin = 1e-9;
-  std::vector<char> seen(m.vertices.size(), 0);  // bit 1: a face at/above 8, bit 2: at/below 82
+  // bit 1: a face at/above 8 degrees, bit 2: a face at/below 82; a vertex with both is kept
+  // whatever its other faces say, so they are not looked at (nor a face with no other vertex)
+  std::vector<char> seen(m.vertices.size(), 0);
+  auto pending = [&](int k) { return need[k] && seen[k] != 3; };
   for (std::size_t f = 0; f < m.faces.size(); f += 3) {
     const int at[3] = {m.at(m.faces[f]), m.at(m.faces[f + 1]), m.at(m.faces[f + 2])};
-    if (!need[at[0]] && !need[at[1]] && !need[at[2]]) continue;
+    if (!pending(at[0]) && !pending(at[1]) && !pending(at[2])) continue;
     const Vec3 p0 = mesh.vertex(m.faces[f]);
     const Vec3 n = (mesh.vertex(m.faces[f + 1]) - p0).cross(mesh.vertex(m.faces[f + 2]) - p0);
     const double len = n.norm();
     if (!(len > 0)) continue;
     const double ny = -n.dot(u) / len;
     for (int k = 0; k < 3; ++k) {
-      if (!need[at[k]]) continue;
+      if (!pending(at[k])) continue;
       const double nx = n.dot(radial[at[k]]) / len;
       if (c8 * ny - s8 * nx >= -kMargin) seen[at[k]] |= 1;
       if (c82 * ny - s82 * nx <= kMargin) seen[at[k]] |= 2;
