@@ -251,6 +251,43 @@ Paths64 flat_skin_sweeps(const Paths64& section, double depth, double sin_theta,
 // The inset less the flat surfaces' skins: Clipper2's difference below (both non-zero).
 bool outside_flat_skins(const detail::Windings& w) { return w[0] != 0 && w[1] == 0; }
 
+// The paths with each run of consecutive vertices beyond one side of `box` (all left of it, or
+// all right of it, or all above or below it) shortened to the run's first and last vertex: the
+// segment between them stays beyond that side, so every winding number inside the box is the
+// same (a path wholly beyond one side winds 0 about it and goes). Where the region sought lies
+// in the box (in the inset), the skins' crossings of the cut's copies beyond it are not paid.
+Paths64 collapsed_outside(const Paths64& paths, const Clipper2Lib::Rect64& box) {
+  auto side = [&box](const Clipper2Lib::Point64& p) {
+    return p.x < box.left ? 1 : p.x > box.right ? 2 : p.y < box.top ? 3 : p.y > box.bottom ? 4 : 0;
+  };
+  Paths64 out;
+  std::vector<int> code;
+  for (const Path64& path : paths) {
+    const std::size_t n = path.size();
+    code.resize(n);
+    for (std::size_t k = 0; k < n; ++k) code[k] = side(path[k]);
+    std::size_t k0 = 0;  // a run's first vertex
+    while (k0 < n && code[k0] == code[(k0 + n - 1) % n]) ++k0;
+    if (k0 == n) {
+      if (n > 0 && code[0] == 0) out.push_back(path);
+      continue;
+    }
+    Path64 q;
+    q.reserve(n);
+    for (std::size_t i = 0; i < n;) {
+      const std::size_t k = (k0 + i) % n;
+      std::size_t r = 1;
+      if (code[k] != 0)
+        while (i + r < n && code[(k + r) % n] == code[k]) ++r;
+      q.push_back(path[k]);
+      if (r >= 2) q.push_back(path[(k + r - 1) % n]);
+      i += r;
+    }
+    if (q.size() >= 3) out.push_back(std::move(q));
+  }
+  return out;
+}
+
 // sparse_islands by winding_region and collect_loops; false where the loops are not in
 // general position.
 bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int64_t shift,
@@ -259,14 +296,16 @@ bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int6
                         std::vector<SectionPolygon>& islands) {
   if (shift == 0) return collect_loops(eroded, layer_per_section, min_area, es, et, islands);
   Paths64 region;
+  Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(eroded);  // the region lies in the inset
+  box.left -= 2, box.top -= 2, box.right += 2, box.bottom += 2;
   if (max_slope >= M_PI / 2) {
-    const Paths64 up = Clipper2Lib::TranslatePaths(section, shift, 0);
-    const Paths64 down = Clipper2Lib::TranslatePaths(section, -shift, 0);
+    const Paths64 up = collapsed_outside(Clipper2Lib::TranslatePaths(section, shift, 0), box);
+    const Paths64 down = collapsed_outside(Clipper2Lib::TranslatePaths(section, -shift, 0), box);
     return detail::winding_region({&eroded, &up, &down}, in_both_shifted, region) &&
            collect_loops(region, layer_per_section, min_area, es, et, islands);
   }
-  const Paths64 sweeps =
-      flat_skin_sweeps(section, static_cast<double>(shift), sin_theta, max_slope);
+  const Paths64 sweeps = collapsed_outside(
+      flat_skin_sweeps(section, static_cast<double>(shift), sin_theta, max_slope), box);
   return detail::winding_region({&eroded, &sweeps}, outside_flat_skins, region) &&
          collect_loops(region, layer_per_section, min_area, es, et, islands);
 }

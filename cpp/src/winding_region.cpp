@@ -77,20 +77,22 @@ struct Arrangement {
   std::vector<int> set_of;   // per path
   std::vector<Crossing> crossings;
   std::vector<Occurrence> occ;  // sorted by edge, then along it
-  int next(int g) const {
-    const int p = path_of[static_cast<std::size_t>(g)];
-    return g + 1 == start[static_cast<std::size_t>(p) + 1] ? start[static_cast<std::size_t>(p)]
-                                                           : g + 1;
-  }
-  int prev(int g) const {
-    const int p = path_of[static_cast<std::size_t>(g)];
-    return g == start[static_cast<std::size_t>(p)] ? start[static_cast<std::size_t>(p) + 1] - 1
-                                                   : g - 1;
-  }
+  std::vector<int> nxt, prv;    // per point: the next and previous point of its path
+  int next(int g) const { return nxt[static_cast<std::size_t>(g)]; }
+  int prev(int g) const { return prv[static_cast<std::size_t>(g)]; }
   const Point64& pt(int g) const { return pts[static_cast<std::size_t>(g)]; }
 };
 
+// orient in T: double is exact where coordinate differences stay under 2^26 (products under
+// 2^52), which find_crossings checks first.
+template <class T>
+inline T orient_in(const Point64& a, const Point64& b, const Point64& c) {
+  return static_cast<T>(b.x - a.x) * static_cast<T>(c.y - a.y) -
+         static_cast<T>(b.y - a.y) * static_cast<T>(c.x - a.x);
+}
+
 // 0: no crossing, 1: a proper crossing (appended), -1: the edges touch or overlap.
+template <class T>
 int cross_edges(Arrangement& a, int i, int j) {
   const int ni = a.next(i), nj = a.next(j);
   if (nj == i || ni == j) return 0;  // neighbours share their end point only (no spikes)
@@ -98,9 +100,9 @@ int cross_edges(Arrangement& a, int i, int j) {
   if (std::max(p.x, q.x) < std::min(r.x, s.x) || std::max(r.x, s.x) < std::min(p.x, q.x) ||
       std::max(p.y, q.y) < std::min(r.y, s.y) || std::max(r.y, s.y) < std::min(p.y, q.y))
     return 0;
-  const Wide d1 = orient(r, s, p), d2 = orient(r, s, q);
+  const T d1 = orient_in<T>(r, s, p), d2 = orient_in<T>(r, s, q);
   if ((d1 > 0 && d2 > 0) || (d1 < 0 && d2 < 0)) return 0;
-  const Wide d3 = orient(p, q, r), d4 = orient(p, q, s);
+  const T d3 = orient_in<T>(p, q, r), d4 = orient_in<T>(p, q, s);
   if ((d3 > 0 && d4 > 0) || (d3 < 0 && d4 < 0)) return 0;
   if (d1 == 0 || d2 == 0 || d3 == 0 || d4 == 0) return -1;
   const double ti = static_cast<double>(d1) / (static_cast<double>(d1) - static_cast<double>(d2));
@@ -116,6 +118,21 @@ int cross_edges(Arrangement& a, int i, int j) {
   return 1;
 }
 
+// a.occ by edge (counting sort: most edges have none or one), then along each edge.
+void sort_occurrences(Arrangement& a) {
+  std::vector<int> first(a.pts.size() + 1, 0);
+  for (const Occurrence& o : a.occ) ++first[static_cast<std::size_t>(o.seg) + 1];
+  for (std::size_t k = 1; k < first.size(); ++k) first[k] += first[k - 1];
+  std::vector<Occurrence> sorted(a.occ.size());
+  std::vector<int> fill(first.begin(), first.end() - 1);
+  for (const Occurrence& o : a.occ)
+    sorted[static_cast<std::size_t>(fill[static_cast<std::size_t>(o.seg)]++)] = o;
+  for (std::size_t k = 0; k + 1 < first.size(); ++k)
+    if (first[k + 1] - first[k] > 1)
+      std::sort(sorted.begin() + first[k], sorted.begin() + first[k + 1]);
+  a.occ.swap(sorted);
+}
+
 // Every proper crossing, each once: pairs of edges are tested in the grid cell at the lower
 // corner of their boxes' common cells. False where two edges touch or overlap.
 bool find_crossings(Arrangement& a) {
@@ -124,7 +141,8 @@ bool find_crossings(Arrangement& a) {
   for (const Point64& p : a.pts)
     x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
   const double w = static_cast<double>(x1 - x0) + 1.0, h = static_cast<double>(y1 - y0) + 1.0;
-  const double cell = std::sqrt(w * h / n);  // about one edge per cell
+  const bool small = w < 0x1p26 && h < 0x1p26;  // orientations exact in double
+  const double cell = std::sqrt(w * h / n);     // about one edge per cell
   const int nx = static_cast<int>(std::clamp(std::ceil(w / cell), 1.0, 1024.0));
   const int ny = static_cast<int>(std::clamp(std::ceil(h / cell), 1.0, 1024.0));
   const double sx = nx / w, sy = ny / h;
@@ -158,7 +176,7 @@ bool find_crossings(Arrangement& a) {
           const int* bi = &box[4 * static_cast<std::size_t>(i)];
           const int* bj = &box[4 * static_cast<std::size_t>(j)];
           if (std::max(bi[0], bj[0]) != cx || std::max(bi[1], bj[1]) != cy) continue;
-          if (cross_edges(a, i, j) < 0) return false;
+          if ((small ? cross_edges<double>(a, i, j) : cross_edges<Wide>(a, i, j)) < 0) return false;
         }
     }
   return true;
@@ -361,11 +379,18 @@ bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(cons
     }
   if (a.pts.empty()) return true;
   a.path_of.resize(a.pts.size());
-  for (std::size_t p = 0; p + 1 < a.start.size(); ++p)
-    std::fill(a.path_of.begin() + a.start[p], a.path_of.begin() + a.start[p + 1],
-              static_cast<int>(p));
+  a.nxt.resize(a.pts.size());
+  a.prv.resize(a.pts.size());
+  for (std::size_t p = 0; p + 1 < a.start.size(); ++p) {
+    const int b = a.start[p], e = a.start[p + 1];
+    std::fill(a.path_of.begin() + b, a.path_of.begin() + e, static_cast<int>(p));
+    for (int g = b; g < e; ++g) {
+      a.nxt[static_cast<std::size_t>(g)] = g + 1 == e ? b : g + 1;
+      a.prv[static_cast<std::size_t>(g)] = g == b ? e - 1 : g - 1;
+    }
+  }
   if (!find_crossings(a)) return false;
-  std::sort(a.occ.begin(), a.occ.end());
+  sort_occurrences(a);
   for (std::size_t k = 1; k < a.occ.size(); ++k)  // two crossings too close to order on an edge
     if (a.occ[k].seg == a.occ[k - 1].seg && !(a.occ[k].t - a.occ[k - 1].t > 1e-12)) return false;
   Assembly s{a, {}, {}, {}, {}};
