@@ -10,7 +10,8 @@ shell, run interleaved. The target (issue 31): a profile costs at most 15 % over
 ``--instructions``: instead of times, the engine's instructions for one analysis per profile
 (callgrind, as bench/compare_builds.py --instructions counts them; needs valgrind), their ratio
 to solid, and from the same run the inclusive counts of the printed section
-(``osteon::printed_section``), of its Clipper2 passes and of the skin widening. Exact whatever
+(``osteon::printed_section``), of its own polygon passes (``winding_region``), of Clipper2's
+boolean passes (its offsets' union included) and of the skin widening. Exact whatever
 the machine's load. OTHER_PYTHONPATH: another build's ``osteon`` package instead.
 """
 
@@ -29,8 +30,8 @@ from models import load
 # Inclusive counts read from callgrind_annotate, by the start of the function's name.
 PARTS = {
     "printed section": "osteon::printed_section(",
-    "Clipper2 offset": "Clipper2Lib::ClipperOffset::Execute(",
-    "Clipper2 boolean": "Clipper2Lib::ClipperBase::Execute(",
+    "winding_region": "osteon::detail::winding_region(",
+    "Clipper2 passes": "Clipper2Lib::ClipperBase::ExecuteInternal(",
     "skin widening": "osteon::detail::widened_skin_strips(",
 }
 
