@@ -24,6 +24,7 @@
 #include <utility>
 
 #include "clipper2/clipper.h"
+#include "round_to_unit.hpp"
 #include "simplify_path.hpp"
 #include "skin_growth.hpp"
 #include "wall_inset.hpp"
@@ -31,6 +32,8 @@
 
 namespace osteon {
 namespace {
+
+using detail::round_to_unit;
 
 using Clipper2Lib::Path64;
 using Clipper2Lib::Paths64;
@@ -49,14 +52,6 @@ constexpr double kSimplify = 0.005;  // mm: the outline is simplified within thi
 bool clipper_reference() {
   const char* v = std::getenv("OSTEON_PRINTED_CLIPPER");
   return v != nullptr && v[0] == '1';
-}
-
-// std::llround for |x| < 2^52, inline (the library call was 2 % of the stage): the same integer,
-// half-way cases away from zero; x - trunc(x) is exact in double.
-inline std::int64_t round_to_unit(double x) {
-  const auto whole = static_cast<std::int64_t>(x);
-  const double frac = x - static_cast<double>(whole);
-  return whole + (frac >= 0.5 ? 1 : 0) - (frac <= -0.5 ? 1 : 0);
 }
 
 // The section's loops in Clipper units of the (s, t) axes; outer boundary counter-clockwise,

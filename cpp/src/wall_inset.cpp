@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "round_to_unit.hpp"
 #include "winding_region.hpp"
 
 namespace osteon::detail {
@@ -30,6 +31,9 @@ struct ArcSteps {
   }
 };
 
+// Clipper2's Point64(double, double): std::round of each coordinate.
+inline Point64 rounded(double x, double y) { return Point64(round_to_unit(x), round_to_unit(y)); }
+
 // One closed path's raw offset by -delta (no repeated points).
 void offset_path(const Path64& path, double delta, const ArcSteps& arc, Path64& out) {
   const std::size_t n = path.size();
@@ -48,19 +52,19 @@ void offset_path(const Path64& path, double delta, const ArcSteps& arc, Path64& 
     const double sin_a = std::clamp(nj.y * nk.x - nk.y * nj.x, -1.0, 1.0);
     const double cos_a = nj.x * nk.x + nj.y * nk.y;
     if (cos_a > -0.999 && sin_a * gd < 0) {  // convex corner: Clipper2's three points
-      out.emplace_back(p.x + nk.x * gd, p.y + nk.y * gd);
+      out.push_back(rounded(p.x + nk.x * gd, p.y + nk.y * gd));
       out.push_back(p);
-      out.emplace_back(p.x + nj.x * gd, p.y + nj.y * gd);
+      out.push_back(rounded(p.x + nj.x * gd, p.y + nj.y * gd));
       continue;
     }
     PointD v(nk.x * gd, nk.y * gd);  // DoRound
-    out.emplace_back(p.x + v.x, p.y + v.y);
+    out.push_back(rounded(p.x + v.x, p.y + v.y));
     const int steps = static_cast<int>(std::ceil(arc.per_rad * std::abs(std::atan2(sin_a, cos_a))));
     for (int i = 1; i < steps; ++i) {
       v = PointD(v.x * arc.cos - arc.sin * v.y, v.x * arc.sin + v.y * arc.cos);
-      out.emplace_back(p.x + v.x, p.y + v.y);
+      out.push_back(rounded(p.x + v.x, p.y + v.y));
     }
-    out.emplace_back(p.x + nj.x * gd, p.y + nj.y * gd);
+    out.push_back(rounded(p.x + nj.x * gd, p.y + nj.y * gd));
   }
 }
 

@@ -11,6 +11,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "round_to_unit.hpp"
+
 namespace osteon::detail {
 namespace {
 
@@ -289,8 +291,7 @@ struct Assembly {
     if (count == 0 && v <= u) count = n;  // around the whole path
     const bool fwd = dir[static_cast<std::size_t>(u)] > 0;
     const Crossing& c = a.crossings[static_cast<std::size_t>(fwd ? e.crossing : f.crossing)];
-    loop.emplace_back(static_cast<std::int64_t>(std::llround(c.x)),
-                      static_cast<std::int64_t>(std::llround(c.y)));
+    loop.emplace_back(round_to_unit(c.x), round_to_unit(c.y));
     for (int i = 0; i < count; ++i) {
       const int k = fwd ? i + 1 : count - i;  // steps after e's edge start
       loop.push_back(a.pt(first + (e.seg - first + k) % n));
