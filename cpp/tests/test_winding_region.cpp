@@ -94,3 +94,21 @@ TEST(WindingRegion, DeclinesTouchingPaths) {
   EXPECT_FALSE(osteon::detail::winding_region({&paths}, positive, out));
   EXPECT_TRUE(out.empty());
 }
+
+TEST(WindingRegion, CoarseGridPathsDeclineOrAgree) {
+  // Paths on a 40-unit grid touch, overlap and cross at vertices all the time: each is either
+  // declined (Clipper2 is used) or the same region as Clipper2's, never something else.
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<int> coord(0, 40);
+  int accepted = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Paths64 paths(1 + trial % 2);
+    for (Path64& p : paths)
+      for (int i = 0; i < 5 + trial % 7; ++i) p.emplace_back(coord(rng) * 1000, coord(rng) * 1000);
+    Paths64 ours;
+    if (!osteon::detail::winding_region({&paths}, positive, ours)) continue;
+    ++accepted;
+    expect_same(ours, Clipper2Lib::Union(paths, FillRule::Positive));
+  }
+  EXPECT_GT(accepted, 200);
+}
