@@ -150,6 +150,7 @@ bool find_crossings(Arrangement& a) {
   const double sx = nx / w, sy = ny / h;
   std::vector<int> box(4 * static_cast<std::size_t>(n));  // cell range per edge
   std::vector<int> count(static_cast<std::size_t>(nx) * ny + 1, 0);
+  std::int64_t entries = 0;  // cells over all edges' boxes
   for (int g = 0; g < n; ++g) {
     const Point64 &p = a.pt(g), &q = a.pt(a.next(g));
     int* b = &box[4 * static_cast<std::size_t>(g)];
@@ -157,6 +158,13 @@ bool find_crossings(Arrangement& a) {
     b[1] = static_cast<int>(static_cast<double>(std::min(p.y, q.y) - y0) * sy);
     b[2] = std::min(nx - 1, static_cast<int>(static_cast<double>(std::max(p.x, q.x) - x0) * sx));
     b[3] = std::min(ny - 1, static_cast<int>(static_cast<double>(std::max(p.y, q.y) - y0) * sy));
+    entries += static_cast<std::int64_t>(b[2] - b[0] + 1) * (b[3] - b[1] + 1);
+  }
+  // Many long edges across a grid of small cells (a star of thousands of spikes) would cost
+  // quadratic memory and pair tests here: decline, and Clipper2 (n log n) takes the section.
+  if (entries > 64 * static_cast<std::int64_t>(n) + 4096) return false;
+  for (int g = 0; g < n; ++g) {
+    const int* b = &box[4 * static_cast<std::size_t>(g)];
     for (int cy = b[1]; cy <= b[3]; ++cy)
       for (int cx = b[0]; cx <= b[2]; ++cx) ++count[static_cast<std::size_t>(cy) * nx + cx + 1];
   }

@@ -112,3 +112,17 @@ TEST(WindingRegion, CoarseGridPathsDeclineOrAgree) {
   }
   EXPECT_GT(accepted, 200);
 }
+
+TEST(WindingRegion, DeclinesAStarOfManyLongSpikes) {
+  // Every edge runs from near the centre to the rim: the edges' grid boxes would hold about n^2
+  // / 8 cells. It declines (false: Clipper2 takes the section) instead of quadratic memory.
+  const int spikes = 20000;
+  Path64 star;
+  for (int i = 0; i < 2 * spikes; ++i) {
+    const double a = M_PI * i / spikes, r = (i % 2 == 0) ? 1e7 : 1e3;
+    star.emplace_back(std::llround(r * std::cos(a)), std::llround(r * std::sin(a)));
+  }
+  const Paths64 in{star};
+  Paths64 out;
+  EXPECT_FALSE(osteon::detail::winding_region({&in}, positive, out));
+}
