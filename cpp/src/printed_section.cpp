@@ -18,16 +18,22 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include "clipper2/clipper.h"
+#include "round_to_unit.hpp"
 #include "simplify_path.hpp"
 #include "skin_growth.hpp"
+#include "wall_inset.hpp"
+#include "winding_region.hpp"
 
 namespace osteon {
 namespace {
+
+using detail::round_to_unit;
 
 using Clipper2Lib::Path64;
 using Clipper2Lib::Paths64;
@@ -39,12 +45,13 @@ constexpr double kScale = 1e4;  // Clipper units per mm (0.1 um)
 constexpr double kMinCos = 1e-3;
 constexpr double kSimplify = 0.005;  // mm: the outline is simplified within this before offsets
 
-// std::llround for |x| < 2^52, inline (the library call was 2 % of the stage): the same integer,
-// half-way cases away from zero; x - trunc(x) is exact in double.
-inline std::int64_t round_to_unit(double x) {
-  const auto whole = static_cast<std::int64_t>(x);
-  const double frac = x - static_cast<double>(whole);
-  return whole + (frac >= 0.5 ? 1 : 0) - (frac <= -0.5 ? 1 : 0);
+// OSTEON_PRINTED_CLIPPER=1 in the environment: the walls' inset and the skins and islands by
+// Clipper2's own passes only, the reference that the faster paths (wall_inset.hpp,
+// winding_region.hpp) are checked against (bench/compare_printed.py,
+// tests/python/test_printed_sections.py).
+bool clipper_reference() {
+  const char* v = std::getenv("OSTEON_PRINTED_CLIPPER");
+  return v != nullptr && v[0] == '1';
 }
 
 // The section's loops in Clipper units of the (s, t) axes; outer boundary counter-clockwise,
@@ -114,6 +121,63 @@ void collect_islands(const PolyPath64& node, double layer_per_section, double mi
   }
 }
 
+// 1 when p lies inside the loop, 0 outside, -1 on it (crossings of the ray +x, exact).
+int encloses(const Path64& loop, const Clipper2Lib::Point64& p) {
+  bool in = false;
+  for (std::size_t k = 0; k < loop.size(); ++k) {
+    const auto& a = loop[k];
+    const auto& b = loop[k + 1 == loop.size() ? 0 : k + 1];
+    if ((a.y > p.y) == (b.y > p.y)) {
+      if (a.y == p.y && b.y == p.y && std::min(a.x, b.x) <= p.x && p.x <= std::max(a.x, b.x))
+        return -1;
+      continue;
+    }
+    const double side = static_cast<double>(b.x - a.x) * static_cast<double>(p.y - a.y) -
+                        static_cast<double>(b.y - a.y) * static_cast<double>(p.x - a.x);
+    if (side == 0) return -1;
+    if ((side > 0) == (b.y > a.y)) in = !in;
+  }
+  return in ? 1 : 0;
+}
+
+// collect_islands for loops that neither cross nor overlap (a union's result: outer boundaries
+// positive, holes negative): each hole belongs to the smallest outer boundary around it, which
+// is Clipper2's tree. False where a hole has no outer boundary around it.
+bool collect_loops(const Paths64& loops, double layer_per_section, double min_area, const Vec2& es,
+                   const Vec2& et, std::vector<SectionPolygon>& islands) {
+  const std::size_t n = loops.size();
+  std::vector<double> area(n), total(n);
+  for (std::size_t i = 0; i < n; ++i) total[i] = area[i] = Clipper2Lib::Area(loops[i]);
+  std::vector<std::ptrdiff_t> parent(n, -1);
+  for (std::size_t h = 0; h < n; ++h) {
+    if (!(area[h] < 0)) continue;
+    for (std::size_t o = 0; o < n; ++o) {
+      if (!(area[o] > 0) ||
+          (parent[h] >= 0 && area[o] >= area[static_cast<std::size_t>(parent[h])]))
+        continue;
+      int inside = -1;  // a vertex of the hole off the outer boundary decides
+      for (std::size_t k = 0; k < loops[h].size() && inside < 0; ++k)
+        inside = encloses(loops[o], loops[h][k]);
+      if (inside == 1) parent[h] = static_cast<std::ptrdiff_t>(o);
+    }
+    if (parent[h] < 0) return false;
+    total[static_cast<std::size_t>(parent[h])] += area[h];
+  }
+  for (std::size_t o = 0; o < n; ++o) {
+    if (!(area[o] > 0) || !(total[o] / (kScale * kScale) * layer_per_section >= min_area)) continue;
+    SectionPolygon island;
+    island.outer = to_plane(loops[o], es, et);
+    for (std::size_t h = 0; h < n; ++h)
+      if (parent[h] == static_cast<std::ptrdiff_t>(o))
+        island.holes.push_back(to_plane(loops[h], es, et));
+    islands.push_back(std::move(island));
+  }
+  return true;
+}
+
+// inset ∩ (cut shifted by +shift) ∩ (cut shifted by -shift): Clipper2's intersection below.
+bool in_both_shifted(const detail::Windings& w) { return w[0] > 0 && w[1] + w[2] - 1 > 0; }
+
 // Skins under the surfaces at most `max_slope` steep from the layer plane: each such boundary
 // edge swept `depth` into the section along the in-plane build axis s (Clipper units, s not
 // stretched). The surface's slope follows from its in-plane normal w: |w.b| = |w_s| sin(theta).
@@ -135,6 +199,151 @@ Paths64 flat_skins(const Paths64& section, double depth, double sin_theta, doubl
     }
   }
   return Clipper2Lib::Union(quads, Clipper2Lib::FillRule::NonZero);
+}
+
+// flat_skins' quads as one polygon per run of consecutive edges with the same shift: such a
+// run is strictly monotone in t (its edges' t steps all have the sign of w_s), so the union of
+// its quads is the region between the run and its copy shifted along s, a simple
+// counter-clockwise polygon (the run up or down t on the side away from the shift).
+Paths64 flat_skin_sweeps(const Paths64& section, double depth, double sin_theta, double max_slope) {
+  Paths64 out;
+  const double min_cos = std::cos(max_slope);
+  std::vector<std::int64_t> shift;
+  for (const Path64& loop : section) {
+    const std::size_t n = loop.size();
+    shift.assign(n, 0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto& p = loop[k];
+      const auto& q = loop[k + 1 == n ? 0 : k + 1];
+      const double dx = static_cast<double>(q.x - p.x), dy = static_cast<double>(q.y - p.y);
+      const double len = std::hypot(dx, dy);
+      if (!(len > 0)) continue;
+      const double ws = dy / len;
+      if (std::abs(ws) * sin_theta < min_cos) continue;
+      shift[k] = static_cast<std::int64_t>(std::llround(ws > 0 ? -depth : depth));
+    }
+    std::size_t k0 = 0;  // the first edge of a run
+    while (k0 < n && (shift[k0] == 0 || shift[k0] == shift[(k0 + n - 1) % n])) ++k0;
+    if (k0 == n) continue;  // no edge under a flat surface (a closed loop cannot be one run)
+    for (std::size_t i = 0; i < n;) {
+      const std::size_t k = (k0 + i) % n;
+      std::size_t r = 1;
+      while (i + r < n && shift[(k + r) % n] == shift[k]) ++r;
+      if (shift[k] != 0) {
+        Path64 sweep;
+        sweep.reserve(2 * (r + 1));
+        for (std::size_t j = 0; j <= r; ++j) sweep.push_back(loop[(k + j) % n]);
+        for (std::size_t j = r + 1; j-- > 0;)
+          sweep.emplace_back(loop[(k + j) % n].x + shift[k], loop[(k + j) % n].y);
+        out.push_back(std::move(sweep));
+      }
+      i += r;
+    }
+  }
+  return out;
+}
+
+// The inset less the flat surfaces' skins: Clipper2's difference below (both non-zero).
+bool outside_flat_skins(const detail::Windings& w) { return w[0] != 0 && w[1] == 0; }
+
+// The paths with each run of consecutive vertices beyond one side of `box` (all left of it, or
+// all right of it, or all above or below it) shortened to the run's first and last vertex: the
+// segment between them stays beyond that side, so every winding number inside the box is the
+// same (a path wholly beyond one side winds 0 about it and goes). Where the region sought lies
+// in the box (in the inset), the skins' crossings of the cut's copies beyond it are not paid.
+Paths64 collapsed_outside(const Paths64& paths, const Clipper2Lib::Rect64& box) {
+  auto side = [&box](const Clipper2Lib::Point64& p) {
+    return p.x < box.left ? 1 : p.x > box.right ? 2 : p.y < box.top ? 3 : p.y > box.bottom ? 4 : 0;
+  };
+  Paths64 out;
+  std::vector<int> code;
+  for (const Path64& path : paths) {
+    const std::size_t n = path.size();
+    code.resize(n);
+    for (std::size_t k = 0; k < n; ++k) code[k] = side(path[k]);
+    std::size_t k0 = 0;  // a run's first vertex
+    while (k0 < n && code[k0] == code[(k0 + n - 1) % n]) ++k0;
+    if (k0 == n) {
+      if (n > 0 && code[0] == 0) out.push_back(path);
+      continue;
+    }
+    Path64 q;
+    q.reserve(n);
+    for (std::size_t i = 0; i < n;) {
+      const std::size_t k = (k0 + i) % n;
+      std::size_t r = 1;
+      if (code[k] != 0)
+        while (i + r < n && code[(k + r) % n] == code[k]) ++r;
+      q.push_back(path[k]);
+      if (r >= 2) q.push_back(path[(k + r - 1) % n]);
+      i += r;
+    }
+    if (q.size() >= 3) out.push_back(std::move(q));
+  }
+  return out;
+}
+
+// sparse_islands by winding_region and collect_loops; false where the loops are not in
+// general position.
+bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int64_t shift,
+                        double sin_theta, double max_slope, double layer_per_section,
+                        double min_area, const Vec2& es, const Vec2& et,
+                        std::vector<SectionPolygon>& islands) {
+  if (shift == 0) return collect_loops(eroded, layer_per_section, min_area, es, et, islands);
+  Paths64 region;
+  Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(eroded);  // the region lies in the inset
+  box.left -= 2, box.top -= 2, box.right += 2, box.bottom += 2;
+  if (max_slope >= M_PI / 2) {
+    const Paths64 up = collapsed_outside(Clipper2Lib::TranslatePaths(section, shift, 0), box);
+    const Paths64 down = collapsed_outside(Clipper2Lib::TranslatePaths(section, -shift, 0), box);
+    return detail::winding_region({&eroded, &up, &down}, in_both_shifted, region) &&
+           collect_loops(region, layer_per_section, min_area, es, et, islands);
+  }
+  const Paths64 sweeps = collapsed_outside(
+      flat_skin_sweeps(section, static_cast<double>(shift), sin_theta, max_slope), box);
+  return detail::winding_region({&eroded, &sweeps}, outside_flat_skins, region) &&
+         collect_loops(region, layer_per_section, min_area, es, et, islands);
+}
+
+// The sparse islands (those whose layer area is at least min_area, mm^2): the inset less the
+// skins, where the layers within skin_depth above and below (the cut shifted by
+// +-skin_depth sin(theta) = `shift` along s, 0: no skins) do not both cover the point. The
+// inset's own loops, or winding_region's intersection, where they are in general position;
+// Clipper2's boolean pass otherwise (and for skins under flat surfaces only).
+void sparse_islands(bool reference, const Paths64& section, const Paths64& eroded,
+                    std::int64_t shift, double sin_theta, double max_slope,
+                    double layer_per_section, double min_area, const Vec2& es, const Vec2& et,
+                    std::vector<SectionPolygon>& islands) {
+  const bool all_slopes = max_slope >= M_PI / 2;
+  if (!reference && islands_by_winding(section, eroded, shift, sin_theta, max_slope,
+                                       layer_per_section, min_area, es, et, islands))
+    return;
+  islands.clear();
+  Clipper2Lib::Clipper64 clipper;
+  clipper.AddSubject(eroded);
+  if (shift > 0 && all_slopes) {
+    // inset ∩ shifted ∩ shifted in one pass (no boolean for the two shifted cuts first): the
+    // clip is both shifted cuts (winding 1 in each's material) and a reversed box around them
+    // (winding -1 everywhere), so the clip's winding is positive where both cover the point.
+    clipper.AddClip(Clipper2Lib::TranslatePaths(section, shift, 0));
+    clipper.AddClip(Clipper2Lib::TranslatePaths(section, -shift, 0));
+    const Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(section);
+    const std::int64_t pad = shift + 1;
+    clipper.AddClip(Paths64{{{box.left - pad, box.top - pad},
+                             {box.left - pad, box.bottom + pad},
+                             {box.right + pad, box.bottom + pad},
+                             {box.right + pad, box.top - pad}}});
+  } else if (shift > 0)
+    clipper.AddClip(flat_skins(section, static_cast<double>(shift), sin_theta, max_slope));
+  Clipper2Lib::PolyTree64 tree;
+  const auto op = shift == 0   ? Clipper2Lib::ClipType::Union
+                  : all_slopes ? Clipper2Lib::ClipType::Intersection
+                               : Clipper2Lib::ClipType::Difference;
+  clipper.Execute(
+      op,
+      shift > 0 && all_slopes ? Clipper2Lib::FillRule::Positive : Clipper2Lib::FillRule::NonZero,
+      tree);
+  collect_islands(tree, layer_per_section, min_area, es, et, islands);
 }
 
 detail::StLoops st_loops(const Paths64& paths) {
@@ -239,6 +448,7 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
                                const Vec2& build_in_plane, double cos_theta,
                                const PrintOptions& options, bool keep_sparse) {
   PrintedSection out;
+  const bool reference = clipper_reference();
   const bool layered = options.kind == PrintOptions::kLayered;
   const double c = std::clamp(std::abs(cos_theta), 0.0, 1.0);
   const double sin_theta = std::sqrt(std::max(0.0, 1.0 - c * c));
@@ -258,10 +468,12 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   if (options.wall_depth > 0) {
     const double delta = options.wall_depth * kScale;
     const double arc_tolerance = std::max(0.005 * kScale, 0.01 * delta);
-    eroded = stretched(
-        Clipper2Lib::InflatePaths(stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
-                                  Clipper2Lib::EndType::Polygon, 2.0, arc_tolerance),
-        1.0 / stretch);
+    eroded =
+        stretched(reference ? Clipper2Lib::InflatePaths(
+                                  stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
+                                  Clipper2Lib::EndType::Polygon, 2.0, arc_tolerance)
+                            : detail::wall_inset(stretched(section, stretch), delta, arc_tolerance),
+                  1.0 / stretch);
     // Less the arcs' chords and 4 units for the rounding of the stretch there and back.
     wall_reach = (delta - arc_tolerance) / stretch - 4.0;
   }
@@ -303,35 +515,9 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
     out.valid = out.modulus > 0 && std::isfinite(out.modulus);
     return out;
   }
-  // Skins: where the layers within skin_depth above and below (the cut shifted by
-  // +-skin_depth sin(theta) along s) do not both cover the point.
-  Clipper2Lib::Clipper64 clipper;
-  clipper.AddSubject(eroded);
-  const bool all_slopes = options.skin_max_slope >= M_PI / 2;
-  if (skins && all_slopes) {
-    // inset ∩ shifted ∩ shifted in one pass (no boolean for the two shifted cuts first): the
-    // clip is both shifted cuts (winding 1 in each's material) and a reversed box around them
-    // (winding -1 everywhere), so the clip's winding is positive where both cover the point.
-    clipper.AddClip(Clipper2Lib::TranslatePaths(section, shift, 0));
-    clipper.AddClip(Clipper2Lib::TranslatePaths(section, -shift, 0));
-    const Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(section);
-    const std::int64_t pad = shift + 1;
-    clipper.AddClip(Paths64{{{box.left - pad, box.top - pad},
-                             {box.left - pad, box.bottom + pad},
-                             {box.right + pad, box.bottom + pad},
-                             {box.right + pad, box.top - pad}}});
-  } else if (skins)
-    clipper.AddClip(
-        flat_skins(section, static_cast<double>(shift), sin_theta, options.skin_max_slope));
-  Clipper2Lib::PolyTree64 tree;
-  const auto op = !skins       ? Clipper2Lib::ClipType::Union
-                  : all_slopes ? Clipper2Lib::ClipType::Intersection
-                               : Clipper2Lib::ClipType::Difference;
-  clipper.Execute(
-      op, skins && all_slopes ? Clipper2Lib::FillRule::Positive : Clipper2Lib::FillRule::NonZero,
-      tree);
-  // Small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
-  collect_islands(tree, layer_per_section, min_area, es, et, islands);
+  // Skins, and small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
+  sparse_islands(reference, section, eroded, skins ? shift : 0, sin_theta, options.skin_max_slope,
+                 layer_per_section, min_area, es, et, islands);
   for (const SectionPolygon& island : islands)
     sparse.add(section_properties(island), solid.centroid);
   if (skins && options.skin_growth > 0 && options.layer_height > 0 && sin_theta > 1e-6)

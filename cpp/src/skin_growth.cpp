@@ -181,8 +181,10 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
     for (int d = 0; d < layers; ++d) {
       // The row's own surfaces are printed as top / bottom fill and are not widened.
       const double g = d == 0 ? 0.0 : growth;
-      if (n + d < rows) add_source(top.row(n + d), room, g, w);
-      if (n - d >= 0) add_source(bottom.row(n - d), room, g, w);
+      const Span up = n + d < rows ? Span(top.row(n + d)) : Span();
+      const Span down = n - d >= 0 ? Span(bottom.row(n - d)) : Span();
+      if (!up.empty()) add_source(up, room, g, w);
+      if (!down.empty()) add_source(down, room, g, w);
     }
     if (w.widened.empty()) continue;
     merge_in_place(w.widened);
