@@ -189,6 +189,7 @@ void Analyzer::Impl::forget_last_run() {
   last_tails.clear();
   last_parents.clear();
   last_gap = -1.0;
+  stress_memo.valid = false;
 }
 
 void Analyzer::Impl::check_inputs(RunState& run) {
