@@ -10,8 +10,8 @@ Target (issue 34): the whole update <= 16 ms, the engine <= 10 ms.
     .venv/bin/python bench/bench_live.py --replay live.npz --instructions   # no bpy: callgrind
 
 The rig is the bundled sample figurine (blender_addon/osteon_blender/sample.py ``--levels 3
---cuts 2``): ~107k vertices, 13 bones.  Each round changes a pose-bone scale (Blender evaluates
-the armature outside the timed region), then times ``live.update_now()``; the overlay outlines
+--cuts 2``): ~107k vertices, 13 bones.  Each round changes a pose-bone scale (``--pose bend``:
+its rotation; Blender evaluates the armature outside the timed region), then times ``live.update_now()``; the overlay outlines
 are timed apart.  Per part, the process CPU time (``time.process_time``: all threads, so
 the engine's workers count; the load of other processes does not) of the functions the update
 calls, each part exclusive of the parts it calls, medians over the rounds; "rest" is what the
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import math
 import os
 import resource
 import statistics
@@ -210,8 +211,12 @@ def main_blender(args) -> int:
     parts_wall: dict[str, list] = {}
     try:
         for i in range(args.repeat + 2):
-            s = 0.7 + 0.02 * (i % 5)
-            pb.scale = (s, 1.0, s)
+            if args.pose == "bend":            # the elbow bent, 4-40 degrees in 10 steps
+                pb.rotation_mode = "XYZ"
+                pb.rotation_euler = (math.radians(4.0 * (1 + i % 10)), 0.0, 0.0)
+            else:                               # the forearm thinned, 0.70-0.78 in 5 steps
+                s = 0.7 + 0.02 * (i % 5)
+                pb.scale = (s, 1.0, s)
             bpy.context.view_layer.update()             # Blender's armature evaluation: not timed
             dg = bpy.context.evaluated_depsgraph_get()
             t0 = time.perf_counter()
@@ -377,6 +382,9 @@ def main(argv) -> int:
     ap.add_argument("--extra-shells", type=int, default=0, choices=(0, 1, 2),
                     help="separate unweighted shells added to the mesh: 1 an 'eye' inside the "
                          "head, 2 also a 'prop' floating beside it (a loose piece)")
+    ap.add_argument("--pose", choices=("scale", "bend"), default="scale",
+                    help="what changes per round: forearm.L's scale across its axis (default) "
+                         "or its rotation (the elbow bends)")
     ap.add_argument("--capture", metavar="FILE", help="save the engine's inputs (.npz)")
     ap.add_argument("--replay", metavar="FILE", help="re-run captured inputs without bpy")
     ap.add_argument("--runs", type=int, default=4, help="--replay: analyser runs")

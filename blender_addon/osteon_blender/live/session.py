@@ -234,8 +234,11 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
     if not np.array_equal(m, np.eye(4)):            # rigged meshes mostly sit at identity
         w = w @ m[:3, :3].T.astype(np.float32)
         w += m[:3, 3].astype(np.float32)
-    # per column: a strided axis-0 reduction over (V, 3) is ~20x slower in NumPy
-    extent = np.array([float(c.max()) - float(c.min()) for c in w.T])
+    # per column: a strided axis-0 reduction over (V, 3) is ~20x slower in NumPy; only the
+    # columns the print-size mode reads (HEIGHT: z; UNITS: none)
+    extent = np.zeros(3)
+    for i in {"HEIGHT": (2,), "UNITS": ()}.get(inp.size_mode, (0, 1, 2)):
+        extent[i] = float(w[:, i].max()) - float(w[:, i].min())
     try:
         k = core.mm_per_unit(inp.size_mode, inp.print_size_mm, extent, inp.unit_scale)
     except ValueError as e:
