@@ -238,8 +238,10 @@ struct Analyzer::Impl {
   // Scratch of reuse_last_run: per vertex, moved since the last run (RunState::moved).
   std::vector<std::uint8_t> moved_scratch;
   // The last run's per-vertex stress and what it was computed from: in live mode a vertex whose
-  // bone, position, bone head and axis and its bone's section profile are bitwise unchanged keeps
-  // its value (the same arithmetic on the same numbers), the others are computed anew.
+  // bone, position, bone head and axis and its bone's section params are bitwise unchanged lies
+  // at the same place between the same two sections (vertex_param, vertex_slab); it keeps its
+  // value when those two sections' stress and culling are unchanged too, else only the
+  // interpolation is redone (the same arithmetic on the same numbers either way).
   struct VertexStressMemo {
     bool valid = false;
     std::vector<std::vector<double>> param, stress;  // per bone: sections' params and stresses
@@ -249,6 +251,8 @@ struct Analyzer::Impl {
     std::vector<std::uint8_t> loose_vertex;  // empty: no loose piece
     std::vector<double> vertex_stress;
     std::vector<std::uint8_t> vertex_culled;
+    std::vector<double> vertex_param;       // mm along the bone (vertices with sections)
+    std::vector<std::int32_t> vertex_slab;  // sections of the bone below vertex_param
   } stress_memo;
 
   // Inputs of the last run, so that the next run re-cuts only what changed (live mode).
