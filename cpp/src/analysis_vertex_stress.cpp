@@ -106,12 +106,17 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   } else {
     r.vertex_stress.assign(num_vertices, 0.0);
     r.vertex_culled.assign(num_vertices, 0);
+  }
+  // Only a reused Analyzer (live mode: the last run's vertices known) keeps what the next run
+  // compares with; a one-off analysis pays nothing for it.
+  const bool keep = run.moved != nullptr;
+  if (keep) {
     memo.vertex_param.resize(num_vertices);
     memo.vertex_slab.resize(num_vertices);
   }
   const int* last_bone = moved != nullptr ? memo.vertex_bone.data() : nullptr;
-  double* vparam = memo.vertex_param.data();
-  std::int32_t* vslab = memo.vertex_slab.data();
+  double* vparam = keep ? memo.vertex_param.data() : nullptr;
+  std::int32_t* vslab = keep ? memo.vertex_slab.data() : nullptr;
   const Index block = 8192;
   detail::parallel_for(
       static_cast<long>((num_vertices + block - 1) / block), options.threads, [&](long chunk, int) {
@@ -136,8 +141,10 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
           } else {
             t = (mesh.vertex(v) - sk.heads[b]).dot(run.axis[b]);
             j = detail::upper_index(p, t);
-            vparam[v] = t;
-            vslab[v] = static_cast<std::int32_t>(j);
+            if (vparam != nullptr) {
+              vparam[v] = t;
+              vslab[v] = static_cast<std::int32_t>(j);
+            }
           }
           if (j == 0) {
             r.vertex_stress[v] = ss[b][0];
@@ -152,6 +159,8 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
           }
         }
       });
+  memo.valid = false;
+  if (!keep) return;
   // What the next run compares with (copies: the result owns its arrays).
   memo.param = std::move(prof.param);
   memo.stress = std::move(prof.stress);

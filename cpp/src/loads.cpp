@@ -142,7 +142,11 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
   group_vertices(mesh, s, vertex_bone, skip, reuse ? moved->data() : nullptr);
   pack_buckets(mesh, skip);
   build_box_trees(tree);
-  remember_build(s, vertex_bone, skip);
+  // Only an index that is rebuilt with `moved` (live mode) keeps its inputs for the next build.
+  if (moved != nullptr)
+    remember_build(s, vertex_bone, skip);
+  else
+    slabs_known_ = false;
 }
 
 namespace {
