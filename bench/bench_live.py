@@ -21,7 +21,8 @@ every update).
 
 ``--replay FILE``: the captured updates run again in a plain Python with the engine alone (the
 same ``Analyzer`` inputs, no bpy); ``--instructions`` counts the machine instructions of one
-update under valgrind's callgrind ((N updates - 1 update) / (N - 1), after the first full run),
+update under valgrind's callgrind ((N runs - 2 runs) / (N - 2): the updates after the first,
+which also fills what later ones reuse),
 exact whatever the machine's load, and lists the engine stages' inclusive counts;
 ``OSTEON_OTHER_BUILD=DIR`` replays with another build's ``osteon`` package (a directory holding it
 with its compiled ``_core``, as bench/compare_builds.py takes).
@@ -325,13 +326,15 @@ def replay(path: str, runs: int, threads: int | None) -> list:
 
 
 def instructions(path: str, runs: int, keep: str | None = None) -> None:
-    """callgrind of the engine's runs: 1 run and `runs` runs, one thread; per update =
-    the difference / (runs - 1); stages by inclusive counts of their functions."""
+    """callgrind of the engine's runs, one thread: 1, 2 and `runs` runs. The first update
+    (2 runs - 1 run) also fills what later updates reuse; an update after it is
+    (`runs` runs - 2 runs) / (`runs` - 2). Stages by inclusive counts of their functions."""
     totals, stages = {}, {}
+    counts = (1, 2, runs)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = keep or tmp
         os.makedirs(tmp, exist_ok=True)
-        for n in (1, runs):
+        for n in counts:
             out = os.path.join(tmp, f"cg.{n}")
             subprocess.run(
                 ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
@@ -343,14 +346,16 @@ def instructions(path: str, runs: int, keep: str | None = None) -> None:
             ann = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", out],
                                  check=True, capture_output=True, text=True).stdout
             stages[n] = _stage_counts(ann)
-    per = (totals[runs] - totals[1]) / (runs - 1)
-    print(f"engine instructions per live update: {per / 1e6:.1f} M "
-          f"(first full run {totals[1] / 1e6:.1f} M; ({runs} runs - 1 run) / {runs - 1})")
-    print("| function (inclusive) | M instructions per update |")
-    print("|---|---|")
+    steady = (totals[runs] - totals[2]) / (runs - 2)
+    print(f"engine instructions per live update: {steady / 1e6:.1f} M (({runs} runs - 2 runs) / "
+          f"{runs - 2}); the first update {(totals[2] - totals[1]) / 1e6:.1f} M, the first "
+          f"(full) run {totals[1] / 1e6:.1f} M")
+    print("| function (inclusive) | M instructions per update | first update |")
+    print("|---|---|---|")
     for k in stages[runs]:
-        v = (stages[runs][k] - stages[1].get(k, 0)) / (runs - 1)
-        print(f"| {k} | {v / 1e6:.1f} |")
+        v = (stages[runs][k] - stages[2].get(k, 0)) / (runs - 2)
+        first = stages[2].get(k, 0) - stages[1].get(k, 0)
+        print(f"| {k} | {v / 1e6:.1f} | {first / 1e6:.1f} |")
 
 
 def _stage_counts(annotate: str) -> dict:
@@ -397,7 +402,7 @@ def main(argv) -> int:
                     help="--replay under callgrind: instructions per update")
     args = ap.parse_args(argv)
     if args.replay and args.instructions:
-        instructions(args.replay, max(2, args.runs), args.keep)
+        instructions(args.replay, max(3, args.runs), args.keep)
         return 0
     if args.replay and args.dump:
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
