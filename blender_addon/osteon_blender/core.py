@@ -120,7 +120,7 @@ def stress_colors(vertex_stress: np.ndarray, allowable_mpa: float,
     s = np.asarray(vertex_stress, dtype=np.float64)
     t = s * (_LUT_SIZE / float(allowable_mpa))
     np.clip(t, 0.0, _LUT_SIZE, out=t)  # NaN stays NaN ...
-    idx = np.nan_to_num(t, nan=0.0).astype(np.intp)  # ... and becomes 0 MPa (blue)
+    idx = np.nan_to_num(t, nan=0.0, copy=False).astype(np.intp)  # ... and becomes 0 MPa (blue)
     if vertex_culled is not None:
         idx[np.asarray(vertex_culled, dtype=bool)] = _LUT_SIZE + 1
     out = np.take(_LUT, idx, axis=0)

@@ -189,6 +189,8 @@ void Analyzer::Impl::forget_last_run() {
   last_tails.clear();
   last_parents.clear();
   last_gap = -1.0;
+  stress_memo.valid = false;
+  arm_index.forget_slabs();
 }
 
 void Analyzer::Impl::check_inputs(RunState& run) {

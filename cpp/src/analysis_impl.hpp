@@ -193,6 +193,10 @@ struct RunState {
   std::atomic<int> local_used{0}, local_failed{0};
   long retried = 0;
 
+  // Live reuse (reuse_last_run): per vertex, whether it moved since the last run (null: not
+  // known, e.g. a full or partial run); the Analyzer's storage.
+  const std::vector<std::uint8_t>* moved = nullptr;
+
   // What changed since the last run (partial and live runs): junction cores whose neighbour
   // planes reach it are re-checked. all_changed: a fresh run.
   bool all_changed = true;
@@ -230,6 +234,26 @@ struct Analyzer::Impl {
   // every update): the loose-piece search (the faces' shells found once) and the moment-arm index.
   LoosePieceFinder loose_finder;
   MomentArmIndex arm_index;
+
+  // Scratch of reuse_last_run: per vertex, moved since the last run (RunState::moved).
+  std::vector<std::uint8_t> moved_scratch;
+  // The last run's per-vertex stress and what it was computed from: in live mode a vertex whose
+  // bone, position, bone head and axis and its bone's section params are bitwise unchanged lies
+  // at the same place between the same two sections (vertex_param, vertex_slab); it keeps its
+  // value when those two sections' stress and culling are unchanged too, else only the
+  // interpolation is redone (the same arithmetic on the same numbers either way).
+  struct VertexStressMemo {
+    bool valid = false;
+    std::vector<std::vector<double>> param, stress;  // per bone: sections' params and stresses
+    std::vector<std::vector<std::uint8_t>> culled;   // per bone: sections culled
+    std::vector<Vec3> heads, axis;
+    std::vector<int> vertex_bone;
+    std::vector<std::uint8_t> loose_vertex;  // empty: no loose piece
+    std::vector<double> vertex_stress;
+    std::vector<std::uint8_t> vertex_culled;
+    std::vector<double> vertex_param;       // mm along the bone (vertices with sections)
+    std::vector<std::int32_t> vertex_slab;  // sections of the bone below vertex_param
+  } stress_memo;
 
   // Inputs of the last run, so that the next run re-cuts only what changed (live mode).
   std::vector<double> last_vertices;

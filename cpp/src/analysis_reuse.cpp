@@ -45,7 +45,9 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
   // Exact reuse: a section keeps its geometry when its bone, plane and downstream side are
   // bitwise the same and no moved triangle reaches the region its cut was proven in.
   Box3 moved_box;
-  std::vector<std::uint8_t> moved(num_vertices, 0);
+  std::vector<std::uint8_t>& moved = moved_scratch;
+  moved.resize(num_vertices);  // every entry written below
+  run.moved = &moved;
   bool any_moved = false;
   for (Index v = 0; v < num_vertices; ++v) {
     const double* a = vertices + 3 * v;

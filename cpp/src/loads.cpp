@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <queue>
@@ -122,8 +123,10 @@ MomentArmIndex::MomentArmIndex(const MeshView& mesh, const Skeleton& s, const Lo
 void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTree& tree,
                            const std::vector<int>& vertex_bone,
                            const std::vector<std::vector<double>>& slab_params,
-                           const std::vector<std::uint8_t>* skip) {
+                           const std::vector<std::uint8_t>* skip,
+                           const std::vector<std::uint8_t>* moved) {
   tree_ = &tree;
+  last_slab_params_.swap(slab_params_);
   slab_params_ = slab_params;
   const int nb = s.num_bones();
   // Slab j of bone b holds the vertices with params in [p[j-1], p[j]) (slab 0: below p[0],
@@ -131,26 +134,80 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
   group_offset_.assign(nb + 1, 0);
   for (int b = 0; b < nb; ++b)
     group_offset_[b + 1] = group_offset_[b] + static_cast<Index>(slab_params_[b].size()) + 1;
-  group_vertices(mesh, s, vertex_bone, skip);
+  const bool reuse = moved != nullptr && slabs_known_ &&
+                     static_cast<Index>(moved->size()) == mesh.num_vertices &&
+                     static_cast<Index>(last_bone_.size()) == mesh.num_vertices &&
+                     vertex_capacity_ >= mesh.num_vertices;
+  if (reuse) compare_with_last_build(s, skip);
+  group_vertices(mesh, s, vertex_bone, skip, reuse ? moved->data() : nullptr);
   pack_buckets(mesh, skip);
   build_box_trees(tree);
+  // Only an index that is rebuilt with `moved` (live mode) keeps its inputs for the next build.
+  if (moved != nullptr)
+    remember_build(s, vertex_bone, skip);
+  else
+    slabs_known_ = false;
 }
 
-// Each kept vertex's group (vertex_group_) and its pseudo-angle in [0, 4] around the bone axis
+namespace {
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+}  // namespace
+
+// bone_same_[b]: bone b's head, axis and slab params are bitwise the last build's (and the
+// vertices left out are the same), so an unmoved vertex of b lies in the same slab at the same
+// angle.
+void MomentArmIndex::compare_with_last_build(const Skeleton& s,
+                                             const std::vector<std::uint8_t>* skip) {
+  const int nb = s.num_bones();
+  bone_same_.assign(nb, 0);
+  const bool same_skip = skip == nullptr ? last_skip_.empty() : same_bits(*skip, last_skip_);
+  if (!same_skip || static_cast<int>(last_head_.size()) != nb ||
+      static_cast<int>(last_slab_params_.size()) != nb)
+    return;
+  for (int b = 0; b < nb; ++b) {
+    const Vec3 axis = s.direction(b);
+    bone_same_[b] = std::memcmp(s.heads[b].data(), last_head_[b].data(), sizeof(Vec3)) == 0 &&
+                    std::memcmp(axis.data(), last_axis_[b].data(), sizeof(Vec3)) == 0 &&
+                    same_bits(slab_params_[b], last_slab_params_[b]);
+  }
+}
+
+void MomentArmIndex::remember_build(const Skeleton& s, const std::vector<int>& vertex_bone,
+                                    const std::vector<std::uint8_t>* skip) {
+  last_bone_ = vertex_bone;
+  last_head_.assign(s.heads.begin(), s.heads.begin() + s.num_bones());
+  last_axis_ = axis_;
+  if (skip != nullptr)
+    last_skip_ = *skip;
+  else
+    last_skip_.clear();
+  slabs_known_ = true;
+}
+
+// Each kept vertex's group (vertex_group_; its slab within its bone: vertex_slab_) and its
+// pseudo-angle in [0, 4] around the bone axis
 // (vertex_angle_: a monotone function of the angle in the bone's frame u, v: no atan); the
 // vertices per group (group_count_).
 void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
                                     const std::vector<int>& vertex_bone,
-                                    const std::vector<std::uint8_t>* skip) {
+                                    const std::vector<std::uint8_t>* skip,
+                                    const std::uint8_t* moved) {
   const int nb = s.num_bones();
   const Index ngroups = group_offset_[nb];
   // (Scratch arrays left uninitialised: every kept vertex's entry is written before it is read.)
   if (vertex_capacity_ < mesh.num_vertices) {
     vertex_group_.reset(new Index[mesh.num_vertices]);
     vertex_angle_.reset(new double[mesh.num_vertices]);
+    vertex_slab_.reset(new Index[mesh.num_vertices]);
     vertex_capacity_ = mesh.num_vertices;
+    moved = nullptr;  // nothing kept
   }
   Index* const vertex_group = vertex_group_.get();
+  Index* const vertex_slab = vertex_slab_.get();  // the slab within its bone (kept)
   double* const vertex_angle = vertex_angle_.get();
   std::vector<Index>& group_count = group_count_;
   group_count.assign(ngroups, 0);
@@ -164,12 +221,20 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
     frame_v[b] = axis[b].cross(frame_u[b]);
   }
   auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
+  const std::uint8_t* bone_same = bone_same_.data();
+  const int* last_bone = last_bone_.data();
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     if (skipped(v)) continue;
     const int b = vertex_bone[v];
+    if (moved != nullptr && !moved[v] && last_bone[v] == b && bone_same[b]) {
+      const Index g = group_offset_[b] + vertex_slab[v];  // the last build's slab and angle
+      vertex_group[v] = g;
+      ++group_count[g];
+      continue;
+    }
     const Vec3 d = mesh.vertex(v) - s.heads[b];
-    const Index g =
-        group_offset_[b] + static_cast<Index>(detail::upper_index(slab_params_[b], d.dot(axis[b])));
+    vertex_slab[v] = static_cast<Index>(detail::upper_index(slab_params_[b], d.dot(axis[b])));
+    const Index g = group_offset_[b] + vertex_slab[v];
     vertex_group[v] = g;
     ++group_count[g];
     const double du = d.dot(frame_u[b]), dv = d.dot(frame_v[b]);

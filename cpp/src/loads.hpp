@@ -46,10 +46,16 @@ class MomentArmIndex {
   /// (Re)builds the index, as the constructor; the storage of an earlier build is reused (an
   /// index kept across live runs allocates nothing once the mesh size is steady). `tree` must
   /// outlive the index's use.
+  /// `moved` (optional, #V): which vertices moved since the last build (live mode); a vertex
+  /// that did not, on the same bone, whose bone's head, axis and slabs are bitwise the same,
+  /// keeps its slab and angle from then (the same numbers: the index is the same).
   void build(const MeshView& mesh, const Skeleton& skeleton, const LoadTree& tree,
              const std::vector<int>& vertex_bone,
              const std::vector<std::vector<double>>& slab_params,
-             const std::vector<std::uint8_t>* skip = nullptr);
+             const std::vector<std::uint8_t>* skip = nullptr,
+             const std::vector<std::uint8_t>* moved = nullptr);
+  /// The next build computes every vertex's slab anew (its inputs are not the last build's).
+  void forget_slabs() { slabs_known_ = false; }
 
   /// Farthest downstream vertex from `center` (mm) for a section of `bone` at slab boundary
   /// `boundary` (index into slab_params[bone]); downstream is the far side (plus = beyond the
@@ -85,7 +91,8 @@ class MomentArmIndex {
   Index packed_capacity_ = 0;              // vertices packed_xyz_ and packed_index_ have room for
   // The steps of build(): vertices into groups (slabs), groups into buckets, the box trees.
   void group_vertices(const MeshView& mesh, const Skeleton& skeleton,
-                      const std::vector<int>& vertex_bone, const std::vector<std::uint8_t>* skip);
+                      const std::vector<int>& vertex_bone, const std::vector<std::uint8_t>* skip,
+                      const std::uint8_t* moved);
   void pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip);
   void build_box_trees(const LoadTree& tree);
   // Scratch of build(), kept for its storage.
@@ -94,6 +101,18 @@ class MomentArmIndex {
   Index vertex_capacity_ = 0;
   std::vector<Index> group_count_, bucket_count_, bucket_fill_;
   std::vector<Vec3> axis_, frame_u_, frame_v_;
+  // Each kept vertex's slab (group) and what it was computed from, kept for the next build.
+  std::unique_ptr<Index[]> vertex_slab_;
+  bool slabs_known_ = false;
+  std::vector<int> last_bone_;
+  std::vector<Vec3> last_head_, last_axis_;
+  std::vector<std::vector<double>> last_slab_params_;
+  std::vector<std::uint8_t> last_skip_;
+  // Per bone, whether the last build's slabs of its unmoved vertices still hold.
+  std::vector<std::uint8_t> bone_same_;
+  void compare_with_last_build(const Skeleton& skeleton, const std::vector<std::uint8_t>* skip);
+  void remember_build(const Skeleton& skeleton, const std::vector<int>& vertex_bone,
+                      const std::vector<std::uint8_t>* skip);
 };
 
 }  // namespace osteon

@@ -106,7 +106,9 @@ def section_doubt(analysis) -> dict:
     by_flag = {k: int(np.count_nonzero(flags & b)) for k, b in table.items()}
     skipped_by_flag = {k: int(np.count_nonzero(((flags & b) != 0) & skipped))
                        for k, b in table.items()}
-    names = [[k for k, b in table.items() if f & b] for f in flags]
+    # Python ints (a NumPy scalar's & costs ~10x more); most sections have no flag
+    bits = list(table.items())
+    names = [[k for k, b in bits if f & b] if f else [] for f in flags.tolist()]
     return {"skipped": skipped, "doubtful": doubtful, "flags": flags,
             "by_flag": {k: v for k, v in by_flag.items() if v},
             "skipped_by_flag": {k: v for k, v in skipped_by_flag.items() if v},
@@ -127,9 +129,14 @@ def bone_doubt(analysis, n_bones: int, share: float = NOT_ANALYSED_SHARE) -> lis
     vb = getattr(analysis, "vertex_bone", None)
     owns = (np.bincount(np.asarray(vb, dtype=np.int64)[np.asarray(vb) >= 0], minlength=n_bones)
             > 0 if vb is not None else np.ones(n_bones, bool))
+    # the skipped or doubtful sections of each bone, in section order (one pass)
+    suspect: list[list[int]] = [[] for _ in range(n_bones)]
+    for i in np.flatnonzero(d["skipped"] | d["doubtful"]).tolist():
+        if 0 <= sb[i] < n_bones:
+            suspect[int(sb[i])].append(i)
     out = []
     for b in range(n_bones):
-        sel = np.flatnonzero((sb == b) & (d["skipped"] | d["doubtful"]))
+        sel = suspect[b]
         names = [n for i in sel for n in d["flag_names"][i]]
         if len(sel) and not names:
             names = ["empty"]

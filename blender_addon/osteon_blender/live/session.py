@@ -103,6 +103,7 @@ class Session:
         self.faces = None
         self.engine_weights = None      # (V, B) sparse weights the analyzer was built with
         self.last_sig = None            # (co, matrix, heads, tails, settings) last analysed
+        self.co_spare = None            # the buffer the next read goes into (not last_sig's)
         self.settings_key = None
         self.future = None              # running analysis job
         self.outline_future = None      # running outline job
@@ -188,7 +189,8 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
     s = scene.osteon
     sk = bridge.skeleton_arrays(arm)
     params = core.engine_params(s, arm, sk.names, orientation=state.of(scene).orientation)
-    co, matrix = bridge.evaluated_positions_into(obj, depsgraph)
+    # two buffers in turn: the last analysed read stays in last_sig ("nothing moved" test)
+    co, matrix = bridge.evaluated_positions_into(obj, depsgraph, sess.co_spare)
     settings = _settings_key(scene)
     want = _want_outlines(scene)
     sig = (co, matrix, sk.heads, sk.tails, settings)
@@ -199,7 +201,9 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
     if (not force and not rebuild and last is not None and last[4] == settings
             and np.array_equal(last[0], co) and np.array_equal(last[1], matrix)
             and np.array_equal(last[2], sk.heads) and np.array_equal(last[3], sk.tails)):
+        sess.co_spare = co
         return None
+    sess.co_spare = last[0] if last is not None else None
     sess.last_sig = sig
     inp = LiveInputs(
         co=co, matrix=matrix, heads=sk.heads, tails=sk.tails, parents=sk.parents,
@@ -230,8 +234,11 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
     if not np.array_equal(m, np.eye(4)):            # rigged meshes mostly sit at identity
         w = w @ m[:3, :3].T.astype(np.float32)
         w += m[:3, 3].astype(np.float32)
-    # per column: a strided axis-0 reduction over (V, 3) is ~20x slower in NumPy
-    extent = np.array([float(c.max()) - float(c.min()) for c in w.T])
+    # per column: a strided axis-0 reduction over (V, 3) is ~20x slower in NumPy; only the
+    # columns the print-size mode reads (HEIGHT: z; UNITS: none)
+    extent = np.zeros(3)
+    for i in {"HEIGHT": (2,), "UNITS": ()}.get(inp.size_mode, (0, 1, 2)):
+        extent[i] = float(w[:, i].max()) - float(w[:, i].min())
     try:
         k = core.mm_per_unit(inp.size_mode, inp.print_size_mm, extent, inp.unit_scale)
     except ValueError as e:
