@@ -492,3 +492,23 @@ def test_a_low_poly_cross_gets_a_bone_to_every_arm_tip(arm):
     b = 4.0 + arm
     for tip in ([b, 0, 0], [-b, 0, 0], [0, 0, b], [0, 0, -b]):
         assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * 4.0, tip
+
+
+def test_cap_holes_closes_a_tube_outward_and_declines_a_sheet():
+    """An open tube with a face flipped is capped into a closed, consistently outward mesh whose
+    volume is the hexagonal prism's (circumradius r: 3√3/2 r² x length; both ends are flat
+    fans); a flat sheet encloses nothing and is declined."""
+    from osteon.autoskeleton.pieces import cap_holes
+
+    r, length = 4.0, 50.0
+    v, f = open_tube((0, 0, 0), (0, 0, length), r, n=6, stations=2)
+    f = f.copy()
+    f[3] = f[3, ::-1]
+    cv, cf = cap_holes(v, f)
+    half = np.concatenate([cf[:, [0, 1]], cf[:, [1, 2]], cf[:, [2, 0]]])
+    assert len(np.unique(half, axis=0)) == len(half)  # every edge once each way: closed, oriented
+    assert np.array_equal(cv[: len(v)], v)
+    volume = np.einsum("ij,ij->", cv[cf[:, 0]], np.cross(cv[cf[:, 1]], cv[cf[:, 2]])) / 6
+    assert volume == pytest.approx(1.5 * np.sqrt(3) * r**2 * length, rel=1e-9)
+    sheet = np.array([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]], float)
+    assert cap_holes(sheet, np.array([[0, 1, 2], [0, 2, 3]], np.int32)) is None

@@ -175,7 +175,9 @@ def orient_faces(f: np.ndarray) -> np.ndarray:
 def cap_holes(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """The open piece ``v`` (V,3) mm, ``f`` (F,3) with every hole closed by a fan of triangles
     from a new vertex at the centroid of its boundary loop (appended after ``v``, so the first V
-    vertices are unchanged); None if the boundary is not a set of simple loops.
+    vertices are unchanged); None if the boundary is not a set of simple loops, or if the
+    capped piece encloses less than ``1e-3`` x its size³ (a sheet, not a limb: a tube of that
+    volume is under 1/56 of its length across, thinner than any printable limb of a model).
 
     Why: low-poly models often have a limb modelled as an open tube glued onto the body
     (issue 35: the arms and legs of a 372-face figure); capped, it encloses the limb's volume
@@ -189,6 +191,7 @@ def cap_holes(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray] | N
         verts.append(v[loop].mean(0)[None])
         faces.append(np.column_stack([loop, np.roll(loop, -1), np.full(len(loop), n)]))
     cv, cf = np.concatenate(verts), np.concatenate(faces).astype(f.dtype)
-    if np.einsum("ij,ij->", cv[cf[:, 0]], np.cross(cv[cf[:, 1]], cv[cf[:, 2]])) < 0:
-        cf = cf[:, ::-1]  # outward, like the rest of the mesh
-    return cv, cf
+    volume = np.einsum("ij,ij->", cv[cf[:, 0]], np.cross(cv[cf[:, 1]], cv[cf[:, 2]])) / 6.0
+    if abs(volume) < 1e-3 * float(np.ptp(cv, axis=0).max()) ** 3:
+        return None
+    return cv, (cf if volume > 0 else cf[:, ::-1].copy())  # outward, like the rest of the mesh
