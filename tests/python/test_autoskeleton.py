@@ -11,7 +11,7 @@ import osteon
 import pytest
 from osteon.autoskeleton import END_RATIO, LoosePiecesWarning, split_pieces
 from scipy import sparse
-from shapes import capsule_along, merge, revolve, torus
+from shapes import capsule_along, cylinder_along, merge, revolve, torus
 
 pytest.importorskip("pygel3d")
 
@@ -429,3 +429,86 @@ def test_coarsening_keeps_about_ten_vertices_round_a_limb():
     spacing = curve.SPACING * r
     round_ = len(mid) / (40.0 / spacing)
     assert 0.5 * 2 * np.pi / curve.SPACING < round_ < 2 * 2 * np.pi / curve.SPACING, round_
+
+
+def open_tube(start, end, r, n, stations):
+    """A low-poly tube of radius r from ``start`` (open there: no cap) to ``end`` (closed by a
+    fan): a limb modelled apart as an open shell, as low-poly models often have them."""
+    v, f = cylinder_along(start, end, r, n=n, stations=stations)
+    c0 = len(v) - 2  # revolve's centre of the cap at `start`
+    f = f[~(f == c0).any(1)]
+    f = np.where(f > c0, f - 1, f)
+    return np.delete(v, c0, axis=0), f.astype(np.int32)
+
+
+def test_low_poly_limbs_modelled_as_open_tubes_get_bones_to_their_tips():
+    """A low-poly body (a 12-sided capsule) with three limbs glued on as open 6-sided tubes of
+    two stations (the arms and legs of low-poly RigNet figures, issue 35): each limb gets
+    bones of its own, ending within 1.5 radii of its tip (before: the open tubes got none and
+    their tips were about 55 mm from any bone end)."""
+    r = 4.0
+    body = capsule_along((0, 0, 0), (60, 0, 0), 10.0, n=12, cap_stations=3, stations=4)
+    tips = np.array([[10.0, 0, 55], [50.0, 0, 55], [30.0, 0, -50]])
+    limbs = [open_tube((x, 0, 0), (x, 0, z), r, n=6, stations=2) for x, _, z in tips]
+    v, f = merge(body, *limbs)
+    p = split_pieces(v, f)
+    assert len(p.joined) == 3 and not p.loose and not p.closed[p.joined].any()
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1
+    ends = np.concatenate([sk.heads, sk.tails])
+    for tip in tips:
+        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * r, tip
+
+
+def low_poly_cross(arm=40.0, half=4.0):
+    """A plus sign in the xz plane, 2 x ``half`` thick and wide, arms reaching ±(half + arm):
+    24 vertices, 44 triangles (each arm a box of 4 long edges, no vertex along it)."""
+    a, b = half, half + arm
+    xz = np.array([(a, -a), (b, -a), (b, a), (a, a), (a, b), (-a, b), (-a, a), (-b, a), (-b, -a),
+                   (-a, -a), (-a, -b), (a, -b)])  # the outline, counter-clockwise in (x, z)
+    v = np.concatenate([np.column_stack([xz[:, 0], np.full(12, y), xz[:, 1]]) for y in (-a, a)])
+    faces = []
+    for q in [(0, 3, 6, 9), (0, 1, 2, 3), (3, 4, 5, 6), (6, 7, 8, 9), (9, 10, 11, 0)]:
+        faces += [[12 + q[0], 12 + q[2], 12 + q[1]], [12 + q[0], 12 + q[3], 12 + q[2]],
+                  [q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+    for i in range(12):
+        j = (i + 1) % 12
+        faces += [[i, 12 + j, j], [i, 12 + i, 12 + j]]
+    f = np.array(faces, np.int32)
+    vol = np.einsum("ij,ij->", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]]))
+    return v, (f if vol > 0 else f[:, ::-1].copy())
+
+
+@pytest.mark.parametrize("arm", [25.0, 60.0])
+def test_a_low_poly_cross_gets_a_bone_to_every_arm_tip(arm):
+    """A 44-triangle plus sign (arms 8 x 8 mm boxes with no vertex along them): the mesh is
+    split before skeletonising, so every arm gets a branch whose bone ends within 1.5 arm radii
+    of its tip (issue 35; before: one bone, ends 4-16 radii from the tips)."""
+    v, f = low_poly_cross(arm)
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    ends = np.concatenate([sk.heads, sk.tails])
+    b = 4.0 + arm
+    for tip in ([b, 0, 0], [-b, 0, 0], [0, 0, b], [0, 0, -b]):
+        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * 4.0, tip
+
+
+def test_cap_holes_closes_a_tube_outward_and_declines_a_sheet():
+    """An open tube with a face flipped is capped into a closed, consistently outward mesh whose
+    volume is the hexagonal prism's (circumradius r: 3√3/2 r² x length; both ends are flat
+    fans); a flat sheet encloses nothing and is declined."""
+    from osteon.autoskeleton.pieces import cap_holes
+
+    r, length = 4.0, 50.0
+    v, f = open_tube((0, 0, 0), (0, 0, length), r, n=6, stations=2)
+    f = f.copy()
+    f[3] = f[3, ::-1]
+    cv, cf = cap_holes(v, f)
+    half = np.concatenate([cf[:, [0, 1]], cf[:, [1, 2]], cf[:, [2, 0]]])
+    assert len(np.unique(half, axis=0)) == len(half)  # every edge once each way: closed, oriented
+    assert np.array_equal(cv[: len(v)], v)
+    volume = np.einsum("ij,ij->", cv[cf[:, 0]], np.cross(cv[cf[:, 1]], cv[cf[:, 2]])) / 6
+    assert volume == pytest.approx(1.5 * np.sqrt(3) * r**2 * length, rel=1e-9)
+    sheet = np.array([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]], float)
+    assert cap_holes(sheet, np.array([[0, 1, 2], [0, 2, 3]], np.int32)) is None

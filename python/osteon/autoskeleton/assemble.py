@@ -15,10 +15,17 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .._api import Skeleton
-from .pieces import Pieces
+from .pieces import Pieces, cap_holes
 
 #: a joined closed piece enclosing at least BIG_PIECE x the main body's volume gets bones
 BIG_PIECE = 0.1
+
+#: so does a joined open piece (its holes capped, :func:`~.pieces.cap_holes`; it encloses no
+#: volume of its own to compare) at least LIMB_SIZE x the whole model's size long (largest
+#: bounding-box side): a limb modelled apart is a large share of the model's length (issue 35:
+#: the arms and legs of low-poly RigNet figures are open tubes 19-37 % of the model's size, 2-4
+#: % of the body's volume when capped; their eyes and teeth are under 8 % of its size)
+LIMB_SIZE = 0.15
 
 #: rig(vertices (n,3) mm, faces (m,3), root) -> (Skeleton, (n,B) dense weights)
 RigOne = Callable[[np.ndarray, np.ndarray, "str | np.ndarray"], tuple[Skeleton, np.ndarray]]
@@ -89,18 +96,24 @@ def _warn_loose(pieces: Pieces, sk: Skeleton, v: np.ndarray) -> None:
 def rig_pieces(v: np.ndarray, f: np.ndarray, pieces: Pieces, root: str, rig: RigOne
                ) -> tuple[Skeleton, np.ndarray]:
     """Skeleton and (V,B) dense weights of the welded mesh ``v``, ``f`` in several pieces."""
-    big = [k for k in pieces.joined if pieces.closed[k]
-           and pieces.volume[k] >= BIG_PIECE * pieces.volume[pieces.main]]
+    meshes = {k: submesh(v, f, pieces.vertices_of([k])) for k in [pieces.main, *pieces.joined]}
+    limb = LIMB_SIZE * float(np.ptp(v[pieces.labels >= 0], axis=0).max())
+    for k in pieces.joined:
+        if not pieces.closed[k] and pieces.size[k] >= limb:
+            meshes[k] = cap_holes(*meshes[k])  # (None: not simple holes, no bones)
+    big = [k for k in pieces.joined if meshes[k] is not None and (
+        pieces.volume[k] >= BIG_PIECE * pieces.volume[pieces.main] if pieces.closed[k]
+        else pieces.size[k] >= limb)]
     parts, rigged = [], np.zeros(0, np.int64)
     for k in [pieces.main, *big]:
         verts = pieces.vertices_of([k])
-        pv, pf = submesh(v, f, verts)
+        pv, pf = meshes[k]
         at: str | np.ndarray = root
         if len(rigged):  # rooted where the piece meets the pieces rigged before it
             d, _ = cKDTree(v[rigged]).query(pv)
             at = pv[int(np.argmin(d))]
         sk, w = rig(pv, pf, at)
-        parts.append((sk, verts, w))
+        parts.append((sk, verts, w[: len(verts)]))  # (a capped piece's centroids dropped)
         rigged = np.concatenate([rigged, verts])
     sk, full = _join(parts, len(v))
     small = pieces.vertices_of([k for k in pieces.joined if k not in big])

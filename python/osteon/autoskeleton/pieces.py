@@ -103,3 +103,95 @@ def split_pieces(v: np.ndarray, f: np.ndarray) -> Pieces:
         todo += near
     return Pieces(lab, main, sorted(held[1:]), sorted(int(k) for k in rest), volume, size,
                   closed)
+
+
+def _boundary_loops(f: np.ndarray) -> list[list[int]] | None:
+    """The boundary loops of the triangles ``f`` (F,3), each in the direction opposite to its
+    faces' edges (so a fan on it faces the same way as most of them); None unless every
+    boundary vertex is on exactly two boundary edges and no edge is in more than 2 faces."""
+    half = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]).astype(np.int64)
+    und = np.sort(half, axis=1)
+    _, inv, counts = np.unique(und, axis=0, return_inverse=True, return_counts=True)
+    if (counts > 2).any():
+        return None
+    border = half[counts[inv.ravel()] == 1]  # (a, b) as the single face holding it runs
+    nbr: dict[int, list[int]] = {}
+    for a, b in border:
+        nbr.setdefault(int(a), []).append(int(b))
+        nbr.setdefault(int(b), []).append(int(a))
+    if any(len(n) != 2 for n in nbr.values()):
+        return None
+    along = {(int(a), int(b)) for a, b in border}
+    loops = []
+    while nbr:
+        loop = [min(nbr)]
+        prev = -1
+        while True:
+            n = nbr.pop(loop[-1])
+            w = n[0] if n[0] != prev else n[1]
+            if w == loop[0]:
+                break
+            prev = loop[-1]
+            loop.append(w)
+        pairs = list(zip(loop, loop[1:] + loop[:1], strict=True))
+        if sum(p in along for p in pairs) * 2 > len(pairs):
+            loop = loop[::-1]  # the faces run along the loop: the cap runs against them
+        loops.append(loop)
+    return loops
+
+
+def orient_faces(f: np.ndarray) -> np.ndarray:
+    """The connected triangles ``f`` (F,3) with each face turned, if need be, to run every
+    shared edge opposite to its neighbour's (breadth first from face 0): a few flipped faces in
+    an open low-poly piece (issue 35) would otherwise split its vertices in pygel3d."""
+    f = f.copy()
+    half = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]).astype(np.int64)
+    face_of = np.tile(np.arange(len(f)), 3)
+    _, inv = np.unique(np.sort(half, axis=1), axis=0, return_inverse=True)
+    inv = inv.ravel()
+    sharing: dict[int, list[int]] = {}
+    for h, e in enumerate(inv):
+        sharing.setdefault(int(e), []).append(h)
+    flipped = np.zeros(len(f), bool)
+    seen = np.zeros(len(f), bool)
+    seen[0] = True
+    queue = [0]
+    while queue:
+        a = queue.pop()
+        for k in range(3):
+            h = a + k * len(f)
+            for g in sharing[int(inv[h])]:
+                b = int(face_of[g])
+                if seen[b]:
+                    continue
+                seen[b] = True
+                same = bool((half[h] == half[g]).all())  # same direction before any flips
+                flipped[b] = flipped[a] ^ same
+                queue.append(b)
+    f[flipped] = f[flipped][:, ::-1]
+    return f
+
+
+def cap_holes(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The open piece ``v`` (V,3) mm, ``f`` (F,3) with every hole closed by a fan of triangles
+    from a new vertex at the centroid of its boundary loop (appended after ``v``, so the first V
+    vertices are unchanged); None if the boundary is not a set of simple loops, or if the
+    capped piece encloses less than ``1e-3`` x its size³ (a sheet, not a limb: a tube of that
+    volume is under 1/56 of its length across, thinner than any printable limb of a model).
+
+    Why: low-poly models often have a limb modelled as an open tube glued onto the body
+    (issue 35: the arms and legs of a 372-face figure); capped, it encloses the limb's volume
+    and can be skeletonised like any closed piece."""
+    f = orient_faces(f)
+    loops = _boundary_loops(f)
+    if loops is None or any(len(lp) < 3 for lp in loops):
+        return None
+    verts, faces = [v], [f]
+    for n, loop in enumerate(loops, start=len(v)):
+        verts.append(v[loop].mean(0)[None])
+        faces.append(np.column_stack([loop, np.roll(loop, -1), np.full(len(loop), n)]))
+    cv, cf = np.concatenate(verts), np.concatenate(faces).astype(f.dtype)
+    volume = np.einsum("ij,ij->", cv[cf[:, 0]], np.cross(cv[cf[:, 1]], cv[cf[:, 2]])) / 6.0
+    if abs(volume) < 1e-3 * float(np.ptp(cv, axis=0).max()) ** 3:
+        return None
+    return cv, (cf if volume > 0 else cf[:, ::-1].copy())  # outward, like the rest of the mesh
