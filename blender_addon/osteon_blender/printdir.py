@@ -63,7 +63,6 @@ def colour_stress(analysis, heads_mm: np.ndarray, tails_mm: np.ndarray) -> np.nd
     cos2 = (axis @ d) ** 2
     factor = x / layer_allowable(x, r, cos2)
     vb = np.asarray(analysis.vertex_bone, dtype=np.intp)
-    if len(vb) and (vb.min() < -1 or vb.max() >= len(factor)):
-        return vs * np.where(vb >= 0, factor[np.clip(vb, 0, len(factor) - 1)], 1.0)
-    # bone -1 (no bone) reads the appended 1.0: one gather, one product
-    return vs * np.append(factor, 1.0)[vb]
+    # no bone (< 0) reads the appended 1.0, a bone past the list its last factor: one gather
+    idx = np.where(vb >= 0, np.minimum(vb, len(factor) - 1), len(factor))
+    return vs * np.append(factor, 1.0)[idx]
