@@ -215,6 +215,14 @@ struct Corner {
 // Smallest moment arm / equivalent radius of a thin side the fit is applied to.
 constexpr double kMinSlenderness = 2.0;
 
+// A thin side that is the body itself, not a shaft entering it (docs/notch.md "Cost"): its
+// equivalent radius at least kBodySized of the model's largest section's (its search cylinder,
+// 2.5 r, would span that whole section) and its load within two of its own diameters (moment
+// arm < kShaftSlenderness r: no length of shaft beyond the fillet's disturbance, Saint-Venant;
+// the charts' and the study's bars are loaded 10 r away). No search from it.
+constexpr double kBodySized = 0.4;
+constexpr double kShaftSlenderness = 4.0;
+
 // A plane inside the fillet: the nominal (thin) radius is at most this fraction below the cut's
 // equivalent radius (nominal_radius). Judgement, not a source: a bound on what a noisy profile
 // can do, about twice the drop of the study's training shape (D/d 3, r/d 0.3: 3.18 -> 3 mm).
@@ -522,6 +530,10 @@ double profile_beyond(const AnalysisResult& r, const std::vector<int>& chain, in
 // in the order of the bones' sections.
 std::vector<Step> find_steps(const AnalysisResult& r) {
   std::vector<Step> steps;
+  double r_model = 0;  // the model's largest section (whole cut), mm
+  for (std::size_t i = 0; i < r.section_cut_area.size(); ++i)
+    if (r.section_cut_area[i] > 0)
+      r_model = std::max(r_model, equivalent_radius(r.section_cut_area[i]));
   for (const std::vector<int>& chain : bone_profiles(r)) {
     const int n = static_cast<int>(chain.size());
     auto radius_of = [&](int k) { return equivalent_radius(r.section_cut_area[chain[k]]); };
@@ -551,6 +563,9 @@ std::vector<Step> find_steps(const AnalysisResult& r) {
       // >= kMinSlenderness r, the FEM check's slenderness, docs/validation.md); a stubby or
       // body-sized section gets no Kt (and costs no search).
       if (r.moment_arm[i] < kMinSlenderness * st.r_thin) continue;
+      // The body itself, not a shaft entering it (kBodySized).
+      if (st.r_thin >= kBodySized * r_model && r.moment_arm[i] < kShaftSlenderness * st.r_thin)
+        continue;
       const double gap = std::abs(r.section_param[chain[thick]] - r.section_param[i]);
       // The big dimension: the thick side's largest section within two thin radii of the step.
       for (int j = thick; j >= 0 && j < n; j += dir) {

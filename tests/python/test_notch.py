@@ -20,10 +20,10 @@ D_SMALL, D_BIG = 6.0, 12.0
 
 
 def stepped_bar(rho: float, d: float = D_SMALL, big: float = D_BIG, arc: int = 9,
-                cone_deg: float | None = None):
+                cone_deg: float | None = None, length: float = 30.0):
     """Closed stepped round bar along x (mm): thick x in [-15, 0], a shoulder at x = 0 with a
-    fillet of radius `rho` (0: a sharp corner), thin x up to 30. With `cone_deg` the shoulder
-    is a cone at that angle to the axis instead (no fillet)."""
+    fillet of radius `rho` (0: a sharp corner), thin x up to `length`. With `cone_deg` the
+    shoulder is a cone at that angle to the axis instead (no fillet)."""
     xs = list(np.arange(-15.0, 0.0, 1.0))
     ts = [big / 2] * len(xs)
     if cone_deg is not None:
@@ -40,16 +40,16 @@ def stepped_bar(rho: float, d: float = D_SMALL, big: float = D_BIG, arc: int = 9
         else:
             xs.append(0.0)
             ts.append(d / 2)
-    tail = list(np.arange(xs[-1] + 0.5, 30.0 + 1e-9, 0.5))
+    tail = list(np.arange(xs[-1] + 0.5, length + 1e-9, 0.5))
     return revolve(xs + tail, ts + [d / 2] * len(tail), 96)
 
 
-def bar_skeleton():
-    return osteon.Skeleton(np.array([[-15.0, 0, 0]]), np.array([[30.0, 0, 0]]), [-1])
+def bar_skeleton(length: float = 30.0):
+    return osteon.Skeleton(np.array([[-15.0, 0, 0]]), np.array([[length, 0, 0]]), [-1])
 
 
-def analyse(v, f, **kw):
-    return osteon.analyze(v, f, bar_skeleton(), force=1.0, root=0, **kw)
+def analyse(v, f, length: float = 30.0, **kw):
+    return osteon.analyze(v, f, bar_skeleton(length), force=1.0, root=0, **kw)
 
 
 # --- the fit -------------------------------------------------------------------------------
@@ -157,6 +157,23 @@ def test_a_plain_bar_and_a_shallow_taper_have_no_corner():
         assert not a.notch.any()
         assert np.all(a.stress_concentration == 1.0)
         assert np.array_equal(a.stress, a.nominal_stress, equal_nan=True)
+
+
+def test_a_stub_as_thick_as_the_model_is_the_body_not_a_shaft():
+    # D/d 1.2 with a sharp step: the thin side (r 3 mm) is at least 0.4 of the model's largest
+    # section (r 3.6 mm). As a shaft loaded 30 mm away (the study's bars) it is searched and
+    # carries the shoulder's Kt; as a stub loaded within two of its diameters (8 mm long) it is
+    # the body itself, not a shaft entering one: no search, no Kt (docs/notch.md "Cost").
+    shaft = analyse(*stepped_bar(0.0, big=7.2))
+    (i,) = np.flatnonzero(shaft.notch)
+    assert shaft.notch_step[i] == pytest.approx(1.2, rel=0.02)
+    assert shaft.stress_concentration[i] > 2.0
+    stub = analyse(*stepped_bar(0.0, big=7.2, length=8.0), length=8.0)
+    assert not stub.notch.any()
+    assert np.all(stub.stress_concentration == 1.0)
+    # the thick side alone beside it is no step: the stub's cut radii step by 1.2 as the shaft's
+    cut = np.sqrt(np.asarray(stub.section_cut_area) / np.pi)
+    assert np.nanmax(cut) / np.nanmin(cut[cut > 0]) == pytest.approx(1.2, rel=0.02)
 
 
 def test_a_plane_inside_the_fillet_refers_kt_to_the_thin_diameter():
