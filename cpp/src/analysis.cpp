@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -44,6 +46,19 @@ bool finite_diagonal(const MeshView& mesh, int threads, double& diag) {
   }
   diag = chunks > 0 ? (hi[0] - lo[0]).norm() : 0.0;
   return true;
+}
+
+// Whether every face index lies in [0, num_vertices): one branch-free pass (it vectorises; a
+// 1.5M-face mesh has 4.5M indices, checked serially before any worker starts), the first bad
+// index named by the caller only when there is one.
+bool face_indices_valid(const std::vector<std::int32_t>& faces, Index num_vertices) {
+  // As unsigned, a negative index is >= 2^31 > any valid one (num_vertices fits in 32 bits, or
+  // every non-negative int32 is valid).
+  const std::uint32_t limit = static_cast<std::uint32_t>(
+      std::min<Index>(num_vertices, Index(std::numeric_limits<std::int32_t>::max()) + 1));
+  std::uint32_t bad = 0;
+  for (const std::int32_t f : faces) bad |= static_cast<std::uint32_t>(f) >= limit;
+  return bad == 0;
 }
 
 }  // namespace
@@ -93,15 +108,14 @@ Analyzer::Analyzer(const std::int32_t* faces, Index num_faces, Index num_vertice
     throw std::invalid_argument("empty mesh: faces has no rows");
   if (num_bones <= 0) throw std::invalid_argument("skeleton has no bones");
   s.faces.assign(faces, faces + 3 * num_faces);
-  MeshView probe{nullptr, num_vertices, s.faces.data(), num_faces};
-  for (Index i = 0; i < 3 * num_faces; ++i) {
-    const std::int32_t f = s.faces[i];
-    if (f < 0 || f >= num_vertices)
-      throw std::invalid_argument("face index out of range: faces[" + std::to_string(i / 3) +
-                                  "] refers to vertex " + std::to_string(f) + " but there are " +
-                                  std::to_string(num_vertices) + " vertices");
-  }
-  (void)probe;
+  if (!face_indices_valid(s.faces, num_vertices))
+    for (Index i = 0; i < 3 * num_faces; ++i) {
+      const std::int32_t f = s.faces[i];
+      if (f < 0 || f >= num_vertices)
+        throw std::invalid_argument("face index out of range: faces[" + std::to_string(i / 3) +
+                                    "] refers to vertex " + std::to_string(f) + " but there are " +
+                                    std::to_string(num_vertices) + " vertices");
+    }
   if (weights != nullptr) {
     validate_weights(*weights, num_vertices, num_bones);
     s.has_weights = true;

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <memory>
 #include <vector>
 
@@ -54,16 +55,22 @@ struct Box3 {
   }
 };
 
-/// Stage timer: OSTEON_PROFILE=1 prints the time of each stage of a run to stderr.
+/// Stage timer: OSTEON_PROFILE=1 prints the wall time of each stage of a run to stderr, and the
+/// process's CPU time (all threads) in it: CPU / wall near 1 on two cores is a stage that keeps
+/// one core idle.
 struct StageTimer {
   bool on = std::getenv("OSTEON_PROFILE") != nullptr;
   std::chrono::steady_clock::time_point last = std::chrono::steady_clock::now();
+  std::clock_t last_cpu = std::clock();
   void lap(const char* stage) {
     if (!on) return;
     const auto now = std::chrono::steady_clock::now();
-    std::fprintf(stderr, "osteon %-14s %8.3f ms\n", stage,
-                 std::chrono::duration<double, std::milli>(now - last).count());
+    const std::clock_t cpu = std::clock();
+    std::fprintf(stderr, "osteon %-16s %8.3f ms wall %8.3f ms cpu\n", stage,
+                 std::chrono::duration<double, std::milli>(now - last).count(),
+                 1e3 * static_cast<double>(cpu - last_cpu) / CLOCKS_PER_SEC);
     last = now;
+    last_cpu = cpu;
   }
 };
 

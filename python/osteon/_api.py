@@ -690,7 +690,10 @@ class Analyzer:
                 f"skeleton has {sk.num_bones} bones, the analyzer was built for "
                 f"{self._skeleton.num_bones}"
             )
-        v = _float_rows(vertices, "vertices")
+        return self._run_rows(_float_rows(vertices, "vertices"), sk, progress)
+
+    def _run_rows(self, v: np.ndarray, sk: Skeleton, progress: Progress | None) -> Analysis:
+        """`run` once ``v`` is checked (``_float_rows``: float64, contiguous, finite)."""
         if len(v) != self.num_vertices:
             raise ValueError(
                 f"vertices has {len(v)} rows, the analyzer was built for {self.num_vertices}"
@@ -723,7 +726,8 @@ def analyze(vertices: Any, faces: Any, skeleton: Skeleton, weights: Any = None, 
         raise ValueError("empty mesh: vertices has no rows")
     analyzer = Analyzer(faces, len(v), skeleton, weights,
                         options=AnalysisOptions.of(options, settings))
-    return analyzer.run(v, progress=progress)
+    # The vertices were checked above: one finite pass over them, not two (~2-6 ms at 750k).
+    return analyzer._run_rows(v, skeleton, progress)
 
 
 #: ``correct(..., reinforce_first=True)``: :func:`osteon.reinforcement.reinforce_then_correct`,
