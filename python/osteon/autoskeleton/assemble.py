@@ -1,7 +1,8 @@
 """Step 7: one skeleton for a mesh in several pieces (units: mm).
 
 The main body and every joined piece enclosing at least ``BIG_PIECE`` × the body's volume (a
-head or a limb modelled apart) get bones of their own, rooted where the piece meets the pieces
+head or a limb modelled apart), every joined closed piece that is a long limb (``CLOSED_LIMB_SIZE``)
+and every joined open piece at least ``LIMB_SIZE`` × the model's size (capped) get bones of their own, rooted where the piece meets the pieces
 rigged before it and hung from the nearest bone there. Smaller joined pieces (eyes, teeth, a
 beak) take the weights of the nearest rigged vertex; loose pieces are bound whole to their
 nearest bone and reported with a :class:`LoosePiecesWarning`."""
@@ -27,6 +28,13 @@ BIG_PIECE = 0.1
 #: % of the body's volume when capped; their eyes and teeth are under 8 % of its size)
 LIMB_SIZE = 0.15
 
+#: ... and so does a joined closed piece under BIG_PIECE x the body's volume that is a limb: at
+#: least CLOSED_LIMB_SIZE x the model's size long and more than ELONGATED x as long as it is wide
+#: (issue 35: the arms of RigNet 1347 are closed pieces 54 % of its size, 64 x 19 x 16 mm, 7 % of
+#: its body's volume; a beak, a horn or a hat is shorter: the test creature's beak is 18 %)
+CLOSED_LIMB_SIZE = 0.3
+ELONGATED = 2.0
+
 #: rig(vertices (n,3) mm, faces (m,3), root) -> (Skeleton, (n,B) dense weights)
 RigOne = Callable[[np.ndarray, np.ndarray, "str | np.ndarray"], tuple[Skeleton, np.ndarray]]
 
@@ -44,6 +52,14 @@ def submesh(v: np.ndarray, f: np.ndarray, verts: np.ndarray) -> tuple[np.ndarray
     index = np.full(len(v), -1, np.int64)
     index[verts] = np.arange(len(verts))
     return v[verts], index[sf].astype(np.int32)
+
+
+def elongated(pts: np.ndarray) -> bool:
+    """Whether the points (n,3) mm reach more than ``ELONGATED`` x farther along their principal
+    axis than across it (the second axis): a limb, not a lump."""
+    c = pts.mean(0)
+    extent = np.ptp((pts - c) @ np.linalg.svd(pts - c, full_matrices=False)[2][:2].T, axis=0)
+    return bool(extent[0] > ELONGATED * extent[1])
 
 
 def nearest_bone(sk: Skeleton, pts: np.ndarray) -> np.ndarray:
@@ -97,13 +113,15 @@ def rig_pieces(v: np.ndarray, f: np.ndarray, pieces: Pieces, root: str, rig: Rig
                ) -> tuple[Skeleton, np.ndarray]:
     """Skeleton and (V,B) dense weights of the welded mesh ``v``, ``f`` in several pieces."""
     meshes = {k: submesh(v, f, pieces.vertices_of([k])) for k in [pieces.main, *pieces.joined]}
-    limb = LIMB_SIZE * float(np.ptp(v[pieces.labels >= 0], axis=0).max())
+    model_size = float(np.ptp(v[pieces.labels >= 0], axis=0).max())
+    limb = LIMB_SIZE * model_size
     for k in pieces.joined:
         if not pieces.closed[k] and pieces.size[k] >= limb:
             meshes[k] = cap_holes(*meshes[k])  # (None: not simple holes, no bones)
     big = [k for k in pieces.joined if meshes[k] is not None and (
-        pieces.volume[k] >= BIG_PIECE * pieces.volume[pieces.main] if pieces.closed[k]
-        else pieces.size[k] >= limb)]
+        (pieces.volume[k] >= BIG_PIECE * pieces.volume[pieces.main]
+         or (pieces.size[k] >= CLOSED_LIMB_SIZE * model_size and elongated(meshes[k][0])))
+        if pieces.closed[k] else pieces.size[k] >= limb)]
     parts, rigged = [], np.zeros(0, np.int64)
     for k in [pieces.main, *big]:
         verts = pieces.vertices_of([k])
