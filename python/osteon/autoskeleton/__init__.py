@@ -5,13 +5,15 @@
 0. ``mesh``: check the mesh, weld coincident vertices; ``pieces``: a mesh in several pieces is
    split into the main body (the piece with the largest enclosed volume), the pieces that touch
    or overlap it (eyes, teeth, a beak: joined to it; a limb glued on as an open tube: capped
-   and rigged) and loose pieces (reported).
+   and rigged; a long thin closed limb: rigged) and loose pieces (reported).
 1. ``curve``: quadric-simplify the main body, collapse the edges of the simplified mesh that
    are short for the limb they lie on (about 10 vertices round every limb: a torso or a palm
    keeps no more than a finger, which is what the skeleton's cost grows with) and compute its
    curve skeleton with pygel3d's local separators (``pygel3d.graph.LS_skeleton_and_map``,
    MIT, Bærentzen & Rotenberg). A low-poly mesh, whose edges are long for their limb, is
-   split 1 -> 4 at its edges' midpoints instead of simplified (up to half the target).
+   split 1 -> 4 at its edges' midpoints instead of simplified (up to half the target); a split
+   piece joined to the body is skeletonised by the level sets of the geodesic distance from
+   where it meets the body instead (``curve.front_skeleton``: one Dijkstra).
 2. ``tree``: root node (barycentre or base) and the shortest-path tree from it: every loop is
    cut at the point farthest from the root along the skeleton.
 3. ``prune``: bumps, end-cap corners and limbs thinner than printable lose their branch.
