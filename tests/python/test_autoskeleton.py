@@ -583,3 +583,36 @@ def test_a_long_closed_limb_modelled_apart_gets_bones_but_a_beak_does_not():
 
     assert p.size[p.joined[0]] >= CLOSED_LIMB_SIZE * np.ptp(v, axis=0).max()
     assert elongated(arm[0]) and not elongated(sphere((0, 0, 0), 5)[0])
+
+
+def box(lo, hi):
+    """A closed box from corner ``lo`` to ``hi`` (mm): 8 vertices, 12 outward triangles."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    v = np.array([[x, y, z] for z in (z0, z1) for y in (y0, y1) for x in (x0, x1)], float)
+    f = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+                  [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]], np.int32)
+    return v, f
+
+
+def test_two_limbs_sharing_an_edge_each_get_a_bone_to_their_tip():
+    """Two closed 4 x 4 x 50 mm boxes sharing one long edge (that edge is in 4 faces: one
+    piece that is neither closed nor a set of simple holes, as RigNet 8210's two missing limbs)
+    glued into a body capsule: the piece is split at that edge into its two boxes
+    (``manifold_parts``), each a long closed limb, and each gets a bone ending within 1.5
+    half-widths (3 mm) of its tip (before: no bones, tips 50 mm from any bone end)."""
+    body = capsule_along((0, 0, 0), (60, 0, 0), 10.0, n=12, cap_stations=3, stations=4)
+    a, b = box((26, -4, 5), (30, 0, 55)), box((30, 0, 5), (34, 4, 55))
+    v, f = merge(body, a, b)
+    p = split_pieces(*osteon.autoskeleton.mesh.check_mesh(v, f)[:2])
+    assert len(p.joined) == 1 and not p.closed[p.joined[0]]  # one piece: the boxes share an edge
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1
+    ends = np.concatenate([sk.heads, sk.tails])
+    for tip in ([28, -2, 55], [32, 2, 55]):
+        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * 2.0, tip
+    from osteon.autoskeleton.assemble import manifold_parts
+
+    both = np.concatenate([a[1], b[1] + 8])
+    both = np.where(both == 8 + 1, 3, np.where(both == 8 + 4 + 1, 7, both))  # shared corners
+    assert sorted(len(x) for x in manifold_parts(both)) == [12, 12]
