@@ -91,6 +91,25 @@ def test_make_skeleton_then_analyze_gives_a_varied_layer(capsule, engine):
         bpy.ops.osteon.make_skeleton()
 
 
+def test_make_skeleton_writes_byte_weights_that_sum_to_one(capsule, engine):
+    """Make skeleton writes the engine's weights in steps of 1/256 (glTF's byte weights: a third
+    of the bpy calls of 1/1024, issue 35): every vertex's weights are multiples of 1/256, sum to
+    exactly 1 and are within 1/256 of ``osteon.auto_skeleton``'s on the same mesh in mm."""
+    obj = capsule
+    co = bridge.world_rest_positions(obj)
+    k = 40.0 / float(np.ptp(co, axis=0).max())  # LARGEST side printed at 40 mm
+    _sk, want = engine.auto_skeleton(co * k, bridge.triangles(obj.data))
+    assert bpy.ops.osteon.make_skeleton() == {"FINISHED"}
+    names = [b.name for b in bridge.armature_of(obj).data.bones]
+    got = bridge.sparse_weights(bridge.vertex_weights_csr(obj, names), len(names)).toarray()
+    assert np.allclose(got * 256, np.round(got * 256), atol=1e-4)
+    assert np.allclose(got.sum(1), 1.0, atol=1e-6)
+    assert np.abs(got - want.toarray()).max() <= 1.0 / 256 + 1e-6
+    from osteon_blender.service import WEIGHT_LEVELS
+
+    assert WEIGHT_LEVELS == 256
+
+
 def test_make_skeleton_without_pygel3d_says_what_to_do_in_blender(capsule, monkeypatch,
                                                                   tmp_path):
     """A zip for a platform PyPI has no pygel3d wheel for: the message tells a zip user what to

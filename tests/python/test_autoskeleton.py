@@ -512,3 +512,107 @@ def test_cap_holes_closes_a_tube_outward_and_declines_a_sheet():
     assert volume == pytest.approx(1.5 * np.sqrt(3) * r**2 * length, rel=1e-9)
     sheet = np.array([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]], float)
     assert cap_holes(sheet, np.array([[0, 1, 2], [0, 2, 3]], np.int32)) is None
+
+
+def test_front_skeleton_of_a_cylinder_is_one_chain_on_its_axis():
+    """The level-set skeleton of a closed cylinder (radius 5 mm, 60 mm long, 16 sides, 13
+    stations) from the centre of one end cap: its bands are as wide as the longest edge, so
+    every ring of the distance's level sets lies in one node: the nodes form one chain (no
+    vertex of degree 3, no loop), every node away from the two caps lies on the axis (the
+    centroid of a whole ring: within a few % of the radius), and they reach from one end to the
+    other."""
+    from osteon.autoskeleton.curve import front_skeleton
+
+    r, length = 5.0, 60.0
+    v, f = cylinder_along((0, 0, 0), (0, 0, length), r, n=16, stations=13)
+    edges = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), 1),
+                      axis=0)
+    start = int(np.argmin(np.linalg.norm(v - [0, 0, 0], axis=1)))  # the cap's centre
+    npos, kedges, node = front_skeleton(v, edges, start)
+    assert node.shape == (len(v),) and node.min() == 0 and node.max() == len(npos) - 1
+    degree = np.bincount(kedges.ravel(), minlength=len(npos))
+    assert degree.max() <= 2 and len(kedges) == len(npos) - 1  # a chain
+    side = (npos[:, 2] > 2 * r) & (npos[:, 2] < length - 2 * r)
+    assert side.sum() >= 3
+    assert np.linalg.norm(npos[side, :2], axis=1).max() < 0.05 * r
+    assert npos[:, 2].min() < r and npos[:, 2].max() > length - r
+
+
+def flat_limb_body():
+    """A low-poly body (a 12-sided capsule along x, r = 10 mm) with a flat limb glued on as an
+    open 4-sided tube of two stations, 50 mm long, 12 x 3 mm across (a rhombus: the flat arms
+    of RigNet 2586, issue 35); its tip at (30, 0, 55)."""
+    body = capsule_along((0, 0, 0), (60, 0, 0), 10.0, n=12, cap_stations=3, stations=4)
+    tv, tf = open_tube((0, 0, 0), (0, 0, 50), 1.0, n=4, stations=2)
+    return merge(body, (tv * [6.0, 1.5, 1.0] + [30, 0, 5], tf))
+
+
+def test_a_flat_low_poly_limb_modelled_apart_gets_one_bone_to_its_tip():
+    """The flat limb is split before skeletonising, then skeletonised by the distance's level
+    sets from where it meets the body (``front_skeleton``): it gets one chain of bones with one
+    end, within 1.5 half-thicknesses (1.5 mm) of its tip (before: local separators on the split
+    limb gave 5 bones ending 24 mm short of the tip)."""
+    v, f = flat_limb_body()
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.linalg.norm(ends - [30, 0, 55], axis=1).min() < 1.5 * 1.5
+    in_limb = np.flatnonzero((sk.heads[:, 2] > 12) | (sk.tails[:, 2] > 12))
+    leaves = [b for b in in_limb if b not in sk.parents]
+    assert len(leaves) == 1
+
+
+def test_a_long_closed_limb_modelled_apart_gets_bones_but_a_beak_does_not():
+    """A closed capsule arm (r = 3 mm, 60 mm long: 4 % of the body's volume, 0.45 of the
+    model's size, 11 x longer than wide) crossing a body capsule (r = 10 mm, 80 mm) gets bones
+    to its tip within 1.5 radii, as RigNet 1347's closed arms (before: under BIG_PIECE x the
+    body's volume, no bones, its tip 5 radii from any bone end); the test creature's beak (0.18
+    of its size) still gets none (``test_pieces_touching_the_body_join_it_...``)."""
+    body = capsule_along((0, 0, 0), (80, 0, 0), 10.0, n=16, cap_stations=5, stations=10)
+    arm = capsule_along((40, 0, 0), (40, 0, -60), 3.0, n=8, cap_stations=3, stations=12)
+    v, f = merge(body, arm)
+    p = split_pieces(v, f)
+    assert len(p.joined) == 1 and p.closed[p.joined[0]]
+    assert p.volume[p.joined[0]] < 0.1 * p.volume[p.main]
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.linalg.norm(ends - [40, 0, -63], axis=1).min() < 1.5 * 3.0
+    from osteon.autoskeleton.assemble import CLOSED_LIMB_SIZE, elongated
+
+    assert p.size[p.joined[0]] >= CLOSED_LIMB_SIZE * np.ptp(v, axis=0).max()
+    assert elongated(arm[0]) and not elongated(sphere((0, 0, 0), 5)[0])
+
+
+def box(lo, hi):
+    """A closed box from corner ``lo`` to ``hi`` (mm): 8 vertices, 12 outward triangles."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    v = np.array([[x, y, z] for z in (z0, z1) for y in (y0, y1) for x in (x0, x1)], float)
+    f = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+                  [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]], np.int32)
+    return v, f
+
+
+def test_two_limbs_sharing_an_edge_each_get_a_bone_to_their_tip():
+    """Two closed 4 x 4 x 50 mm boxes sharing one long edge (that edge is in 4 faces: one
+    piece that is neither closed nor a set of simple holes, as RigNet 8210's two missing limbs)
+    glued into a body capsule: the piece is split at that edge into its two boxes
+    (``manifold_parts``), each a long closed limb, and each gets a bone ending within 1.5
+    half-widths (3 mm) of its tip (before: no bones, tips 50 mm from any bone end)."""
+    body = capsule_along((0, 0, 0), (60, 0, 0), 10.0, n=12, cap_stations=3, stations=4)
+    a, b = box((26, -4, 5), (30, 0, 55)), box((30, 0, 5), (34, 4, 55))
+    v, f = merge(body, a, b)
+    p = split_pieces(*osteon.autoskeleton.mesh.check_mesh(v, f)[:2])
+    assert len(p.joined) == 1 and not p.closed[p.joined[0]]  # one piece: the boxes share an edge
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1
+    ends = np.concatenate([sk.heads, sk.tails])
+    for tip in ([28, -2, 55], [32, 2, 55]):
+        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * 2.0, tip
+    from osteon.autoskeleton.assemble import manifold_parts
+
+    both = np.concatenate([a[1], b[1] + 8])
+    both = np.where(both == 8 + 1, 3, np.where(both == 8 + 4 + 1, 7, both))  # shared corners
+    assert sorted(len(x) for x in manifold_parts(both)) == [12, 12]

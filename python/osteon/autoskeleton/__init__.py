@@ -5,13 +5,15 @@
 0. ``mesh``: check the mesh, weld coincident vertices; ``pieces``: a mesh in several pieces is
    split into the main body (the piece with the largest enclosed volume), the pieces that touch
    or overlap it (eyes, teeth, a beak: joined to it; a limb glued on as an open tube: capped
-   and rigged) and loose pieces (reported).
+   and rigged; a long thin closed limb: rigged) and loose pieces (reported).
 1. ``curve``: quadric-simplify the main body, collapse the edges of the simplified mesh that
    are short for the limb they lie on (about 10 vertices round every limb: a torso or a palm
    keeps no more than a finger, which is what the skeleton's cost grows with) and compute its
    curve skeleton with pygel3d's local separators (``pygel3d.graph.LS_skeleton_and_map``,
    MIT, Bærentzen & Rotenberg). A low-poly mesh, whose edges are long for their limb, is
-   split 1 -> 4 at its edges' midpoints instead of simplified (up to half the target).
+   split 1 -> 4 at its edges' midpoints instead of simplified (up to half the target); a split
+   piece joined to the body is skeletonised by the level sets of the geodesic distance from
+   where it meets the body instead (``curve.front_skeleton``: one Dijkstra).
 2. ``tree``: root node (barycentre or base) and the shortest-path tree from it: every loop is
    cut at the point farthest from the root along the skeleton.
 3. ``prune``: bumps, end-cap corners and limbs thinner than printable lose their branch.
@@ -110,7 +112,7 @@ def _rig_one(v: np.ndarray, f: np.ndarray, root: str | np.ndarray, *, target: in
              deterministic: bool, up: np.ndarray, spur: float, bend: float, smooth: int,
              min_t: float) -> tuple[Skeleton, np.ndarray]:
     """Steps 1-6 on one welded piece ``v`` (V,3) mm, ``f`` (F,3): (Skeleton, (V,B) weights)."""
-    cs = curve_skeleton(v, f, target, deterministic)
+    cs = curve_skeleton(v, f, target, deterministic, root)
     body = make_body(v, f, up, cs)
     return _skeleton_and_weights(body, cs, root, spur, bend, smooth, min_t)
 
