@@ -9,6 +9,7 @@
 #include <numeric>
 #include <utility>
 
+#include "notch_reuse.hpp"
 #include "parallel.hpp"
 
 namespace osteon {
@@ -168,6 +169,9 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
       }
     }
   }
+  // The faces in an order of their own (not the grid's cells'): the sums below do not depend on
+  // the grid's layout, so a corner no moved triangle reaches measures the same (notch_reuse.hpp).
+  canonical_face_order(m.faces, m.vertices, slot);
   // Only a vertex that can be a candidate needs its normal (a neighbour's position is enough):
   // the candidate's own tests (measure_corner) with a margin, so the normals they read are summed
   // from the same faces in the same order as for every vertex (bit for bit), and the angle
