@@ -641,9 +641,59 @@ double shoulder_fillet_kt(double big_diameter, double small_diameter, double rad
   return kt;
 }
 
+namespace {
+
+// The corners of `steps` in a reused Analyzer (live mode, notch_reuse.hpp): a gathering (the
+// steps of one thin section towards one side) whose inputs are bitwise the last run's and whose
+// searched region no moved triangle reaches is copied from `memo`, the others are searched
+// (whole gatherings: a gathering's window is its widest step's); `memo` then holds this run's.
+std::vector<Corner> recall_or_measure(const MeshView& mesh,
+                                      const std::function<const FaceGrid&()>& face_grid,
+                                      const std::vector<Step>& steps, int threads, CornerMemo& memo,
+                                      const MeshChange& change) {
+  std::vector<CornerGroup> groups;
+  std::vector<int> group_of(steps.size(), -1);
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    if (group_of[s] >= 0) continue;
+    CornerGroup g;
+    g.point = steps[s].point;
+    g.u = steps[s].u;
+    g.r_thin = steps[s].r_thin;
+    for (std::size_t t = s; t < steps.size(); ++t)
+      if (steps[t].section == steps[s].section && steps[t].u == steps[s].u) {
+        group_of[t] = static_cast<int>(groups.size());
+        g.reach.push_back(steps[t].reach);
+      }
+    groups.push_back(std::move(g));
+  }
+  std::vector<char> recalled(groups.size());
+  for (std::size_t k = 0; k < groups.size(); ++k) recalled[k] = memo.recall(groups[k], change);
+  std::vector<Step> todo;
+  for (std::size_t s = 0; s < steps.size(); ++s)
+    if (!recalled[group_of[s]]) todo.push_back(steps[s]);
+  const std::vector<Corner> measured = measure_corners(mesh, face_grid, todo, threads);
+  std::vector<Corner> corners(steps.size());
+  std::vector<std::size_t> taken(groups.size(), 0);
+  for (std::size_t s = 0, next = 0; s < steps.size(); ++s) {
+    CornerGroup& g = groups[group_of[s]];
+    if (recalled[group_of[s]]) {
+      const CornerFit& f = g.corners[taken[group_of[s]]++];
+      corners[s] = Corner{f.found, f.radius, f.axial};
+    } else {
+      corners[s] = measured[next++];
+      g.corners.push_back(CornerFit{corners[s].found, corners[s].radius, corners[s].axial});
+    }
+  }
+  memo.groups = std::move(groups);
+  memo.valid = true;
+  return corners;
+}
+
+}  // namespace
+
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
-                        const AnalysisResult& r, double min_radius, double sensitivity,
-                        int threads) {
+                        const AnalysisResult& r, double min_radius, double sensitivity, int threads,
+                        CornerMemo* memo, const MeshChange& change) {
   const int ns = static_cast<int>(r.section_bone.size());
   NotchField out;
   out.kt.assign(ns, 1.0);
@@ -653,7 +703,9 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
   out.arm_ratio.assign(ns, 1.0);
   std::vector<double> peak(ns, 1.0);  // Kt x modulus ratio x arm ratio of the corner taken
   const std::vector<Step> steps = find_steps(r);
-  const std::vector<Corner> corners = measure_corners(mesh, face_grid, steps, threads);
+  const std::vector<Corner> corners =
+      memo != nullptr ? recall_or_measure(mesh, face_grid, steps, threads, *memo, change)
+                      : measure_corners(mesh, face_grid, steps, threads);
   for (std::size_t s = 0; s < steps.size(); ++s) {
     const Step& st = steps[s];
     const Corner& c = corners[s];

@@ -5,6 +5,7 @@
 #include <functional>
 #include <vector>
 
+#include "notch_reuse.hpp"
 #include "osteon/analysis.hpp"
 #include "osteon/mesh.hpp"
 #include "osteon/notch.hpp"
@@ -30,9 +31,13 @@ struct NotchField {
 /// `sensitivity` q (0..1): governing stress = (1 + q (Kt - 1)) x nominal.
 /// `face_grid` returns the run's face grid over `mesh` (built on first call): a corner is
 /// measured from the faces near it only. `threads`: workers for the corners' searches (each
-/// thin section's search is one job; the result does not depend on it).
+/// thin section's search is one job; the result does not depend on it). `memo` (a reused
+/// Analyzer's, live mode): the last run's corners, reused where `change` (what moved since that
+/// run) proves the measurement unchanged, and then this run's (notch_reuse.hpp); bit for bit the
+/// corners of a search without it.
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
                         const AnalysisResult& r, double min_radius, double sensitivity,
-                        int threads = 1);
+                        int threads = 1, CornerMemo* memo = nullptr,
+                        const MeshChange& change = MeshChange{});
 
 }  // namespace osteon
