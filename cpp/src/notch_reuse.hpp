@@ -22,7 +22,8 @@ struct CornerFit {
 /// elsewhere, as before the call). The face grid hands the faces out cell by cell, and its cells
 /// follow the mesh's box: without this order a pose that moves the box (a hand at the model's
 /// edge) reorders the sums of a corner far away, and its Kt moves in the last bits; with it the
-/// measurement depends on the faces alone, which is what makes its reuse exact.
+/// measurement depends on the faces alone, which is what makes its reuse exact. Live updates
+/// only: it costs ~2 M instructions per corner of the figurine (~7 % of a one-off analysis).
 void canonical_face_order(std::vector<std::int32_t>& faces, std::vector<std::int32_t>& vertices,
                           std::vector<int>& slot);
 
