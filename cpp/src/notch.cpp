@@ -709,13 +709,17 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
   out.arm_ratio.assign(ns, 1.0);
   std::vector<double> peak(ns, 1.0);  // Kt x modulus ratio x arm ratio of the corner taken
   const std::vector<Step> steps = find_steps(r);
-  // Live updates (what moved is known): the canonical order, and the memo. Other runs (one-off,
-  // the first of a session, the correction's) search in the grid's order, as they always did.
-  if (memo != nullptr && !change.known) memo->forget();
+  // Live updates (what moved is known, after a full run or another live update): the canonical
+  // order, and the memo. Other runs (one-off, the first of a session, the correction's) search in
+  // the grid's order, as they always did; a full one arms the memo for the next run.
+  const bool live = memo != nullptr && change.known && memo->armed;
+  if (memo != nullptr && !live) {
+    memo->forget();
+    memo->armed = true;
+  }
   const std::vector<Corner> corners =
-      memo != nullptr && change.known
-          ? recall_or_measure(mesh, face_grid, steps, threads, *memo, change)
-          : measure_corners(mesh, face_grid, steps, threads);
+      live ? recall_or_measure(mesh, face_grid, steps, threads, *memo, change)
+           : measure_corners(mesh, face_grid, steps, threads);
   for (std::size_t s = 0; s < steps.size(); ++s) {
     const Step& st = steps[s];
     const Corner& c = corners[s];

@@ -53,10 +53,12 @@ struct CornerGroup {
 
 /// The last run's corner groups, kept by a reused Analyzer.
 struct CornerMemo {
-  bool valid = false;
+  bool valid = false;  ///< `groups` hold the last run's corners (a live update's)
+  bool armed = false;  ///< the last run was a full one: a live update may follow
   std::vector<CornerGroup> groups;
   void forget() {
     valid = false;
+    armed = false;
     groups.clear();
   }
   /// The last run's measurement of `g` (its corners copied into g.corners) if its inputs are the
