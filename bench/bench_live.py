@@ -8,6 +8,7 @@ Target (issue 34): the whole update <= 16 ms, the engine <= 10 ms.
     blender -b --factory-startup --python bench/bench_live.py -- [--repeat 21]
     ... bench_live.py -- --capture live.npz      # also keep the engine's inputs of every update
     .venv/bin/python bench/bench_live.py --replay live.npz --instructions   # no bpy: callgrind
+    ... --replay live.npz --dump reused.npz [--fresh]   # every number; --fresh: one-off runs
 
 The rig is the bundled sample figurine (blender_addon/osteon_blender/sample.py ``--levels 3
 --cuts 2``): ~107k vertices, 13 bones.  Each round changes a pose-bone scale (``--pose bend``:
@@ -310,9 +311,10 @@ def _load(path: str):
     return osteon, d, kw, w, skeleton
 
 
-def replay(path: str, runs: int, threads: int | None) -> list:
+def replay(path: str, runs: int, threads: int | None, fresh: bool = False) -> list:
     """The captured updates: the Analyzer built as Live built it, then `runs` runs (the first
-    full, then the captured updates in turn); returns the results."""
+    full, then the captured updates in turn); returns the results. `fresh`: each update by an
+    Analyzer of its own (a one-off analysis: what a reused one must give, bit for bit)."""
     osteon, d, kw, w, skeleton = _load(path)
     if threads is not None:
         kw["threads"] = threads
@@ -321,6 +323,8 @@ def replay(path: str, runs: int, threads: int | None) -> list:
     out = []
     for r in range(runs):
         i = r % n
+        if fresh:
+            an = osteon.Analyzer(d["faces"], int(d["nv"]), skeleton(i), w, **kw)
         out.append(an.run(d["vertices"][i], skeleton(i)))
     return out
 
@@ -397,6 +401,9 @@ def main(argv) -> int:
     ap.add_argument("--dump", metavar="FILE",
                     help="--replay: every number of every run's result into FILE (.npz), to "
                          "compare two builds bit for bit (bench/identity_dump.py compare)")
+    ap.add_argument("--fresh", action="store_true",
+                    help="--replay --dump: each update by a new Analyzer (a fresh analysis), to "
+                         "compare with the reused one's dump bit for bit")
     ap.add_argument("--keep", metavar="DIR", help="--instructions: keep callgrind's files here")
     ap.add_argument("--instructions", action="store_true",
                     help="--replay under callgrind: instructions per update")
@@ -409,7 +416,7 @@ def main(argv) -> int:
         from identity_dump import _flatten
 
         out: dict = {}
-        for i, a in enumerate(replay(args.replay, args.runs, args.threads)):
+        for i, a in enumerate(replay(args.replay, args.runs, args.threads, args.fresh)):
             a.section_thickness  # noqa: B018 -- the deferred thickness, as a report reads it
             _flatten(f"run{i}", a, out)
         np.savez(args.dump, **out)

@@ -213,14 +213,16 @@ MATERIAL_ITEMS.append((materials.CUSTOM, "Custom", "your own strength value"))
 def build_report(*, object_name: str, armature_name: str, bone_names: list[str],
                  analysis, allowable_mpa: float, settings: dict, mm_per_unit: float,
                  correction=None, corrected_analysis=None, vertices=None, faces=None,
-                 seconds=None) -> dict:
+                 seconds=None, section_table: bool = True) -> dict:
     """:func:`osteon.report.build_report` for a Blender mesh object and its armature
-    (``mm_per_unit``: mm of the print per Blender unit)."""
+    (``mm_per_unit``: mm of the print per Blender unit; ``section_table=False``: without the
+    per-section rows, Live's per-update report)."""
     return report.build_report(
         analysis=analysis, bone_names=bone_names, allowable_mpa=allowable_mpa,
         settings=settings, front_end="blender", model=object_name, object_name=object_name,
         armature_name=armature_name, mm_per_unit=mm_per_unit, vertices=vertices, faces=faces,
-        seconds=seconds, correction=correction, corrected_analysis=corrected_analysis)
+        seconds=seconds, correction=correction, corrected_analysis=corrected_analysis,
+        section_table=section_table)
 
 
 def _preset_exact(s, ratio: float) -> float:

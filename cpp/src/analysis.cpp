@@ -204,6 +204,7 @@ void Analyzer::Impl::forget_last_run() {
   last_parents.clear();
   last_gap = -1.0;
   stress_memo.valid = false;
+  corner_memo.forget();
   arm_index.forget_slabs();
 }
 

@@ -26,6 +26,7 @@
 
 #include "loads.hpp"
 #include "loose_pieces.hpp"
+#include "notch_reuse.hpp"
 #include "osteon/analysis.hpp"
 #include "osteon/printed_section.hpp"
 #include "osteon/slicer.hpp"
@@ -261,6 +262,9 @@ struct Analyzer::Impl {
     std::vector<double> vertex_param;       // mm along the bone (vertices with sections)
     std::vector<std::int32_t> vertex_slab;  // sections of the bone below vertex_param
   } stress_memo;
+
+  // The last run's corners (notch_reuse.hpp): live mode searches only those a change reaches.
+  CornerMemo corner_memo;
 
   // Inputs of the last run, so that the next run re-cuts only what changed (live mode).
   std::vector<double> last_vertices;

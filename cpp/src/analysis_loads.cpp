@@ -48,8 +48,16 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
     run.build_grid(options.threads);
     return run.grid;
   };
-  NotchField notch = find_notches(run.mesh, grid, r, options.min_notch_radius,
-                                  options.notch_sensitivity, options.threads);
+  // Live mode: corners no moved triangle reaches keep the last run's measurement (exact).
+  MeshChange change;
+  change.known = run.moved != nullptr;
+  change.lo = run.changed.lo;
+  change.hi = run.changed.hi;
+  // (A partial run, the correction's, disarms it: its final full run searches as before.)
+  if (run.partial) corner_memo.forget();
+  NotchField notch = find_notches(
+      run.mesh, grid, r, options.min_notch_radius, options.notch_sensitivity, options.threads,
+      options.reuse_sections && !run.partial ? &corner_memo : nullptr, change);
   for (int i = 0; i < ns; ++i) {
     if (!(notch.kt[i] > 1.0) || !std::isfinite(r.stress[i])) continue;
     r.stress[i] *= notch.effective[i] * notch.arm_ratio[i];

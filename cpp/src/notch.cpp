@@ -9,6 +9,7 @@
 #include <numeric>
 #include <utility>
 
+#include "notch_reuse.hpp"
 #include "parallel.hpp"
 
 namespace osteon {
@@ -124,7 +125,8 @@ void keep_turning(const MeshView& mesh, const LocalMesh& m, const Vec3& u,
 // both (the only ones a candidate's normal and neighbours need), and the normals of their
 // vertices at least `min_t` from the axis (closer ones are no candidate: theirs stay 0).
 LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, double lo,
-                     double hi, const CutRegion& region, double min_t, std::vector<int>& slot) {
+                     double hi, const CutRegion& region, double min_t, std::vector<int>& slot,
+                     bool canonical = false) {
   LocalMesh m;
   m.slot = &slot;
   const double r2 = region.radius * region.radius;
@@ -168,6 +170,10 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
       }
     }
   }
+  // `canonical` (live mode, notch_reuse.hpp): the faces in an order of their own, not the grid's
+  // cells', so that the sums below do not depend on the grid's layout and a corner no moved
+  // triangle reaches measures the same bit for bit.
+  if (canonical) canonical_face_order(m.faces, m.vertices, slot);
   // Only a vertex that can be a candidate needs its normal (a neighbour's position is enough):
   // the candidate's own tests (measure_corner) with a margin, so the normals they read are summed
   // from the same faces in the same order as for every vertex (bit for bit), and the angle
@@ -338,14 +344,16 @@ struct FilletPoints {
 // depend on the window beyond its own a (its normal and neighbours come from all its faces),
 // so the points of a narrower window are exactly those of this list inside it.
 FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vector<int>& slot,
-                           const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi) {
+                           const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi,
+                           bool canonical = false) {
   const Vec3 e1 = u.unitOrthogonal(), e2 = u.cross(e1);
   CutRegion region;  // the cylinder t <= 2.5 r_thin around the axis
   region.point = origin;
   region.axis = u;
   region.radius = 2.5 * r_thin;
   const double at = u.dot(origin);
-  LocalMesh local = local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, slot);
+  LocalMesh local =
+      local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, slot, canonical);
   // Fillet points: normal mostly in the meridian plane, turned 8..82 degrees from radial
   // towards the thin side (the shoulder face, at 90 degrees, and the thin part, at 0, left out).
   const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
@@ -587,7 +595,8 @@ std::vector<Step> find_steps(const AnalysisResult& r) {
 // gathered once, over the widest window, and each step fitted on its own window's points.
 std::vector<Corner> measure_corners(const MeshView& mesh,
                                     const std::function<const FaceGrid&()>& face_grid,
-                                    const std::vector<Step>& steps, int threads) {
+                                    const std::vector<Step>& steps, int threads,
+                                    bool canonical = false) {
   std::vector<Corner> corners(steps.size());
   auto same_side = [&](std::size_t s, std::size_t t) {
     return steps[s].section == steps[t].section && steps[s].u == steps[t].u;
@@ -615,8 +624,8 @@ std::vector<Corner> measure_corners(const MeshView& mesh,
     for (std::size_t t = s; t < steps.size(); ++t)
       if (same_side(s, t)) reach = std::max(reach, steps[t].reach);
     const Step& st = steps[s];
-    const FilletPoints points =
-        fillet_points(mesh, grid, slot, st.point, st.u, st.r_thin, -0.25 * reach, 1.25 * reach);
+    const FilletPoints points = fillet_points(mesh, grid, slot, st.point, st.u, st.r_thin,
+                                              -0.25 * reach, 1.25 * reach, canonical);
     for (std::size_t t = s; t < steps.size(); ++t)
       if (same_side(s, t))
         corners[t] = corner_in(points, st.r_thin, -0.25 * steps[t].reach, 1.25 * steps[t].reach);
@@ -652,9 +661,60 @@ double shoulder_fillet_kt(double big_diameter, double small_diameter, double rad
   return kt;
 }
 
+namespace {
+
+// The corners of `steps` in a live update (notch_reuse.hpp): a gathering (the steps of one thin
+// section towards one side) whose inputs are bitwise the last run's and whose searched region no
+// moved triangle reaches is copied from `memo`, the others are searched in the canonical face
+// order (whole gatherings: a gathering's window is its widest step's); `memo` then holds this
+// run's.
+std::vector<Corner> recall_or_measure(const MeshView& mesh,
+                                      const std::function<const FaceGrid&()>& face_grid,
+                                      const std::vector<Step>& steps, int threads, CornerMemo& memo,
+                                      const MeshChange& change) {
+  std::vector<CornerGroup> groups;
+  std::vector<int> group_of(steps.size(), -1);
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    if (group_of[s] >= 0) continue;
+    CornerGroup g;
+    g.point = steps[s].point;
+    g.u = steps[s].u;
+    g.r_thin = steps[s].r_thin;
+    for (std::size_t t = s; t < steps.size(); ++t)
+      if (steps[t].section == steps[s].section && steps[t].u == steps[s].u) {
+        group_of[t] = static_cast<int>(groups.size());
+        g.reach.push_back(steps[t].reach);
+      }
+    groups.push_back(std::move(g));
+  }
+  std::vector<char> recalled(groups.size());
+  for (std::size_t k = 0; k < groups.size(); ++k) recalled[k] = memo.recall(groups[k], change);
+  std::vector<Step> todo;
+  for (std::size_t s = 0; s < steps.size(); ++s)
+    if (!recalled[group_of[s]]) todo.push_back(steps[s]);
+  const std::vector<Corner> measured = measure_corners(mesh, face_grid, todo, threads, true);
+  std::vector<Corner> corners(steps.size());
+  std::vector<std::size_t> taken(groups.size(), 0);
+  for (std::size_t s = 0, next = 0; s < steps.size(); ++s) {
+    CornerGroup& g = groups[group_of[s]];
+    if (recalled[group_of[s]]) {
+      const CornerFit& f = g.corners[taken[group_of[s]]++];
+      corners[s] = Corner{f.found, f.radius, f.axial};
+    } else {
+      corners[s] = measured[next++];
+      g.corners.push_back(CornerFit{corners[s].found, corners[s].radius, corners[s].axial});
+    }
+  }
+  memo.groups = std::move(groups);
+  memo.valid = true;
+  return corners;
+}
+
+}  // namespace
+
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
-                        const AnalysisResult& r, double min_radius, double sensitivity,
-                        int threads) {
+                        const AnalysisResult& r, double min_radius, double sensitivity, int threads,
+                        CornerMemo* memo, const MeshChange& change) {
   const int ns = static_cast<int>(r.section_bone.size());
   NotchField out;
   out.kt.assign(ns, 1.0);
@@ -664,7 +724,17 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
   out.arm_ratio.assign(ns, 1.0);
   std::vector<double> peak(ns, 1.0);  // Kt x modulus ratio x arm ratio of the corner taken
   const std::vector<Step> steps = find_steps(r);
-  const std::vector<Corner> corners = measure_corners(mesh, face_grid, steps, threads);
+  // Live updates (what moved is known, after a full run or another live update): the canonical
+  // order, and the memo. Other runs (one-off, the first of a session, the correction's) search in
+  // the grid's order, as they always did; a full one arms the memo for the next run.
+  const bool live = memo != nullptr && change.known && memo->armed;
+  if (memo != nullptr && !live) {
+    memo->forget();
+    memo->armed = true;
+  }
+  const std::vector<Corner> corners =
+      live ? recall_or_measure(mesh, face_grid, steps, threads, *memo, change)
+           : measure_corners(mesh, face_grid, steps, threads);
   for (std::size_t s = 0; s < steps.size(); ++s) {
     const Step& st = steps[s];
     const Corner& c = corners[s];

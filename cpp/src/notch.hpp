@@ -5,6 +5,7 @@
 #include <functional>
 #include <vector>
 
+#include "notch_reuse.hpp"
 #include "osteon/analysis.hpp"
 #include "osteon/mesh.hpp"
 #include "osteon/notch.hpp"
@@ -30,9 +31,14 @@ struct NotchField {
 /// `sensitivity` q (0..1): governing stress = (1 + q (Kt - 1)) x nominal.
 /// `face_grid` returns the run's face grid over `mesh` (built on first call): a corner is
 /// measured from the faces near it only. `threads`: workers for the corners' searches (each
-/// thin section's search is one job; the result does not depend on it).
+/// thin section's search is one job; the result does not depend on it). `memo` (a reused
+/// Analyzer's): in a live update (`change.known`: what moved since the last run) the corners are
+/// searched in the canonical face order and the last update's are reused where `change` proves
+/// them unchanged, bit for bit the corners of that search (notch_reuse.hpp); other runs search in
+/// the grid's order (a one-off analysis as before) and clear the memo.
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
                         const AnalysisResult& r, double min_radius, double sensitivity,
-                        int threads = 1);
+                        int threads = 1, CornerMemo* memo = nullptr,
+                        const MeshChange& change = MeshChange{});
 
 }  // namespace osteon

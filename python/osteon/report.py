@@ -307,7 +307,8 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
                  armature_name: str | None = None, mm_per_unit: float = 1.0,
                  vertices: int | None = None, faces: int | None = None,
                  seconds: float | None = None, correction=None, corrected_analysis=None,
-                 output: str | None = None, print_profile=None) -> dict:
+                 output: str | None = None, print_profile=None,
+                 section_table: bool = True) -> dict:
     """The JSON report (schema :data:`SCHEMA_VERSION`) of an analysis or a correction.
 
     ``analysis``: the ``osteon.Analysis`` of the model as it was. With a correction
@@ -320,6 +321,9 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     ``print_profile``: the :class:`osteon.profiles.PrintProfile` analysed with (default: the
     analysis's own ``print_profile``, else the one ``settings`` names,
     :func:`osteon.profiles.profile_of`), echoed as ``print_profile``.
+    ``section_table=False``: ``section_table`` is None, to be filled with :func:`section_rows`
+    when it is needed (Live's per-update report: the panel reads the bones, not every section;
+    more than half of a report's time is that table).
     """
     if correction is not None and corrected_analysis is None:
         corrected_analysis = correction.after
@@ -389,7 +393,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         "bones": rows,
         # the CLI's name for ``bones`` before the schema had a version; same list
         "bone_results": rows,
-        "section_table": section_rows(shown, bone_names),
+        "section_table": section_rows(shown, bone_names) if section_table else None,
         "converged": (not any(r["weak"] for r in rows)) if correction is None
         else bool(correction.converged),
         "corrected": correction is not None,

@@ -262,3 +262,34 @@ def test_live_result_is_the_panels_and_analyzes(live_sample):
     assert (s.worst_ratio, s.worst_stress_mpa, s.worst_allowable_mpa) == pytest.approx(
         live_worst[1:], rel=1e-6)
     np.testing.assert_allclose(bridge.read_point_colors(obj.data), live_layer, atol=1e-6)
+
+
+def test_the_section_rows_come_once_the_pose_is_still(live_sample):
+    """Per update Live's report leaves out the per-section rows (issue 34: the panel does not
+    show them); a look that finds nothing moved, or Live switched off, fills them in, the same
+    rows as the wheel's report of that analysis, so the report the panel keeps is whole."""
+    from osteon import report as wheel_report
+
+    _obj, arm = live_sample
+    live.start(bpy.context)
+    arm.pose.bones["forearm.L"].scale = (0.8, 1.0, 0.8)
+    bpy.context.view_layer.update()
+    assert live.update_now().updates == 2
+    res = live.session().last_result
+    assert res.report["section_table"] is None
+    assert res.report["weak_bones"] == core.build_report(
+        object_name=res.report["object"], armature_name=res.report["armature"],
+        bone_names=res.names, analysis=res.analysis, allowable_mpa=res.report[
+            "allowable_stress_mpa"], settings=res.report["settings"],
+        mm_per_unit=res.mm_per_unit)["weak_bones"]
+    assert live.update_now().updates == 2                    # nothing moved: the pose is still
+    rows = res.report["section_table"]
+    assert rows == wheel_report.section_rows(res.analysis, res.names)
+    assert len(rows) == res.analysis.num_sections > 0
+    arm.pose.bones["forearm.L"].scale = (0.75, 1.0, 0.75)
+    bpy.context.view_layer.update()
+    assert live.update_now().updates == 3
+    res = live.session().last_result
+    assert res.report["section_table"] is None
+    live.stop()
+    assert len(res.report["section_table"]) == res.analysis.num_sections

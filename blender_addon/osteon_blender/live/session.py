@@ -265,11 +265,12 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
         sess.analyzer_key = None
         raise OsteonError(f"osteon could not analyse '{sess.obj_name}': {e}") from e
     t2 = time.perf_counter()
-    # the same report and colours as Analyze (service.publish): one verdict everywhere
+    # the same report and colours as Analyze (service.publish): one verdict everywhere; the
+    # per-section rows (which the panel does not show) once the pose is still (complete_report)
     report = core.build_report(
         object_name=inp.obj_name, armature_name=inp.arm_name, bone_names=inp.names,
         analysis=analysis, allowable_mpa=inp.params["allowable_stress"], settings=inp.settings,
-        mm_per_unit=k, vertices=len(world), faces=len(sess.faces))
+        mm_per_unit=k, vertices=len(world), faces=len(sess.faces), section_table=False)
     doubt = results.not_analysed_vertices(analysis, report, inp.names)
     rgba = core.result_colors(analysis, inp.heads * k, tails * k, doubt)
     t3 = time.perf_counter()
@@ -279,6 +280,14 @@ def compute(sess: Session, inp: LiveInputs) -> LiveResult:
                       timings={"read_ms": inp.t_read * 1e3, "prepare_ms": (t1 - t0) * 1e3,
                                "analysis_ms": (t2 - t1) * 1e3, "colors_ms": (t3 - t2) * 1e3})
 
+
+
+def complete_report(sess: Session) -> None:
+    """The pose is still (or Live stops): the last result's report gets its per-section rows,
+    so that the report the panel keeps is whole (compute leaves them out per update)."""
+    res = sess.last_result
+    if res is not None and res.report is not None and res.report.get("section_table") is None:
+        res.report["section_table"] = core.report.section_rows(res.analysis, res.names)
 
 
 def outlines_of(sess: Session, res: LiveResult):
@@ -350,6 +359,7 @@ def update_now(force: bool = False, depsgraph=None, outlines: bool | None = None
         raise
     sess.dirty = False
     if inp is None:
+        complete_report(sess)
         return sess.readout
     try:
         res = compute(sess, inp)

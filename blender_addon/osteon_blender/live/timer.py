@@ -19,6 +19,7 @@ from .session import (
     _settings_key,
     _wait_jobs,
     _want_outlines,
+    complete_report,
     compute,
     outlines_of,
     publish,
@@ -54,6 +55,7 @@ def _tick():
     if sess is None:
         return None
     now = time.perf_counter()
+    published = False
     try:
         # 1. a finished analysis: publish it
         if sess.future is not None:
@@ -62,6 +64,7 @@ def _tick():
             fut, sess.future = sess.future, None
             res = fut.result()                      # OsteonError -> readout below
             publish(sess, res)
+            published = True
             spent = time.perf_counter() - sess.started
             sess.next_allowed = time.perf_counter() + max(_throttle_s(sess), spent)
         # 2. finished outlines: show them if they belong to the latest result
@@ -82,7 +85,10 @@ def _tick():
                 sess.future = _pool().submit(compute, sess, inp)
                 return _POLL_S
             still = True                # noted, but nothing moved (e.g. our colour write)
-        # 4. the pose is still: outlines of the latest result (lower priority)
+        # 4. the pose is still: the latest report's section rows (not in the tick that
+        # published it: a pose being dragged goes on), then its outlines (lower priority)
+        if still and not published and sess.future is None:
+            complete_report(sess)
         res = sess.last_result
         if (res is not None and still and sess.outline_future is None
                 and sess.outlined is not res.analysis
@@ -217,6 +223,7 @@ def stop() -> None:
     unregister_handlers()
     if sess is not None:
         _wait_jobs(sess)
+        complete_report(sess)           # the panel keeps a whole report
         sess.readout.status = "off"
         state.of(sess.scene_name).live_readout = sess.readout
         bridge.tag_redraw_view3d(("UI",))
