@@ -6,6 +6,7 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <utility>
 
@@ -144,29 +145,40 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   CutRegion ball;
   ball.point = region.point + (0.5 * (lo + hi) - u.dot(region.point)) * u;
   ball.radius = std::hypot(region.radius, 0.5 * (hi - lo));
-  std::vector<char> in;
+  // The cells first, so that the lists are sized once for their faces and vertices at most (no
+  // reallocation and copy while they grow).
+  std::vector<Index> cells;
+  std::size_t max_faces = 0, max_vertices = 0;
   for (Index k = 0; k < grid.num_blocks(); ++k) {
     if (!grid.block_near(k, ball)) continue;
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
       if (!grid.near(c, ball) || !grid.meets(c, u, lo, hi, &region)) continue;
-      const Index e0 = grid.vertex_begin(c), e1 = grid.vertex_end(c);
-      in.assign(e1 - e0, 0);
-      bool any = false;
-      for (Index e = e0; e < e1; ++e) {
-        in[e - e0] = inside(Vec3(grid.entry_x()[e], grid.entry_y()[e], grid.entry_z()[e]));
-        any = any || in[e - e0];
-      }
-      if (!any) continue;
-      for (Index t = grid.begin(c); t < grid.end(c); ++t) {
-        const std::int32_t* fe = grid.face_entries() + 3 * t;
-        if (!in[fe[0] - e0] && !in[fe[1] - e0] && !in[fe[2] - e0]) continue;
-        const std::int32_t* f = grid.faces() + 3 * t;
-        for (int j = 0; j < 3; ++j) {
-          m.faces.push_back(f[j]);
-          if (slot[f[j]] >= 0) continue;
-          slot[f[j]] = static_cast<int>(m.vertices.size());
-          m.vertices.push_back(f[j]);
-        }
+      cells.push_back(c);
+      max_faces += grid.end(c) - grid.begin(c);
+      max_vertices += grid.vertex_end(c) - grid.vertex_begin(c);
+    }
+  }
+  m.faces.reserve(3 * max_faces);
+  m.vertices.reserve(max_vertices);
+  std::vector<char> in;
+  for (Index c : cells) {
+    const Index e0 = grid.vertex_begin(c), e1 = grid.vertex_end(c);
+    in.assign(e1 - e0, 0);
+    bool any = false;
+    for (Index e = e0; e < e1; ++e) {
+      in[e - e0] = inside(Vec3(grid.entry_x()[e], grid.entry_y()[e], grid.entry_z()[e]));
+      any = any || in[e - e0];
+    }
+    if (!any) continue;
+    for (Index t = grid.begin(c); t < grid.end(c); ++t) {
+      const std::int32_t* fe = grid.face_entries() + 3 * t;
+      if (!in[fe[0] - e0] && !in[fe[1] - e0] && !in[fe[2] - e0]) continue;
+      const std::int32_t* f = grid.faces() + 3 * t;
+      for (int j = 0; j < 3; ++j) {
+        m.faces.push_back(f[j]);
+        if (slot[f[j]] >= 0) continue;
+        slot[f[j]] = static_cast<int>(m.vertices.size());
+        m.vertices.push_back(f[j]);
       }
     }
   }
@@ -180,7 +192,7 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   // weights (atan2, most of the search's cost) of the other vertices are not computed.
   const double margin = 1e-9 * region.radius;
   std::vector<char> need(m.vertices.size());
-  std::vector<Vec3> radial(m.vertices.size(), Vec3::Zero());  // unit, where needed
+  std::vector<Vec3> radial(m.vertices.size());  // unit where needed (Vec3: no zero fill)
   for (std::size_t k = 0; k < m.vertices.size(); ++k) {
     const Vec3 d = mesh.vertex(m.vertices[k]) - region.point;
     const double a = u.dot(mesh.vertex(m.vertices[k]));
@@ -188,7 +200,7 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
     const double t = r.norm();
     need[k] =
         a >= lo - margin && a <= hi + margin && t >= min_t - margin && t <= region.radius + margin;
-    if (need[k] && t > 0) radial[k] = r / t;
+    radial[k] = need[k] && t > 0 ? Vec3(r / t) : Vec3::Zero();
   }
   keep_turning(mesh, m, u, radial, need);
   m.normals.assign(m.vertices.size(), Vec3::Zero());
@@ -262,10 +274,10 @@ bool sharp_edge(double& rho, double& axial, double at) {
 // normal to the axis is a circle whose points satisfy a = c_a - rho n_a (the outward normal
 // points to the circle's centre), whatever the section's shape: rho = -cov(a, n_a) / var(n_a).
 // Returns false when the sector says nothing (under two points, a straight taper, a convex
-// turn). `t`: the points' distances from the axis; `edge`: their mesh edge lengths (mm), what the
-// mesh can resolve there.
+// turn). `t`: the points' distances from the axis; `lengths`: their mesh edge lengths (mm), what
+// the mesh can resolve there.
 bool sector_radius(const std::vector<double>& a, const std::vector<double>& t,
-                   const std::vector<double>& na, const std::vector<double>& edge, double scale,
+                   const std::vector<double>& na, std::vector<double> lengths, double scale,
                    double& rho, double& axial) {
   const std::size_t n = a.size();
   // One point tells neither a ring (a sharp edge) nor a curve (a fillet): a lone point's zero
@@ -290,7 +302,6 @@ bool sector_radius(const std::vector<double>& a, const std::vector<double>& t,
   // (docs/notch.md): a ring spreads by under kSharpEdge h along one of them; points spread by
   // more along both are measured as a fillet first, and read as a ring only when they make none.
   // h: the median edge length (the long edges of a flat face next to a fillet do not count).
-  std::vector<double> lengths = edge;
   auto mid = lengths.begin() + lengths.size() / 2;
   std::nth_element(lengths.begin(), mid, lengths.end());
   const double h = lengths.empty() ? 0.0 : *mid;
@@ -322,6 +333,25 @@ Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, cons
   return m;
 }
 
+// A fillet point's normal: mostly in the meridian plane, turned 8..82 degrees from radial
+// towards the thin side (the shoulder face, at 90 degrees, and the thin part, at 0, left out).
+// The signs and a squared test first, with a margin of 1e-9 (far above the rounding of either),
+// reject the vertices clearly outside (no normal, the thin part, the shoulder face: about half of
+// those in the window on cow x4) without the hypot; the exact test decides the rest as before.
+bool fillet_turn(const Meridian& m) {
+  const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
+  if (m.nr <= 0 || !(m.na < 0)) return false;  // turn <= 0: no hypot needed
+  constexpr double kLoose = 1e-9;
+  const double q = m.na * m.na + m.nr * m.nr, na2 = m.na * m.na;
+  if (q < 0.49 * (1 - kLoose) || na2 < lo_sin * lo_sin * q * (1 - kLoose) ||
+      na2 > hi_sin * hi_sin * q * (1 + kLoose))
+    return false;
+  const double meridian = std::hypot(m.na, m.nr);
+  if (meridian < 0.7) return false;
+  const double turn = -m.na / meridian;  // sin of the angle from radial towards the thin side
+  return turn >= lo_sin && turn <= hi_sin;
+}
+
 // A vertex of a concave fillet: axial position a from the thin plane (mm), the axial component
 // na of its unit meridian normal, the normal's turn from radial towards the thin side (radians)
 // and its unit radial direction (x, y) in a frame of the plane.
@@ -335,7 +365,7 @@ struct FilletPoint {
 // one run per point.
 struct FilletPoints {
   std::vector<FilletPoint> points;
-  std::vector<double> edges;
+  std::unique_ptr<double[]> edges;
 };
 
 // The fillet points of the concave corner between a thin section (bone point `origin`,
@@ -354,19 +384,14 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
   const double at = u.dot(origin);
   LocalMesh local =
       local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, slot, canonical);
-  // Fillet points: normal mostly in the meridian plane, turned 8..82 degrees from radial
-  // towards the thin side (the shoulder face, at 90 degrees, and the thin part, at 0, left out).
-  const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
-  std::vector<Meridian> merid(local.vertices.size());
+  std::vector<Meridian> merid;  // every entry written below (no zero fill first)
+  merid.reserve(local.vertices.size());
   std::vector<int> candidate(local.vertices.size(), 0);
   for (std::size_t k = 0; k < local.vertices.size(); ++k) {
-    const Meridian m = merid[k] =
-        meridian_of(mesh.vertex(local.vertices[k]), local.normals[k], origin, u);
+    const Meridian m = merid.emplace_back(
+        meridian_of(mesh.vertex(local.vertices[k]), local.normals[k], origin, u));
     if (m.a < lo || m.a > hi || m.t < 0.5 * r_thin || m.t > 2.5 * r_thin) continue;
-    const double meridian = std::hypot(m.na, m.nr);
-    if (meridian < 0.7 || m.nr <= 0) continue;
-    const double turn = -m.na / meridian;  // sin of the angle from radial towards the thin side
-    candidate[k] = turn >= lo_sin && turn <= hi_sin;
+    candidate[k] = fillet_turn(m);
   }
   // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
   // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
@@ -381,7 +406,8 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
       if (candidate[local.at(local.faces[f + j])]) next[local.at(local.faces[f + j]) + 1] += 2;
   for (std::size_t k = 0; k < local.vertices.size(); ++k) next[k + 1] += next[k];
   FilletPoints out;
-  out.edges.resize(next.back());
+  // Every slot is written exactly once below (the runs' counts): no zero fill first.
+  out.edges.reset(new double[next.back()]);
   const std::vector<std::size_t> first(next.begin(), next.end() - 1);
   for (std::size_t f = 0; f < local.faces.size(); f += 3) {
     int slots[3];
@@ -461,20 +487,37 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
   for (const FilletPoint& p : fillet.points)
     if (p.a >= lo && p.a <= hi) inside.push_back(&p);
   const auto [c0, s0] = sector_start(inside);
+  // Each sector's arrays sized first (counted), then filled: no reallocation while filling.
+  std::vector<int> sector_of(inside.size());
+  std::array<std::size_t, kSectors> count{}, edges{};
+  for (std::size_t i = 0; i < inside.size(); ++i) {
+    const FilletPoint* p = inside[i];
+    sector_of[i] = octant(p->x * c0 + p->y * s0, p->y * c0 - p->x * s0);
+    ++count[sector_of[i]];
+    edges[sector_of[i]] += p->edge_end - p->edge_begin;
+  }
   SectorPoints pts;
-  for (const FilletPoint* p : inside) {
-    const int sector = octant(p->x * c0 + p->y * s0, p->y * c0 - p->x * s0);
+  for (int s = 0; s < kSectors; ++s) {
+    pts.a[s].reserve(count[s]);
+    pts.t[s].reserve(count[s]);
+    pts.na[s].reserve(count[s]);
+    pts.edge[s].reserve(edges[s]);
+  }
+  for (std::size_t i = 0; i < inside.size(); ++i) {
+    const FilletPoint* p = inside[i];
+    const int sector = sector_of[i];
     pts.a[sector].push_back(p->a);
     pts.t[sector].push_back(p->t);
-    pts.edge[sector].insert(pts.edge[sector].end(), fillet.edges.begin() + p->edge_begin,
-                            fillet.edges.begin() + p->edge_end);
+    pts.edge[sector].insert(pts.edge[sector].end(), fillet.edges.get() + p->edge_begin,
+                            fillet.edges.get() + p->edge_end);
     pts.na[sector].push_back(p->na);
     pts.turn[sector] = std::max(pts.turn[sector], p->turn);
   }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
     double rho = 0, axial = 0;
-    if (!sector_radius(pts.a[s], pts.t[s], pts.na[s], pts.edge[s], r_thin, rho, axial)) continue;
+    if (!sector_radius(pts.a[s], pts.t[s], pts.na[s], std::move(pts.edge[s]), r_thin, rho, axial))
+      continue;
     // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
     // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
     // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:
