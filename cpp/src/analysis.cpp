@@ -146,6 +146,8 @@ AnalysisResult Analyzer::run(const double* vertices, const Skeleton& skeleton, P
 AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, const Box3* dirty,
                                    Progress* progress) {
   RunState run(vertices, sk, dirty, progress, grid);
+  run.grid_holds_last_run = grid_holds_last_run;
+  grid_holds_last_run = false;  // until this run ends
   try {
     if (progress != nullptr) {
       progress->sections_done = 0;
@@ -183,6 +185,7 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     compute_vertex_stress(run, result);
     run.timer.lap("vertex stress");
     remember_inputs(run);
+    grid_holds_last_run = run.grid_built;
     if (progress != nullptr) progress->runs_done.fetch_add(1);
     return result;
   } catch (...) {

@@ -185,10 +185,17 @@ struct RunState {
   // update); it holds this run's mesh only once build_grid() ran.
   FaceGrid& grid;
   bool grid_built = false;
+  // Live mode: the grid holds the last run's mesh and `moved_faces` lists the faces with a
+  // vertex moved since (null: not known): the grid keeps its layout and re-files those alone.
+  const std::vector<std::int32_t>* moved_faces = nullptr;
+  bool grid_holds_last_run = false;
   /// Buckets this run's mesh into `grid` (once per run).
   void build_grid(int threads) {
     if (grid_built) return;
-    grid.build(mesh, 12, threads);
+    const bool refiled = grid_holds_last_run && moved_faces != nullptr &&
+                         grid.refile(mesh, moved_faces->data(),
+                                     static_cast<Index>(moved_faces->size()), threads);
+    if (!refiled) grid.build(mesh, 12, threads);
     grid_built = true;
   }
   std::vector<double> reach;                   // B radius of the local cut around the bone, mm
@@ -234,7 +241,9 @@ struct Analyzer::Impl {
   std::vector<int> job_bone;     // >= 0: interior family of that bone; -1: a single plane
   std::vector<int> job_section;  // first section of the job
   LoadTree tree;
-  FaceGrid grid;  // rebuilt by each run that cuts (RunState::build_grid); kept for its buffers
+  // Built by each run that cuts (RunState::build_grid), kept for its buffers; a live update whose
+  // last run built it re-files only the moved faces in its kept layout (FaceGrid::refile).
+  FaceGrid grid;
   // Loose pieces (full runs; a partial run keeps them): vertex lists, and #V 1 = loose vertex.
   std::vector<std::vector<std::int32_t>> loose;
   std::vector<std::uint8_t> loose_vertex;
@@ -245,6 +254,10 @@ struct Analyzer::Impl {
 
   // Scratch of reuse_last_run: per vertex, moved since the last run (RunState::moved).
   std::vector<std::uint8_t> moved_scratch;
+  // The faces with a moved vertex (RunState::moved_faces), and whether `grid` holds the last
+  // run's mesh (that run built it).
+  std::vector<std::int32_t> moved_faces_scratch;
+  bool grid_holds_last_run = false;
   // The last run's per-vertex stress and what it was computed from: in live mode a vertex whose
   // bone, position, bone head and axis and its bone's section params are bitwise unchanged lies
   // at the same place between the same two sections (vertex_param, vertex_slab); it keeps its

@@ -49,6 +49,9 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
   moved.resize(num_vertices);  // every entry written below
   run.moved = &moved;
   bool any_moved = false;
+  std::vector<std::int32_t>& moved_faces = moved_faces_scratch;
+  moved_faces.clear();
+  run.moved_faces = &moved_faces;
   for (Index v = 0; v < num_vertices; ++v) {
     const double* a = vertices + 3 * v;
     const double* b = last_vertices.data() + 3 * v;
@@ -58,6 +61,7 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
   if (any_moved) {
     for (std::size_t f = 0; f < faces.size(); f += 3) {
       if (!moved[faces[f]] && !moved[faces[f + 1]] && !moved[faces[f + 2]]) continue;
+      moved_faces.push_back(static_cast<std::int32_t>(f / 3));
       for (int k = 0; k < 3; ++k) {
         const Index v = faces[f + k];
         moved_box.add(mesh.vertex(v));

@@ -106,21 +106,116 @@ FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int 
   return grid;
 }
 
+// Face f's cell (the cell of its centroid) and how far it sticks out of its centroid (`reach`,
+// widened by 1e-6 relative, as a float), mm.
+inline Index FaceGrid::file_face(const MeshView& mesh, const Layout& grid, Index f,
+                                 float& reach_out) {
+  const Vec3& lo = grid.lo;
+  const Vec3& inv = grid.inv;
+#if defined(__SSE2__)
+  const __m128d lo_xy = _mm_loadu_pd(lo.data()), inv_xy = _mm_loadu_pd(inv.data());
+  const __m128d kThree = _mm_set1_pd(3.0);
+  const __m128d kAbs = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+#endif
+  const std::int32_t* t = mesh.faces + 3 * f;
+  int raw[3];
+  double reach;
+#if defined(__SSE2__)
+  // x and y as a pair, z alone: the same operations lane by lane as the Eigen code below
+  // ((a + b + c) / 3.0, the truncations, the absolute values); reach is the largest of the
+  // nine absolute offsets, which does not depend on the order (finite coordinates).
+  const double *pa = mesh.vertices + 3 * static_cast<Index>(t[0]),
+               *pb = mesh.vertices + 3 * static_cast<Index>(t[1]),
+               *pc = mesh.vertices + 3 * static_cast<Index>(t[2]);
+  const __m128d axy = _mm_loadu_pd(pa), bxy = _mm_loadu_pd(pb), cxy = _mm_loadu_pd(pc);
+  const __m128d mxy = _mm_div_pd(_mm_add_pd(_mm_add_pd(axy, bxy), cxy), kThree);
+  const double mz = (pa[2] + pb[2] + pc[2]) / 3.0;
+  const __m128i ixy = _mm_cvttpd_epi32(_mm_mul_pd(_mm_sub_pd(mxy, lo_xy), inv_xy));
+  raw[0] = _mm_cvtsi128_si32(ixy);
+  raw[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(ixy, 1));
+  raw[2] = static_cast<int>((mz - lo.z()) * inv.z());
+  const __m128d dxy = _mm_max_pd(
+      _mm_max_pd(_mm_and_pd(_mm_sub_pd(axy, mxy), kAbs), _mm_and_pd(_mm_sub_pd(bxy, mxy), kAbs)),
+      _mm_and_pd(_mm_sub_pd(cxy, mxy), kAbs));
+  const double dz =
+      std::max(std::max(std::abs(pa[2] - mz), std::abs(pb[2] - mz)), std::abs(pc[2] - mz));
+  reach = std::max(std::max(_mm_cvtsd_f64(dxy), _mm_cvtsd_f64(_mm_unpackhi_pd(dxy, dxy))), dz);
+#else
+  const Vec3 a = mesh.vertex(t[0]), b = mesh.vertex(t[1]), c = mesh.vertex(t[2]);
+  const Vec3 centroid = (a + b + c) / 3.0;
+  for (int k = 0; k < 3; ++k) raw[k] = static_cast<int>((centroid[k] - lo[k]) * inv[k]);
+  reach = std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
+                    (c - centroid).cwiseAbs().maxCoeff()});
+#endif
+  reach_out = static_cast<float>(reach * (1 + 1e-6));
+  return grid.cell_id(raw);
+}
+
 void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
   const Index nf = mesh.num_faces;
   const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
-  const Layout grid = layout(mesh, faces_per_cell, parts);
+  auto grid = std::make_shared<Layout>(layout(mesh, faces_per_cell, parts));
   // Boxes are widened by a few ulps of the coordinates so that a plane through a box's face is
   // never rounded out of it (the plane tests compute n.center +- |n|.half).
   slack_ = 64 * std::numeric_limits<double>::epsilon() *
-           std::max(grid.lo.cwiseAbs().maxCoeff(), grid.hi.cwiseAbs().maxCoeff());
+           std::max(grid->lo.cwiseAbs().maxCoeff(), grid->hi.cwiseAbs().maxCoeff());
+  kept_faces_ = -1;  // until the faces are filed
+  bin_faces(mesh, *grid, parts);
+  kept_layout_ = std::move(grid);
+  kept_faces_ = nf;
+  finish_build(mesh, *kept_layout_, parts);
+}
+
+// The steps after the binning (build and refile): the faces sorted by cell, the cells and blocks
+// with their boxes, the vertex entries.
+void FaceGrid::finish_build(const MeshView& mesh, const Layout& grid, int parts) {
   tight_on_ = false;
-  bin_faces(mesh, grid, parts);
   sort_faces_by_cell(mesh, grid.total, parts);
   collect_cells(grid);
-  start_.push_back(nf);
+  start_.push_back(mesh.num_faces);
   block_start_.push_back(static_cast<Index>(center_.size()));
   build_entries(mesh, parts);
+}
+
+bool FaceGrid::refile(const MeshView& mesh, const std::int32_t* moved, Index count, int threads) {
+  const Index nf = mesh.num_faces;
+  if (kept_layout_ == nullptr || kept_faces_ != nf || 4 * count > nf) return false;
+  const Layout& grid = *kept_layout_;
+  // The faces that did not move lie in the box (they did when filed); a moved one must too, or
+  // its centroid would be clamped into a cell whose box does not hold it.
+  for (Index i = 0; i < count; ++i) {
+    const std::int32_t* t = mesh.faces + 3 * static_cast<Index>(moved[i]);
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 p = mesh.vertex(t[k]);
+      if (!((p.array() >= grid.lo.array()).all() && (p.array() <= grid.hi.array()).all()))
+        return false;
+    }
+  }
+  std::int32_t* cell_of = cell_of_.get();
+  float* reach = face_reach_.get();
+  for (Index i = 0; i < count; ++i) {
+    const Index f = moved[i];
+    cell_of[f] = static_cast<std::int32_t>(file_face(mesh, grid, f, reach[f]));
+  }
+  // The faces per cell and part and the cells' overhangs, from the kept cells and overhangs.
+  const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
+  if (static_cast<int>(part_count_.size()) < parts) {
+    part_count_.resize(parts);
+    part_overhang_.resize(parts);
+  }
+  detail::parallel_for(parts, parts, [&](long part, int) {
+    std::vector<Index>& n = part_count_[part];
+    std::vector<float>& overhang = part_overhang_[part];
+    n.assign(grid.total, 0);
+    overhang.assign(grid.total, 0.0f);
+    for (Index f = nf * part / parts, end = nf * (part + 1) / parts; f < end; ++f) {
+      const std::int32_t id = cell_of[f];
+      ++n[id];
+      overhang[id] = std::max(overhang[id], reach[f]);
+    }
+  });
+  finish_build(mesh, grid, parts);
+  return true;
 }
 
 // One pass over the triangles (split over `parts` workers): cell of the centroid (cell_of_), the
@@ -128,9 +223,8 @@ void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
 // (part_overhang_; so that a cell's box = its grid box widened by that, without a second pass).
 void FaceGrid::bin_faces(const MeshView& mesh, const Layout& grid, int parts) {
   const Index nf = mesh.num_faces, total = grid.total;
-  const Vec3& lo = grid.lo;
-  const Vec3& inv = grid.inv;
   std::int32_t* cell_of = cell_of_.reserve(nf);
+  float* face_reach = face_reach_.reserve(nf);
   auto& part_count = part_count_;
   auto& part_overhang = part_overhang_;
   if (static_cast<int>(part_count.size()) < parts) {
@@ -141,50 +235,17 @@ void FaceGrid::bin_faces(const MeshView& mesh, const Layout& grid, int parts) {
     part_count[p].assign(total, 0);
     part_overhang[p].assign(total, 0.0f);
   }
-#if defined(__SSE2__)
-  const __m128d lo_xy = _mm_loadu_pd(lo.data()), inv_xy = _mm_loadu_pd(inv.data());
-  const __m128d kThree = _mm_set1_pd(3.0);
-  const __m128d kAbs = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
-#endif
   detail::parallel_for(parts, parts, [&](long part, int) {
     auto& count = part_count[part];
     auto& overhang = part_overhang[part];
     const Index begin = nf * part / parts, end = nf * (part + 1) / parts;
     for (Index f = begin; f < end; ++f) {
-      const std::int32_t* t = mesh.faces + 3 * f;
-      int raw[3];
-      double reach;
-#if defined(__SSE2__)
-      // x and y as a pair, z alone: the same operations lane by lane as the Eigen code below
-      // ((a + b + c) / 3.0, the truncations, the absolute values); reach is the largest of the
-      // nine absolute offsets, which does not depend on the order (finite coordinates).
-      const double *pa = mesh.vertices + 3 * static_cast<Index>(t[0]),
-                   *pb = mesh.vertices + 3 * static_cast<Index>(t[1]),
-                   *pc = mesh.vertices + 3 * static_cast<Index>(t[2]);
-      const __m128d axy = _mm_loadu_pd(pa), bxy = _mm_loadu_pd(pb), cxy = _mm_loadu_pd(pc);
-      const __m128d mxy = _mm_div_pd(_mm_add_pd(_mm_add_pd(axy, bxy), cxy), kThree);
-      const double mz = (pa[2] + pb[2] + pc[2]) / 3.0;
-      const __m128i ixy = _mm_cvttpd_epi32(_mm_mul_pd(_mm_sub_pd(mxy, lo_xy), inv_xy));
-      raw[0] = _mm_cvtsi128_si32(ixy);
-      raw[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(ixy, 1));
-      raw[2] = static_cast<int>((mz - lo.z()) * inv.z());
-      const __m128d dxy = _mm_max_pd(_mm_max_pd(_mm_and_pd(_mm_sub_pd(axy, mxy), kAbs),
-                                                _mm_and_pd(_mm_sub_pd(bxy, mxy), kAbs)),
-                                     _mm_and_pd(_mm_sub_pd(cxy, mxy), kAbs));
-      const double dz =
-          std::max(std::max(std::abs(pa[2] - mz), std::abs(pb[2] - mz)), std::abs(pc[2] - mz));
-      reach = std::max(std::max(_mm_cvtsd_f64(dxy), _mm_cvtsd_f64(_mm_unpackhi_pd(dxy, dxy))), dz);
-#else
-      const Vec3 a = mesh.vertex(t[0]), b = mesh.vertex(t[1]), c = mesh.vertex(t[2]);
-      const Vec3 centroid = (a + b + c) / 3.0;
-      for (int k = 0; k < 3; ++k) raw[k] = static_cast<int>((centroid[k] - lo[k]) * inv[k]);
-      reach = std::max({(a - centroid).cwiseAbs().maxCoeff(), (b - centroid).cwiseAbs().maxCoeff(),
-                        (c - centroid).cwiseAbs().maxCoeff()});
-#endif
-      const Index id = grid.cell_id(raw);
+      float r;
+      const Index id = file_face(mesh, grid, f, r);
       cell_of[f] = static_cast<std::int32_t>(id);
+      face_reach[f] = r;
       ++count[id];
-      overhang[id] = std::max(overhang[id], static_cast<float>(reach * (1 + 1e-6)));
+      overhang[id] = std::max(overhang[id], r);
     }
   });
 }

@@ -95,6 +95,14 @@ class FaceGrid {
   /// Buckets the faces of `mesh` (about faces_per_cell triangles per non-empty cell) on up to
   /// `threads` workers (0 = all cores); the result does not depend on the number of workers.
   void build(const MeshView& mesh, int faces_per_cell = 12, int threads = 0);
+  /// Live mode: the grid keeps the layout (box, cells) of its last build() and re-files only the
+  /// faces listed in `moved` (indices into mesh.faces, the faces of the last build, at most one
+  /// entry each; every other face's vertices must be bitwise those the grid last filed). The
+  /// result is what build() gives with that layout, not with this mesh's own (a query may take
+  /// its faces in another order than a fresh build's). Returns false, leaving the grid as it
+  /// was, when it cannot: no layout kept, another face count, a moved face's vertex outside the
+  /// kept box, or more than a quarter of the faces moved (then call build()).
+  bool refile(const MeshView& mesh, const std::int32_t* moved, Index count, int threads = 0);
   /// Number of non-empty cells.
   Index num_cells() const { return static_cast<Index>(center_.size()); }
   /// Cell c's faces are faces()[3*begin(c) .. 3*end(c)) (vertex indices, reordered copy).
@@ -238,6 +246,12 @@ class FaceGrid {
   void sort_faces_by_cell(const MeshView& mesh, Index total, int parts);
   void collect_cells(const Layout& grid);
   void build_entries(const MeshView& mesh, int parts);
+  void finish_build(const MeshView& mesh, const Layout& grid, int parts);
+  static Index file_face(const MeshView& mesh, const Layout& grid, Index f, float& reach);
+  // The last build's layout (refile keeps it) and each face's cell (cell_of_) and overhang.
+  std::shared_ptr<const Layout> kept_layout_;
+  Index kept_faces_ = -1;
+  Buffer<float> face_reach_;
   std::vector<Vec3> block_center_, block_half_;
   std::vector<Index> block_start_;
   // Scratch of build() and build_entries(), kept for its storage.
