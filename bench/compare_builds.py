@@ -35,15 +35,19 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 
-# Both children: the other build imported instead of this one, the model, the keywords.
-PREAMBLE = """
+# Every child: the other build (OSTEON_OTHER_BUILD) imported instead of this one, and bench/ on
+# the path. Shared by compare_corners.py.
+OTHER_BUILD_IMPORT = """
 import os, sys
 if os.environ.get("OSTEON_OTHER_BUILD"):
     # An editable install's import redirect would win over PYTHONPATH: drop it.
     sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
     sys.path.insert(0, os.environ["OSTEON_OTHER_BUILD"])
 sys.path.insert(0, {here!r})
-import osteon
+"""
+
+# The timing and instruction children: that, the model, the keywords.
+PREAMBLE = OTHER_BUILD_IMPORT + """import osteon
 from models import load
 v, f, sk, w = load({model!r}, subdivisions={sub})
 kw = {{"junctions": False}} if {no_junctions} and not os.environ.get("OSTEON_OTHER_BUILD") else {{}}
@@ -112,13 +116,7 @@ def count_instructions(pythonpath: str | None, model: str, sub: int, h: float,
     return total, int(faces), file
 
 
-IDENTITY_CHILD = """
-import os, sys
-if os.environ.get("OSTEON_OTHER_BUILD"):
-    sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
-    sys.path.insert(0, os.environ["OSTEON_OTHER_BUILD"])
-sys.path.insert(0, {here!r})
-import numpy as np, osteon, identity_dump
+IDENTITY_CHILD = OTHER_BUILD_IMPORT + """import numpy as np, osteon, identity_dump
 np.savez({out!r}, **identity_dump.dump())
 print(osteon.__file__)
 """

@@ -25,14 +25,10 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from compare_builds import OTHER_BUILD_IMPORT
 
-CHILD = """
-import os, sys
-if os.environ.get("OSTEON_OTHER_BUILD"):
-    sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
-    sys.path.insert(0, os.environ["OSTEON_OTHER_BUILD"])
-sys.path.insert(0, {here!r})
-sys.path.insert(0, {tests!r})
+CHILD = OTHER_BUILD_IMPORT + """sys.path.insert(0, {tests!r})
 import numpy as np, osteon, compare_corners
 np.savez({out!r}, **compare_corners.dump())
 print(osteon.__file__)
