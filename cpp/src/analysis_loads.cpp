@@ -55,16 +55,9 @@ AnalysisResult Analyzer::Impl::compute_loads(RunState& run) {
   change.hi = run.changed.hi;
   // (A partial run, the correction's, disarms it: its final full run searches as before.)
   if (run.partial) corner_memo.forget();
-  // Each thin section's whole cut around its bone point: the corner search's band.
-  const auto outline = [&](int i) {
-    std::vector<Vec3> loop;
-    if (!states[i].found) return loop;
-    for (const Vec2& q : states[i].cut.outer) loop.push_back(states[i].frame.to_world(q));
-    return loop;
-  };
   NotchField notch = find_notches(
       run.mesh, grid, r, options.min_notch_radius, options.notch_sensitivity, options.threads,
-      options.reuse_sections && !run.partial ? &corner_memo : nullptr, change, outline);
+      options.reuse_sections && !run.partial ? &corner_memo : nullptr, change);
   for (int i = 0; i < ns; ++i) {
     if (!(notch.kt[i] > 1.0) || !std::isfinite(r.stress[i])) continue;
     r.stress[i] *= notch.effective[i] * notch.arm_ratio[i];

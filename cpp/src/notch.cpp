@@ -122,122 +122,21 @@ void keep_turning(const MeshView& mesh, const LocalMesh& m, const Vec3& u,
   for (std::size_t k = 0; k < need.size(); ++k) need[k] = need[k] && seen[k] == 3;
 }
 
-// The searched band around the thin section's own outline (docs/notch.md "Cost"): per
-// direction around the axis, the distances from the axis that the fillet between the thin side
-// and the shoulder can reach. A fillet leaves the thin side where its outline is (the plane may
-// lie a little inside the fillet or before a taper: kBandIn inwards) and ends on the shoulder
-// at most its radius further out (the charts' fillets, Peterson chart 3.11, reach r/d = 0.3:
-// 0.6 of the thin radius; kBandOut leaves room for a taper between the plane and the shoulder).
-// The rest of the 2.5 r cylinder (the shoulder face's outer part, the thick side, other parts
-// of the model passing through it) holds no fillet point of this corner and is not gathered.
-constexpr double kBandIn = 0.25;  // x r_thin, inwards of the outline's nearest point
-constexpr double kBandOut = 0.6;  // x r_thin, outwards of its farthest point
-constexpr int kBandBins = 32;     // directions around the axis (by the diamond angle below)
-
-// A monotone stand-in for the angle of (x, y) around the axis, in [0, 4) (no atan2): the
-// "diamond angle", 1 per quadrant.
-double diamond_angle(double x, double y) {
-  const double s = std::abs(x) + std::abs(y);
-  if (!(s > 0)) return 0.0;
-  if (y >= 0) return x >= 0 ? y / s : 1.0 - x / s;
-  return x < 0 ? 2.0 - y / s : 3.0 + x / s;
-}
-
-int band_bin(double x, double y) {
-  return std::min(static_cast<int>(diamond_angle(x, y) * (kBandBins / 4)), kBandBins - 1);
-}
-
-// Squared bounds of the distance from the axis per direction bin, in the frame (e1, e2) of the
-// plane normal to u; a bin the outline does not reach (a bone point outside its section) keeps
-// the whole cylinder.
-struct Band {
-  bool on = false;
-  Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero();
-  std::array<double, kBandBins> lo2{}, hi2{};
-  double any_lo2 = 0, any_hi2 = 0, all_lo2 = 0, all_hi2 = 0;  // the bins' extremes
-  bool holds(const Vec3& radial, double t2, double margin2) const {
-    if (!on) return true;
-    if (t2 < any_lo2 - margin2 || t2 > any_hi2 + margin2) return false;   // outside every bin
-    if (t2 >= all_lo2 - margin2 && t2 <= all_hi2 + margin2) return true;  // inside every bin
-    const int b = band_bin(radial.dot(e1), radial.dot(e2));
-    return t2 >= lo2[b] - margin2 && t2 <= hi2[b] + margin2;
-  }
-};
-
-// The band of the thin section's outline `loop` (its outer boundary, 3D mm, in the plane normal
-// to u through origin). The outline is sampled along each edge at most 5 degrees apart (a bin
-// spans at least 7 degrees), and each bin takes its neighbours' extremes too (the outline
-// between two samples). Distances are clipped to the cylinder (2.5 r): the band depends only on
-// the outline inside the searched region (the live update's reuse, notch_reuse.hpp).
-Band band_of(const std::vector<Vec3>& loop, const Vec3& origin, const Vec3& u, double r_thin) {
-  Band band;
-  if (loop.size() < 3) return band;
-  band.e1 = u.unitOrthogonal();
-  band.e2 = u.cross(band.e1);
-  const double cap = 2.5 * r_thin, inf = std::numeric_limits<double>::infinity();
-  std::array<double, kBandBins> tmin, tmax;
-  tmin.fill(inf);
-  tmax.fill(-inf);
-  auto plane = [&](const Vec3& p) {
-    const Vec3 d = p - origin;
-    return Vec2(d.dot(band.e1), d.dot(band.e2));
-  };
-  for (std::size_t k = 0; k < loop.size(); ++k) {
-    const Vec2 p = plane(loop[k]), q = plane(loop[(k + 1) % loop.size()]);
-    const double span = std::atan2(std::abs(p.x() * q.y() - p.y() * q.x()), p.dot(q));
-    const int n = 1 + static_cast<int>(span / (5.0 * kPi / 180.0));
-    for (int j = 0; j < n; ++j) {
-      const Vec2 s = p + (q - p) * (static_cast<double>(j) / n);
-      const int b = band_bin(s.x(), s.y());
-      const double t = std::min(s.norm(), cap);
-      tmin[b] = std::min(tmin[b], t);
-      tmax[b] = std::max(tmax[b], t);
-    }
-  }
-  for (int b = 0; b < kBandBins; ++b) {
-    double lo = inf, hi = -inf;
-    for (int j = -1; j <= 1; ++j) {
-      const int c = (b + j + kBandBins) % kBandBins;
-      lo = std::min(lo, tmin[c]);
-      hi = std::max(hi, tmax[c]);
-    }
-    if (!(hi >= lo)) {  // not reached: the whole cylinder
-      band.lo2[b] = 0.0;
-      band.hi2[b] = inf;
-      continue;
-    }
-    lo = std::max(lo - kBandIn * r_thin, 0.0);
-    hi += kBandOut * r_thin;
-    band.lo2[b] = lo * lo;
-    band.hi2[b] = hi * hi;
-  }
-  band.any_lo2 = *std::min_element(band.lo2.begin(), band.lo2.end());
-  band.any_hi2 = *std::max_element(band.hi2.begin(), band.hi2.end());
-  band.all_lo2 = *std::max_element(band.lo2.begin(), band.lo2.end());
-  band.all_hi2 = *std::min_element(band.hi2.begin(), band.hi2.end());
-  band.on = true;
-  return band;
-}
-
 // Faces of the cells the slab lo <= u.x <= hi and the region reach that have a vertex inside
 // both (the only ones a candidate's normal and neighbours need), and the normals of their
 // vertices at least `min_t` from the axis (closer ones are no candidate: theirs stay 0).
 LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, double lo,
-                     double hi, const CutRegion& region, double min_t, const Band& band,
-                     std::vector<int>& slot, bool canonical = false) {
+                     double hi, const CutRegion& region, double min_t, std::vector<int>& slot,
+                     bool canonical = false) {
   LocalMesh m;
   m.slot = &slot;
   const double r2 = region.radius * region.radius;
-  // The band's gathering is a little wider than its candidates' test (every candidate's faces
-  // are gathered, its normal complete).
-  const double gather_margin2 = 1e-12 * r2;
   auto inside = [&](const Vec3& p) {
     const double a = u.dot(p);
     if (a < lo || a > hi) return false;
     Vec3 d = p - region.point;
     d -= d.dot(u) * u;
-    const double t2 = d.squaredNorm();
-    return t2 <= r2 && band.holds(d, t2, gather_margin2);
+    return d.squaredNorm() <= r2;
   };
   // Each cell's distinct vertices (its entries, bit-exact copies) are tested once, and a face
   // reads its corners' verdicts (a vertex is shared by ~6 faces).
@@ -299,8 +198,8 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
     const double a = u.dot(mesh.vertex(m.vertices[k]));
     const Vec3 r = d - d.dot(u) * u;
     const double t = r.norm();
-    need[k] = a >= lo - margin && a <= hi + margin && t >= min_t - margin &&
-              t <= region.radius + margin && band.holds(r, t * t, 1e-13 * r2);
+    need[k] =
+        a >= lo - margin && a <= hi + margin && t >= min_t - margin && t <= region.radius + margin;
     radial[k] = need[k] && t > 0 ? Vec3(r / t) : Vec3::Zero();
   }
   keep_turning(mesh, m, u, radial, need);
@@ -476,7 +375,7 @@ struct FilletPoints {
 // so the points of a narrower window are exactly those of this list inside it.
 FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vector<int>& slot,
                            const Vec3& origin, const Vec3& u, double r_thin, double lo, double hi,
-                           const Band& band, bool canonical = false) {
+                           bool canonical = false) {
   const Vec3 e1 = u.unitOrthogonal(), e2 = u.cross(e1);
   CutRegion region;  // the cylinder t <= 2.5 r_thin around the axis
   region.point = origin;
@@ -484,7 +383,7 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
   region.radius = 2.5 * r_thin;
   const double at = u.dot(origin);
   LocalMesh local =
-      local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, band, slot, canonical);
+      local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, slot, canonical);
   std::vector<Meridian> merid;  // every entry written below (no zero fill first)
   merid.reserve(local.vertices.size());
   std::vector<int> candidate(local.vertices.size(), 0);
@@ -492,10 +391,6 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
     const Meridian m = merid.emplace_back(
         meridian_of(mesh.vertex(local.vertices[k]), local.normals[k], origin, u));
     if (m.a < lo || m.a > hi || m.t < 0.5 * r_thin || m.t > 2.5 * r_thin) continue;
-    if (band.on) {
-      const Vec3 d = mesh.vertex(local.vertices[k]) - origin;
-      if (!band.holds(d - d.dot(u) * u, m.t * m.t, 0.0)) continue;
-    }
     candidate[k] = fillet_turn(m);
   }
   // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
@@ -744,7 +639,7 @@ std::vector<Step> find_steps(const AnalysisResult& r) {
 std::vector<Corner> measure_corners(const MeshView& mesh,
                                     const std::function<const FaceGrid&()>& face_grid,
                                     const std::vector<Step>& steps, int threads,
-                                    const SectionOutline& outline, bool canonical = false) {
+                                    bool canonical = false) {
   std::vector<Corner> corners(steps.size());
   auto same_side = [&](std::size_t s, std::size_t t) {
     return steps[s].section == steps[t].section && steps[s].u == steps[t].u;
@@ -772,9 +667,8 @@ std::vector<Corner> measure_corners(const MeshView& mesh,
     for (std::size_t t = s; t < steps.size(); ++t)
       if (same_side(s, t)) reach = std::max(reach, steps[t].reach);
     const Step& st = steps[s];
-    const Band band = outline ? band_of(outline(st.section), st.point, st.u, st.r_thin) : Band{};
     const FilletPoints points = fillet_points(mesh, grid, slot, st.point, st.u, st.r_thin,
-                                              -0.25 * reach, 1.25 * reach, band, canonical);
+                                              -0.25 * reach, 1.25 * reach, canonical);
     for (std::size_t t = s; t < steps.size(); ++t)
       if (same_side(s, t))
         corners[t] = corner_in(points, st.r_thin, -0.25 * steps[t].reach, 1.25 * steps[t].reach);
@@ -820,7 +714,7 @@ namespace {
 std::vector<Corner> recall_or_measure(const MeshView& mesh,
                                       const std::function<const FaceGrid&()>& face_grid,
                                       const std::vector<Step>& steps, int threads, CornerMemo& memo,
-                                      const MeshChange& change, const SectionOutline& outline) {
+                                      const MeshChange& change) {
   std::vector<CornerGroup> groups;
   std::vector<int> group_of(steps.size(), -1);
   for (std::size_t s = 0; s < steps.size(); ++s) {
@@ -841,8 +735,7 @@ std::vector<Corner> recall_or_measure(const MeshView& mesh,
   std::vector<Step> todo;
   for (std::size_t s = 0; s < steps.size(); ++s)
     if (!recalled[group_of[s]]) todo.push_back(steps[s]);
-  const std::vector<Corner> measured =
-      measure_corners(mesh, face_grid, todo, threads, outline, true);
+  const std::vector<Corner> measured = measure_corners(mesh, face_grid, todo, threads, true);
   std::vector<Corner> corners(steps.size());
   std::vector<std::size_t> taken(groups.size(), 0);
   for (std::size_t s = 0, next = 0; s < steps.size(); ++s) {
@@ -864,7 +757,7 @@ std::vector<Corner> recall_or_measure(const MeshView& mesh,
 
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
                         const AnalysisResult& r, double min_radius, double sensitivity, int threads,
-                        CornerMemo* memo, const MeshChange& change, const SectionOutline& outline) {
+                        CornerMemo* memo, const MeshChange& change) {
   const int ns = static_cast<int>(r.section_bone.size());
   NotchField out;
   out.kt.assign(ns, 1.0);
@@ -883,8 +776,8 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
     memo->armed = true;
   }
   const std::vector<Corner> corners =
-      live ? recall_or_measure(mesh, face_grid, steps, threads, *memo, change, outline)
-           : measure_corners(mesh, face_grid, steps, threads, outline);
+      live ? recall_or_measure(mesh, face_grid, steps, threads, *memo, change)
+           : measure_corners(mesh, face_grid, steps, threads);
   for (std::size_t s = 0; s < steps.size(); ++s) {
     const Step& st = steps[s];
     const Corner& c = corners[s];

@@ -22,9 +22,6 @@ struct NotchField {
   std::vector<double> arm_ratio;  ///< moment at the corner / the section's moment (>= 1), 1: none
 };
 
-/// The outer boundary of a section's whole cut around its bone point (3D, mm; empty: none).
-using SectionOutline = std::function<std::vector<Vec3>(int section)>;
-
 /// Finds, along each bone's sections, the steps of the equivalent radius sqrt(A / pi) between
 /// neighbours (ratio >= kStepRatio), measures the fillet radius of the concave corner between
 /// them on the mesh (the meridian circle fitted through the vertex normals, docs/notch.md), and
@@ -38,13 +35,10 @@ using SectionOutline = std::function<std::vector<Vec3>(int section)>;
 /// Analyzer's): in a live update (`change.known`: what moved since the last run) the corners are
 /// searched in the canonical face order and the last update's are reused where `change` proves
 /// them unchanged, bit for bit the corners of that search (notch_reuse.hpp); other runs search in
-/// the grid's order (a one-off analysis as before) and clear the memo. `outline` (thread-safe):
-/// each thin section's outline; the search then gathers only a band around it per direction
-/// around the axis (docs/notch.md "Cost"); none: the whole 2.5 r cylinder.
+/// the grid's order (a one-off analysis as before) and clear the memo.
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
                         const AnalysisResult& r, double min_radius, double sensitivity,
                         int threads = 1, CornerMemo* memo = nullptr,
-                        const MeshChange& change = MeshChange{},
-                        const SectionOutline& outline = SectionOutline{});
+                        const MeshChange& change = MeshChange{});
 
 }  // namespace osteon
