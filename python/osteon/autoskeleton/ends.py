@@ -13,10 +13,6 @@ from .tree import Body, Tree
 #: (beam sections need some distance from the load; see :func:`limb_end`).
 END_RATIO = 1.25
 
-#: a limb's own surface axis is used for its end bone only if it is within AXIS_ANGLE degrees of
-#: the line from the limb's junction to the limb's centre (:func:`_surface_axis`)
-AXIS_ANGLE = 60.0
-
 
 def tip_extent(body: Body, tree: Tree, leaf: int, direction: np.ndarray) -> float:
     """How far beyond node ``leaf`` along ``direction`` (3,) its surface vertices reach (mm)."""
@@ -63,13 +59,7 @@ def _surface_axis(ends: np.ndarray, start: np.ndarray
     has a single skeleton node (a finger on a coarse simplified mesh: the line from the
     junction to that node misses the limb's axis): (its start (1,3) on the axis level with the
     limb's vertex nearest ``start``, centre (3,), unit direction (3,) pointing away from
-    ``start``); None unless the limb is longer than it is wide and grows away from ``start``
-    along that axis (within ``AXIS_ANGLE`` degrees of the line from ``start`` to its centre).
-
-    Why the angle: a head is a leaf with a single node too, and its surface's principal axis
-    may run across it (issue 35: RigNet 8333's head with its hair is 29 x 27 x 23 mm, the axis
-    ran from ear to ear and the bone with it, ending 10 mm from the real head joint); a finger
-    grows away from its junction along its own axis."""
+    ``start``); None unless the limb is longer than it is wide."""
     if len(ends) < 6:
         return None
     c = ends.mean(0)
@@ -80,8 +70,6 @@ def _surface_axis(ends: np.ndarray, start: np.ndarray
     off = np.linalg.norm(ends - c - t[:, None] * d, axis=1)
     if np.ptp(t) <= 2.0 * float(np.median(off)):  # not longer than wide: a bump or a blob
         return None
-    if (c - start) @ d < math.cos(math.radians(AXIS_ANGLE)) * np.linalg.norm(c - start):
-        return None  # the axis runs across the limb's way out: a blob, not a finger
     return (c + d * t.min())[None], c, d
 
 
