@@ -638,24 +638,3 @@ def test_open_limbs_plugged_into_an_open_body_join_it_and_get_bones():
     ends = np.concatenate([sk.heads, sk.tails])
     for foot in feet:
         assert np.linalg.norm(ends - foot, axis=1).min() < 1.5 * r, foot
-
-
-
-def test_a_mesh_under_the_detail_target_is_coarsened_before_the_separators():
-    """A capsule under the detail target (36 vertices round, 1 300 in all; 1 mm edges round a
-    6 mm radius) whose edges are not long for its limb is not split, but its edges shorter than
-    SPACING x the radius are collapsed before the local separators, which cost about (vertices)
-    x (vertices round the limb) (RigNet 8338's 1 261-vertex body: 1.9 -> 0.8 s CPU, issue 35);
-    the bone still reaches both ends (END_RATIO radii inside; before: every vertex kept).
-    (The coarsened T of ``test_t_shape_...`` checks that a flat end's corners stay pruned.)"""
-    from osteon.autoskeleton.curve import curve_skeleton
-
-    r, length = 6.0, 80.0
-    v, f = capsule(length=length, radius=r, n=36, stations=20, cap=8)
-    assert len(v) < 1500
-    cs = curve_skeleton(v, f, 1500)
-    assert len(cs.spos) < 0.5 * len(v)
-    sk, _w = osteon.auto_skeleton(v, f)
-    ends = np.concatenate([sk.heads, sk.tails])
-    for tip in ([-r, 0, 0], [length + r, 0, 0]):
-        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * r, tip

@@ -25,12 +25,6 @@ SPACING = 0.6
 PRE_DECIMATE_ABOVE = 30_000
 PRE_FACES = 20_000
 
-#: a mesh under the detail target whose edges are not long for its limbs (no
-#: :func:`refine_by_radius` split) is coarsened by radius too before the separators, as a
-#: simplified one is: a 1 261-vertex body (RigNet 8338, issue 35) put as many vertices round its
-#: torso as along a leg (1.9 -> 0.8 s CPU); False: skeletonised as it is (as before)
-COARSEN_UNDER_TARGET = True
-
 #: a mesh with fewer vertices than the detail target, some of whose edges are longer than
 #: REFINE x SPACING x the local limb radius, is split 1 -> 4 (every edge at its midpoint) until
 #: few are or the split mesh would pass half the target; :func:`coarsen_by_radius` then collapses
@@ -78,15 +72,13 @@ def curve_skeleton(v: np.ndarray, f: np.ndarray, target: int, deterministic: boo
     surface = hmesh.MeshDistance(m)
     size = float(np.ptp(v[used], axis=0).max())
     refined = False
-    if len(used) > target:
+    if len(used) > target:  # (a mesh already this small is skeletonised as it is)
         hmesh.quadric_simplify(m, target / len(used))
         m.cleanup()
         coarsen_by_radius(m, surface, size)
     elif refine_by_radius(m, surface, size, target):
         coarsen_by_radius(m, surface, size, faces=True)
         refined = True
-    elif COARSEN_UNDER_TARGET:  # fine enough for its limbs: fewer vertices round thick parts
-        coarsen_by_radius(m, surface, size)
     g = graph.from_mesh(m)
     pos = np.array(g.positions(), dtype=np.float64)
     sedges = graph_edges(g, len(pos))

@@ -16,18 +16,10 @@ from .tree import Body, Tree
 
 def _is_end_corner(tree: Tree, leaf: int) -> bool:
     """A leaf node in a corner of a limb's end: under half its parent's radius and owning fewer
-    simplified vertices, or with its ball overlapping its parent's (the tip is still reached by
-    the end bone, see ``ends.limb_end``).
-
-    Why the balls: the parent may be a junction node that owns no vertex at all (the flat end
-    of a coarsened 12 mm bar forked into two corner leaves 5.5 mm from a fork node of radius
-    4.2, each leaf of radius 1.5-1.8: not a limb sticking out past the fork's ball)."""
+    simplified vertices (the tip is still reached by the end bone, see ``ends.limb_end``)."""
     par = int(tree.parent[leaf])
-    if par < 0 or tree.nradius[leaf] >= 0.5 * tree.nradius[par]:
-        return False
-    overlap = np.linalg.norm(tree.npos[leaf] - tree.npos[par]) <= (tree.nradius[leaf]
-                                                                  + tree.nradius[par])
-    return bool(overlap or (tree.owner == leaf).sum() < (tree.owner == par).sum())
+    return bool(par >= 0 and tree.nradius[leaf] < 0.5 * tree.nradius[par]
+                and (tree.owner == leaf).sum() < (tree.owner == par).sum())
 
 
 def leaf_branch(tree: Tree, ch: list[list[int]], leaf: int) -> tuple[list[int], int]:
