@@ -616,3 +616,25 @@ def test_two_limbs_sharing_an_edge_each_get_a_bone_to_their_tip():
     both = np.concatenate([a[1], b[1] + 8])
     both = np.where(both == 8 + 1, 3, np.where(both == 8 + 4 + 1, 7, both))  # shared corners
     assert sorted(len(x) for x in manifold_parts(both)) == [12, 12]
+
+
+def test_open_limbs_plugged_into_an_open_body_join_it_and_get_bones():
+    """A low-poly body modelled as an open shell (a 12-sided tube, r = 14 mm, open at the
+    bottom) with two legs modelled as open 6-sided tubes (r = 4 mm) whose open tops reach
+    12 mm up into it, 6 mm from its wall (RigNet 9477, issue 35): no leg vertex is near the
+    body's surface, but the tops lie inside the body once its hole is capped, so the legs join
+    it and each gets a bone ending within 1.5 radii of its foot (before: loose pieces, no
+    bones, feet 60 mm from any bone end)."""
+    r = 4.0
+    body = open_tube((0, 0, 0), (0, 0, 70), 14.0, n=12, stations=4)
+    feet = np.array([[-5.0, 0, -50], [5.0, 0, -50]])
+    legs = [open_tube((x, 0, 12), (x, 0, z), r, n=6, stations=2) for x, _, z in feet]
+    v, f = merge(body, *legs)
+    p = split_pieces(v, f)
+    assert len(p.joined) == 2 and not p.loose
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1
+    ends = np.concatenate([sk.heads, sk.tails])
+    for foot in feet:
+        assert np.linalg.norm(ends - foot, axis=1).min() < 1.5 * r, foot

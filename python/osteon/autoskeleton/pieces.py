@@ -57,22 +57,34 @@ def _piece_measures(v: np.ndarray, f: np.ndarray, labels: np.ndarray, n: int):
     return np.where(closed, volume, 0.0), lo, hi, closed
 
 
-def _distance_field(v: np.ndarray, f: np.ndarray):
-    """pygel3d ``MeshDistance`` of the triangles ``f`` (signed distance mm, < 0 inside)."""
+def _distance_field(v: np.ndarray, f: np.ndarray, closed: bool):
+    """(pygel3d ``MeshDistance`` of the triangles ``f`` (signed distance mm, < 0 inside),
+    whether its inside means anything): an open piece whose holes :func:`cap_holes` closes is
+    measured capped, so a limb plugged into its holes lies inside it.
+
+    Why: low-poly figures are often open shells plugged into one another (issue 35: RigNet
+    9477's legs are open tubes whose tops reach 9 mm up into the open bottom of its open torso;
+    no leg vertex is near the torso's surface, so the legs were loose and got no bones)."""
     from pygel3d import hmesh
 
     used, inv = np.unique(f, return_inverse=True)
-    return hmesh.MeshDistance(hmesh.Manifold.from_triangles(v[used], inv.reshape(f.shape)))
+    pv, pf = v[used], inv.reshape(f.shape).astype(np.int32)
+    capped = None if closed else cap_holes(pv, pf)
+    if capped is not None:
+        pv, pf = capped
+    return hmesh.MeshDistance(hmesh.Manifold.from_triangles(pv, pf)), closed or capped is not None
 
 
 def _touch(v, f, labels, closed, size, a: int, b: int, fields: dict) -> bool:
-    """Whether pieces ``a`` and ``b`` touch or overlap."""
+    """Whether pieces ``a`` and ``b`` touch or overlap (a vertex of one inside the other,
+    capped if open, or near its surface)."""
     tol = TOUCH * min(size[a], size[b])
     for p, q in ((a, b), (b, a)):
         if p not in fields:
-            fields[p] = _distance_field(v, f[labels[f[:, 0]] == p])
-        d = np.asarray(fields[p].signed_distance(v[labels == q]), dtype=np.float64)
-        if (np.abs(d) <= tol).any() or (closed[p] and (d < 0).any()):
+            fields[p] = _distance_field(v, f[labels[f[:, 0]] == p], bool(closed[p]))
+        field, solid = fields[p]
+        d = np.asarray(field.signed_distance(v[labels == q]), dtype=np.float64)
+        if (np.abs(d) <= tol).any() or (solid and (d < 0).any()):
             return True
     return False
 
