@@ -20,7 +20,10 @@ counters for ``perf stat``). One analysis per h in its own child process per bui
 ``--identity``: instead of times, every number of the analyses of bench/identity_dump.py (all
 real models of tests/data, outlines, junctions on and off, live runs, loose pieces, a
 correction), one child process per build, compared byte for byte; exits 1 on any difference
-(``--keep DIR`` keeps both dumps as .npz).
+(``--keep DIR`` keeps both dumps as .npz) and prints, per array kind (result field), the largest
+relative difference among the differing arrays (inf: a count, flag, shape or NaN differs, not
+the last bits). A one-off analysis may differ from main's in the last bits (the team's rule,
+docs/performance.md); anything above 1e-9 relative is to be explained.
 """
 
 from __future__ import annotations
@@ -127,7 +130,7 @@ def identity(other: str, keep: str | None) -> int:
     import tempfile
 
     import numpy as np
-    from identity_dump import compare
+    from identity_dump import compare, largest_relative
 
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(keep or tmp)
@@ -152,6 +155,11 @@ def identity(other: str, keep: str | None) -> int:
           f"{len(dumps['other'])} in the other; {len(bad)} differ")
     for k in bad[:50]:
         print("  differs:", k)
+    if bad:
+        print("largest relative difference per array kind (inf: not a rounding difference):")
+        worst = largest_relative(dumps["this"], dumps["other"], bad)
+        for kind, (rel, name) in sorted(worst.items(), key=lambda item: -item[1][0]):
+            print(f"  {kind:32s} {rel:.3g}  ({name})")
     return 1 if bad else 0
 
 

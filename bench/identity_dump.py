@@ -143,5 +143,36 @@ def compare(a: dict, b: dict) -> list[str]:
     return bad
 
 
+def array_kind(name: str) -> str:
+    """The result field a dump name holds (its last part; a list's lengths keep their field)."""
+    parts = name.split(".")
+    return ".".join(parts[-2:]) if parts[-1] == "lengths" and len(parts) > 1 else parts[-1]
+
+
+def largest_relative(a: dict, b: dict, names: list[str]) -> dict:
+    """Per array kind (array_kind) of the differing `names`: (largest relative difference, the
+    name it is in). Relative to the larger magnitude of the two numbers (denormal floor); NaN
+    against a number, another shape or dtype, a missing array or any integer, boolean or text
+    difference counts as inf (a different section, flag or count, not rounding)."""
+    worst: dict = {}
+    for k in names:
+        rel = float("inf")
+        if k in a and k in b:
+            x, y = np.asarray(a[k]), np.asarray(b[k])
+            if x.shape == y.shape and x.dtype == y.dtype and np.issubdtype(x.dtype, np.floating):
+                xf, yf = x.astype(np.float64).ravel(), y.astype(np.float64).ravel()
+                same_nan = np.array_equal(np.isnan(xf), np.isnan(yf))
+                ok = ~np.isnan(xf)
+                if same_nan and np.array_equal(np.isinf(xf), np.isinf(yf)) and \
+                        np.array_equal(xf[np.isinf(xf)], yf[np.isinf(yf)]):
+                    ok &= np.isfinite(xf)
+                    scale = np.maximum(np.maximum(np.abs(xf[ok]), np.abs(yf[ok])), 1e-300)
+                    rel = float((np.abs(xf[ok] - yf[ok]) / scale).max(initial=0.0))
+        kind = array_kind(k)
+        if kind not in worst or rel > worst[kind][0]:
+            worst[kind] = (rel, k)
+    return worst
+
+
 if __name__ == "__main__":
     np.savez(sys.argv[1], **dump())
