@@ -143,6 +143,44 @@ struct Scratch {
   Intervals solid, widened, extra, kept_extra;
 };
 
+// Top surfaces of rows k_lo <= k < k_hi (row k less row k + 1 of `cut`) and bottom ones (row k
+// less row k - 1), each kept only where it overlaps the hull of the rows it is a source for
+// (`hull`: each row's room from its first to its last interval, empty for a row without sparse
+// infill; top: rows k - layers + 1 .. k, bottom: rows k .. k + layers - 1): an interval outside
+// it has no part in any of those rooms, and add_source keeps nothing else of it.
+void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int layers, int k_lo,
+              int k_hi, RowIntervals& top, RowIntervals& bottom) {
+  const int rows = static_cast<int>(hull.size());
+  top.start.assign(static_cast<std::size_t>(rows) + 1, 0);
+  bottom.start = top.start;
+  auto reach = [&](int n0, int n1) {  // the hull of rows n0 .. n1
+    Interval h(INFINITY, -INFINITY);
+    for (int n = std::max(n0, 0); n <= std::min(n1, rows - 1); ++n) {
+      h.first = std::min(h.first, hull[static_cast<std::size_t>(n)].first);
+      h.second = std::max(h.second, hull[static_cast<std::size_t>(n)].second);
+    }
+    return h;
+  };
+  auto keep_overlapping = [](Intervals& v, std::size_t from, const Interval& h) {
+    std::size_t n = from;
+    for (std::size_t i = from; i < v.size(); ++i)
+      if (v[i].second > h.first && v[i].first < h.second) v[n++] = v[i];
+    v.resize(n);
+  };
+  for (int k = 0; k < rows; ++k) {
+    if (k >= k_lo && k < k_hi) {
+      std::size_t from = top.intervals.size();
+      subtract_into(cut.row(k), cut.row(k + 1), top.intervals);
+      keep_overlapping(top.intervals, from, reach(k - layers + 1, k));
+      from = bottom.intervals.size();
+      subtract_into(cut.row(k), cut.row(k - 1), bottom.intervals);
+      keep_overlapping(bottom.intervals, from, reach(k, k + layers - 1));
+    }
+    top.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(top.intervals.size());
+    bottom.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(bottom.intervals.size());
+  }
+}
+
 // A source's parts inside the row's infill region, each in `solid`; those narrower than
 // 2 growth also widened by growth at both ends within their interval of `inner`, in `widened`.
 // True when one was widened (otherwise `widened` gained what `solid` did).
@@ -191,18 +229,14 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   const int k_lo = std::max(n_lo - layers + 1, 0), k_hi = std::min(n_hi + layers - 1, rows);
   const RowIntervals cut = row_intervals(section, s_first, pitch, rows, k_lo - 1, k_hi + 1);
   const RowIntervals fill = row_intervals(inner, s_first, pitch, rows, n_lo, n_hi);
-  // Top surfaces (not covered by the row above) and bottom surfaces (not by the row below).
-  RowIntervals top, bottom;
-  top.start.assign(static_cast<std::size_t>(rows) + 1, 0);
-  bottom.start = top.start;
-  for (int k = 0; k < rows; ++k) {
-    if (k >= k_lo && k < k_hi) {
-      subtract_into(cut.row(k), cut.row(k + 1), top.intervals);
-      subtract_into(cut.row(k), cut.row(k - 1), bottom.intervals);
-    }
-    top.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(top.intervals.size());
-    bottom.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(bottom.intervals.size());
+  std::vector<Interval> hull(static_cast<std::size_t>(rows), Interval(INFINITY, -INFINITY));
+  for (int n = n_lo; n < n_hi; ++n) {
+    const Span room = fill.row(n);
+    if (!room.empty() && !Span(kept.row(n)).empty())
+      hull[static_cast<std::size_t>(n)] = Interval(room.first->first, (room.last - 1)->second);
   }
+  RowIntervals top, bottom;
+  surfaces(cut, hull, layers, k_lo, k_hi, top, bottom);
   Scratch w;
   for (int n = n_lo; n < n_hi; ++n) {
     const Span room = fill.row(n), sparse_row = kept.row(n);
