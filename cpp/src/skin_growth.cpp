@@ -30,16 +30,23 @@ struct RowIntervals {
   }
 };
 
+// The crossings of rows k_lo <= k < k_hi (s = s_first + k pitch, k counted from the first row
+// whatever the range, so a row's crossings do not depend on the range asked).
 template <class Visit>
-void for_each_crossing(const StLoops& loops, double s_first, double pitch, int rows, Visit visit) {
+void for_each_crossing(const StLoops& loops, double s_first, double pitch, int k_lo, int k_hi,
+                       Visit visit) {
   for (const auto& loop : loops)
     for (std::size_t i = 0; i < loop.size(); ++i) {
       const Vec2& a = loop[i];
       const Vec2& b = loop[i + 1 == loop.size() ? 0 : i + 1];
       if (a.x() == b.x()) continue;
       const double lo = std::min(a.x(), b.x()), hi = std::max(a.x(), b.x());
-      for (int k = std::max(static_cast<int>(std::ceil((lo - s_first) / pitch)), 0); k < rows;
-           ++k) {
+      // max(ceil(q), 0) without a call to ceil: the first row at or above lo, give or take
+      // the rounding that the test s < lo below takes care of.
+      const double q = (lo - s_first) / pitch;
+      int k0 = 0;
+      if (q > 0) k0 = static_cast<int>(q), k0 += static_cast<double>(k0) < q;
+      for (int k = std::max(k0, k_lo); k < k_hi; ++k) {
         const double s = s_first + k * pitch;
         if (s >= hi) break;
         if (s < lo) continue;
@@ -48,14 +55,17 @@ void for_each_crossing(const StLoops& loops, double s_first, double pitch, int r
     }
 }
 
-RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, int rows) {
+// Rows outside k_lo <= k < k_hi are left empty.
+RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
+                           int k_hi) {
+  k_lo = std::max(k_lo, 0), k_hi = std::min(k_hi, rows);
   std::vector<int> count(static_cast<std::size_t>(rows) + 1, 0);
-  for_each_crossing(loops, s_first, pitch, rows,
+  for_each_crossing(loops, s_first, pitch, k_lo, k_hi,
                     [&](int k, double) { ++count[static_cast<std::size_t>(k) + 1]; });
   for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
   std::vector<double> t(static_cast<std::size_t>(count.back()));
   std::vector<int> fill(count.begin(), count.end() - 1);
-  for_each_crossing(loops, s_first, pitch, rows, [&](int k, double y) {
+  for_each_crossing(loops, s_first, pitch, k_lo, k_hi, [&](int k, double y) {
     t[static_cast<std::size_t>(fill[static_cast<std::size_t>(k)]++)] = y;
   });
   RowIntervals out;
@@ -64,7 +74,12 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   for (int k = 0; k < rows; ++k) {
     const auto first = t.begin() + count[static_cast<std::size_t>(k)];
     const auto last = t.begin() + count[static_cast<std::size_t>(k) + 1];
-    std::sort(first, last);
+    if (last - first > 16) {
+      std::sort(first, last);
+    } else {  // a row crosses a region a few times: std::sort's set-up would cost more
+      for (auto c = first + 1; c < last; ++c)
+        for (auto d = c; d != first && *(d - 1) > *d; --d) std::swap(*(d - 1), *d);
+    }
     for (auto c = first; c + 1 < last; c += 2)
       if (*(c + 1) > *c) out.intervals.emplace_back(*c, *(c + 1));
     out.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(out.intervals.size());
@@ -93,8 +108,8 @@ void intersect(Span a, Span b, Intervals& out) {
   }
 }
 
-void subtract(Span a, Span b, Intervals& out) {
-  out.clear();
+// a less b, appended to `out`.
+void subtract_into(Span a, Span b, Intervals& out) {
   for (; a.first != a.last; ++a.first) {
     double lo = a.first->first;
     const double hi = a.first->second;
@@ -105,6 +120,11 @@ void subtract(Span a, Span b, Intervals& out) {
     }
     if (hi > lo) out.emplace_back(lo, hi);
   }
+}
+
+void subtract(Span a, Span b, Intervals& out) {
+  out.clear();
+  subtract_into(a, b, out);
 }
 
 void merge_in_place(Intervals& a) {
@@ -120,24 +140,68 @@ void merge_in_place(Intervals& a) {
 }
 
 struct Scratch {
-  Intervals part, solid, widened, extra, kept_extra;
+  Intervals solid, widened, extra, kept_extra;
 };
+
+// Top surfaces of rows k_lo <= k < k_hi (row k less row k + 1 of `cut`) and bottom ones (row k
+// less row k - 1), each kept only where it overlaps the hull of the rows it is a source for
+// (`hull`: each row's room from its first to its last interval, empty for a row without sparse
+// infill; top: rows k - layers + 1 .. k, bottom: rows k .. k + layers - 1): an interval outside
+// it has no part in any of those rooms, and add_source keeps nothing else of it.
+void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int layers, int k_lo,
+              int k_hi, RowIntervals& top, RowIntervals& bottom) {
+  const int rows = static_cast<int>(hull.size());
+  top.start.assign(static_cast<std::size_t>(rows) + 1, 0);
+  bottom.start = top.start;
+  auto reach = [&](int n0, int n1) {  // the hull of rows n0 .. n1
+    Interval h(INFINITY, -INFINITY);
+    for (int n = std::max(n0, 0); n <= std::min(n1, rows - 1); ++n) {
+      h.first = std::min(h.first, hull[static_cast<std::size_t>(n)].first);
+      h.second = std::max(h.second, hull[static_cast<std::size_t>(n)].second);
+    }
+    return h;
+  };
+  auto keep_overlapping = [](Intervals& v, std::size_t from, const Interval& h) {
+    std::size_t n = from;
+    for (std::size_t i = from; i < v.size(); ++i)
+      if (v[i].second > h.first && v[i].first < h.second) v[n++] = v[i];
+    v.resize(n);
+  };
+  for (int k = 0; k < rows; ++k) {
+    if (k >= k_lo && k < k_hi) {
+      std::size_t from = top.intervals.size();
+      subtract_into(cut.row(k), cut.row(k + 1), top.intervals);
+      keep_overlapping(top.intervals, from, reach(k - layers + 1, k));
+      from = bottom.intervals.size();
+      subtract_into(cut.row(k), cut.row(k - 1), bottom.intervals);
+      keep_overlapping(bottom.intervals, from, reach(k, k + layers - 1));
+    }
+    top.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(top.intervals.size());
+    bottom.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(bottom.intervals.size());
+  }
+}
 
 // A source's parts inside the row's infill region, each in `solid`; those narrower than
 // 2 growth also widened by growth at both ends within their interval of `inner`, in `widened`.
-void add_source(Span source, Span inner, double growth, Scratch& w) {
-  intersect(source, inner, w.part);
+// True when one was widened (otherwise `widened` gained what `solid` did).
+bool add_source(Span source, Span inner, double growth, Scratch& w) {
   const Interval* room = inner.first;
-  for (const Interval& x : w.part) {
-    w.solid.push_back(x);
-    if (!(x.second - x.first < 2.0 * growth)) {
-      w.widened.push_back(x);
+  bool grown = false;
+  while (source.first != source.last && inner.first != inner.last) {  // intersect(), inline
+    const double lo = std::max(source.first->first, inner.first->first);
+    const double hi = std::min(source.first->second, inner.first->second);
+    (source.first->second < inner.first->second) ? ++source.first : ++inner.first;
+    if (!(hi > lo)) continue;
+    w.solid.emplace_back(lo, hi);
+    if (!(hi - lo < 2.0 * growth)) {
+      w.widened.emplace_back(lo, hi);
       continue;
     }
-    while (room + 1 != inner.last && room->second < x.first) ++room;  // the interval holding x
-    w.widened.emplace_back(std::max(room->first, x.first - growth),
-                           std::min(room->second, x.second + growth));
+    grown = true;
+    while (room + 1 != inner.last && room->second < lo) ++room;  // the interval holding [lo, hi]
+    w.widened.emplace_back(std::max(room->first, lo - growth), std::min(room->second, hi + growth));
   }
+  return grown;
 }
 
 }  // namespace
@@ -155,38 +219,41 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   const int rows = static_cast<int>(rows_needed);
   layers = std::min(layers, rows);  // sources farther than the section's rows do not exist
   const double s_first = s_lo + 0.5 * pitch;  // each row stands for the layer around it
-  const RowIntervals kept = row_intervals(sparse, s_first, pitch, rows);
+  const RowIntervals kept = row_intervals(sparse, s_first, pitch, rows, 0, rows);
   if (kept.intervals.empty()) return strips;
-  const RowIntervals cut = row_intervals(section, s_first, pitch, rows);
-  const RowIntervals fill = row_intervals(inner, s_first, pitch, rows);
-  // Top surfaces (not covered by the row above) and bottom surfaces (not by the row below).
-  RowIntervals top, bottom;
-  top.start.assign(static_cast<std::size_t>(rows) + 1, 0);
-  bottom.start = top.start;
-  Intervals buffer;
-  for (int k = 0; k < rows; ++k) {
-    subtract(cut.row(k), cut.row(k + 1), buffer);
-    top.intervals.insert(top.intervals.end(), buffer.begin(), buffer.end());
-    top.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(top.intervals.size());
-    subtract(cut.row(k), cut.row(k - 1), buffer);
-    bottom.intervals.insert(bottom.intervals.end(), buffer.begin(), buffer.end());
-    bottom.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(bottom.intervals.size());
+  // Only rows holding sparse infill get strips (n_lo <= n < n_hi): their room, and the surfaces
+  // of the rows within `layers` of them (each from its own row and the next one).
+  int n_lo = 0, n_hi = rows;
+  while (kept.start[static_cast<std::size_t>(n_lo) + 1] == 0) ++n_lo;
+  while (kept.start[static_cast<std::size_t>(n_hi) - 1] == kept.start.back()) --n_hi;
+  const int k_lo = std::max(n_lo - layers + 1, 0), k_hi = std::min(n_hi + layers - 1, rows);
+  const RowIntervals cut = row_intervals(section, s_first, pitch, rows, k_lo - 1, k_hi + 1);
+  const RowIntervals fill = row_intervals(inner, s_first, pitch, rows, n_lo, n_hi);
+  std::vector<Interval> hull(static_cast<std::size_t>(rows), Interval(INFINITY, -INFINITY));
+  for (int n = n_lo; n < n_hi; ++n) {
+    const Span room = fill.row(n);
+    if (!room.empty() && !Span(kept.row(n)).empty())
+      hull[static_cast<std::size_t>(n)] = Interval(room.first->first, (room.last - 1)->second);
   }
+  RowIntervals top, bottom;
+  surfaces(cut, hull, layers, k_lo, k_hi, top, bottom);
   Scratch w;
-  for (int n = 0; n < rows; ++n) {
+  for (int n = n_lo; n < n_hi; ++n) {
     const Span room = fill.row(n), sparse_row = kept.row(n);
     if (room.empty() || sparse_row.empty()) continue;
     w.solid.clear();
     w.widened.clear();
+    bool grown = false;
     for (int d = 0; d < layers; ++d) {
       // The row's own surfaces are printed as top / bottom fill and are not widened.
       const double g = d == 0 ? 0.0 : growth;
       const Span up = n + d < rows ? Span(top.row(n + d)) : Span();
       const Span down = n - d >= 0 ? Span(bottom.row(n - d)) : Span();
-      if (!up.empty()) add_source(up, room, g, w);
-      if (!down.empty()) add_source(down, room, g, w);
+      if (!up.empty()) grown |= add_source(up, room, g, w);
+      if (!down.empty()) grown |= add_source(down, room, g, w);
     }
-    if (w.widened.empty()) continue;
+    // Nothing widened: `widened` holds what `solid` does, and adds nothing.
+    if (!grown) continue;
     merge_in_place(w.widened);
     merge_in_place(w.solid);
     subtract(Span(w.widened), Span(w.solid), w.extra);
