@@ -189,13 +189,23 @@ struct RunState {
   // vertex moved since (null: not known): the grid keeps its layout and re-files those alone.
   const std::vector<std::int32_t>* moved_faces = nullptr;
   bool grid_holds_last_run = false;
+  // The live rebuild's margin: 5 % of the extent on each side (the figurine's bent elbow moves
+  // the hand 0.2-0.4 mm, ~0.3 %, beyond the last box per update; docs/performance.md).
+  static constexpr double kLiveGridMargin = 0.05;
   /// Buckets this run's mesh into `grid` (once per run).
   void build_grid(int threads) {
     if (grid_built) return;
-    const bool refiled = grid_holds_last_run && moved_faces != nullptr &&
-                         grid.refile(mesh, moved_faces->data(),
-                                     static_cast<Index>(moved_faces->size()), threads);
-    if (!refiled) grid.build(mesh, 12, threads);
+    // Live update: re-file the moved faces in the kept layout. When a limb left the kept box
+    // (up to a quarter of the faces moved) the grid is rebuilt with a margin, so that the next
+    // poses moving that limb a little further re-file again. Any other build (one-off analyses,
+    // an Analyzer's first run, partial runs, a changed plan, most of the mesh moved) is on the
+    // mesh's own box: the layout of a fresh analysis.
+    const bool live = grid_holds_last_run && moved_faces != nullptr &&
+                      4 * static_cast<Index>(moved_faces->size()) <= mesh.num_faces;
+    const bool refiled =
+        live && grid.refile(mesh, moved_faces->data(), static_cast<Index>(moved_faces->size()),
+                            threads);
+    if (!refiled) grid.build(mesh, 12, threads, live ? kLiveGridMargin : 0.0);
     grid_built = true;
   }
   std::vector<double> reach;                   // B radius of the local cut around the bone, mm

@@ -39,7 +39,8 @@ struct FaceGrid::Layout {
   }
 };
 
-FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int parts) const {
+FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int parts,
+                                  double box_margin) const {
   const Index nf = mesh.num_faces;
   Layout grid;
   Vec3& lo = grid.lo;
@@ -65,6 +66,11 @@ FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int 
   for (int p = 0; p < parts; ++p) {
     lo = lo.cwiseMin(part_lo[p]);
     hi = hi.cwiseMax(part_hi[p]);
+  }
+  if (box_margin > 0) {  // live rebuilds: room for the next poses (see build())
+    const Vec3 pad = box_margin * (hi - lo);
+    lo -= pad;
+    hi += pad;
   }
   const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-12 * (1.0 + (hi - lo).norm())));
   // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
@@ -151,10 +157,10 @@ inline Index FaceGrid::file_face(const MeshView& mesh, const Layout& grid, Index
   return grid.cell_id(raw);
 }
 
-void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
+void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads, double box_margin) {
   const Index nf = mesh.num_faces;
   const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
-  auto grid = std::make_shared<Layout>(layout(mesh, faces_per_cell, parts));
+  auto grid = std::make_shared<Layout>(layout(mesh, faces_per_cell, parts, box_margin));
   // Boxes are widened by a few ulps of the coordinates so that a plane through a box's face is
   // never rounded out of it (the plane tests compute n.center +- |n|.half).
   slack_ = 64 * std::numeric_limits<double>::epsilon() *

@@ -94,7 +94,11 @@ class FaceGrid {
  public:
   /// Buckets the faces of `mesh` (about faces_per_cell triangles per non-empty cell) on up to
   /// `threads` workers (0 = all cores); the result does not depend on the number of workers.
-  void build(const MeshView& mesh, int faces_per_cell = 12, int threads = 0);
+  /// `box_margin` > 0 widens the grid's box by that fraction of the mesh's extent on each side
+  /// of each axis (live mode: later poses that move a limb a little further stay inside it, so
+  /// that refile() can keep the layout).
+  void build(const MeshView& mesh, int faces_per_cell = 12, int threads = 0,
+             double box_margin = 0.0);
   /// Live mode: the grid keeps the layout (box, cells) of its last build() and re-files only the
   /// faces listed in `moved` (indices into mesh.faces, the faces of the last build, at most one
   /// entry each; every other face's vertices must be bitwise those the grid last filed). The
@@ -241,7 +245,7 @@ class FaceGrid {
   // the cell of its centroid (per worker part), the faces sorted by cell, the non-empty cells and
   // blocks with their boxes, and each cell's vertex entries.
   struct Layout;
-  Layout layout(const MeshView& mesh, int faces_per_cell, int parts) const;
+  Layout layout(const MeshView& mesh, int faces_per_cell, int parts, double box_margin) const;
   void bin_faces(const MeshView& mesh, const Layout& grid, int parts);
   void sort_faces_by_cell(const MeshView& mesh, Index total, int parts);
   void collect_cells(const Layout& grid);
