@@ -202,9 +202,8 @@ struct RunState {
     // mesh's own box: the layout of a fresh analysis.
     const bool live = grid_holds_last_run && moved_faces != nullptr &&
                       4 * static_cast<Index>(moved_faces->size()) <= mesh.num_faces;
-    const bool refiled =
-        live && grid.refile(mesh, moved_faces->data(), static_cast<Index>(moved_faces->size()),
-                            threads);
+    const bool refiled = live && grid.refile(mesh, moved_faces->data(),
+                                             static_cast<Index>(moved_faces->size()), threads);
     if (!refiled) grid.build(mesh, 12, threads, live ? kLiveGridMargin : 0.0);
     grid_built = true;
   }
