@@ -6,7 +6,8 @@
 //   analysis.cpp                Analyzer, validate_options, analyze, Impl::run (the pipeline),
 //                               Impl::check_inputs
 //   analysis_plan.cpp           Impl::assign_vertex_bones, Impl::plan_sections
-//   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run, Impl::remember_inputs
+//   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run (list_moved_faces),
+//                               Impl::remember_inputs
 //   analysis_cut.cpp            Impl::prepare_cuts, Impl::cut_local (phase 1),
 //                               Impl::cut_retries (phase 2)
 //   analysis_junction.cpp       Impl::find_junction_cores
@@ -189,13 +190,22 @@ struct RunState {
   // vertex moved since (null: not known): the grid keeps its layout and re-files those alone.
   const std::vector<std::int32_t>* moved_faces = nullptr;
   bool grid_holds_last_run = false;
+  // The live rebuild's margin: 5 % of the extent on each side (the figurine's bent elbow moves
+  // the hand 0.2-0.4 mm, ~0.3 %, beyond the last box per update; docs/performance.md).
+  static constexpr double kLiveGridMargin = 0.05;
   /// Buckets this run's mesh into `grid` (once per run).
   void build_grid(int threads) {
     if (grid_built) return;
-    const bool refiled = grid_holds_last_run && moved_faces != nullptr &&
-                         grid.refile(mesh, moved_faces->data(),
-                                     static_cast<Index>(moved_faces->size()), threads);
-    if (!refiled) grid.build(mesh, 12, threads);
+    // Live update: re-file the moved faces in the kept layout. When a limb left the kept box
+    // (up to a quarter of the faces moved) the grid is rebuilt with a margin, so that the next
+    // poses moving that limb a little further re-file again. Any other build (one-off analyses,
+    // an Analyzer's first run, partial runs, a changed plan, most of the mesh moved) is on the
+    // mesh's own box: the layout of a fresh analysis.
+    const bool live = grid_holds_last_run && moved_faces != nullptr &&
+                      4 * static_cast<Index>(moved_faces->size()) <= mesh.num_faces;
+    const bool refiled = live && grid.refile(mesh, moved_faces->data(),
+                                             static_cast<Index>(moved_faces->size()), threads);
+    if (!refiled) grid.build(mesh, 12, threads, live ? kLiveGridMargin : 0.0);
     grid_built = true;
   }
   std::vector<double> reach;                   // B radius of the local cut around the bone, mm
@@ -257,6 +267,11 @@ struct Analyzer::Impl {
   // The faces with a moved vertex (RunState::moved_faces), and whether `grid` holds the last
   // run's mesh (that run built it).
   std::vector<std::int32_t> moved_faces_scratch;
+  // list_moved_faces: each vertex's faces (CSR, built on the first live update that moved a
+  // vertex), marks (all 0 between calls) and the moved faces' corners.
+  std::vector<Index> vertex_face_start;
+  std::vector<std::int32_t> vertex_faces, corner_scratch;
+  std::vector<std::uint8_t> face_listed, corner_listed;
   bool grid_holds_last_run = false;
   // The last run's per-vertex stress and what it was computed from: in live mode a vertex whose
   // bone, position, bone head and axis and its bone's section params are bitwise unchanged lies
@@ -306,6 +321,9 @@ struct Analyzer::Impl {
   void mark_dirty(RunState& run);
   /// Live mode: keeps the last run's geometry of every section no moved triangle can reach.
   void reuse_last_run(RunState& run);
+  /// The faces with a moved vertex (moved_faces_scratch, each once) and the box of their
+  /// corners' old and new positions (reuse_last_run, something moved).
+  void list_moved_faces(RunState& run, Box3& moved_box);
   /// 3a. The face grid, each bone's local-cut radius and its axis crossings.
   void prepare_cuts(RunState& run);
   /// 3b. Phase 1: one local cut per family of parallel planes; queues what it cannot prove.

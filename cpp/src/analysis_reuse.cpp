@@ -38,7 +38,6 @@ void Analyzer::Impl::mark_dirty(RunState& run) {
 void Analyzer::Impl::reuse_last_run(RunState& run) {
   if (!(run.may_reuse && run.prev_specs.size() == specs.size())) return;
   const Skeleton& sk = run.sk;
-  const MeshView& mesh = run.mesh;
   const double* vertices = run.vertices;
   const std::vector<SectionSpec>& prev_specs = run.prev_specs;
   std::vector<SectionState>& prev_states = run.prev_states;  // moved into `states` once reused
@@ -58,18 +57,7 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
     moved[v] = a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
     any_moved |= moved[v] != 0;
   }
-  if (any_moved) {
-    for (std::size_t f = 0; f < faces.size(); f += 3) {
-      if (!moved[faces[f]] && !moved[faces[f + 1]] && !moved[faces[f + 2]]) continue;
-      moved_faces.push_back(static_cast<std::int32_t>(f / 3));
-      for (int k = 0; k < 3; ++k) {
-        const Index v = faces[f + k];
-        moved_box.add(mesh.vertex(v));
-        moved_box.add(
-            Vec3(last_vertices[3 * v], last_vertices[3 * v + 1], last_vertices[3 * v + 2]));
-      }
-    }
-  }
+  if (any_moved) list_moved_faces(run, moved_box);
   const Vec3 center = 0.5 * (moved_box.lo + moved_box.hi),
              half = 0.5 * (moved_box.hi - moved_box.lo);
   run.all_changed = false;
@@ -97,6 +85,51 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
       run.job_dirty[a.job] = 1;
     }
   }
+}
+
+void Analyzer::Impl::list_moved_faces(RunState& run, Box3& moved_box) {
+  const Index nf = static_cast<Index>(faces.size() / 3);
+  if (vertex_face_start.empty()) {  // each vertex's faces (the faces never change)
+    vertex_face_start.assign(num_vertices + 1, 0);
+    for (std::int32_t v : faces) ++vertex_face_start[v + 1];
+    for (Index v = 0; v < num_vertices; ++v) vertex_face_start[v + 1] += vertex_face_start[v];
+    vertex_faces.resize(faces.size());
+    std::vector<Index> fill(vertex_face_start.begin(), vertex_face_start.end() - 1);
+    for (Index k = 0; k < 3 * nf; ++k)
+      vertex_faces[fill[faces[k]]++] = static_cast<std::int32_t>(k / 3);
+    face_listed.assign(nf, 0);
+    corner_listed.assign(num_vertices, 0);
+  }
+  // The faces of the moved vertices, each once, and the corners of those faces (moved or not):
+  // the box of their old and new positions is the box of the moved triangles.
+  const std::vector<std::uint8_t>& moved = *run.moved;
+  std::vector<std::int32_t>& moved_faces = moved_faces_scratch;
+  std::vector<std::int32_t>& corners = corner_scratch;
+  corners.clear();
+  for (Index v = 0; v < num_vertices; ++v) {
+    if (!moved[v]) continue;
+    for (Index k = vertex_face_start[v]; k < vertex_face_start[v + 1]; ++k) {
+      const std::int32_t f = vertex_faces[k];
+      if (face_listed[f]) continue;
+      face_listed[f] = 1;
+      moved_faces.push_back(f);
+      for (int j = 0; j < 3; ++j) {
+        const std::int32_t c = faces[3 * static_cast<Index>(f) + j];
+        if (corner_listed[c]) continue;
+        corner_listed[c] = 1;
+        corners.push_back(c);
+      }
+    }
+  }
+  const MeshView& mesh = run.mesh;
+  for (std::int32_t c : corners) {
+    corner_listed[c] = 0;
+    moved_box.add(mesh.vertex(c));
+    moved_box.add(Vec3(last_vertices[3 * static_cast<Index>(c)],
+                       last_vertices[3 * static_cast<Index>(c) + 1],
+                       last_vertices[3 * static_cast<Index>(c) + 2]));
+  }
+  for (std::int32_t f : moved_faces) face_listed[f] = 0;
 }
 
 void Analyzer::Impl::remember_inputs(const RunState& run) {

@@ -39,7 +39,8 @@ struct FaceGrid::Layout {
   }
 };
 
-FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int parts) const {
+FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int parts,
+                                  double box_margin) const {
   const Index nf = mesh.num_faces;
   Layout grid;
   Vec3& lo = grid.lo;
@@ -65,6 +66,11 @@ FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int 
   for (int p = 0; p < parts; ++p) {
     lo = lo.cwiseMin(part_lo[p]);
     hi = hi.cwiseMax(part_hi[p]);
+  }
+  if (box_margin > 0) {  // live rebuilds: room for the next poses (see build())
+    const Vec3 pad = box_margin * (hi - lo);
+    lo -= pad;
+    hi += pad;
   }
   const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-12 * (1.0 + (hi - lo).norm())));
   // A surface fills few cells of a volume grid: size cells from the triangles' mean area (a
@@ -108,7 +114,7 @@ FaceGrid::Layout FaceGrid::layout(const MeshView& mesh, int faces_per_cell, int 
 
 // Face f's cell (the cell of its centroid) and how far it sticks out of its centroid (`reach`,
 // widened by 1e-6 relative, as a float), mm.
-inline Index FaceGrid::file_face(const MeshView& mesh, const Layout& grid, Index f,
+inline Index FaceGrid::file_face(const MeshView& mesh, const Layout& grid, const std::int32_t* t,
                                  float& reach_out) {
   const Vec3& lo = grid.lo;
   const Vec3& inv = grid.inv;
@@ -117,7 +123,6 @@ inline Index FaceGrid::file_face(const MeshView& mesh, const Layout& grid, Index
   const __m128d kThree = _mm_set1_pd(3.0);
   const __m128d kAbs = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
 #endif
-  const std::int32_t* t = mesh.faces + 3 * f;
   int raw[3];
   double reach;
 #if defined(__SSE2__)
@@ -151,10 +156,10 @@ inline Index FaceGrid::file_face(const MeshView& mesh, const Layout& grid, Index
   return grid.cell_id(raw);
 }
 
-void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads) {
+void FaceGrid::build(const MeshView& mesh, int faces_per_cell, int threads, double box_margin) {
   const Index nf = mesh.num_faces;
   const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
-  auto grid = std::make_shared<Layout>(layout(mesh, faces_per_cell, parts));
+  auto grid = std::make_shared<Layout>(layout(mesh, faces_per_cell, parts, box_margin));
   // Boxes are widened by a few ulps of the coordinates so that a plane through a box's face is
   // never rounded out of it (the plane tests compute n.center +- |n|.half).
   slack_ = 64 * std::numeric_limits<double>::epsilon() *
@@ -193,12 +198,22 @@ bool FaceGrid::refile(const MeshView& mesh, const std::int32_t* moved, Index cou
   }
   std::int32_t* cell_of = cell_of_.get();
   float* reach = face_reach_.get();
+  // The first cell (in the numbering) a moved face leaves or enters: every cell before it keeps
+  // its faces, their places in faces(), its vertex entries and its box.
+  Index first = grid.total;
+  old_cell_.resize(count);
   for (Index i = 0; i < count; ++i) {
     const Index f = moved[i];
-    cell_of[f] = static_cast<std::int32_t>(file_face(mesh, grid, f, reach[f]));
+    old_cell_[i] = cell_of[f];
+    cell_of[f] = static_cast<std::int32_t>(file_face(mesh, grid, mesh.faces + 3 * f, reach[f]));
+    first = std::min<Index>(first, std::min(old_cell_[i], cell_of[f]));
+  }
+  const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
+  if (parts == 1 || 2 * (nf - cell_start_[first]) <= nf) {
+    refile_from(mesh, grid, first, moved, count);
+    return true;
   }
   // The faces per cell and part and the cells' overhangs, from the kept cells and overhangs.
-  const int parts = detail::worker_count(threads, static_cast<long>(nf / 16384 + 1));
   if (static_cast<int>(part_count_.size()) < parts) {
     part_count_.resize(parts);
     part_overhang_.resize(parts);
@@ -216,6 +231,94 @@ bool FaceGrid::refile(const MeshView& mesh, const std::int32_t* moved, Index cou
   });
   finish_build(mesh, grid, parts);
   return true;
+}
+
+// refile() from cell `first` on (one thread): the kept counts, overhangs and entries of the
+// earlier cells stand; the later cells are counted, sorted, bounded and given their vertex
+// entries as finish_build() would (the same arrays, bit for bit).
+void FaceGrid::refile_from(const MeshView& mesh, const Layout& grid, Index first,
+                           const std::int32_t* moved, Index count) {
+  const Index nf = mesh.num_faces, total = grid.total;
+  const std::int32_t* cell_of = cell_of_.get();
+  Index* start = cell_start_.get();  // the kept cell starts (total + 1)
+  std::vector<Index>& fill = part_count_[0];
+  std::vector<float>& overhang = part_overhang_[0];  // the kept overhangs (merged)
+  fill.resize(total);
+  for (Index c = first; c < total; ++c) fill[c] = start[c + 1] - start[c];
+  for (Index i = 0; i < count; ++i) {
+    --fill[old_cell_[i]];
+    ++fill[cell_of[moved[i]]];
+  }
+  for (Index c = first; c < total; ++c) {
+    const Index n = fill[c];
+    fill[c] = start[c];
+    start[c + 1] = start[c] + n;
+  }
+  // The faces of those cells in order, and each cell's overhang (the largest reach of its faces).
+  const float* reach = face_reach_.get();
+  std::fill(overhang.begin() + first, overhang.end(), 0.0f);
+  for (Index f = 0; f < nf; ++f) {
+    const Index c = cell_of[f];
+    if (c < first) continue;
+    const Index k = fill[c]++;
+    faces_[3 * k] = mesh.faces[3 * f];
+    faces_[3 * k + 1] = mesh.faces[3 * f + 1];
+    faces_[3 * k + 2] = mesh.faces[3 * f + 2];
+    overhang[c] = std::max(overhang[c], reach[f]);
+  }
+  tight_on_ = false;
+  collect_cells(grid);
+  start_.push_back(nf);
+  block_start_.push_back(static_cast<Index>(center_.size()));
+  // The non-empty cells before `first` are the kept ones, with their entries.
+  const Index cells = num_cells();
+  const Index k0 =
+      std::lower_bound(start_.begin(), start_.begin() + cells, start[first]) - start_.begin();
+  entries_from(mesh, k0);
+}
+
+// build_entries() from non-empty cell k0 on (one thread), the entries before it kept.
+void FaceGrid::entries_from(const MeshView& mesh, Index k0) {
+  const Index cells = num_cells();
+  std::vector<std::int32_t>& slot = part_slots_[0];  // v's latest entry (stale below k0)
+  if (static_cast<Index>(slot.size()) != mesh.num_vertices ||
+      k0 >= static_cast<Index>(vstart_.size())) {
+    build_entries(mesh, 1);
+    return;
+  }
+  const Index base = vstart_[k0];  // entries of the cells before k0, unchanged
+  vstart_.resize(cells + 1);
+  for (Index k = 3 * start_[k0], stop = 3 * start_[cells]; k < stop; ++k) slot[faces_[k]] = -1;
+  std::int32_t* list = part_lists_[0].reserve(3 * (start_[cells] - start_[k0]) + 1);
+  std::int32_t* corner = face_entries_.get();
+  Index n = base;
+  for (Index c = k0; c < cells; ++c) {
+    const Index cell_first = n;
+    vstart_[c] = cell_first;
+    for (Index k = 3 * start_[c], stop = 3 * start_[c + 1]; k < stop; ++k) {
+      const std::int32_t v = faces_[k];
+      std::int32_t e = slot[v];
+      if (e < cell_first) {
+        e = static_cast<std::int32_t>(n++);
+        slot[v] = e;
+        list[e - base] = v;
+      }
+      corner[k] = e;
+    }
+  }
+  vstart_[cells] = n;
+  entry_vertex_.grow(n, base);
+  entry_x_.grow(n, base);
+  entry_y_.grow(n, base);
+  entry_z_.grow(n, base);
+  for (Index e = base; e < n; ++e) {
+    const std::int32_t v = list[e - base];
+    const double* p = mesh.vertices + 3 * static_cast<Index>(v);
+    entry_vertex_[e] = v;
+    entry_x_[e] = p[0];
+    entry_y_[e] = p[1];
+    entry_z_[e] = p[2];
+  }
 }
 
 // One pass over the triangles (split over `parts` workers): cell of the centroid (cell_of_), the
@@ -241,7 +344,7 @@ void FaceGrid::bin_faces(const MeshView& mesh, const Layout& grid, int parts) {
     const Index begin = nf * part / parts, end = nf * (part + 1) / parts;
     for (Index f = begin; f < end; ++f) {
       float r;
-      const Index id = file_face(mesh, grid, f, r);
+      const Index id = file_face(mesh, grid, mesh.faces + 3 * f, r);
       cell_of[f] = static_cast<std::int32_t>(id);
       face_reach[f] = r;
       ++count[id];

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <string>
 #include <thread>
 #include <tuple>
 #include <utility>
@@ -290,6 +291,80 @@ TEST(Slicer, GridCellBoxesHoldTheirTriangles) {
       EXPECT_EQ(listed, faces);
     }
   }
+}
+
+TEST(Slicer, RefileIsABuildWithTheKeptLayout) {
+  // Live mode re-files the moved faces in the kept layout (FaceGrid::refile): the grid must be
+  // the one build() gives for the new positions with that layout. A soup on a 1/16 mm lattice
+  // whose moved triangles shift by lattice steps inside the box: their edges (so the sampled
+  // area) and the box are bitwise the same, so a fresh build has the same layout. The shift
+  // crosses cells (~1-2 mm); moved faces at the low end of the numbering (every later cell
+  // re-sorted), at the high end (the cells before kept), or none; one and four workers.
+  std::mt19937 rng(34);
+  std::uniform_int_distribution<int> pos(16, 1008), step(-12, 12);
+  osteon::testing::OwnedMesh soup;
+  auto add = [&](const Vec3& base) {
+    const Index first = static_cast<Index>(soup.v.size() / 3);
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 p = base + Vec3(step(rng), step(rng), step(rng)) / 16.0;
+      soup.v.insert(soup.v.end(), {p.x(), p.y(), p.z()});
+      soup.f.push_back(static_cast<std::int32_t>(first + k));
+    }
+  };
+  add(Vec3::Zero());
+  add(Vec3::Constant(66.0));  // the box: -0.75 .. 66.75 mm
+  for (int t = 0; t < 40000; ++t) add(Vec3(pos(rng), pos(rng), pos(rng)) / 16.0);
+  const MeshView before = soup.view();
+  const Index nf = before.num_faces;
+  for (int end = 0; end < 3; ++end)
+    for (int threads : {1, 4}) {
+      osteon::testing::OwnedMesh moved_mesh = soup;
+      std::vector<std::int32_t> moved;
+      for (Index f = 2; f < nf && end < 2; ++f) {
+        const double x = soup.v[3 * static_cast<Index>(soup.f[3 * f])];
+        if ((end == 0 ? x > 10.0 : x < 54.0) || f % 2 != 0) continue;
+        moved.push_back(static_cast<std::int32_t>(f));
+        for (int k = 0; k < 3; ++k) {
+          double* p = &moved_mesh.v[3 * static_cast<Index>(soup.f[3 * f + k])];
+          p[0] += end == 0 ? 2.5 : -2.5;
+          p[1] += 1.25;
+          p[2] -= 0.75;
+        }
+      }
+      ASSERT_LT(4 * static_cast<Index>(moved.size()), nf);
+      const MeshView after = moved_mesh.view();
+      FaceGrid live, fresh;
+      live.build(before, 12, threads);
+      ASSERT_TRUE(live.refile(after, moved.data(), static_cast<Index>(moved.size()), threads));
+      fresh.build(after, 12, threads);
+      const std::string where =
+          "end " + std::to_string(end) + ", threads " + std::to_string(threads);
+      ASSERT_EQ(live.num_cells(), fresh.num_cells()) << where;
+      for (Index c = 0; c <= live.num_cells(); ++c) {
+        ASSERT_EQ(c < live.num_cells() ? live.begin(c) : live.end(c - 1),
+                  c < fresh.num_cells() ? fresh.begin(c) : fresh.end(c - 1))
+            << where << ", cell " << c;
+        if (c == live.num_cells()) break;
+        ASSERT_EQ(live.vertex_begin(c), fresh.vertex_begin(c)) << where << ", cell " << c;
+        ASSERT_EQ(live.cell_center(c), fresh.cell_center(c)) << where << ", cell " << c;
+        ASSERT_EQ(live.cell_half(c), fresh.cell_half(c)) << where << ", cell " << c;
+      }
+      EXPECT_TRUE(std::equal(live.faces(), live.faces() + 3 * nf, fresh.faces())) << where;
+      EXPECT_TRUE(
+          std::equal(live.face_entries(), live.face_entries() + 3 * nf, fresh.face_entries()))
+          << where;
+      ASSERT_EQ(live.num_entries(), fresh.num_entries()) << where;
+      const Index ne = live.num_entries();
+      EXPECT_TRUE(std::equal(live.entry_vertex(), live.entry_vertex() + ne, fresh.entry_vertex()));
+      EXPECT_TRUE(std::equal(live.entry_x(), live.entry_x() + ne, fresh.entry_x())) << where;
+      EXPECT_TRUE(std::equal(live.entry_y(), live.entry_y() + ne, fresh.entry_y())) << where;
+      EXPECT_TRUE(std::equal(live.entry_z(), live.entry_z() + ne, fresh.entry_z())) << where;
+      ASSERT_EQ(live.num_blocks(), fresh.num_blocks()) << where;
+      for (Index k = 0; k < live.num_blocks(); ++k) {
+        ASSERT_EQ(live.block_begin(k), fresh.block_begin(k)) << where;
+        ASSERT_EQ(live.block_end(k), fresh.block_end(k)) << where;
+      }
+    }
 }
 
 TEST(Slicer, ParallelCutsThroughTheGridMatchTheFullHeightTable) {

@@ -1,6 +1,8 @@
 """Live mode's corner reuse (issue 34, cpp/src/notch_reuse.hpp): a live update keeps a corner's
 measurement only where no moved triangle reaches its search, and its results are those of
-searching every corner again, bit for bit."""
+searching every corner again. A live update's face grid depends on the Analyzer's history (its
+box has a margin after a rebuild: docs/performance.md), so two Analyzers' updates of the same pose
+agree to the order of the sums (1e-12 relative, the rule for live updates), not bit for bit."""
 
 from __future__ import annotations
 
@@ -53,6 +55,16 @@ def searched_again(v, f):
     return an.run(v)
 
 
+def assert_same(a, b):
+    """Within 1e-12 relative (of each field's largest value): a stale corner (a fillet measured
+    before it moved) is off by ~5 % of its Kt."""
+    for name in CORNER_FIELDS + ("section_area", "section_modulus", "moment_arm"):
+        x, y = (np.atleast_1d(np.asarray(getattr(r, name), float)) for r in (a, b))
+        assert x.shape == y.shape, name
+        scale = np.nanmax(np.abs(y)) if y.size else 0.0
+        np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12 * scale, err_msg=name)
+
+
 def assert_same_bits(a, b):
     for name in CORNER_FIELDS + ("section_area", "section_modulus", "moment_arm"):
         x, y = (np.atleast_1d(np.asarray(getattr(r, name), float)) for r in (a, b))
@@ -82,19 +94,20 @@ def test_a_moved_fillet_is_measured_again_and_an_untouched_one_reused_exactly():
     ref = {0: searched_again(v0, f), 1: searched_again(v1, f)}
     for k in (1, 0, 0, 1, 1, 0):
         a = an.run((v0, v1)[k])
-        assert_same_bits(a, ref[k])
+        assert_same(a, ref[k])
         np.testing.assert_allclose(a.stress_concentration, (a0, a1)[k].stress_concentration,
                                    rtol=1e-13)
 
 
-def test_a_move_far_from_the_corners_keeps_them_bit_for_bit_whatever_the_grid():
+def test_a_move_far_from_the_corners_keeps_them_whatever_the_grid():
     # The bar's thin ends stretch: the model's box (and so the face grid's cells) changes, the
-    # corners' regions do not; their measurement must not depend on the grid's layout.
+    # corners' regions do not; their measurement must not depend on the grid's layout, and the
+    # stretched ends' sections must be cut through the moved faces' new cells.
     v0, f = two_step_bar(0.5, 0.8)
     an = analyzer(f, len(v0))
     an.run(v0)
     for k in (1, 2, 3, 2):
         v = v0.copy()
         far = np.abs(v[:, 0]) > 36.0
-        v[far, 0] *= 1.0 + 0.003 * k
-        assert_same_bits(an.run(v), searched_again(v, f))
+        v[far, 0] *= 1.0 + 0.03 * k  # the tips move 1.2 mm per step (cells ~0.8 mm)
+        assert_same(an.run(v), searched_again(v, f))

@@ -94,12 +94,18 @@ class FaceGrid {
  public:
   /// Buckets the faces of `mesh` (about faces_per_cell triangles per non-empty cell) on up to
   /// `threads` workers (0 = all cores); the result does not depend on the number of workers.
-  void build(const MeshView& mesh, int faces_per_cell = 12, int threads = 0);
+  /// `box_margin` > 0 widens the grid's box by that fraction of the mesh's extent on each side
+  /// of each axis (live mode: later poses that move a limb a little further stay inside it, so
+  /// that refile() can keep the layout).
+  void build(const MeshView& mesh, int faces_per_cell = 12, int threads = 0,
+             double box_margin = 0.0);
   /// Live mode: the grid keeps the layout (box, cells) of its last build() and re-files only the
   /// faces listed in `moved` (indices into mesh.faces, the faces of the last build, at most one
   /// entry each; every other face's vertices must be bitwise those the grid last filed). The
   /// result is what build() gives with that layout, not with this mesh's own (a query may take
-  /// its faces in another order than a fresh build's). Returns false, leaving the grid as it
+  /// its faces in another order than a fresh build's). The cells before the first one a moved
+  /// face leaves or enters (in the grid's numbering) keep their faces, boxes and vertex entries
+  /// as they are; the later ones are redone. Returns false, leaving the grid as it
   /// was, when it cannot: no layout kept, another face count, a moved face's vertex outside the
   /// kept box, or more than a quarter of the faces moved (then call build()).
   bool refile(const MeshView& mesh, const std::int32_t* moved, Index count, int threads = 0);
@@ -126,6 +132,9 @@ class FaceGrid {
   /// Corner k of faces() (3 #F) as an entry of its cell: entry_vertex()[face_entries()[k]] ==
   /// faces()[k].
   const std::int32_t* face_entries() const { return face_entries_.get(); }
+  /// Cell c's box (centre and half extents, mm): its grid box widened by its triangles' overhang.
+  const Vec3& cell_center(Index c) const { return center_[c]; }
+  const Vec3& cell_half(Index c) const { return half_[c]; }
   /// True when cell c's box meets the slab lo <= dot(n, x) <= hi (and the region, if any).
   bool meets(Index c, const Vec3& n, double lo, double hi,
              const CutRegion* region = nullptr) const {
@@ -225,6 +234,16 @@ class FaceGrid {
     }
     T* get() const { return data.get(); }
     T& operator[](std::size_t i) const { return data[i]; }
+    /// Room for n elements, the first `keep` kept.
+    T* grow(std::size_t n, std::size_t keep) {
+      if (n > capacity) {
+        std::unique_ptr<T[]> bigger(new T[n]);
+        std::copy(data.get(), data.get() + keep, bigger.get());
+        data = std::move(bigger);
+        capacity = n;
+      }
+      return data.get();
+    }
   };
   // Tight boxes: storage kept across builds, valid while tight_on_ (filled lazily by const cuts).
   mutable TightData tight_;
@@ -241,13 +260,17 @@ class FaceGrid {
   // the cell of its centroid (per worker part), the faces sorted by cell, the non-empty cells and
   // blocks with their boxes, and each cell's vertex entries.
   struct Layout;
-  Layout layout(const MeshView& mesh, int faces_per_cell, int parts) const;
+  Layout layout(const MeshView& mesh, int faces_per_cell, int parts, double box_margin) const;
   void bin_faces(const MeshView& mesh, const Layout& grid, int parts);
   void sort_faces_by_cell(const MeshView& mesh, Index total, int parts);
   void collect_cells(const Layout& grid);
   void build_entries(const MeshView& mesh, int parts);
   void finish_build(const MeshView& mesh, const Layout& grid, int parts);
-  static Index file_face(const MeshView& mesh, const Layout& grid, Index f, float& reach);
+  static Index file_face(const MeshView& mesh, const Layout& grid, const std::int32_t* corners,
+                         float& reach);
+  void refile_from(const MeshView& mesh, const Layout& grid, Index first, const std::int32_t* moved,
+                   Index count);
+  void entries_from(const MeshView& mesh, Index k0);
   // The last build's layout (refile keeps it) and each face's cell (cell_of_) and overhang.
   std::shared_ptr<const Layout> kept_layout_;
   Index kept_faces_ = -1;
@@ -256,6 +279,7 @@ class FaceGrid {
   std::vector<Index> block_start_;
   // Scratch of build() and build_entries(), kept for its storage.
   Buffer<std::int32_t> cell_of_;
+  std::vector<std::int32_t> old_cell_;  // refile(): each moved face's cell before
   std::vector<std::vector<Index>> part_count_;
   std::vector<std::vector<float>> part_overhang_;
   Buffer<Index> cell_start_;
