@@ -63,13 +63,15 @@ double kt_at(double step, double r_over_d) {
 // (from the region's point: axial a, radial vector and distance t), and whether it can be a
 // candidate (`need`: only those get a normal).
 struct LocalMesh {
-  std::vector<std::int32_t> faces;     // 3 per face, mesh vertex indices
-  std::vector<int> corners;            // 3 per face, entries of `vertices` (no slot lookups)
-  std::vector<std::int32_t> vertices;  // distinct vertices of `faces`
-  std::vector<Vec3> normals;           // per entry of `vertices`, unit (0: not needed)
-  std::vector<double> a, t;            // per entry: axial and radial distance from the point, mm
-  std::vector<Vec3> radial;            // per entry: its offset from the axis, mm
-  std::vector<char> need;              // per entry: may be a candidate (its normal is summed)
+  // (Buffers, not zero-filled: written once while gathering.)
+  std::unique_ptr<std::int32_t[]> faces;     // 3 per face, mesh vertex indices
+  std::unique_ptr<int[]> corners;            // 3 per face, entries of `vertices` (no slot lookup)
+  std::unique_ptr<std::int32_t[]> vertices;  // distinct vertices of `faces`
+  std::size_t num_corners = 0, num_vertices = 0;  // 3 x faces, vertices
+  std::vector<Vec3> normals;                      // per entry of `vertices`, unit (0: not needed)
+  std::vector<double> a, t;  // per entry: axial and radial distance from the point, mm
+  std::vector<Vec3> radial;  // per entry: its offset from the axis, mm
+  std::vector<char> need;    // per entry: may be a candidate (its normal is summed)
 };
 
 // The angle atan2(s, c) in [0, pi] between two edges, s = |e1 x e2| >= 0 and c = e1 . e2 (the
@@ -124,9 +126,14 @@ void gather_faces(const FaceGrid& grid, const Vec3& u, double lo, double hi,
       max_vertices += grid.vertex_end(c) - grid.vertex_begin(c);
     }
   }
-  m.faces.reserve(3 * max_faces);
-  m.corners.reserve(3 * max_faces);
-  m.vertices.reserve(max_vertices);
+  // Written through pointers into buffers sized for the most (a face's vertices are entries of
+  // its cell) and not zero-filled (the cells hold several times the faces kept).
+  m.faces.reset(new std::int32_t[3 * max_faces]);
+  m.vertices.reset(new std::int32_t[max_vertices]);
+  m.corners.reset(new int[3 * max_faces]);
+  std::int32_t *face_out = m.faces.get(), *vertex_out = m.vertices.get();
+  int* corner_out = m.corners.get();
+  int nv = 0;
   std::vector<char> in;
   for (Index c : cells) {
     const Index e0 = grid.vertex_begin(c), e1 = grid.vertex_end(c);
@@ -142,24 +149,30 @@ void gather_faces(const FaceGrid& grid, const Vec3& u, double lo, double hi,
       if (!in[fe[0] - e0] && !in[fe[1] - e0] && !in[fe[2] - e0]) continue;
       const std::int32_t* f = grid.faces() + 3 * t;
       for (int j = 0; j < 3; ++j) {
-        m.faces.push_back(f[j]);
+        *face_out++ = f[j];
         int& s = slot[f[j]];
         if (s < 0) {
-          s = static_cast<int>(m.vertices.size());
-          m.vertices.push_back(f[j]);
+          s = nv;
+          vertex_out[nv++] = f[j];
         }
-        m.corners.push_back(s);
+        *corner_out++ = s;
       }
     }
   }
+  m.num_corners = static_cast<std::size_t>(face_out - m.faces.get());
+  m.num_vertices = static_cast<std::size_t>(nv);
   // `canonical` (live mode, notch_reuse.hpp): the faces in an order of their own, not the grid's
   // cells', so that the sums below do not depend on the grid's layout and a corner no moved
   // triangle reaches measures the same bit for bit.
   if (canonical) {
-    canonical_face_order(m.faces, m.vertices, slot);
-    for (std::size_t i = 0; i < m.faces.size(); ++i) m.corners[i] = slot[m.faces[i]];
+    std::vector<std::int32_t> faces(m.faces.get(), m.faces.get() + m.num_corners),
+        vertices(m.vertices.get(), m.vertices.get() + m.num_vertices);
+    canonical_face_order(faces, vertices, slot);
+    std::copy(faces.begin(), faces.end(), m.faces.get());
+    std::copy(vertices.begin(), vertices.end(), m.vertices.get());
+    for (std::size_t i = 0; i < m.num_corners; ++i) m.corners[i] = slot[m.faces[i]];
   }
-  for (std::int32_t v : m.vertices) slot[v] = -1;
+  for (std::size_t k = 0; k < m.num_vertices; ++k) slot[m.vertices[k]] = -1;
 }
 
 // Each vertex's position about the axis and whether it can be a candidate: the candidate's own
@@ -169,7 +182,7 @@ void gather_faces(const FaceGrid& grid, const Vec3& u, double lo, double hi,
 void place_vertices(const MeshView& mesh, const Vec3& u, double lo, double hi,
                     const CutRegion& region, double min_t, LocalMesh& m, std::vector<Vec3>& unit) {
   const double margin = 1e-9 * region.radius;
-  const std::size_t nv = m.vertices.size();
+  const std::size_t nv = m.num_vertices;
   m.need.resize(nv);
   m.a.resize(nv);
   m.t.resize(nv);
@@ -204,10 +217,12 @@ void keep_turning(const MeshView& mesh, LocalMesh& m, const Vec3& u,
   constexpr double kMargin = 1e-9;
   std::vector<char>& need = m.need;
   // bit 1: a face at/above 8 degrees, bit 2: a face at/below 82; a vertex with both is kept
-  // whatever its other faces say, so they are not looked at (nor a face with no other vertex)
-  std::vector<char> seen(m.vertices.size(), 0);
-  auto pending = [&](int k) { return need[k] && seen[k] != 3; };
-  for (std::size_t f = 0; f < m.corners.size(); f += 3) {
+  // whatever its other faces say, so they are not looked at (nor a face with no other vertex).
+  // bit 4: needed. Pending: needed, not both seen (4, 5 or 6: one load and one compare).
+  std::vector<unsigned char> seen(m.num_vertices);
+  for (std::size_t k = 0; k < need.size(); ++k) seen[k] = need[k] ? 4 : 0;
+  auto pending = [&](int k) { return static_cast<unsigned char>(seen[k] - 4) < 3; };
+  for (std::size_t f = 0; f < m.num_corners; f += 3) {
     const int* at = &m.corners[f];
     if (!pending(at[0]) && !pending(at[1]) && !pending(at[2])) continue;
     const Vec3 p0 = mesh.vertex(m.faces[f]);
@@ -222,7 +237,7 @@ void keep_turning(const MeshView& mesh, LocalMesh& m, const Vec3& u,
       if (c82 * ny - s82 * nx <= kMargin) seen[at[k]] |= 2;
     }
   }
-  for (std::size_t k = 0; k < need.size(); ++k) need[k] = need[k] && seen[k] == 3;
+  for (std::size_t k = 0; k < need.size(); ++k) need[k] = seen[k] == 7;
 }
 
 // The faces near the slab lo <= u.x <= hi within the region (gather_faces), and the normals of
@@ -238,9 +253,9 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   std::vector<Vec3> unit;
   place_vertices(mesh, u, lo, hi, region, min_t, m, unit);
   keep_turning(mesh, m, u, unit);
-  m.normals.assign(m.vertices.size(), Vec3::Zero());
+  m.normals.assign(m.num_vertices, Vec3::Zero());
   const std::vector<char>& need = m.need;
-  for (std::size_t f = 0; f < m.corners.size(); f += 3) {
+  for (std::size_t f = 0; f < m.num_corners; f += 3) {
     const int* at = &m.corners[f];
     if (!need[at[0]] && !need[at[1]] && !need[at[2]]) continue;
     const std::int32_t* fv = &m.faces[f];
@@ -406,7 +421,7 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
   const double at = u.dot(origin);
   const LocalMesh local =
       local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, slot, canonical);
-  const std::size_t nv = local.vertices.size();
+  const std::size_t nv = local.num_vertices;
   // The normals' meridian components, of the vertices in the window only (a neighbour's a and t
   // are enough); every one read below is written (no zero fill first).
   const std::unique_ptr<double[]> na(new double[nv]), nr(new double[nv]);
@@ -426,31 +441,44 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
   // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
   // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
   // shoulder has the same normal turn and is left out by this).
-  std::vector<double> bend(nv, 0.0);
+  const std::unique_ptr<double[]> bend(new double[nv]());  // zero-filled
   // The candidates' edges in the meridian plane (the plane a fillet curves in): their lengths
   // there are what the mesh resolves of a fillet (a ring's own edges count ~0).
   // (One run per candidate in one array: two per face at the candidate.)
-  const std::vector<int>& corners = local.corners;
+  // The faces at a candidate are listed while the runs are counted (one pass over all faces).
+  const int* const corners = local.corners.get();
   std::vector<std::size_t> next(nv + 1, 0);
-  for (std::size_t i = 0; i < corners.size(); ++i)
-    if (candidate[corners[i]]) next[corners[i] + 1] += 2;
+  std::vector<std::size_t> at_candidate;
+  for (std::size_t f = 0; f < local.num_corners; f += 3) {
+    const int* slots = &corners[f];
+    if (!candidate[slots[0]] && !candidate[slots[1]] && !candidate[slots[2]]) continue;
+    at_candidate.push_back(f);
+    for (int j = 0; j < 3; ++j)
+      if (candidate[slots[j]]) next[slots[j] + 1] += 2;
+  }
   for (std::size_t k = 0; k < nv; ++k) next[k + 1] += next[k];
   FilletPoints out;
   // Every slot is written exactly once below (the runs' counts): no zero fill first.
   out.edges.reset(new double[next.back()]);
   const std::vector<std::size_t> first(next.begin(), next.end() - 1);
-  for (std::size_t f = 0; f < corners.size(); f += 3) {
+  const double *a = local.a.data(), *t = local.t.data();
+  for (std::size_t f : at_candidate) {
     const int* slots = &corners[f];
-    if (!candidate[slots[0]] && !candidate[slots[1]] && !candidate[slots[2]]) continue;
     for (int j = 0; j < 3; ++j) {
       const int p = slots[j];
       if (!candidate[p]) continue;
+      // p's sums in registers (the edges' array could alias them), added in the same order
+      const double ap = a[p], tp = t[p], nap = na[p], nrp = nr[p];
+      double b = bend[p];
+      std::size_t e = next[p];
       for (int k = 1; k < 3; ++k) {
         const int q = slots[(j + k) % 3];
-        bend[p] += (local.a[q] - local.a[p]) * na[p] + (local.t[q] - local.t[p]) * nr[p];
-        const double da = local.a[q] - local.a[p], dt = local.t[q] - local.t[p];
-        out.edges[next[p]++] = std::sqrt(da * da + dt * dt);
+        const double da = a[q] - ap, dt = t[q] - tp;
+        b += da * nap + dt * nrp;
+        out.edges[e++] = std::sqrt(da * da + dt * dt);
       }
+      bend[p] = b;
+      next[p] = e;
     }
   }
   for (std::size_t k = 0; k < nv; ++k) {
