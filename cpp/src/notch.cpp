@@ -68,10 +68,10 @@ struct LocalMesh {
   std::unique_ptr<int[]> corners;            // 3 per face, entries of `vertices` (no slot lookup)
   std::unique_ptr<std::int32_t[]> vertices;  // distinct vertices of `faces`
   std::size_t num_corners = 0, num_vertices = 0;  // 3 x faces, vertices
-  std::vector<Vec3> normals;                      // per entry of `vertices`, unit (0: not needed)
-  std::vector<double> a, t;  // per entry: axial and radial distance from the point, mm
-  std::vector<Vec3> radial;  // per entry: its offset from the axis, mm
-  std::vector<char> need;    // per entry: may be a candidate (its normal is summed)
+  std::vector<Vec3> normals;       // per entry of `vertices`, unit; set where `need` only
+  std::unique_ptr<double[]> a, t;  // per entry: axial and radial distance from the point, mm
+  std::vector<Vec3> radial;        // per entry: its offset from the axis, mm
+  std::vector<char> need;          // per entry: may be a candidate (its normal is summed)
 };
 
 // The angle atan2(s, c) in [0, pi] between two edges, s = |e1 x e2| >= 0 and c = e1 . e2 (the
@@ -184,8 +184,8 @@ void place_vertices(const MeshView& mesh, const Vec3& u, double lo, double hi,
   const double margin = 1e-9 * region.radius;
   const std::size_t nv = m.num_vertices;
   m.need.resize(nv);
-  m.a.resize(nv);
-  m.t.resize(nv);
+  m.a.reset(new double[nv]);  // every entry written below: no zero fill
+  m.t.reset(new double[nv]);
   m.radial.resize(nv);  // Vec3: no zero fill
   unit.resize(nv);
   for (std::size_t k = 0; k < nv; ++k) {
@@ -253,8 +253,10 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   std::vector<Vec3> unit;
   place_vertices(mesh, u, lo, hi, region, min_t, m, unit);
   keep_turning(mesh, m, u, unit);
-  m.normals.assign(m.num_vertices, Vec3::Zero());
   const std::vector<char>& need = m.need;
+  m.normals.resize(m.num_vertices);  // Vec3: no zero fill; only the needed ones are summed
+  for (std::size_t k = 0; k < m.num_vertices; ++k)
+    if (need[k]) m.normals[k].setZero();
   for (std::size_t f = 0; f < m.num_corners; f += 3) {
     const int* at = &m.corners[f];
     if (!need[at[0]] && !need[at[1]] && !need[at[2]]) continue;
@@ -461,7 +463,7 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
   // Every slot is written exactly once below (the runs' counts): no zero fill first.
   out.edges.reset(new double[next.back()]);
   const std::vector<std::size_t> first(next.begin(), next.end() - 1);
-  const double *a = local.a.data(), *t = local.t.data();
+  const double *a = local.a.get(), *t = local.t.get();
   for (std::size_t f : at_candidate) {
     const int* slots = &corners[f];
     for (int j = 0; j < 3; ++j) {
