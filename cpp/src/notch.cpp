@@ -317,7 +317,7 @@ struct SectorSums {
   std::size_t n = 0;                          // points
   double ma = 0, mt = 0, mn = 0;              // sums, then means, of a, t and n_a
   double saa = 0, stt = 0, snn = 0, san = 0;  // sums of the deviations' products
-  double* lengths = nullptr;                  // their mesh edges' lengths (a run of a buffer)
+  double* lengths = nullptr;                  // their mesh edges' squared lengths (a buffer's run)
   std::size_t num_lengths = 0;
   double turn = 0;  // the largest normal turn from radial, radians
 };
@@ -354,7 +354,9 @@ bool sector_radius(const SectorSums& sums, double scale, double& rho, double& ax
   double* const lengths = sums.lengths;
   double* const mid = lengths + sums.num_lengths / 2;
   std::nth_element(lengths, mid, lengths + sums.num_lengths);
-  const double h = sums.num_lengths == 0 ? 0.0 : *mid;
+  // (The lengths are kept squared: sqrt is monotone and correctly rounded, so the square root of
+  // the squares' median is the lengths' median, bit for bit, with one square root.)
+  const double h = sums.num_lengths == 0 ? 0.0 : std::sqrt(*mid);
   const bool ring = sd_a < 0.02 * scale;
   if (ring && std::min(sd_a, sd_t) < kSharpEdge * h) return sharp_edge(rho, axial, ma);
   // One normal direction along a length: a straight taper (or a wandering ring).
@@ -397,11 +399,11 @@ bool fillet_turn(const Meridian& m) {
 struct FilletPoint {
   double a = 0, na = 0, turn = 0, x = 0, y = 0;
   double t = 0;                              // distance from the axis, mm
-  std::size_t edge_begin = 0, edge_end = 0;  // its mesh edges' lengths in FilletPoints::edges
+  std::size_t edge_begin = 0, edge_end = 0;  // its edges' squared lengths in FilletPoints::edges
 };
 
-// The fillet points of a corner and the lengths of their mesh edges in the meridian plane (mm),
-// one run per point.
+// The fillet points of a corner and the squared lengths of their mesh edges in the meridian
+// plane (mm^2), one run per point.
 struct FilletPoints {
   std::vector<FilletPoint> points;
   std::unique_ptr<double[]> edges;
@@ -477,7 +479,7 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
         const int q = slots[(j + k) % 3];
         const double da = a[q] - ap, dt = t[q] - tp;
         b += da * nap + dt * nrp;
-        out.edges[e++] = std::sqrt(da * da + dt * dt);
+        out.edges[e++] = da * da + dt * dt;  // squared (FilletPoints)
       }
       bend[p] = b;
       next[p] = e;
