@@ -379,7 +379,8 @@ struct Meridian {
 // The signs and a squared test first, with a margin of 1e-9 (far above the rounding of either),
 // reject the vertices clearly outside (no normal, the thin part, the shoulder face: about half of
 // those in the window on cow x4) without the hypot; the exact test decides the rest as before.
-bool fillet_turn(const Meridian& m) {
+// `meridian`: the normal's length in the meridian plane (set where true: fillet_points reuses it).
+bool fillet_turn(const Meridian& m, double& meridian) {
   const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
   if (m.nr <= 0 || !(m.na < 0)) return false;  // turn <= 0: no hypot needed
   constexpr double kLoose = 1e-9;
@@ -387,7 +388,7 @@ bool fillet_turn(const Meridian& m) {
   if (q < 0.49 * (1 - kLoose) || na2 < lo_sin * lo_sin * q * (1 - kLoose) ||
       na2 > hi_sin * hi_sin * q * (1 + kLoose))
     return false;
-  const double meridian = std::hypot(m.na, m.nr);
+  meridian = std::hypot(m.na, m.nr);
   if (meridian < 0.7) return false;
   const double turn = -m.na / meridian;  // sin of the angle from radial towards the thin side
   return turn >= lo_sin && turn <= hi_sin;
@@ -427,8 +428,9 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
       local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, slot, canonical);
   const std::size_t nv = local.num_vertices;
   // The normals' meridian components, of the vertices in the window only (a neighbour's a and t
-  // are enough); every one read below is written (no zero fill first).
-  const std::unique_ptr<double[]> na(new double[nv]), nr(new double[nv]);
+  // are enough) and, of the candidates, its length in that plane; every one read below is
+  // written (no zero fill first).
+  const std::unique_ptr<double[]> na(new double[nv]), nr(new double[nv]), meridian(new double[nv]);
   std::vector<char> candidate(nv, 0);
   for (std::size_t k = 0; k < nv; ++k) {
     if (!local.need[k]) continue;  // outside the window or turning too little or too much
@@ -440,7 +442,7 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
     m.nr = m.t > 0 ? local.normals[k].dot(local.radial[k]) / m.t : 0.0;
     na[k] = m.na;
     nr[k] = m.nr;
-    candidate[k] = fillet_turn(m);
+    candidate[k] = fillet_turn(m, meridian[k]);
   }
   // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
   // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
@@ -490,7 +492,7 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
     const Vec3& radial = local.radial[k];
     FilletPoint p;
     p.a = local.a[k];
-    p.na = na[k] / std::hypot(na[k], nr[k]);
+    p.na = na[k] / meridian[k];  // hypot(na, nr), from fillet_turn
     p.turn = std::atan2(-na[k], nr[k]);
     p.t = local.t[k];
     p.edge_begin = first[k];
