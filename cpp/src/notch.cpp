@@ -58,16 +58,20 @@ double kt_at(double step, double r_over_d) {
 // The faces near one corner and their vertices' normals, weighted by the face angle at the
 // vertex (Thuermer & Wuethrich 1998: a vertex on a sharp edge gets the bisector whatever the
 // faces' sizes). Every face touching a vertex inside the searched region is among them (a face
-// lies in a grid cell whose box holds it), so those vertices' normals are complete.
+// lies in a grid cell whose box holds it), so those vertices' normals are complete. Per vertex,
+// flat arrays (structure of arrays, written once while gathering): its position about the axis
+// (from the region's point: axial a, radial vector and distance t), and whether it can be a
+// candidate (`need`: only those get a normal).
 struct LocalMesh {
-  std::vector<std::int32_t> faces;     // 3 per face, mesh vertex indices
-  std::vector<std::int32_t> vertices;  // distinct vertices of `faces`
-  std::vector<Vec3> normals;           // per entry of `vertices`, unit
-  std::vector<int>* slot = nullptr;    // V scratch: entry of each vertex, -1 elsewhere
-  int at(std::int32_t v) const { return (*slot)[v]; }
-  void release() {  // the scratch back to all -1
-    for (std::int32_t v : vertices) (*slot)[v] = -1;
-  }
+  // (Buffers, not zero-filled: written once while gathering.)
+  std::unique_ptr<std::int32_t[]> faces;     // 3 per face, mesh vertex indices
+  std::unique_ptr<int[]> corners;            // 3 per face, entries of `vertices` (no slot lookup)
+  std::unique_ptr<std::int32_t[]> vertices;  // distinct vertices of `faces`
+  std::size_t num_corners = 0, num_vertices = 0;  // 3 x faces, vertices
+  std::vector<Vec3> normals;       // per entry of `vertices`, unit; set where `need` only
+  std::unique_ptr<double[]> a, t;  // per entry: axial and radial distance from the point, mm
+  std::vector<Vec3> radial;        // per entry: its offset from the axis, mm
+  std::vector<char> need;          // per entry: may be a candidate (its normal is summed)
 };
 
 // The angle atan2(s, c) in [0, pi] between two edges, s = |e1 x e2| >= 0 and c = e1 . e2 (the
@@ -89,47 +93,11 @@ double corner_angle(double s, double c) {
   return c < 0 ? kPi - angle : angle;
 }
 
-// A candidate's normal, in its meridian plane (radial x, towards the thin side y), turns 8..82
-// degrees from radial (measure_corner). The angle-weighted normal is a positive combination of
-// its faces' normals, and so is its meridian projection: when every face's projection lies
-// below the 8-degree line (or every one above the 82-degree line), so does the vertex's, and it
-// is no candidate. Such vertices are dropped from `need` before their angle weights (atan2) are
-// computed; a margin of 1e-9 (unit normals) keeps every vertex the exact test could take.
-void keep_turning(const MeshView& mesh, const LocalMesh& m, const Vec3& u,
-                  const std::vector<Vec3>& radial, std::vector<char>& need) {
-  const double c8 = std::cos(8.0 * kPi / 180.0), s8 = std::sin(8.0 * kPi / 180.0);
-  const double c82 = std::cos(82.0 * kPi / 180.0), s82 = std::sin(82.0 * kPi / 180.0);
-  constexpr double kMargin = 1e-9;
-  // bit 1: a face at/above 8 degrees, bit 2: a face at/below 82; a vertex with both is kept
-  // whatever its other faces say, so they are not looked at (nor a face with no other vertex)
-  std::vector<char> seen(m.vertices.size(), 0);
-  auto pending = [&](int k) { return need[k] && seen[k] != 3; };
-  for (std::size_t f = 0; f < m.faces.size(); f += 3) {
-    const int at[3] = {m.at(m.faces[f]), m.at(m.faces[f + 1]), m.at(m.faces[f + 2])};
-    if (!pending(at[0]) && !pending(at[1]) && !pending(at[2])) continue;
-    const Vec3 p0 = mesh.vertex(m.faces[f]);
-    const Vec3 n = (mesh.vertex(m.faces[f + 1]) - p0).cross(mesh.vertex(m.faces[f + 2]) - p0);
-    const double len = n.norm();
-    if (!(len > 0)) continue;
-    const double ny = -n.dot(u) / len;
-    for (int k = 0; k < 3; ++k) {
-      if (!pending(at[k])) continue;
-      const double nx = n.dot(radial[at[k]]) / len;
-      if (c8 * ny - s8 * nx >= -kMargin) seen[at[k]] |= 1;
-      if (c82 * ny - s82 * nx <= kMargin) seen[at[k]] |= 2;
-    }
-  }
-  for (std::size_t k = 0; k < need.size(); ++k) need[k] = need[k] && seen[k] == 3;
-}
-
 // Faces of the cells the slab lo <= u.x <= hi and the region reach that have a vertex inside
-// both (the only ones a candidate's normal and neighbours need), and the normals of their
-// vertices at least `min_t` from the axis (closer ones are no candidate: theirs stay 0).
-LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, double lo,
-                     double hi, const CutRegion& region, double min_t, std::vector<int>& slot,
-                     bool canonical = false) {
-  LocalMesh m;
-  m.slot = &slot;
+// both (the only ones a candidate's normal and neighbours need), their distinct vertices and
+// each face's corners as entries of those (`slot`: V scratch, all -1 before and after).
+void gather_faces(const FaceGrid& grid, const Vec3& u, double lo, double hi,
+                  const CutRegion& region, std::vector<int>& slot, bool canonical, LocalMesh& m) {
   const double r2 = region.radius * region.radius;
   auto inside = [&](const Vec3& p) {
     const double a = u.dot(p);
@@ -158,8 +126,14 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
       max_vertices += grid.vertex_end(c) - grid.vertex_begin(c);
     }
   }
-  m.faces.reserve(3 * max_faces);
-  m.vertices.reserve(max_vertices);
+  // Written through pointers into buffers sized for the most (a face's vertices are entries of
+  // its cell) and not zero-filled (the cells hold several times the faces kept).
+  m.faces.reset(new std::int32_t[3 * max_faces]);
+  m.vertices.reset(new std::int32_t[max_vertices]);
+  m.corners.reset(new int[3 * max_faces]);
+  std::int32_t *face_out = m.faces.get(), *vertex_out = m.vertices.get();
+  int* corner_out = m.corners.get();
+  int nv = 0;
   std::vector<char> in;
   for (Index c : cells) {
     const Index e0 = grid.vertex_begin(c), e1 = grid.vertex_end(c);
@@ -175,40 +149,119 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
       if (!in[fe[0] - e0] && !in[fe[1] - e0] && !in[fe[2] - e0]) continue;
       const std::int32_t* f = grid.faces() + 3 * t;
       for (int j = 0; j < 3; ++j) {
-        m.faces.push_back(f[j]);
-        if (slot[f[j]] >= 0) continue;
-        slot[f[j]] = static_cast<int>(m.vertices.size());
-        m.vertices.push_back(f[j]);
+        *face_out++ = f[j];
+        int& s = slot[f[j]];
+        if (s < 0) {
+          s = nv;
+          vertex_out[nv++] = f[j];
+        }
+        *corner_out++ = s;
       }
     }
   }
+  m.num_corners = static_cast<std::size_t>(face_out - m.faces.get());
+  m.num_vertices = static_cast<std::size_t>(nv);
   // `canonical` (live mode, notch_reuse.hpp): the faces in an order of their own, not the grid's
   // cells', so that the sums below do not depend on the grid's layout and a corner no moved
   // triangle reaches measures the same bit for bit.
-  if (canonical) canonical_face_order(m.faces, m.vertices, slot);
-  // Only a vertex that can be a candidate needs its normal (a neighbour's position is enough):
-  // the candidate's own tests (measure_corner) with a margin, so the normals they read are summed
-  // from the same faces in the same order as for every vertex (bit for bit), and the angle
-  // weights (atan2, most of the search's cost) of the other vertices are not computed.
-  const double margin = 1e-9 * region.radius;
-  std::vector<char> need(m.vertices.size());
-  std::vector<Vec3> radial(m.vertices.size());  // unit where needed (Vec3: no zero fill)
-  for (std::size_t k = 0; k < m.vertices.size(); ++k) {
-    const Vec3 d = mesh.vertex(m.vertices[k]) - region.point;
-    const double a = u.dot(mesh.vertex(m.vertices[k]));
-    const Vec3 r = d - d.dot(u) * u;
-    const double t = r.norm();
-    need[k] =
-        a >= lo - margin && a <= hi + margin && t >= min_t - margin && t <= region.radius + margin;
-    radial[k] = need[k] && t > 0 ? Vec3(r / t) : Vec3::Zero();
+  if (canonical) {
+    std::vector<std::int32_t> faces(m.faces.get(), m.faces.get() + m.num_corners),
+        vertices(m.vertices.get(), m.vertices.get() + m.num_vertices);
+    canonical_face_order(faces, vertices, slot);
+    std::copy(faces.begin(), faces.end(), m.faces.get());
+    std::copy(vertices.begin(), vertices.end(), m.vertices.get());
+    for (std::size_t i = 0; i < m.num_corners; ++i) m.corners[i] = slot[m.faces[i]];
   }
-  keep_turning(mesh, m, u, radial, need);
-  m.normals.assign(m.vertices.size(), Vec3::Zero());
-  for (std::size_t f = 0; f < m.faces.size(); f += 3) {
-    const int at[3] = {m.at(m.faces[f]), m.at(m.faces[f + 1]), m.at(m.faces[f + 2])};
+  for (std::size_t k = 0; k < m.num_vertices; ++k) slot[m.vertices[k]] = -1;
+}
+
+// Each vertex's position about the axis and whether it can be a candidate: the candidate's own
+// window (fillet_points) with a margin, so the normals it reads are summed from the same faces
+// in the same order as for every vertex (bit for bit). `unit`: the unit radial direction where
+// needed (keep_turning).
+void place_vertices(const MeshView& mesh, const Vec3& u, double lo, double hi,
+                    const CutRegion& region, double min_t, LocalMesh& m, std::vector<Vec3>& unit) {
+  const double margin = 1e-9 * region.radius;
+  const std::size_t nv = m.num_vertices;
+  m.need.resize(nv);
+  m.a.reset(new double[nv]);  // every entry written below: no zero fill
+  m.t.reset(new double[nv]);
+  m.radial.resize(nv);  // Vec3: no zero fill
+  unit.resize(nv);
+  for (std::size_t k = 0; k < nv; ++k) {
+    const Vec3 p = mesh.vertex(m.vertices[k]);
+    const Vec3 d = p - region.point;
+    const double a = u.dot(p);
+    const double along = d.dot(u);
+    const Vec3 r = d - along * u;
+    const double t = r.norm();
+    m.a[k] = along;
+    m.t[k] = t;
+    m.radial[k] = r;
+    m.need[k] =
+        a >= lo - margin && a <= hi + margin && t >= min_t - margin && t <= region.radius + margin;
+    unit[k] = m.need[k] && t > 0 ? Vec3(r / t) : Vec3::Zero();
+  }
+}
+
+// A candidate's normal, in its meridian plane (radial x, towards the thin side y), turns 8..82
+// degrees from radial (measure_corner). The angle-weighted normal is a positive combination of
+// its faces' normals, and so is its meridian projection: when every face's projection lies
+// below the 8-degree line (or every one above the 82-degree line), so does the vertex's, and it
+// is no candidate. Such vertices are dropped from `need` before their angle weights (atan2) are
+// computed; a margin of 1e-9 (unit normals) keeps every vertex the exact test could take.
+void keep_turning(const MeshView& mesh, LocalMesh& m, const Vec3& u,
+                  const std::vector<Vec3>& radial) {
+  const double c8 = std::cos(8.0 * kPi / 180.0), s8 = std::sin(8.0 * kPi / 180.0);
+  const double c82 = std::cos(82.0 * kPi / 180.0), s82 = std::sin(82.0 * kPi / 180.0);
+  constexpr double kMargin = 1e-9;
+  std::vector<char>& need = m.need;
+  // bit 1: a face at/above 8 degrees, bit 2: a face at/below 82; a vertex with both is kept
+  // whatever its other faces say, so they are not looked at (nor a face with no other vertex).
+  // bit 4: needed. Pending: needed, not both seen (4, 5 or 6: one load and one compare).
+  std::vector<unsigned char> seen(m.num_vertices);
+  for (std::size_t k = 0; k < need.size(); ++k) seen[k] = need[k] ? 4 : 0;
+  auto pending = [&](int k) { return static_cast<unsigned char>(seen[k] - 4) < 3; };
+  for (std::size_t f = 0; f < m.num_corners; f += 3) {
+    const int* at = &m.corners[f];
+    if (!pending(at[0]) && !pending(at[1]) && !pending(at[2])) continue;
+    const Vec3 p0 = mesh.vertex(m.faces[f]);
+    const Vec3 n = (mesh.vertex(m.faces[f + 1]) - p0).cross(mesh.vertex(m.faces[f + 2]) - p0);
+    const double len = n.norm();
+    if (!(len > 0)) continue;
+    const double ny = -n.dot(u) / len;
+    for (int k = 0; k < 3; ++k) {
+      if (!pending(at[k])) continue;
+      const double nx = n.dot(radial[at[k]]) / len;
+      if (c8 * ny - s8 * nx >= -kMargin) seen[at[k]] |= 1;
+      if (c82 * ny - s82 * nx <= kMargin) seen[at[k]] |= 2;
+    }
+  }
+  for (std::size_t k = 0; k < need.size(); ++k) need[k] = seen[k] == 7;
+}
+
+// The faces near the slab lo <= u.x <= hi within the region (gather_faces), and the normals of
+// their vertices at least `min_t` from the axis that can be candidates (others stay 0).
+LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, double lo,
+                     double hi, const CutRegion& region, double min_t, std::vector<int>& slot,
+                     bool canonical = false) {
+  LocalMesh m;
+  gather_faces(grid, u, lo, hi, region, slot, canonical, m);
+  // Only a vertex that can be a candidate needs its normal (a neighbour's position is enough),
+  // and the angle weights (atan2, most of the search's cost) of the other vertices are not
+  // computed.
+  std::vector<Vec3> unit;
+  place_vertices(mesh, u, lo, hi, region, min_t, m, unit);
+  keep_turning(mesh, m, u, unit);
+  const std::vector<char>& need = m.need;
+  m.normals.resize(m.num_vertices);  // Vec3: no zero fill; only the needed ones are summed
+  for (std::size_t k = 0; k < m.num_vertices; ++k)
+    if (need[k]) m.normals[k].setZero();
+  for (std::size_t f = 0; f < m.num_corners; f += 3) {
+    const int* at = &m.corners[f];
     if (!need[at[0]] && !need[at[1]] && !need[at[2]]) continue;
-    const Vec3 p[3] = {mesh.vertex(m.faces[f]), mesh.vertex(m.faces[f + 1]),
-                       mesh.vertex(m.faces[f + 2])};
+    const std::int32_t* fv = &m.faces[f];
+    const Vec3 p[3] = {mesh.vertex(fv[0]), mesh.vertex(fv[1]), mesh.vertex(fv[2])};
     const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
     const double len = n.norm();
     if (!(len > 0)) continue;
@@ -218,8 +271,10 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
       m.normals[at[k]] += corner_angle(len, e1.dot(e2)) / len * n;
     }
   }
-  for (Vec3& n : m.normals)
-    if (n.norm() > 0) n.normalize();
+  for (std::size_t k = 0; k < m.normals.size(); ++k) {
+    Vec3& n = m.normals[k];
+    if (need[k] && n.norm() > 0) n.normalize();
+  }
   return m;
 }
 
@@ -258,9 +313,13 @@ constexpr double kMinTurn = 45.0 * kPi / 180.0;
 // the axis and the normal's axial component n_a of each point (mm, unit), and the lengths of
 // their mesh edges in the meridian plane (mm).
 constexpr int kSectors = 8;
-struct SectorPoints {
-  std::array<std::vector<double>, kSectors> a, t, na, edge;
-  std::array<double, kSectors> turn{};  // the largest normal turn from radial, radians
+struct SectorSums {
+  std::size_t n = 0;                          // points
+  double ma = 0, mt = 0, mn = 0;              // sums, then means, of a, t and n_a
+  double saa = 0, stt = 0, snn = 0, san = 0;  // sums of the deviations' products
+  double* lengths = nullptr;                  // their mesh edges' squared lengths (a buffer's run)
+  std::size_t num_lengths = 0;
+  double turn = 0;  // the largest normal turn from radial, radians
 };
 
 // A sector's verdict "sharp edge" at axial position `at` (always true).
@@ -276,24 +335,14 @@ bool sharp_edge(double& rho, double& axial, double at) {
 // Returns false when the sector says nothing (under two points, a straight taper, a convex
 // turn). `t`: the points' distances from the axis; `lengths`: their mesh edge lengths (mm), what
 // the mesh can resolve there.
-bool sector_radius(const std::vector<double>& a, const std::vector<double>& t,
-                   const std::vector<double>& na, std::vector<double> lengths, double scale,
-                   double& rho, double& axial) {
-  const std::size_t n = a.size();
+bool sector_radius(const SectorSums& sums, double scale, double& rho, double& axial) {
+  const std::size_t n = sums.n;
   // One point tells neither a ring (a sharp edge) nor a curve (a fillet): a lone point's zero
   // spread would read as a sharp edge, the worst Kt, from noise (a symmetric rig's two thighs
   // got radii 1.9 and 0.2 mm).
   if (n < 2) return false;
-  const double ma = std::accumulate(a.begin(), a.end(), 0.0) / n;
-  const double mn = std::accumulate(na.begin(), na.end(), 0.0) / n;
-  const double mt = std::accumulate(t.begin(), t.end(), 0.0) / n;
-  double saa = 0, stt = 0, snn = 0, san = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    saa += (a[i] - ma) * (a[i] - ma);
-    stt += (t[i] - mt) * (t[i] - mt);
-    snn += (na[i] - mn) * (na[i] - mn);
-    san += (a[i] - ma) * (na[i] - mn);
-  }
+  const double ma = sums.ma, mn = sums.mn, san = sums.san, snn = sums.snn;
+  const double saa = sums.saa, stt = sums.stt;
   const double sd_a = std::sqrt(saa / n), sd_t = std::sqrt(stt / n), sd_n = std::sqrt(snn / n);
   // Every fillet point on one ring: a sharp edge. A ring may wander axially (a crease on a
   // shoulder that is not quite flat), so up to 0.02 r it is a ring; but a fillet the mesh
@@ -302,9 +351,12 @@ bool sector_radius(const std::vector<double>& a, const std::vector<double>& t,
   // (docs/notch.md): a ring spreads by under kSharpEdge h along one of them; points spread by
   // more along both are measured as a fillet first, and read as a ring only when they make none.
   // h: the median edge length (the long edges of a flat face next to a fillet do not count).
-  auto mid = lengths.begin() + lengths.size() / 2;
-  std::nth_element(lengths.begin(), mid, lengths.end());
-  const double h = lengths.empty() ? 0.0 : *mid;
+  double* const lengths = sums.lengths;
+  double* const mid = lengths + sums.num_lengths / 2;
+  std::nth_element(lengths, mid, lengths + sums.num_lengths);
+  // (The lengths are kept squared: sqrt is monotone and correctly rounded, so the square root of
+  // the squares' median is the lengths' median, bit for bit, with one square root.)
+  const double h = sums.num_lengths == 0 ? 0.0 : std::sqrt(*mid);
   const bool ring = sd_a < 0.02 * scale;
   if (ring && std::min(sd_a, sd_t) < kSharpEdge * h) return sharp_edge(rho, axial, ma);
   // One normal direction along a length: a straight taper (or a wandering ring).
@@ -322,23 +374,13 @@ struct Meridian {
   double a = 0, t = 0, na = 0, nr = 0;
 };
 
-Meridian meridian_of(const Vec3& p, const Vec3& normal, const Vec3& origin, const Vec3& u) {
-  const Vec3 d = p - origin;
-  Meridian m;
-  m.a = d.dot(u);
-  const Vec3 radial = d - m.a * u;
-  m.t = radial.norm();
-  m.na = normal.dot(u);
-  m.nr = m.t > 0 ? normal.dot(radial) / m.t : 0.0;
-  return m;
-}
-
 // A fillet point's normal: mostly in the meridian plane, turned 8..82 degrees from radial
 // towards the thin side (the shoulder face, at 90 degrees, and the thin part, at 0, left out).
 // The signs and a squared test first, with a margin of 1e-9 (far above the rounding of either),
 // reject the vertices clearly outside (no normal, the thin part, the shoulder face: about half of
 // those in the window on cow x4) without the hypot; the exact test decides the rest as before.
-bool fillet_turn(const Meridian& m) {
+// `meridian`: the normal's length in the meridian plane (set where true: fillet_points reuses it).
+bool fillet_turn(const Meridian& m, double& meridian) {
   const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
   if (m.nr <= 0 || !(m.na < 0)) return false;  // turn <= 0: no hypot needed
   constexpr double kLoose = 1e-9;
@@ -346,7 +388,7 @@ bool fillet_turn(const Meridian& m) {
   if (q < 0.49 * (1 - kLoose) || na2 < lo_sin * lo_sin * q * (1 - kLoose) ||
       na2 > hi_sin * hi_sin * q * (1 + kLoose))
     return false;
-  const double meridian = std::hypot(m.na, m.nr);
+  meridian = std::hypot(m.na, m.nr);
   if (meridian < 0.7) return false;
   const double turn = -m.na / meridian;  // sin of the angle from radial towards the thin side
   return turn >= lo_sin && turn <= hi_sin;
@@ -358,11 +400,11 @@ bool fillet_turn(const Meridian& m) {
 struct FilletPoint {
   double a = 0, na = 0, turn = 0, x = 0, y = 0;
   double t = 0;                              // distance from the axis, mm
-  std::size_t edge_begin = 0, edge_end = 0;  // its mesh edges' lengths in FilletPoints::edges
+  std::size_t edge_begin = 0, edge_end = 0;  // its edges' squared lengths in FilletPoints::edges
 };
 
-// The fillet points of a corner and the lengths of their mesh edges in the meridian plane (mm),
-// one run per point.
+// The fillet points of a corner and the squared lengths of their mesh edges in the meridian
+// plane (mm^2), one run per point.
 struct FilletPoints {
   std::vector<FilletPoint> points;
   std::unique_ptr<double[]> edges;
@@ -382,66 +424,79 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, std::vect
   region.axis = u;
   region.radius = 2.5 * r_thin;
   const double at = u.dot(origin);
-  LocalMesh local =
+  const LocalMesh local =
       local_mesh(mesh, grid, u, at + lo, at + hi, region, 0.5 * r_thin, slot, canonical);
-  std::vector<Meridian> merid;  // every entry written below (no zero fill first)
-  merid.reserve(local.vertices.size());
-  std::vector<int> candidate(local.vertices.size(), 0);
-  for (std::size_t k = 0; k < local.vertices.size(); ++k) {
-    const Meridian m = merid.emplace_back(
-        meridian_of(mesh.vertex(local.vertices[k]), local.normals[k], origin, u));
+  const std::size_t nv = local.num_vertices;
+  // The normals' meridian components, of the vertices in the window only (a neighbour's a and t
+  // are enough) and, of the candidates, its length in that plane; every one read below is
+  // written (no zero fill first).
+  const std::unique_ptr<double[]> na(new double[nv]), nr(new double[nv]), meridian(new double[nv]);
+  std::vector<char> candidate(nv, 0);
+  for (std::size_t k = 0; k < nv; ++k) {
+    if (!local.need[k]) continue;  // outside the window or turning too little or too much
+    Meridian m;
+    m.a = local.a[k];
+    m.t = local.t[k];
     if (m.a < lo || m.a > hi || m.t < 0.5 * r_thin || m.t > 2.5 * r_thin) continue;
-    candidate[k] = fillet_turn(m);
+    m.na = local.normals[k].dot(u);
+    m.nr = m.t > 0 ? local.normals[k].dot(local.radial[k]) / m.t : 0.0;
+    na[k] = m.na;
+    nr[k] = m.nr;
+    candidate[k] = fillet_turn(m, meridian[k]);
   }
   // Concave in the meridian only: the neighbours lie on the outer side of the tangent line of
   // the meridian, (a_q - a_p) n_a + (t_q - t_p) n_r > 0 summed (the outer, convex edge of a
   // shoulder has the same normal turn and is left out by this).
-  std::vector<double> bend(local.vertices.size(), 0.0);
+  const std::unique_ptr<double[]> bend(new double[nv]());  // zero-filled
   // The candidates' edges in the meridian plane (the plane a fillet curves in): their lengths
   // there are what the mesh resolves of a fillet (a ring's own edges count ~0).
   // (One run per candidate in one array: two per face at the candidate.)
-  std::vector<std::size_t> next(local.vertices.size() + 1, 0);
-  for (std::size_t f = 0; f < local.faces.size(); f += 3)
+  // The faces at a candidate are listed while the runs are counted (one pass over all faces).
+  const int* const corners = local.corners.get();
+  std::vector<std::size_t> next(nv + 1, 0);
+  std::vector<std::size_t> at_candidate;
+  for (std::size_t f = 0; f < local.num_corners; f += 3) {
+    const int* slots = &corners[f];
+    if (!candidate[slots[0]] && !candidate[slots[1]] && !candidate[slots[2]]) continue;
+    at_candidate.push_back(f);
     for (int j = 0; j < 3; ++j)
-      if (candidate[local.at(local.faces[f + j])]) next[local.at(local.faces[f + j]) + 1] += 2;
-  for (std::size_t k = 0; k < local.vertices.size(); ++k) next[k + 1] += next[k];
+      if (candidate[slots[j]]) next[slots[j] + 1] += 2;
+  }
+  for (std::size_t k = 0; k < nv; ++k) next[k + 1] += next[k];
   FilletPoints out;
   // Every slot is written exactly once below (the runs' counts): no zero fill first.
   out.edges.reset(new double[next.back()]);
   const std::vector<std::size_t> first(next.begin(), next.end() - 1);
-  for (std::size_t f = 0; f < local.faces.size(); f += 3) {
-    int slots[3];
-    for (int j = 0; j < 3; ++j) slots[j] = local.at(local.faces[f + j]);
+  const double *a = local.a.get(), *t = local.t.get();
+  for (std::size_t f : at_candidate) {
+    const int* slots = &corners[f];
     for (int j = 0; j < 3; ++j) {
-      if (!candidate[slots[j]]) continue;
-      const Meridian& p = merid[slots[j]];
+      const int p = slots[j];
+      if (!candidate[p]) continue;
+      // p's sums in registers (the edges' array could alias them), added in the same order
+      const double ap = a[p], tp = t[p], nap = na[p], nrp = nr[p];
+      double b = bend[p];
+      std::size_t e = next[p];
       for (int k = 1; k < 3; ++k) {
-        const Meridian& q = merid[slots[(j + k) % 3]];
-        bend[slots[j]] += (q.a - p.a) * p.na + (q.t - p.t) * p.nr;
-        const double da = q.a - p.a, dt = q.t - p.t;
-        out.edges[next[slots[j]]++] = std::sqrt(da * da + dt * dt);
+        const int q = slots[(j + k) % 3];
+        const double da = a[q] - ap, dt = t[q] - tp;
+        b += da * nap + dt * nrp;
+        out.edges[e++] = da * da + dt * dt;  // squared (FilletPoints)
       }
+      bend[p] = b;
+      next[p] = e;
     }
   }
-  local.release();
-  std::vector<Index> candidates;
-  std::vector<double> bends;
-  for (std::size_t k = 0; k < local.vertices.size(); ++k)
-    if (candidate[k]) {
-      candidates.push_back(static_cast<Index>(k));
-      bends.push_back(bend[k]);
-    }
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    if (!(bends[c] > 1e-9 * r_thin)) continue;
-    const Meridian& m = merid[candidates[c]];
-    const Vec3 radial = mesh.vertex(local.vertices[candidates[c]]) - origin - m.a * u;
+  for (std::size_t k = 0; k < nv; ++k) {
+    if (!candidate[k] || !(bend[k] > 1e-9 * r_thin)) continue;
+    const Vec3& radial = local.radial[k];
     FilletPoint p;
-    p.a = m.a;
-    p.na = m.na / std::hypot(m.na, m.nr);
-    p.turn = std::atan2(-m.na, m.nr);
-    p.t = m.t;
-    p.edge_begin = first[candidates[c]];
-    p.edge_end = next[candidates[c]];
+    p.a = local.a[k];
+    p.na = na[k] / meridian[k];  // hypot(na, nr), from fillet_turn
+    p.turn = std::atan2(-na[k], nr[k]);
+    p.t = local.t[k];
+    p.edge_begin = first[k];
+    p.edge_end = next[k];
     const double t = std::hypot(radial.dot(e1), radial.dot(e2));
     p.x = t > 0 ? radial.dot(e1) / t : 1.0;
     p.y = t > 0 ? radial.dot(e2) / t : 0.0;
@@ -487,43 +542,60 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
   for (const FilletPoint& p : fillet.points)
     if (p.a >= lo && p.a <= hi) inside.push_back(&p);
   const auto [c0, s0] = sector_start(inside);
-  // Each sector's arrays sized first (counted), then filled: no reallocation while filling.
+  // Each sector's sums over its points in their order (the order a sequential sum needs), and
+  // its edges' lengths grouped in one buffer: no per-sector copies of the points.
   std::vector<int> sector_of(inside.size());
-  std::array<std::size_t, kSectors> count{}, edges{};
+  std::array<SectorSums, kSectors> sums{};
+  std::array<std::size_t, kSectors + 1> edge_at{};
   for (std::size_t i = 0; i < inside.size(); ++i) {
     const FilletPoint* p = inside[i];
-    sector_of[i] = octant(p->x * c0 + p->y * s0, p->y * c0 - p->x * s0);
-    ++count[sector_of[i]];
-    edges[sector_of[i]] += p->edge_end - p->edge_begin;
+    const int sector = octant(p->x * c0 + p->y * s0, p->y * c0 - p->x * s0);
+    sector_of[i] = sector;
+    SectorSums& q = sums[sector];
+    ++q.n;
+    q.ma += p->a;
+    q.mn += p->na;
+    q.mt += p->t;
+    q.turn = std::max(q.turn, p->turn);
+    edge_at[sector + 1] += p->edge_end - p->edge_begin;
   }
-  SectorPoints pts;
   for (int s = 0; s < kSectors; ++s) {
-    pts.a[s].reserve(count[s]);
-    pts.t[s].reserve(count[s]);
-    pts.na[s].reserve(count[s]);
-    pts.edge[s].reserve(edges[s]);
+    edge_at[s + 1] += edge_at[s];
+    SectorSums& q = sums[s];
+    if (q.n == 0) continue;
+    q.ma /= q.n;
+    q.mn /= q.n;
+    q.mt /= q.n;
+  }
+  const std::unique_ptr<double[]> lengths(new double[edge_at[kSectors]]);
+  std::array<std::size_t, kSectors> edge_next{};
+  for (int s = 0; s < kSectors; ++s) {
+    edge_next[s] = edge_at[s];
+    sums[s].lengths = lengths.get() + edge_at[s];
+    sums[s].num_lengths = edge_at[s + 1] - edge_at[s];
   }
   for (std::size_t i = 0; i < inside.size(); ++i) {
     const FilletPoint* p = inside[i];
-    const int sector = sector_of[i];
-    pts.a[sector].push_back(p->a);
-    pts.t[sector].push_back(p->t);
-    pts.edge[sector].insert(pts.edge[sector].end(), fillet.edges.get() + p->edge_begin,
-                            fillet.edges.get() + p->edge_end);
-    pts.na[sector].push_back(p->na);
-    pts.turn[sector] = std::max(pts.turn[sector], p->turn);
+    SectorSums& q = sums[sector_of[i]];
+    const double da = p->a - q.ma, dt = p->t - q.mt, dn = p->na - q.mn;
+    q.saa += da * da;
+    q.stt += dt * dt;
+    q.snn += dn * dn;
+    q.san += da * dn;
+    std::copy(fillet.edges.get() + p->edge_begin, fillet.edges.get() + p->edge_end,
+              lengths.get() + edge_next[sector_of[i]]);
+    edge_next[sector_of[i]] += p->edge_end - p->edge_begin;
   }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
     double rho = 0, axial = 0;
-    if (!sector_radius(pts.a[s], pts.t[s], pts.na[s], std::move(pts.edge[s]), r_thin, rho, axial))
-      continue;
+    if (!sector_radius(sums[s], r_thin, rho, axial)) continue;
     // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
     // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
     // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:
     // their singularity is weaker (Williams 1952: stress ~ dist^-0.33 at a 45-degree turn
     // against dist^-0.46 at 90), and turns of 45..90 degrees take the shoulder's Kt (safe side).
-    const double turn = rho == 0.0 ? 2.0 * pts.turn[s] : pts.turn[s] + 8.0 * kPi / 180.0;
+    const double turn = rho == 0.0 ? 2.0 * sums[s].turn : sums[s].turn + 8.0 * kPi / 180.0;
     if (turn < kMinTurn) continue;
     if (!c.found || rho < c.radius) {  // the sharpest sector governs
       c.found = true;
