@@ -311,8 +311,14 @@ void FaceGrid::entries_from(const MeshView& mesh, Index k0) {
   entry_x_.grow(n, base);
   entry_y_.grow(n, base);
   entry_z_.grow(n, base);
-  for (Index e = base; e < n; ++e) {
-    const std::int32_t v = list[e - base];
+  write_entries(mesh, list, base, n);
+}
+
+// Entries [begin, end): vertex list[e - begin] and its coordinates (storage already sized).
+void FaceGrid::write_entries(const MeshView& mesh, const std::int32_t* list, Index begin,
+                             Index end) {
+  for (Index e = begin; e < end; ++e) {
+    const std::int32_t v = list[e - begin];
     const double* p = mesh.vertices + 3 * static_cast<Index>(v);
     entry_vertex_[e] = v;
     entry_x_[e] = p[0];
@@ -490,15 +496,7 @@ void FaceGrid::build_entries(const MeshView& mesh, int parts) {
       for (Index k = 3 * start_[c0], stop = 3 * start_[c1]; k < stop; ++k)
         face_entries_[k] += static_cast<std::int32_t>(base);
     }
-    const std::int32_t* list = part_lists_[part].get();
-    for (Index e = base, stop = shift[part + 1]; e < stop; ++e) {
-      const std::int32_t v = list[e - base];
-      const double* p = mesh.vertices + 3 * static_cast<Index>(v);
-      entry_vertex_[e] = v;
-      entry_x_[e] = p[0];
-      entry_y_[e] = p[1];
-      entry_z_[e] = p[2];
-    }
+    write_entries(mesh, part_lists_[part].get(), base, shift[part + 1]);
   });
 }
 

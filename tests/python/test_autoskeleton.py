@@ -265,6 +265,18 @@ def test_rignet_models_in_several_pieces_are_rigged_whole(name, joined, loose):
     assert len(sk.roots) == 1 and sk.num_bones >= 5
 
 
+def rig_reaching(v, f, tips, within):
+    """auto_skeleton of (v, f), checked: valid weights, one tree, and a bone end within
+    ``within`` mm of each of ``tips``; returns the skeleton."""
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1
+    ends = np.concatenate([sk.heads, sk.tails])
+    for tip in tips:
+        assert np.linalg.norm(ends - tip, axis=1).min() < within, tip
+    return sk
+
+
 def segment_distance(p, a, b):
     """Distance (mm) from points p (..., 3) to the segment a-b."""
     a, b = np.asarray(a, float), np.asarray(b, float)
@@ -453,12 +465,7 @@ def test_low_poly_limbs_modelled_as_open_tubes_get_bones_to_their_tips():
     v, f = merge(body, *limbs)
     p = split_pieces(v, f)
     assert len(p.joined) == 3 and not p.loose and not p.closed[p.joined].any()
-    sk, w = osteon.auto_skeleton(v, f)
-    check_weights(w, len(v), sk.num_bones)
-    assert len(sk.roots) == 1
-    ends = np.concatenate([sk.heads, sk.tails])
-    for tip in tips:
-        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * r, tip
+    rig_reaching(v, f, tips, 1.5 * r)
 
 
 def low_poly_cross(arm=40.0, half=4.0):
@@ -605,12 +612,7 @@ def test_two_limbs_sharing_an_edge_each_get_a_bone_to_their_tip():
     v, f = merge(body, a, b)
     p = split_pieces(*osteon.autoskeleton.mesh.check_mesh(v, f)[:2])
     assert len(p.joined) == 1 and not p.closed[p.joined[0]]  # one piece: the boxes share an edge
-    sk, w = osteon.auto_skeleton(v, f)
-    check_weights(w, len(v), sk.num_bones)
-    assert len(sk.roots) == 1
-    ends = np.concatenate([sk.heads, sk.tails])
-    for tip in ([28, -2, 55], [32, 2, 55]):
-        assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * 2.0, tip
+    rig_reaching(v, f, ([28, -2, 55], [32, 2, 55]), 1.5 * 2.0)
     from osteon.autoskeleton.assemble import manifold_parts
 
     both = np.concatenate([a[1], b[1] + 8])
@@ -632,9 +634,4 @@ def test_open_limbs_plugged_into_an_open_body_join_it_and_get_bones():
     v, f = merge(body, *legs)
     p = split_pieces(v, f)
     assert len(p.joined) == 2 and not p.loose
-    sk, w = osteon.auto_skeleton(v, f)
-    check_weights(w, len(v), sk.num_bones)
-    assert len(sk.roots) == 1
-    ends = np.concatenate([sk.heads, sk.tails])
-    for foot in feet:
-        assert np.linalg.norm(ends - foot, axis=1).min() < 1.5 * r, foot
+    rig_reaching(v, f, feet, 1.5 * r)

@@ -271,6 +271,8 @@ class FaceGrid {
   void refile_from(const MeshView& mesh, const Layout& grid, Index first, const std::int32_t* moved,
                    Index count);
   void entries_from(const MeshView& mesh, Index k0);
+  // Entries [begin, end) from the vertex list (their coordinates from mesh).
+  void write_entries(const MeshView& mesh, const std::int32_t* list, Index begin, Index end);
   // The last build's layout (refile keeps it) and each face's cell (cell_of_) and overhang.
   std::shared_ptr<const Layout> kept_layout_;
   Index kept_faces_ = -1;
