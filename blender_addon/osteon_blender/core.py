@@ -256,11 +256,13 @@ def settings_of(s, orientation: dict | None = None) -> Settings:
 
 
 def engine_params(s, arm, bone_names, correct: bool = False,
-                  orientation: dict | None = None) -> dict:
+                  orientation: dict | None = None, settings: Settings | None = None) -> dict:
     """The engine's keyword arguments from ``scene.osteon`` (checked once, in the wheel);
-    ``orientation`` as in :func:`settings_of`."""
+    ``orientation`` as in :func:`settings_of`; ``settings``: ``settings_of(s, orientation)``
+    when the caller has it."""
     try:
-        kw = engine_arguments(settings_of(s, orientation), bone_names, correct=correct)
+        kw = engine_arguments(settings if settings is not None else settings_of(s, orientation),
+                              bone_names, correct=correct)
     except ValueError as e:
         msg = str(e)
         if msg.startswith("Held bone"):
