@@ -17,18 +17,10 @@ _DEFORM_ONLY = {
 }
 
 
-def attribute(mesh, name: str):
-    """``mesh.attributes.get(name)``, by index: in Blender 4.5 ``get`` takes ~0.1-0.2 ms on a
-    mesh the depsgraph just updated (every live update), ``find`` + index ~0.02 ms."""
-    attrs = mesh.attributes
-    i = attrs.find(name)
-    return attrs[i] if i >= 0 else None
-
-
 def read_co(mesh, out: np.ndarray) -> None:
     """Vertex coordinates into a (V*3,) float32 array: the ``position`` attribute where
     Blender has one (3.5+, ~100x faster than ``vertices.co`` in 4.x), else ``vertices``."""
-    attr = attribute(mesh, "position")
+    attr = mesh.attributes.get("position")
     if attr is not None and attr.data_type == "FLOAT_VECTOR" and attr.domain == "POINT":
         attr.data.foreach_get("vector", out)
     else:

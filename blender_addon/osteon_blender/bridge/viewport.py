@@ -5,15 +5,13 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from .mesh import attribute
-
 LAYER = "osteon_stress"
 
 
 def write_point_colors(mesh, rgba: np.ndarray, name: str = LAYER):
     """Write (V, 4) RGBA into a FLOAT_COLOR point attribute and make it the active
     (and render) colour.  Only this attribute of the mesh is touched."""
-    attr = attribute(mesh, name)
+    attr = mesh.attributes.get(name)
     if attr is not None and (attr.domain != "POINT" or attr.data_type != "FLOAT_COLOR"):
         mesh.attributes.remove(attr)
         attr = None
@@ -35,7 +33,7 @@ def write_point_colors(mesh, rgba: np.ndarray, name: str = LAYER):
 
 
 def read_point_colors(mesh, name: str = LAYER) -> np.ndarray | None:
-    attr = attribute(mesh, name)
+    attr = mesh.attributes.get(name)
     if attr is None:
         return None
     out = np.empty(len(attr.data) * 4, dtype=np.float32)
@@ -44,7 +42,7 @@ def read_point_colors(mesh, name: str = LAYER) -> np.ndarray | None:
 
 
 def remove_point_colors(mesh, name: str = LAYER) -> bool:
-    attr = attribute(mesh, name)
+    attr = mesh.attributes.get(name)
     if attr is None:
         return False
     mesh.attributes.remove(attr)
