@@ -7,6 +7,7 @@ Target (issue 34): the whole update <= 16 ms, the engine <= 10 ms.
     .venv-bpy52/bin/python bench/bench_live.py -- [--repeat 21]    # the bpy 5.2 wheel
     blender -b --factory-startup --python bench/bench_live.py -- [--repeat 21]
     ... bench_live.py -- --capture live.npz      # also keep the engine's inputs of every update
+    ... bench_live.py -- --profile live.prof     # cProfile of the updates (Python side)
     .venv/bin/python bench/bench_live.py --replay live.npz --instructions   # no bpy: callgrind
     ... --replay live.npz --dump reused.npz [--fresh]   # every number; --fresh: one-off runs
 
@@ -206,8 +207,14 @@ def main_blender(args) -> int:
     pb = arm.pose.bones["forearm.L"]
     buf = np.empty(nv * 3, dtype=np.float32)
     clock = PartClock()
-    for path, attr, name in PARTS:
-        clock.wrap(_resolve(path), attr, name)
+    prof = None
+    if args.profile:        # cProfile of the timed updates instead of the part clocks
+        import cProfile
+
+        prof = cProfile.Profile()
+    else:
+        for path, attr, name in PARTS:
+            clock.wrap(_resolve(path), attr, name)
     wall, cpu, base, out_t, faults = [], [], [], [], []
     parts_cpu: dict[str, list] = {}
     parts_wall: dict[str, list] = {}
@@ -221,16 +228,22 @@ def main_blender(args) -> int:
                 pb.scale = (s, 1.0, s)
             bpy.context.view_layer.update()             # Blender's armature evaluation: not timed
             dg = bpy.context.evaluated_depsgraph_get()
-            t0 = time.perf_counter()
-            obj.evaluated_get(dg).data.vertices.foreach_get("co", buf)
-            t1 = time.perf_counter()
             before = sess.readout.updates
             f1 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
             clock.reset()
+            if prof is not None and i >= 2:
+                prof.enable()
             c1, t1 = time.process_time(), time.perf_counter()
             live.update_now(depsgraph=dg, outlines=False)
             c2, t2 = time.process_time(), time.perf_counter()
+            if prof is not None:
+                prof.disable()
             f2 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+            # the reference read after the update: before it, it would pay the first access
+            # to the freshly evaluated mesh that a live update pays (in bpy 4.5 ~0.1 ms)
+            t0 = time.perf_counter()
+            obj.evaluated_get(dg).data.vertices.foreach_get("co", buf)
+            t0 = time.perf_counter() - t0
             assert sess.readout.updates == before + 1, "no update ran"
             res = sess.last_result
             t3 = time.perf_counter()
@@ -238,7 +251,7 @@ def main_blender(args) -> int:
             t4 = time.perf_counter()
             if i < 2:                                    # warm-up
                 continue
-            base.append(t1 - t0)
+            base.append(t0)
             wall.append(t2 - t1)
             cpu.append(c2 - c1)
             out_t.append(t4 - t3)
@@ -272,6 +285,11 @@ def main_blender(args) -> int:
         print(f"| {k} | {_ms(v).strip()} | {_ms(parts_wall[k]).strip()} |")
     print(f"overlay outlines median {_ms(out_t)} ms wall "
           f"({out.num_sections} sections; computed after the colours, in the worker)")
+    if prof is not None:
+        import pstats
+
+        prof.dump_stats(args.profile)
+        pstats.Stats(prof).sort_stats("tottime").print_stats(40)
     if cap is not None:
         cap.save(args.capture)
         print(f"engine inputs of {len(cap.runs)} runs saved to {args.capture}")
@@ -395,6 +413,9 @@ def main(argv) -> int:
                     help="what changes per round: forearm.L's scale across its axis (default) "
                          "or its rotation (the elbow bends)")
     ap.add_argument("--capture", metavar="FILE", help="save the engine's inputs (.npz)")
+    ap.add_argument("--profile", metavar="FILE",
+                    help="cProfile of the timed updates into FILE (pstats; the table of the 40 "
+                         "largest own times is printed; the per-part clocks are off)")
     ap.add_argument("--replay", metavar="FILE", help="re-run captured inputs without bpy")
     ap.add_argument("--runs", type=int, default=4, help="--replay: analyser runs")
     ap.add_argument("--threads", type=int, default=None, help="--replay: engine threads")

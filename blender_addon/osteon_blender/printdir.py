@@ -62,7 +62,7 @@ def colour_stress(analysis, heads_mm: np.ndarray, tails_mm: np.ndarray) -> np.nd
     d = d / np.linalg.norm(d)
     cos2 = (axis @ d) ** 2
     factor = x / layer_allowable(x, r, cos2)
-    vb = np.asarray(analysis.vertex_bone, dtype=np.intp)
-    # no bone (< 0) reads the appended 1.0, a bone past the list its last factor: one gather
-    idx = np.where(vb >= 0, np.minimum(vb, len(factor) - 1), len(factor))
-    return vs * np.append(factor, 1.0)[idx]
+    vb = np.asarray(analysis.vertex_bone)
+    # no bone (< 0) reads the prepended 1.0, a bone past the list its last factor: one
+    # clipped gather at bone + 1
+    return vs * np.take(np.append(1.0, factor), vb + 1, mode="clip")

@@ -103,9 +103,10 @@ def section_doubt(analysis) -> dict:
     table = flag_table()
     skipped = ~np.isfinite(stress) | _mask(flags, SKIP_FLAGS, table)
     doubtful = ~skipped & _mask(flags, DOUBT_FLAGS, table)
-    by_flag = {k: int(np.count_nonzero(flags & b)) for k, b in table.items()}
-    skipped_by_flag = {k: int(np.count_nonzero(((flags & b) != 0) & skipped))
-                       for k, b in table.items()}
+    # every flag at once: (S, K) section has flag k
+    has = (flags[:, None] & np.array(list(table.values()), dtype=np.int64)) != 0
+    by_flag = dict(zip(table, has.sum(axis=0).tolist()))
+    skipped_by_flag = dict(zip(table, has[skipped].sum(axis=0).tolist()))
     # Python ints (a NumPy scalar's & costs ~10x more); most sections have no flag
     bits = list(table.items())
     names = [[k for k, b in bits if f & b] if f else [] for f in flags.tolist()]
@@ -115,20 +116,23 @@ def section_doubt(analysis) -> dict:
             "flag_names": names}
 
 
-def bone_doubt(analysis, n_bones: int, share: float = NOT_ANALYSED_SHARE) -> list[dict]:
+def bone_doubt(analysis, n_bones: int, share: float = NOT_ANALYSED_SHARE,
+               d: dict | None = None) -> list[dict]:
     """Per bone: ``sections``, ``skipped_sections``, ``doubtful_sections``, ``not_analysed``
     (more than ``share`` of its sections skipped, or it has sections and none gave a stress;
     never a bone that deforms no vertex, e.g. a glTF ``_rootJoint``: there is nothing of the
     model to analyse along it) and ``reason`` ("12 of 61 sections could not be cut: the mesh is
-    open there")."""
-    d = section_doubt(analysis)
+    open there"). ``d``: the analysis's :func:`section_doubt`, when the caller has it."""
+    d = section_doubt(analysis) if d is None else d
     sb = np.asarray(analysis.section_bone, dtype=np.int64)
     count = np.bincount(sb, minlength=n_bones)
     nskip = np.bincount(sb, weights=d["skipped"], minlength=n_bones).astype(int)
     ndoubt = np.bincount(sb, weights=d["doubtful"], minlength=n_bones).astype(int)
     vb = getattr(analysis, "vertex_bone", None)
+    # which bones deform a vertex: read only for bones with skipped sections (a pass over
+    # every vertex, which most results do not need)
     owns = (np.bincount(np.asarray(vb, dtype=np.int64)[np.asarray(vb) >= 0], minlength=n_bones)
-            > 0 if vb is not None else np.ones(n_bones, bool))
+            > 0 if vb is not None and nskip.any() else np.ones(n_bones, bool))
     # the skipped or doubtful sections of each bone, in section order (one pass)
     suspect: list[list[int]] = [[] for _ in range(n_bones)]
     for i in np.flatnonzero(d["skipped"] | d["doubtful"]).tolist():
@@ -154,9 +158,10 @@ def bone_doubt(analysis, n_bones: int, share: float = NOT_ANALYSED_SHARE) -> lis
     return out
 
 
-def worst_section_doubt(analysis) -> list[str]:
+def worst_section_doubt(analysis, d: dict | None = None) -> list[str]:
     """Flag names of the section that gives the maximum stress ([] if it is a plain result);
-    as the engine's maximum, among the sections not too thin to print."""
+    as the engine's maximum, among the sections not too thin to print. ``d``: the analysis's
+    :func:`section_doubt`, when the caller has it."""
     stress = np.asarray(analysis.stress, dtype=np.float64)
     ok = np.isfinite(stress)
     flags = getattr(analysis, "section_flags", None)
@@ -165,7 +170,7 @@ def worst_section_doubt(analysis) -> list[str]:
     if not ok.any():
         return []
     i = int(np.flatnonzero(ok)[np.argmax(stress[ok])])
-    d = section_doubt(analysis)
+    d = section_doubt(analysis) if d is None else d
     if not (d["doubtful"][i] or d["skipped"][i]):
         return []
     return [n for n in d["flag_names"][i] if n in DOUBT_FLAGS or n in SKIP_FLAGS]

@@ -73,9 +73,12 @@ def bone_table(section_bone, stress, weak, bone_names, allowable_mpa: float,
     rmax = np.full(nb, -np.inf)
     where = np.full(nb, -1)
     idx = np.flatnonzero(ok & np.isfinite(ratio_s))
-    for i in idx[np.argsort(ratio_s[idx], kind="stable")]:  # ascending: last write = worst
-        rmax[section_bone[i]] = ratio_s[i]
-        where[section_bone[i]] = i
+    # per bone its worst section: the last of that bone in ascending (stable) ratio order,
+    # i.e. the first in the reversed order
+    last_first = idx[np.argsort(ratio_s[idx], kind="stable")][::-1]
+    bones, first = np.unique(section_bone[last_first], return_index=True)
+    where[bones] = last_first[first]
+    rmax[bones] = ratio_s[where[bones]]
     allow_s = (np.full(len(stress), float(allowable_mpa)) if section_allowable is None
                else np.asarray(section_allowable, dtype=np.float64))
     have = np.flatnonzero(count > 0)
@@ -130,7 +133,7 @@ def printable_stress(a) -> np.ndarray:
     return np.where(too_thin_mask(a), np.nan, np.asarray(a.stress, dtype=np.float64))
 
 
-def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
+def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None, section_doubt=None):
     rows = bone_table(a.section_bone, printable_stress(a), a.weak, bone_names, allowable_mpa,
                       bone_scale,
                       getattr(a, "stress_ratio", None), getattr(a, "across_layers", None),
@@ -138,7 +141,7 @@ def _analysis_table(a, bone_names, allowable_mpa, bone_scale=None):
                       getattr(a, "stress_concentration", None))
     # skipped / doubtful sections per bone (osteon.doubt): a bone with too many skipped
     # sections is "not analysed", never "ok"
-    per_bone = doubt.bone_doubt(a, len(bone_names))
+    per_bone = doubt.bone_doubt(a, len(bone_names), d=section_doubt)
     for r in rows:
         d = per_bone[r["index"]]
         r["skipped_sections"] = d["skipped_sections"]
@@ -329,7 +332,8 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         corrected_analysis = correction.after
     shown = corrected_analysis if corrected_analysis is not None else analysis
     scale = None if correction is None else np.asarray(correction.bone_scale, dtype=np.float64)
-    rows = _analysis_table(shown, bone_names, allowable_mpa, scale)
+    d = doubt.section_doubt(shown)     # once: the rows, the counts and the worst read it
+    rows = _analysis_table(shown, bone_names, allowable_mpa, scale, d)
     if correction is None:
         weak_bones = [{"bone": r["bone"], "max_stress_mpa": r["max_stress_mpa"],
                        "ratio": r["ratio"], "stress_mpa": r["stress_mpa"],
@@ -416,7 +420,6 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
         np.asarray(getattr(shown, "junction", np.zeros(len(shown.stress), bool))))]
     # what the numbers above do not cover (osteon.doubt): skipped sections, bones not analysed,
     # a maximum resting on a doubtful section
-    d = doubt.section_doubt(shown)
     report["skipped_sections"] = int(np.count_nonzero(d["skipped"]))
     report["doubtful_sections"] = int(np.count_nonzero(d["doubtful"]))
     report["skipped_by_flag"] = d["skipped_by_flag"]
@@ -425,7 +428,7 @@ def build_report(*, analysis, bone_names, allowable_mpa: float, settings: dict,
     report["not_analysed_bones"] = [
         {"bone": r["bone"], "sections": r["sections"], "skipped_sections": r["skipped_sections"],
          "reason": r["reason"]} for r in rows if r["status"] == "not analysed"]
-    report["max_stress_doubt"] = doubt.worst_section_doubt(shown)
+    report["max_stress_doubt"] = doubt.worst_section_doubt(shown, d)
     report["verdict"] = ("weak" if any(r["weak"] for r in rows) else
                          "not analysed" if report["not_analysed_bones"] or (
                              report["sections"] and report["max_stress_mpa"] is None) else "ok")

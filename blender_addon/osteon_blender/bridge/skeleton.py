@@ -42,17 +42,29 @@ def skeleton_arrays(arm) -> SkeletonArrays:
     idx = {n: i for i, n in enumerate(deform)}
     nb = len(deform)
     pb = arm.pose.bones
-    head = np.empty((nb, 3))
-    tail = np.empty((nb, 3))
+    # every pose bone's head, tail and matrix in three bulk reads (float32, as Blender keeps
+    # them), then the deform bones' rows: per-bone reads cost ~15 us a bone (x_axis & co. are
+    # Python properties)
+    n = len(pb)
+    rows = np.array([pb.find(name) for name in deform], dtype=np.intp)
+    if (rows < 0).any():       # the pose is not rebuilt yet (bones just added)
+        missing = deform[int(np.flatnonzero(rows < 0)[0])]
+        raise OsteonError(f"Armature '{arm.name}': bone '{missing}' has no pose yet; leave "
+                          "Edit Mode or update the scene and try again")
+    head_all = np.empty((n, 3), dtype=np.float32)
+    tail_all = np.empty((n, 3), dtype=np.float32)
+    mat_all = np.empty((n, 4, 4), dtype=np.float32)   # column-major: mat_all[i, j] = column j
+    pb.foreach_get("head", head_all.ravel())
+    pb.foreach_get("tail", tail_all.ravel())
+    pb.foreach_get("matrix", mat_all.ravel())
+    head = head_all[rows].astype(np.float64)
+    tail = tail_all[rows].astype(np.float64)
+    # PoseBone.x_axis (y, z) = matrix.to_3x3() @ unit vector: the column itself, summed from
+    # +0.0 (a -0.0 becomes +0.0); the same here
+    axes = (mat_all[rows, :3, :3] + np.float32(0.0)).astype(np.float64)
+    x_axes = axes[:, 0].copy()
     parents = np.full(nb, -1, dtype=np.int64)
-    x_axes = np.empty((nb, 3))
-    axes = np.empty((nb, 3, 3))
     for i, name in enumerate(deform):
-        p = pb[name]
-        head[i] = p.head
-        tail[i] = p.tail
-        x_axes[i] = p.x_axis
-        axes[i] = (p.x_axis, p.y_axis, p.z_axis)
         anc = bones[name].parent
         while anc is not None and anc.name not in idx:
             anc = anc.parent

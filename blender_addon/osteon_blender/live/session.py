@@ -105,6 +105,8 @@ class Session:
         self.last_sig = None            # (co, matrix, heads, tails, settings) last analysed
         self.co_spare = None            # the buffer the next read goes into (not last_sig's)
         self.settings_key = None
+        # (settings key, engine params, their key, Settings.as_dict()) of the last read
+        self.derived = None
         self.future = None              # running analysis job
         self.outline_future = None      # running outline job
         self.last_result: LiveResult | None = None
@@ -142,12 +144,14 @@ def is_live(scene=None) -> bool:
 # --------------------------------------------------------------------------- the three steps
 
 
-def _settings_key(scene) -> tuple:
+def _settings_key(scene, settings=None) -> tuple:
     """Everything of ``scene.osteon`` that changes the analysis (the wheel's Settings, so a new
-    setting is covered without listing it here) and the scene's unit scale."""
+    setting is covered without listing it here) and the scene's unit scale; ``settings``: the
+    scene's ``core.settings_of`` when the caller has it."""
     s = scene.osteon
     try:
-        settings = core.settings_of(s, state.of(scene).orientation)
+        if settings is None:
+            settings = core.settings_of(s, state.of(scene).orientation)
         settings = dataclasses.replace(
             settings, build_direction=tuple(float(x) for x in settings.build_direction))
     except (OsteonError, ValueError, TypeError) as e:  # read_inputs reports it to the user
@@ -188,15 +192,22 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
         depsgraph = bpy.context.evaluated_depsgraph_get()
     s = scene.osteon
     sk = bridge.skeleton_arrays(arm)
-    params = core.engine_params(s, arm, sk.names, orientation=state.of(scene).orientation)
+    chosen = core.settings_of(s, state.of(scene).orientation)   # once per update
+    settings = _settings_key(scene, chosen)
+    # the engine arguments, their key and the report's settings change only with the settings
+    # (and the bone names): made again only then
+    derived_key = (settings, tuple(sk.names))
+    if sess.derived is None or sess.derived[0] != derived_key:
+        params = core.engine_params(s, arm, sk.names, settings=chosen)
+        sess.derived = (derived_key, params, _params_key(params), chosen.as_dict())
+    _, params, params_key, settings_dict = sess.derived
     # two buffers in turn: the last analysed read stays in last_sig ("nothing moved" test)
     co, matrix = bridge.evaluated_positions_into(obj, depsgraph, sess.co_spare)
-    settings = _settings_key(scene)
     want = _want_outlines(scene)
     sig = (co, matrix, sk.heads, sk.tails, settings)
     last = sess.last_sig
     key = bridge.topology_key(obj) + (tuple(sk.names), tuple(int(p) for p in sk.parents),
-                                       _params_key(params))
+                                       params_key)
     rebuild = sess.analyzer is None or key != sess.analyzer_key or sess.weights_stale
     if (not force and not rebuild and last is not None and last[4] == settings
             and np.array_equal(last[0], co) and np.array_equal(last[1], matrix)
@@ -212,7 +223,7 @@ def read_inputs(sess: Session, depsgraph=None, force: bool = False) -> LiveInput
         params=params,
         analyzer_key=key, want_outlines=want, skeleton=sk, obj_name=obj.name,
         arm_name=arm.name,
-        settings=core.settings_of(s, state.of(scene).orientation).as_dict())
+        settings=settings_dict)
     if rebuild:
         if sess.weights_stale:
             sess.weights.clear()
