@@ -98,14 +98,20 @@ struct Span {
   bool empty() const { return first == last; }
 };
 
-void intersect(Span a, Span b, Intervals& out) {
-  out.clear();
+// Calls overlap(lo, hi) for each non-empty overlap of a and b, in order.
+template <class Overlap>
+void for_each_overlap(Span a, Span b, Overlap overlap) {
   while (a.first != a.last && b.first != b.last) {
     const double lo = std::max(a.first->first, b.first->first);
     const double hi = std::min(a.first->second, b.first->second);
-    if (hi > lo) out.emplace_back(lo, hi);
     (a.first->second < b.first->second) ? ++a.first : ++b.first;
+    if (hi > lo) overlap(lo, hi);
   }
+}
+
+void intersect(Span a, Span b, Intervals& out) {
+  out.clear();
+  for_each_overlap(a, b, [&](double lo, double hi) { out.emplace_back(lo, hi); });
 }
 
 // a less b, appended to `out`.
@@ -187,20 +193,16 @@ void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int la
 bool add_source(Span source, Span inner, double growth, Scratch& w) {
   const Interval* room = inner.first;
   bool grown = false;
-  while (source.first != source.last && inner.first != inner.last) {  // intersect(), inline
-    const double lo = std::max(source.first->first, inner.first->first);
-    const double hi = std::min(source.first->second, inner.first->second);
-    (source.first->second < inner.first->second) ? ++source.first : ++inner.first;
-    if (!(hi > lo)) continue;
+  for_each_overlap(source, inner, [&](double lo, double hi) {
     w.solid.emplace_back(lo, hi);
     if (!(hi - lo < 2.0 * growth)) {
       w.widened.emplace_back(lo, hi);
-      continue;
+      return;
     }
     grown = true;
     while (room + 1 != inner.last && room->second < lo) ++room;  // the interval holding [lo, hi]
     w.widened.emplace_back(std::max(room->first, lo - growth), std::min(room->second, hi + growth));
-  }
+  });
   return grown;
 }
 
