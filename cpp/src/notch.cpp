@@ -204,39 +204,16 @@ void place_vertices(const MeshView& mesh, const Vec3& u, double lo, double hi,
   }
 }
 
-// Face f's normal n (unnormalised), its length and the unit normal's component -n.u towards the
-// thin side; false for a degenerate face.
-inline bool face_axial(const MeshView& mesh, const LocalMesh& m, std::size_t f, const Vec3& u,
-                       Vec3& n, double& len, double& ny) {
-  const Vec3 p0 = mesh.vertex(m.faces[f]);
-  n = (mesh.vertex(m.faces[f + 1]) - p0).cross(mesh.vertex(m.faces[f + 2]) - p0);
-  len = n.norm();
-  if (!(len > 0)) return false;
-  ny = -n.dot(u) / len;
-  return true;
-}
-
-// Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
-constexpr double kMinTurn = 45.0 * kPi / 180.0;
-
 // A candidate's normal, in its meridian plane (radial x, towards the thin side y), turns 8..82
 // degrees from radial (measure_corner). The angle-weighted normal is a positive combination of
 // its faces' normals, and so is its meridian projection: when every face's projection lies
 // below the 8-degree line (or every one above the 82-degree line), so does the vertex's, and it
 // is no candidate. Such vertices are dropped from `need` before their angle weights (atan2) are
 // computed; a margin of 1e-9 (unit normals) keeps every vertex the exact test could take.
-// The same bound says when the whole gathering can find no corner (issue 33's cost, sixth
-// round): a corner needs a fillet point turned kMinTurn / 2 = 22.5 degrees or more (a sharp
-// edge's turn is twice its points' largest, a fillet's that plus 8, and either must reach
-// kMinTurn, corner_in), and a vertex none of whose faces' projections lies at/above that line (the
-// closed half-plane, with the margin) turns less. When no needed vertex has such a face (a second
-// pass looks at the faces the first skipped, only if the first saw none), no vertex is kept: the
-// gathering's corners are "none", as the full search would find. Returns whether one was seen.
-bool keep_turning(const MeshView& mesh, LocalMesh& m, const Vec3& u,
+void keep_turning(const MeshView& mesh, LocalMesh& m, const Vec3& u,
                   const std::vector<Vec3>& radial) {
   const double c8 = std::cos(8.0 * kPi / 180.0), s8 = std::sin(8.0 * kPi / 180.0);
   const double c82 = std::cos(82.0 * kPi / 180.0), s82 = std::sin(82.0 * kPi / 180.0);
-  const double c_half = std::cos(0.5 * kMinTurn), s_half = std::sin(0.5 * kMinTurn);
   constexpr double kMargin = 1e-9;
   std::vector<char>& need = m.need;
   // bit 1: a face at/above 8 degrees, bit 2: a face at/below 82; a vertex with both is kept
@@ -244,39 +221,23 @@ bool keep_turning(const MeshView& mesh, LocalMesh& m, const Vec3& u,
   // bit 4: needed. Pending: needed, not both seen (4, 5 or 6: one load and one compare).
   std::vector<unsigned char> seen(m.num_vertices);
   for (std::size_t k = 0; k < need.size(); ++k) seen[k] = need[k] ? 4 : 0;
-  // `steep_face`: a face at/above kMinTurn / 2 (of those looked at).
-  std::vector<unsigned char> steep_face(m.num_vertices, 0);
   auto pending = [&](int k) { return static_cast<unsigned char>(seen[k] - 4) < 3; };
-  Vec3 n;
-  double len = 0, ny = 0;
   for (std::size_t f = 0; f < m.num_corners; f += 3) {
     const int* at = &m.corners[f];
     if (!pending(at[0]) && !pending(at[1]) && !pending(at[2])) continue;
-    if (!face_axial(mesh, m, f, u, n, len, ny)) continue;
+    const Vec3 p0 = mesh.vertex(m.faces[f]);
+    const Vec3 n = (mesh.vertex(m.faces[f + 1]) - p0).cross(mesh.vertex(m.faces[f + 2]) - p0);
+    const double len = n.norm();
+    if (!(len > 0)) continue;
+    const double ny = -n.dot(u) / len;
     for (int k = 0; k < 3; ++k) {
       if (!pending(at[k])) continue;
       const double nx = n.dot(radial[at[k]]) / len;
       if (c8 * ny - s8 * nx >= -kMargin) seen[at[k]] |= 1;
       if (c82 * ny - s82 * nx <= kMargin) seen[at[k]] |= 2;
-      if (c_half * ny - s_half * nx >= -kMargin) steep_face[at[k]] = 1;
     }
   }
-  bool steep = false;
-  for (std::size_t k = 0; k < seen.size() && !steep; ++k) steep = seen[k] == 7 && steep_face[k];
-  if (!steep) {
-    // The needed vertices' faces the loop above skipped (it stops at a vertex once it has bits 1
-    // and 2): only where no needed vertex showed a steep face.
-    for (std::size_t f = 0; f < m.num_corners && !steep; f += 3) {
-      const int* at = &m.corners[f];
-      if (seen[at[0]] != 7 && seen[at[1]] != 7 && seen[at[2]] != 7) continue;
-      if (!face_axial(mesh, m, f, u, n, len, ny)) continue;
-      for (int k = 0; k < 3; ++k)
-        if (seen[at[k]] == 7 && c_half * ny - s_half * n.dot(radial[at[k]]) / len >= -kMargin)
-          steep = true;
-    }
-  }
-  for (std::size_t k = 0; k < need.size(); ++k) need[k] = steep && seen[k] == 7;
-  return steep;
+  for (std::size_t k = 0; k < need.size(); ++k) need[k] = seen[k] == 7;
 }
 
 // The faces near the slab lo <= u.x <= hi within the region (gather_faces), and the normals of
@@ -291,7 +252,7 @@ LocalMesh local_mesh(const MeshView& mesh, const FaceGrid& grid, const Vec3& u, 
   // computed.
   std::vector<Vec3> unit;
   place_vertices(mesh, u, lo, hi, region, min_t, m, unit);
-  keep_turning(mesh, m, u, unit);  // (no vertex kept: no corner can be found here)
+  keep_turning(mesh, m, u, unit);
   const std::vector<char>& need = m.need;
   m.normals.resize(m.num_vertices);  // Vec3: no zero fill; only the needed ones are summed
   for (std::size_t k = 0; k < m.num_vertices; ++k)
@@ -344,6 +305,9 @@ constexpr double kMaxNominalDrop = 0.1;
 // (the median in the meridian at the fillet points; docs/notch.md: a fillet the mesh resolves
 // spreads by at least 0.13 of it).
 constexpr double kSharpEdge = 0.1;
+
+// Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
+constexpr double kMinTurn = 45.0 * kPi / 180.0;
 
 // Fillet points grouped in angular sectors around the axis: axial position a, distance t from
 // the axis and the normal's axial component n_a of each point (mm, unit), and the lengths of
