@@ -10,6 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
+#include <new>
+#include <utility>
 
 #include "round_to_unit.hpp"
 
@@ -20,6 +23,30 @@ using Clipper2Lib::Path64;
 using Clipper2Lib::Paths64;
 using Clipper2Lib::Point64;
 __extension__ typedef __int128 Wide;
+
+// An allocator whose resize() leaves new elements uninitialised (default-initialised) instead of
+// zeroing them: for the arrays below that are written in full before they are read, where the
+// zeroing was a pass over memory for nothing.
+template <class T>
+struct NoZeroAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = NoZeroAllocator<U>;
+  };
+  NoZeroAllocator() = default;
+  template <class U>
+  NoZeroAllocator(const NoZeroAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <class T>
+using Filled = std::vector<T, NoZeroAllocator<T>>;  // every element written before it is read
 
 // Twice the signed area of (a, b, c): > 0 when c lies left of a -> b.
 inline Wide orient(const Point64& a, const Point64& b, const Point64& c) {
@@ -74,12 +101,12 @@ struct Occurrence {
 
 struct Arrangement {
   std::vector<Point64> pts;
-  std::vector<int> path_of;  // per point
-  std::vector<int> start;    // per path, and one past the last
-  std::vector<int> set_of;   // per path
+  Filled<int> path_of;      // per point
+  std::vector<int> start;   // per path, and one past the last
+  std::vector<int> set_of;  // per path
   std::vector<Crossing> crossings;
-  std::vector<Occurrence> occ;  // sorted by edge, then along it
-  std::vector<int> nxt, prv;    // per point: the next and previous point of its path
+  Filled<Occurrence> occ;  // sorted by edge, then along it
+  Filled<int> nxt, prv;    // per point: the next and previous point of its path
   int next(int g) const { return nxt[static_cast<std::size_t>(g)]; }
   int prev(int g) const { return prv[static_cast<std::size_t>(g)]; }
   const Point64& pt(int g) const { return pts[static_cast<std::size_t>(g)]; }
@@ -127,7 +154,7 @@ void sort_occurrences(Arrangement& a) {
   std::vector<int> first(a.pts.size() + 1, 0);
   for (const Occurrence& o : a.occ) ++first[static_cast<std::size_t>(o.seg) + 1];
   for (std::size_t k = 1; k < first.size(); ++k) first[k] += first[k - 1];
-  std::vector<Occurrence> sorted(a.occ.size());
+  Filled<Occurrence> sorted(a.occ.size());
   std::vector<int> fill(first.begin(), first.end() - 1);
   for (const Occurrence& o : a.occ)
     sorted[static_cast<std::size_t>(fill[static_cast<std::size_t>(o.seg)]++)] = o;
@@ -141,12 +168,12 @@ void sort_occurrences(Arrangement& a) {
 // cells holding two edges or more.
 struct EdgeGrid {
   int nx = 1, ny = 1;
-  std::vector<int> cell_range;  // per edge: x0, y0, x1, y1 of its cells
-  std::vector<int> start;       // per cell: its entries' start (one more at the end)
-  std::vector<int> entries;     // edges by cell
-  std::vector<int> busy;        // cells with two edges or more, in increasing order
+  Filled<int> cell_range;  // per edge: x0, y0, x1, y1 of its cells
+  std::vector<int> start;  // per cell: its entries' start (one more at the end)
+  Filled<int> entries;     // edges by cell
+  std::vector<int> busy;   // cells with two edges or more, in increasing order
   // False where the boxes cover more than 64 cells per edge (many long edges across small cells).
-  bool build(const std::vector<EdgeBox>& boxes, const EdgeBox& all, double cell);
+  bool build(const Filled<EdgeBox>& boxes, const EdgeBox& all, double cell);
   std::int64_t pairs() const {  // edge pairs sharing a cell
     std::int64_t sum = 0;
     for (const int c : busy) {
@@ -158,7 +185,7 @@ struct EdgeGrid {
   }
 };
 
-bool EdgeGrid::build(const std::vector<EdgeBox>& boxes, const EdgeBox& all, double cell) {
+bool EdgeGrid::build(const Filled<EdgeBox>& boxes, const EdgeBox& all, double cell) {
   const std::size_t n = boxes.size();
   const double w = static_cast<double>(all.x1 - all.x0) + 1.0;
   const double h = static_cast<double>(all.y1 - all.y0) + 1.0;
@@ -209,7 +236,7 @@ bool EdgeGrid::build(const std::vector<EdgeBox>& boxes, const EdgeBox& all, doub
 // quadratic memory and pair tests here: Clipper2, n log n, takes the section).
 bool find_crossings(Arrangement& a) {
   const std::size_t n = a.pts.size();
-  std::vector<EdgeBox> boxes(n);
+  Filled<EdgeBox> boxes(n);
   EdgeBox all{INT64_MAX, INT64_MAX, INT64_MIN, INT64_MIN};
   for (std::size_t g = 0; g < n; ++g) {
     const Point64 &p = a.pts[g], &q = a.pt(a.nxt[g]);
@@ -437,6 +464,10 @@ bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(cons
   out.clear();
   Arrangement a;
   a.start.push_back(0);
+  std::size_t points = 0;
+  for (std::size_t s = 0; s < sets.size() && s < 3; ++s)
+    for (const Path64& path : *sets[s]) points += path.size();
+  a.pts.reserve(points);  // clean() keeps at most every point
   for (std::size_t s = 0; s < sets.size() && s < 3; ++s)
     for (const Path64& path : *sets[s]) {
       clean(path, a.pts);
