@@ -74,7 +74,8 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   });
   RowIntervals out;
   out.start.assign(static_cast<std::size_t>(rows) + 1, 0);
-  out.intervals.reserve(t.size() / 2);
+  out.intervals.resize(t.size() / 2);  // at most one interval per two crossings
+  Interval* next = out.intervals.data();
   for (int k = 0; k < rows; ++k) {
     const auto first = t.begin() + count[static_cast<std::size_t>(k)];
     const auto last = t.begin() + count[static_cast<std::size_t>(k) + 1];
@@ -85,9 +86,10 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
         for (auto d = c; d != first && *(d - 1) > *d; --d) std::swap(*(d - 1), *d);
     }
     for (auto c = first; c + 1 < last; c += 2)
-      if (*(c + 1) > *c) out.intervals.emplace_back(*c, *(c + 1));
-    out.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(out.intervals.size());
+      if (*(c + 1) > *c) *next++ = Interval(*c, *(c + 1));
+    out.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(next - out.intervals.data());
   }
+  out.intervals.resize(static_cast<std::size_t>(next - out.intervals.data()));
   return out;
 }
 

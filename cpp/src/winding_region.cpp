@@ -110,6 +110,10 @@ struct Arrangement {
   int next(int g) const { return nxt[static_cast<std::size_t>(g)]; }
   int prev(int g) const { return prv[static_cast<std::size_t>(g)]; }
   const Point64& pt(int g) const { return pts[static_cast<std::size_t>(g)]; }
+  void clear() {
+    pts.clear(), path_of.clear(), start.clear(), set_of.clear();
+    crossings.clear(), occ.clear(), nxt.clear(), prv.clear();
+  }
 };
 
 // orient in T: double is exact where coordinate differences stay under 2^26 (products under
@@ -150,12 +154,13 @@ int cross_edges(Arrangement& a, int i, int j) {
 }
 
 // a.occ by edge (counting sort: most edges have none or one), then along each edge.
-void sort_occurrences(Arrangement& a) {
-  std::vector<int> first(a.pts.size() + 1, 0);
+void sort_occurrences(Arrangement& a, std::vector<int>& first, std::vector<int>& fill,
+                      Filled<Occurrence>& sorted) {
+  first.assign(a.pts.size() + 1, 0);
   for (const Occurrence& o : a.occ) ++first[static_cast<std::size_t>(o.seg) + 1];
   for (std::size_t k = 1; k < first.size(); ++k) first[k] += first[k - 1];
-  Filled<Occurrence> sorted(a.occ.size());
-  std::vector<int> fill(first.begin(), first.end() - 1);
+  sorted.resize(a.occ.size());
+  fill.assign(first.begin(), first.end() - 1);
   for (const Occurrence& o : a.occ)
     sorted[static_cast<std::size_t>(fill[static_cast<std::size_t>(o.seg)]++)] = o;
   for (std::size_t k = 0; k + 1 < first.size(); ++k)
@@ -172,6 +177,7 @@ struct EdgeGrid {
   std::vector<int> start;  // per cell: its entries' start (one more at the end)
   Filled<int> entries;     // edges by cell
   std::vector<int> busy;   // cells with two edges or more, in increasing order
+  std::vector<int> fill;   // build()'s: per cell, the next entry to fill
   // False where the boxes cover more than 64 cells per edge (many long edges across small cells).
   bool build(const Filled<EdgeBox>& boxes, const EdgeBox& all, double cell);
   std::int64_t pairs() const {  // edge pairs sharing a cell
@@ -215,7 +221,7 @@ bool EdgeGrid::build(const Filled<EdgeBox>& boxes, const EdgeBox& all, double ce
   std::sort(busy.begin(), busy.end());
   for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
   entries.resize(static_cast<std::size_t>(start.back()));
-  std::vector<int> fill(start.begin(), start.end() - 1);
+  fill.assign(start.begin(), start.end() - 1);
   for (std::size_t g = 0; g < n; ++g) {
     const int* b = &cell_range[4 * g];
     for (int cy = b[1]; cy <= b[3]; ++cy)
@@ -234,9 +240,9 @@ bool EdgeGrid::build(const Filled<EdgeBox>& boxes, const EdgeBox& all, double ce
 // (a few long edges set the mean): one edge per cell's area, as before. False where two edges
 // touch or overlap, or where the grid declines (a star of thousands of long spikes would cost
 // quadratic memory and pair tests here: Clipper2, n log n, takes the section).
-bool find_crossings(Arrangement& a) {
+bool find_crossings(Arrangement& a, Filled<EdgeBox>& boxes, EdgeGrid& grid) {
   const std::size_t n = a.pts.size();
-  Filled<EdgeBox> boxes(n);
+  boxes.resize(n);
   EdgeBox all{INT64_MAX, INT64_MAX, INT64_MIN, INT64_MIN};
   for (std::size_t g = 0; g < n; ++g) {
     const Point64 &p = a.pts[g], &q = a.pt(a.nxt[g]);
@@ -252,7 +258,6 @@ bool find_crossings(Arrangement& a) {
   double extent = 0.0;
   for (const EdgeBox& b : boxes) extent += static_cast<double>(std::max(b.x1 - b.x0, b.y1 - b.y0));
   const std::int64_t most = 64 * static_cast<std::int64_t>(n) + 4096;
-  EdgeGrid grid;
   if (!grid.build(boxes, all, std::max(4.0 * extent / cells, std::sqrt(w * h / (16.0 * cells)))) ||
       grid.pairs() > most)
     if (!grid.build(boxes, all, std::sqrt(w * h / cells))) return false;
@@ -459,10 +464,25 @@ bool assemble(Assembly& s, const std::vector<Windings>& lone, const std::vector<
 
 }  // namespace
 
-bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(const Windings&),
-                    Paths64& out) {
-  out.clear();
+namespace {
+
+// winding_region's arrays, kept by each thread from call to call (a section's printed stage
+// calls it two or three times): no allocation once they are large enough. The work takes them
+// by reference: each use of a thread_local in a shared library is a call that finds it.
+struct Work {
   Arrangement a;
+  Filled<EdgeBox> boxes;
+  EdgeGrid grid;  // build() sets every field
+  std::vector<int> first, fill;
+  Filled<Occurrence> sorted;
+  std::vector<Windings> right, lone;
+};
+
+__attribute__((noinline)) bool winding_region_in(Work& work,
+                                                 const std::vector<const Paths64*>& sets,
+                                                 bool (*inside)(const Windings&), Paths64& out) {
+  Arrangement& a = work.a;
+  a.clear();
   a.start.push_back(0);
   std::size_t points = 0;
   for (std::size_t s = 0; s < sets.size() && s < 3; ++s)
@@ -487,8 +507,8 @@ bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(cons
       a.prv[static_cast<std::size_t>(g)] = g == b ? e - 1 : g - 1;
     }
   }
-  if (!find_crossings(a)) return false;
-  sort_occurrences(a);
+  if (!find_crossings(a, work.boxes, work.grid)) return false;
+  sort_occurrences(a, work.first, work.fill, work.sorted);
   for (std::size_t k = 1; k < a.occ.size(); ++k)  // two crossings too close to order on an edge
     if (a.occ[k].seg == a.occ[k - 1].seg && !(a.occ[k].t - a.occ[k - 1].t > 1e-12)) return false;
   Assembly s{a, {}, {}, {}, {}};
@@ -500,12 +520,27 @@ bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(cons
     while (o < a.occ.size() && a.occ[o].seg < a.start[p + 1]) ++o;
     s.end[p] = static_cast<int>(o);
   }
-  std::vector<Windings> right, lone;
+  std::vector<Windings>&right = work.right, &lone = work.lone;
   if (!chain_windings(a, right, lone) || !assemble(s, lone, right, inside, out)) {
     out.clear();
     return false;
   }
   return true;
+}
+
+}  // namespace
+
+bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(const Windings&),
+                    Paths64& out) {
+  out.clear();
+  static thread_local Work work;
+  Work* w = &work;
+#if defined(__GNUC__)
+  // Hides the address from the optimiser: known constant, it would be propagated into the work's
+  // functions and each use there would look the thread's copy up again (measured: 1.8 M lookups).
+  asm("" : "+r"(w));
+#endif
+  return winding_region_in(*w, sets, inside, out);
 }
 
 }  // namespace osteon::detail
