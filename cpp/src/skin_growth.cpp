@@ -24,6 +24,10 @@ struct RowIntervals {
   std::vector<Interval> intervals;
   std::pair<const Interval*, const Interval*> row(int k) const {
     if (k < 0 || k + 1 >= static_cast<int>(start.size())) return {nullptr, nullptr};
+    return at(k);
+  }
+  // row(k) for 0 <= k < rows, unchecked (the loops below stay in that range).
+  std::pair<const Interval*, const Interval*> at(int k) const {
     const Interval* base = intervals.data();
     return {base + start[static_cast<std::size_t>(k)],
             base + start[static_cast<std::size_t>(k + 1)]};
@@ -70,7 +74,8 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   });
   RowIntervals out;
   out.start.assign(static_cast<std::size_t>(rows) + 1, 0);
-  out.intervals.reserve(t.size() / 2);
+  out.intervals.resize(t.size() / 2);  // at most one interval per two crossings
+  Interval* next = out.intervals.data();
   for (int k = 0; k < rows; ++k) {
     const auto first = t.begin() + count[static_cast<std::size_t>(k)];
     const auto last = t.begin() + count[static_cast<std::size_t>(k) + 1];
@@ -81,9 +86,10 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
         for (auto d = c; d != first && *(d - 1) > *d; --d) std::swap(*(d - 1), *d);
     }
     for (auto c = first; c + 1 < last; c += 2)
-      if (*(c + 1) > *c) out.intervals.emplace_back(*c, *(c + 1));
-    out.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(out.intervals.size());
+      if (*(c + 1) > *c) *next++ = Interval(*c, *(c + 1));
+    out.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(next - out.intervals.data());
   }
+  out.intervals.resize(static_cast<std::size_t>(next - out.intervals.data()));
   return out;
 }
 
@@ -176,10 +182,10 @@ void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int la
   for (int k = 0; k < rows; ++k) {
     if (k >= k_lo && k < k_hi) {
       std::size_t from = top.intervals.size();
-      subtract_into(cut.row(k), cut.row(k + 1), top.intervals);
+      subtract_into(cut.at(k), cut.row(k + 1), top.intervals);
       keep_overlapping(top.intervals, from, reach(k - layers + 1, k));
       from = bottom.intervals.size();
-      subtract_into(cut.row(k), cut.row(k - 1), bottom.intervals);
+      subtract_into(cut.at(k), cut.row(k - 1), bottom.intervals);
       keep_overlapping(bottom.intervals, from, reach(k, k + layers - 1));
     }
     top.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(top.intervals.size());
@@ -233,15 +239,15 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   const RowIntervals fill = row_intervals(inner, s_first, pitch, rows, n_lo, n_hi);
   std::vector<Interval> hull(static_cast<std::size_t>(rows), Interval(INFINITY, -INFINITY));
   for (int n = n_lo; n < n_hi; ++n) {
-    const Span room = fill.row(n);
-    if (!room.empty() && !Span(kept.row(n)).empty())
+    const Span room = fill.at(n);
+    if (!room.empty() && !Span(kept.at(n)).empty())
       hull[static_cast<std::size_t>(n)] = Interval(room.first->first, (room.last - 1)->second);
   }
   RowIntervals top, bottom;
   surfaces(cut, hull, layers, k_lo, k_hi, top, bottom);
   Scratch w;
   for (int n = n_lo; n < n_hi; ++n) {
-    const Span room = fill.row(n), sparse_row = kept.row(n);
+    const Span room = fill.at(n), sparse_row = kept.at(n);
     if (room.empty() || sparse_row.empty()) continue;
     w.solid.clear();
     w.widened.clear();
@@ -249,8 +255,8 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
     for (int d = 0; d < layers; ++d) {
       // The row's own surfaces are printed as top / bottom fill and are not widened.
       const double g = d == 0 ? 0.0 : growth;
-      const Span up = n + d < rows ? Span(top.row(n + d)) : Span();
-      const Span down = n - d >= 0 ? Span(bottom.row(n - d)) : Span();
+      const Span up = n + d < rows ? Span(top.at(n + d)) : Span();
+      const Span down = n - d >= 0 ? Span(bottom.at(n - d)) : Span();
       if (!up.empty()) grown |= add_source(up, room, g, w);
       if (!down.empty()) grown |= add_source(down, room, g, w);
     }

@@ -10,6 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
+#include <new>
+#include <utility>
 
 #include "round_to_unit.hpp"
 
@@ -20,6 +23,30 @@ using Clipper2Lib::Path64;
 using Clipper2Lib::Paths64;
 using Clipper2Lib::Point64;
 __extension__ typedef __int128 Wide;
+
+// An allocator whose resize() leaves new elements uninitialised (default-initialised) instead of
+// zeroing them: for the arrays below that are written in full before they are read, where the
+// zeroing was a pass over memory for nothing.
+template <class T>
+struct NoZeroAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = NoZeroAllocator<U>;
+  };
+  NoZeroAllocator() = default;
+  template <class U>
+  NoZeroAllocator(const NoZeroAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <class T>
+using Filled = std::vector<T, NoZeroAllocator<T>>;  // every element written before it is read
 
 // Twice the signed area of (a, b, c): > 0 when c lies left of a -> b.
 inline Wide orient(const Point64& a, const Point64& b, const Point64& c) {
@@ -74,15 +101,19 @@ struct Occurrence {
 
 struct Arrangement {
   std::vector<Point64> pts;
-  std::vector<int> path_of;  // per point
-  std::vector<int> start;    // per path, and one past the last
-  std::vector<int> set_of;   // per path
+  Filled<int> path_of;      // per point
+  std::vector<int> start;   // per path, and one past the last
+  std::vector<int> set_of;  // per path
   std::vector<Crossing> crossings;
-  std::vector<Occurrence> occ;  // sorted by edge, then along it
-  std::vector<int> nxt, prv;    // per point: the next and previous point of its path
+  Filled<Occurrence> occ;  // sorted by edge, then along it
+  Filled<int> nxt, prv;    // per point: the next and previous point of its path
   int next(int g) const { return nxt[static_cast<std::size_t>(g)]; }
   int prev(int g) const { return prv[static_cast<std::size_t>(g)]; }
   const Point64& pt(int g) const { return pts[static_cast<std::size_t>(g)]; }
+  void clear() {
+    pts.clear(), path_of.clear(), start.clear(), set_of.clear();
+    crossings.clear(), occ.clear(), nxt.clear(), prv.clear();
+  }
 };
 
 // orient in T: double is exact where coordinate differences stay under 2^26 (products under
@@ -123,12 +154,13 @@ int cross_edges(Arrangement& a, int i, int j) {
 }
 
 // a.occ by edge (counting sort: most edges have none or one), then along each edge.
-void sort_occurrences(Arrangement& a) {
-  std::vector<int> first(a.pts.size() + 1, 0);
+void sort_occurrences(Arrangement& a, std::vector<int>& first, std::vector<int>& fill,
+                      Filled<Occurrence>& sorted) {
+  first.assign(a.pts.size() + 1, 0);
   for (const Occurrence& o : a.occ) ++first[static_cast<std::size_t>(o.seg) + 1];
   for (std::size_t k = 1; k < first.size(); ++k) first[k] += first[k - 1];
-  std::vector<Occurrence> sorted(a.occ.size());
-  std::vector<int> fill(first.begin(), first.end() - 1);
+  sorted.resize(a.occ.size());
+  fill.assign(first.begin(), first.end() - 1);
   for (const Occurrence& o : a.occ)
     sorted[static_cast<std::size_t>(fill[static_cast<std::size_t>(o.seg)]++)] = o;
   for (std::size_t k = 0; k + 1 < first.size(); ++k)
@@ -141,12 +173,13 @@ void sort_occurrences(Arrangement& a) {
 // cells holding two edges or more.
 struct EdgeGrid {
   int nx = 1, ny = 1;
-  std::vector<int> cell_range;  // per edge: x0, y0, x1, y1 of its cells
-  std::vector<int> start;       // per cell: its entries' start (one more at the end)
-  std::vector<int> entries;     // edges by cell
-  std::vector<int> busy;        // cells with two edges or more, in increasing order
+  Filled<int> cell_range;  // per edge: x0, y0, x1, y1 of its cells
+  std::vector<int> start;  // per cell: its entries' start (one more at the end)
+  Filled<int> entries;     // edges by cell
+  std::vector<int> busy;   // cells with two edges or more, in increasing order
+  std::vector<int> fill;   // build()'s: per cell, the next entry to fill
   // False where the boxes cover more than 64 cells per edge (many long edges across small cells).
-  bool build(const std::vector<EdgeBox>& boxes, const EdgeBox& all, double cell);
+  bool build(const Filled<EdgeBox>& boxes, const EdgeBox& all, double cell);
   std::int64_t pairs() const {  // edge pairs sharing a cell
     std::int64_t sum = 0;
     for (const int c : busy) {
@@ -158,7 +191,7 @@ struct EdgeGrid {
   }
 };
 
-bool EdgeGrid::build(const std::vector<EdgeBox>& boxes, const EdgeBox& all, double cell) {
+bool EdgeGrid::build(const Filled<EdgeBox>& boxes, const EdgeBox& all, double cell) {
   const std::size_t n = boxes.size();
   const double w = static_cast<double>(all.x1 - all.x0) + 1.0;
   const double h = static_cast<double>(all.y1 - all.y0) + 1.0;
@@ -188,7 +221,7 @@ bool EdgeGrid::build(const std::vector<EdgeBox>& boxes, const EdgeBox& all, doub
   std::sort(busy.begin(), busy.end());
   for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
   entries.resize(static_cast<std::size_t>(start.back()));
-  std::vector<int> fill(start.begin(), start.end() - 1);
+  fill.assign(start.begin(), start.end() - 1);
   for (std::size_t g = 0; g < n; ++g) {
     const int* b = &cell_range[4 * g];
     for (int cy = b[1]; cy <= b[3]; ++cy)
@@ -207,9 +240,9 @@ bool EdgeGrid::build(const std::vector<EdgeBox>& boxes, const EdgeBox& all, doub
 // (a few long edges set the mean): one edge per cell's area, as before. False where two edges
 // touch or overlap, or where the grid declines (a star of thousands of long spikes would cost
 // quadratic memory and pair tests here: Clipper2, n log n, takes the section).
-bool find_crossings(Arrangement& a) {
+bool find_crossings(Arrangement& a, Filled<EdgeBox>& boxes, EdgeGrid& grid) {
   const std::size_t n = a.pts.size();
-  std::vector<EdgeBox> boxes(n);
+  boxes.resize(n);
   EdgeBox all{INT64_MAX, INT64_MAX, INT64_MIN, INT64_MIN};
   for (std::size_t g = 0; g < n; ++g) {
     const Point64 &p = a.pts[g], &q = a.pt(a.nxt[g]);
@@ -225,7 +258,6 @@ bool find_crossings(Arrangement& a) {
   double extent = 0.0;
   for (const EdgeBox& b : boxes) extent += static_cast<double>(std::max(b.x1 - b.x0, b.y1 - b.y0));
   const std::int64_t most = 64 * static_cast<std::int64_t>(n) + 4096;
-  EdgeGrid grid;
   if (!grid.build(boxes, all, std::max(4.0 * extent / cells, std::sqrt(w * h / (16.0 * cells)))) ||
       grid.pairs() > most)
     if (!grid.build(boxes, all, std::sqrt(w * h / cells))) return false;
@@ -432,11 +464,30 @@ bool assemble(Assembly& s, const std::vector<Windings>& lone, const std::vector<
 
 }  // namespace
 
-bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(const Windings&),
-                    Paths64& out) {
-  out.clear();
+namespace {
+
+// winding_region's arrays, kept by each thread from call to call (a section's printed stage
+// calls it two or three times): no allocation once they are large enough. The work takes them
+// by reference: each use of a thread_local in a shared library is a call that finds it.
+struct Work {
   Arrangement a;
+  Filled<EdgeBox> boxes;
+  EdgeGrid grid;  // build() sets every field
+  std::vector<int> first, fill;
+  Filled<Occurrence> sorted;
+  std::vector<Windings> right, lone;
+};
+
+__attribute__((noinline)) bool winding_region_in(Work& work,
+                                                 const std::vector<const Paths64*>& sets,
+                                                 bool (*inside)(const Windings&), Paths64& out) {
+  Arrangement& a = work.a;
+  a.clear();
   a.start.push_back(0);
+  std::size_t points = 0;
+  for (std::size_t s = 0; s < sets.size() && s < 3; ++s)
+    for (const Path64& path : *sets[s]) points += path.size();
+  a.pts.reserve(points);  // clean() keeps at most every point
   for (std::size_t s = 0; s < sets.size() && s < 3; ++s)
     for (const Path64& path : *sets[s]) {
       clean(path, a.pts);
@@ -456,8 +507,8 @@ bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(cons
       a.prv[static_cast<std::size_t>(g)] = g == b ? e - 1 : g - 1;
     }
   }
-  if (!find_crossings(a)) return false;
-  sort_occurrences(a);
+  if (!find_crossings(a, work.boxes, work.grid)) return false;
+  sort_occurrences(a, work.first, work.fill, work.sorted);
   for (std::size_t k = 1; k < a.occ.size(); ++k)  // two crossings too close to order on an edge
     if (a.occ[k].seg == a.occ[k - 1].seg && !(a.occ[k].t - a.occ[k - 1].t > 1e-12)) return false;
   Assembly s{a, {}, {}, {}, {}};
@@ -469,12 +520,27 @@ bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(cons
     while (o < a.occ.size() && a.occ[o].seg < a.start[p + 1]) ++o;
     s.end[p] = static_cast<int>(o);
   }
-  std::vector<Windings> right, lone;
+  std::vector<Windings>&right = work.right, &lone = work.lone;
   if (!chain_windings(a, right, lone) || !assemble(s, lone, right, inside, out)) {
     out.clear();
     return false;
   }
   return true;
+}
+
+}  // namespace
+
+bool winding_region(const std::vector<const Paths64*>& sets, bool (*inside)(const Windings&),
+                    Paths64& out) {
+  out.clear();
+  static thread_local Work work;
+  Work* w = &work;
+#if defined(__GNUC__)
+  // Hides the address from the optimiser: known constant, it would be propagated into the work's
+  // functions and each use there would look the thread's copy up again (measured: 1.8 M lookups).
+  asm("" : "+r"(w));
+#endif
+  return winding_region_in(*w, sets, inside, out);
 }
 
 }  // namespace osteon::detail
