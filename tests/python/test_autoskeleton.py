@@ -265,6 +265,26 @@ def test_rignet_models_in_several_pieces_are_rigged_whole(name, joined, loose):
     assert len(sk.roots) == 1 and sk.num_bones >= 5
 
 
+def test_a_tapering_toe_gets_a_tip_bone_to_its_point():
+    """RigNet 8333's right foot (tests/data/RigNet, 120 mm tall) ends in a toe that tapers to a
+    point on the ground: its limb radius near the tip is 1.8 mm (the bench's extremity measure,
+    bench/extremities.py). The end bone stops where the sections fall under a tenth of the
+    limb's median area, 5.6 mm from the toe's front vertex (3.1 radii); the tip bone goes on
+    to where the toe is END_RATIO radii from its end and still as thick as printable, within
+    1.5 radii of the point."""
+    from osteon.io import load_model
+    from rigged_models import DATA
+
+    obj = DATA / "RigNet" / "8333_ori.obj"
+    m = load_model(obj, skeleton=obj.with_name("8333_ori_rig.txt"), height_mm=120)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    sk, _w = osteon.auto_skeleton(v, f)
+    ground = np.flatnonzero((v[:, 1] < 2.0) & (v[:, 0] > 0))  # the right foot's sole
+    toe = v[ground[np.argmax(v[ground, 2])]]  # its frontmost vertex: the toe's point
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.linalg.norm(ends - toe, axis=1).min() < 1.5 * 1.8, toe
+
+
 def rig_reaching(v, f, tips, within):
     """auto_skeleton of (v, f), checked: valid weights, one tree, and a bone end within
     ``within`` mm of each of ``tips``; returns the skeleton."""

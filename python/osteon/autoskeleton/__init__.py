@@ -113,7 +113,7 @@ def _rig_one(v: np.ndarray, f: np.ndarray, root: str | np.ndarray, *, target: in
              min_t: float) -> tuple[Skeleton, np.ndarray]:
     """Steps 1-6 on one welded piece ``v`` (V,3) mm, ``f`` (F,3): (Skeleton, (V,B) weights)."""
     cs = curve_skeleton(v, f, target, deterministic, root)
-    body = make_body(v, f, up, cs)
+    body = make_body(v, f, up, cs, min_t)
     return _skeleton_and_weights(body, cs, root, spur, bend, smooth, min_t)
 
 
