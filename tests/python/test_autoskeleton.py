@@ -285,6 +285,25 @@ def test_a_tapering_toe_gets_a_tip_bone_to_its_point():
     assert np.linalg.norm(ends - toe, axis=1).min() < 1.5 * 1.8, toe
 
 
+def test_a_thin_branch_the_simplified_mesh_lost_gets_a_bone():
+    """RigNet 8184 (tests/data/RigNet, 120 mm tall) ends at the top in a thin point,
+    1.1 mm in limb radius (the bench's extremity measure, bench/extremities.py), that the
+    simplified copy does not keep: the chain through the head stopped 4.7 mm (4.2 radii) from
+    its top vertex. The thin-branch step (``autoskeleton.thin``) finds it on the full mesh
+    and gives it a bone ending within 1.5 radii of it."""
+    from osteon.io import load_model
+    from rigged_models import DATA
+
+    obj = DATA / "RigNet" / "8184_ori.obj"
+    m = load_model(obj, skeleton=obj.with_name("8184_ori_rig.txt"), height_mm=120)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    top = v[np.argmax(v[:, 1])]
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.linalg.norm(ends - top, axis=1).min() < 1.5 * 1.1, top
+
+
 def rig_reaching(v, f, tips, within):
     """auto_skeleton of (v, f), checked: valid weights, one tree, and a bone end within
     ``within`` mm of each of ``tips``; returns the skeleton."""
