@@ -107,28 +107,32 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
     graph = _mesh_graph(body)
     kd = cKDTree(v)
     kept: list[tuple[int, np.ndarray, np.ndarray, float, np.ndarray]] = []
-    order = np.argsort(-stick, kind="stable")  # longest first: a shorter tip near a kept one
-    cand, q, stick = cand[order], q[order], stick[order]
+    order = np.argsort(-stick, kind="stable")  # longest first: a shorter tip near a longer
+    cand, q, stick = cand[order], q[order], stick[order]  # one's is the same feature
     dist = np.linalg.norm(q - v[cand], axis=1)
     frac = (np.arange(SAMPLES) + 0.5) / SAMPLES
-    # every candidate's line to its bone, sampled (one distance query for all)
-    rho_all = body.inner_radius(v[cand][:, None] + frac[None, :, None] * (q - v[cand])[:, None])
-    rho_all = rho_all.reshape(len(cand), SAMPLES)
-    for c, qc, length, rho, dc in zip(cand, q, stick, rho_all, dist, strict=True):  # is the same
+    seen_tip = np.zeros((len(cand), 3))  # the tips tested so far and their widths
+    seen_width = np.zeros(len(cand))
+    n_seen = 0
+    for c, qc, length, dc in zip(cand, q, stick, dist, strict=True):
         length = float(length)
         tip = v[c]
+        if n_seen and (np.linalg.norm(seen_tip[:n_seen] - tip, axis=1)
+                       <= seen_width[:n_seen]).any():
+            continue  # within the width of a longer one's tip: the same feature
         u = (qc - tip) / dc
         s = frac * dc
+        rho = body.inner_radius(tip + s[:, None] * u)
         if not (rho > 0).all():
             continue  # the line leaves the mesh: not a straight branch off this bone
         out = s <= length
         width = 2.0 * float(rho[out].max()) if out.any() else 0.0
         if width < body.min_t or length <= spur * width:
             continue  # thinner than printable, or a bump: not longer than wide
+        seen_tip[n_seen], seen_width[n_seen] = tip, width
+        n_seen += 1
         if np.linalg.norm(ends - tip, axis=1).min() <= width:
             continue  # a bone already ends there
-        if any(np.linalg.norm(tip - k[4]) <= max(width, k[3]) for k in kept):
-            continue  # within its width of a longer branch's tip: the same feature
         if not _finger_like(body, graph, kd, int(c), -u, 0.5 * length, spur):
             continue  # a ridge or a rim (a flat part's edge), not a branch
         stop = np.flatnonzero((s >= END_RATIO * rho) & (rho >= 0.5 * body.min_t))
