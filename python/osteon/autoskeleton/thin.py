@@ -13,8 +13,9 @@ This step looks for such features on the full-resolution mesh, after the bones a
   width (2 x the largest distance to the surface along that part), as for a leaf branch in
   ``prune``; it must be at least as thick as printable (``min_t``) and no bone may already
   end within its width of c;
-* tips closer than their width to a longer one are the same feature (neighbouring maxima of
-  d on one toe's end).
+* candidates are taken longest first, and one within the width of a longer one already
+  tested (kept or not) is the same feature (neighbouring maxima of d on one toe's end or
+  along one rim).
 
 Each tip gets a bone from q (a child of the bone q lies on) to the first point in from c that
 is ``END_RATIO`` radii from c and at least ``min_t`` / 2 thick, and the vertices beyond the
