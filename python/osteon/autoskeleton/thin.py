@@ -91,14 +91,15 @@ def _finger_like(body: Body, graph: sparse.csr_matrix, kd: cKDTree, c: int, out:
 
 
 def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
-          ) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
-    """[(bone, head q (3,), tail (3,), width mm)] of the thin branches found, longest first."""
+          ) -> tuple[list[tuple[int, np.ndarray, np.ndarray, float]], np.ndarray]:
+    """([(bone, head q (3,), tail (3,), width mm)] of the thin branches found, longest first;
+    (V,) each vertex's distance to its bone ``owner``, mm)."""
     v = body.v
     q_all = _segment_points(v, sk.heads[owner], sk.tails[owner])
     d = np.linalg.norm(v - q_all, axis=1)
     cand = _local_maxima(body, d)
     if not len(cand):
-        return []
+        return [], d
     q = q_all[cand]
     big_r = body.inner_radius(q)
     stick = d[cand] - big_r
@@ -139,7 +140,7 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
         stop = np.flatnonzero((s >= END_RATIO * rho) & (rho >= 0.5 * body.min_t))
         tail = tip + s[stop[0]] * u if len(stop) else tip + 0.5 * length * u
         kept.append((int(owner[c]), qc, tail, width, tip))
-    return [(b, qc, tail, width) for b, qc, tail, width, _tip in kept]
+    return [(b, qc, tail, width) for b, qc, tail, width, _tip in kept], d
 
 
 def add_thin_branches(body: Body, sk: Skeleton, full: np.ndarray, spur: float
@@ -149,14 +150,11 @@ def add_thin_branches(body: Body, sk: Skeleton, full: np.ndarray, spur: float
     if sk.num_bones == 0 or not len(body.used):
         return sk, full
     owner = np.argmax(full, axis=1)
-    tips = _tips(body, sk, owner, spur)
+    tips, own_d = _tips(body, sk, owner, spur)
     if not tips:
         return sk, full
     heads, tails = list(sk.heads), list(sk.tails)
     parents, names = list(sk.parents), list(sk.names)
-    v = body.v
-    own_q = _segment_points(v, sk.heads[owner], sk.tails[owner])
-    own_d = np.linalg.norm(v - own_q, axis=1)
     new_owner = owner.copy()
     for b, qc, tail, _width in tips:
         nb = len(heads)
@@ -166,11 +164,12 @@ def add_thin_branches(body: Body, sk: Skeleton, full: np.ndarray, spur: float
         names.append(f"auto_{nb:02d}")
         axis = tail - qc
         n = float(np.linalg.norm(axis))
+        idx = np.flatnonzero(owner == b)  # (only the vertices of the bone it hangs from)
+        v = body.v[idx]
         beyond = ((v - qc) @ (axis / n)) > float(body.inner_radius(qc[None])[0])
         near = np.linalg.norm(v - _segment_points(v, np.broadcast_to(qc, v.shape),
                                                   np.broadcast_to(tail, v.shape)), axis=1)
-        mine = (owner == b) & beyond & (near < own_d)
-        new_owner[mine] = nb
+        new_owner[idx[beyond & (near < own_d[idx])]] = nb
     out = np.zeros((len(full), len(heads)))
     out[:, : full.shape[1]] = full
     moved = new_owner != owner
