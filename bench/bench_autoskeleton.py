@@ -11,7 +11,11 @@ subdivided to ~93k faces, per stage (cProfile). With --pieces: the RigNet models
 pieces (pieces joined / loose, bones, CPU time, and for each leaf joint of the real rig the
 distance to the nearest auto bone end in limb radii: the radius being the median distance from
 the real leaf bone to the nearest vertex; and the same distance to the stretch from the leaf
-joint on to the limb's end, for rigs that stop at a wrist or an ankle: ``limb_radii``). Reads
+joint on to the limb's end, for rigs that stop at a wrist or an ankle: ``limb_radii``), and,
+independent of any rig's choices and of osteon's own rules, for each extremity of the mesh the
+distance from its tip to the nearest auto bone end in its limb's radii (``extremities.py``:
+the maxima of the geodesic distance inside the solid from the main body's centre of mass that
+stick out more than their own width; limb radius: the depth near the tip). Reads
 ../shared/data (or OSTEON_DATA).
 
     python bench/bench_autoskeleton.py [--repeat 3] [--models arm cow ...] [--skip-big]
@@ -152,15 +156,18 @@ def pieces_table(data: str) -> None:
     import warnings
     from pathlib import Path
 
+    from extremities import extremities
     from osteon.autoskeleton import split_pieces
     from osteon.autoskeleton.mesh import check_mesh
     from osteon.io import load_model
 
     print("| model | faces | pieces: joined / loose | auto bones | CPU s | real leaf tips within "
           "1.5 limb radii | tip distance median / max (limb radii) | tips or beyond, to the "
-          "limb's end |")
-    print("|---|---|---|---|---|---|---|---|")
-    totals = np.zeros(4)
+          "limb's end | extremities within 1.5 limb radii | extremity distance median / max "
+          "(limb radii) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    totals = np.zeros(6)
+    misses = []
     for obj in sorted(Path(data, "RigNet").glob("*_ori.obj")):
         m = load_model(obj, skeleton=obj.with_name(obj.stem + "_rig.txt"), height_mm=120)
         v, f = np.asarray(m.vertices), np.asarray(m.faces)
@@ -179,13 +186,45 @@ def pieces_table(data: str) -> None:
         cpu = time.process_time() - c
         real = m.skeleton if isinstance(m.skeleton, osteon.Skeleton) else osteon.Skeleton(
             m.heads, m.tails, m.parents)
-        d, e = limb_radii(v, real, np.concatenate([sk.heads, sk.tails]))
-        totals += [(d <= 1.5).sum(), (e <= 1.5).sum(), len(d), cpu]
+        ends = np.concatenate([sk.heads, sk.tails])
+        d, e = limb_radii(v, real, ends)
+        ex = extremities(wv, wf, p)
+        x = np.linalg.norm(ex.tips[:, None] - ends[None], axis=2).min(1) / ex.radius
+        totals += [(d <= 1.5).sum(), (e <= 1.5).sum(), len(d), cpu, (x <= 1.5).sum(), len(x)]
+        misses += [f"{obj.stem.split('_')[0]} tip {np.round(t, 1).tolist()} r {r:.1f} mm: {q:.1f}"
+                   for t, r, q in zip(ex.tips, ex.radius, x, strict=True) if q > 1.5]
         print(f"| {obj.stem} | {len(f)} | {len(p.joined)} / {len(p.loose)} | {sk.num_bones} | "
               f"{cpu:.2f} | {(d <= 1.5).sum()}/{len(d)} | {np.median(d):.1f} / {d.max():.1f} | "
-              f"{(e <= 1.5).sum()}/{len(e)} |", flush=True)
-    n = int(totals[2])
-    print(f"| all | | | | {totals[3]:.2f} | {int(totals[0])}/{n} | | {int(totals[1])}/{n} |")
+              f"{(e <= 1.5).sum()}/{len(e)} | {(x <= 1.5).sum()}/{len(x)} | "
+              f"{np.median(x):.1f} / {x.max():.1f} |", flush=True)
+    hand_x = hand_row()
+    totals[4:] += [(hand_x <= 1.5).sum(), len(hand_x)]
+    n, m = int(totals[2]), int(totals[5])
+    print(f"| all (CPU: RigNet) | | | | {totals[3]:.2f} | {int(totals[0])}/{n} | | {int(totals[1])}/{n} | "
+          f"{int(totals[4])}/{m} | |")
+    print("\nextremities missed (tip mm, limb radius, distance in radii):", *misses, sep="\n  ")
+
+
+def hand_row() -> np.ndarray:
+    """The test hand (``tests/python/test_autoskeleton.py``: five 8 mm capsule fingers on an
+    ellipsoid palm, one closed mesh, no rig) as a row of the pieces table: its extremities'
+    distances to the nearest auto bone end (limb radii)."""
+    from extremities import extremities
+    from osteon.autoskeleton import split_pieces
+    from osteon.autoskeleton.mesh import check_mesh
+    from test_autoskeleton import hand
+
+    v, f, _fingers, _r = hand()
+    c = time.process_time()
+    sk, _w = osteon.auto_skeleton(v, f)
+    cpu = time.process_time() - c
+    wv, wf, _ = check_mesh(v, f)
+    ex = extremities(wv, wf, split_pieces(wv, wf))
+    ends = np.concatenate([sk.heads, sk.tails])
+    x = np.linalg.norm(ex.tips[:, None] - ends[None], axis=2).min(1) / ex.radius
+    print(f"| hand (test) | {len(f)} | 0 / 0 | {sk.num_bones} | {cpu:.2f} | (no rig) | | | "
+          f"{(x <= 1.5).sum()}/{len(x)} | {np.median(x):.1f} / {x.max():.1f} |", flush=True)
+    return x
 
 
 def big(repeat: int) -> None:

@@ -265,6 +265,45 @@ def test_rignet_models_in_several_pieces_are_rigged_whole(name, joined, loose):
     assert len(sk.roots) == 1 and sk.num_bones >= 5
 
 
+def test_a_tapering_toe_gets_a_tip_bone_to_its_point():
+    """RigNet 8333's right foot (tests/data/RigNet, 120 mm tall) ends in a toe that tapers to a
+    point on the ground: its limb radius near the tip is 1.8 mm (the bench's extremity measure,
+    bench/extremities.py). The end bone stops where the sections fall under a tenth of the
+    limb's median area, 5.6 mm from the toe's front vertex (3.1 radii); the tip bone goes on
+    to where the toe is END_RATIO radii from its end and still as thick as printable, within
+    1.5 radii of the point."""
+    from osteon.io import load_model
+    from rigged_models import DATA
+
+    obj = DATA / "RigNet" / "8333_ori.obj"
+    m = load_model(obj, skeleton=obj.with_name("8333_ori_rig.txt"), height_mm=120)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    sk, _w = osteon.auto_skeleton(v, f)
+    ground = np.flatnonzero((v[:, 1] < 2.0) & (v[:, 0] > 0))  # the right foot's sole
+    toe = v[ground[np.argmax(v[ground, 2])]]  # its frontmost vertex: the toe's point
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.linalg.norm(ends - toe, axis=1).min() < 1.5 * 1.8, toe
+
+
+def test_a_thin_branch_the_simplified_mesh_lost_gets_a_bone():
+    """RigNet 8184 (tests/data/RigNet, 120 mm tall) ends at the top in a thin point,
+    1.1 mm in limb radius (the bench's extremity measure, bench/extremities.py), that the
+    simplified copy does not keep: the chain through the head stopped 4.7 mm (4.2 radii) from
+    its top vertex. The thin-branch step (``autoskeleton.thin``) finds it on the full mesh
+    and gives it a bone ending within 1.5 radii of it."""
+    from osteon.io import load_model
+    from rigged_models import DATA
+
+    obj = DATA / "RigNet" / "8184_ori.obj"
+    m = load_model(obj, skeleton=obj.with_name("8184_ori_rig.txt"), height_mm=120)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    top = v[np.argmax(v[:, 1])]
+    ends = np.concatenate([sk.heads, sk.tails])
+    assert np.linalg.norm(ends - top, axis=1).min() < 1.5 * 1.1, top
+
+
 def rig_reaching(v, f, tips, within):
     """auto_skeleton of (v, f), checked: valid weights, one tree, and a bone end within
     ``within`` mm of each of ``tips``; returns the skeleton."""
@@ -635,3 +674,57 @@ def test_open_limbs_plugged_into_an_open_body_join_it_and_get_bones():
     p = split_pieces(v, f)
     assert len(p.joined) == 2 and not p.loose
     rig_reaching(v, f, feet, 1.5 * r)
+
+
+def test_radius_inputs_from_the_triangles_in_bulk_match_pygel3d_and_the_shape():
+    """Issue 35: the radius measuring reads the simplified mesh's triangles in one call
+    (``curve.mesh_triangles``) and computes GEL's angle-weighted vertex normals in NumPy
+    (``curve.vertex_normals``) instead of several pygel3d calls per face and vertex. On a
+    capsule simplified by pygel3d (irregular triangles), the triangles are pygel3d's own face
+    by face, the normals GEL's to rounding, and on the cylinder they point straight out from
+    the axis (closed form: (0, y, z) / r)."""
+    from osteon.autoskeleton import curve
+    from pygel3d import hmesh
+
+    r = 6.0
+    v, f = capsule(length=80.0, radius=r, n=32, stations=30, cap=8)
+    m = hmesh.Manifold.from_triangles(v, f)
+    hmesh.quadric_simplify(m, 0.5)
+    m.cleanup()
+    pos = np.array(m.positions())
+    tri = curve.mesh_triangles(m)
+    assert tri.tolist() == [list(m.circulate_face(int(i), "v")) for i in m.faces()]
+    normals = curve.vertex_normals(pos, tri)
+    gel = np.array([m.vertex_normal(i) for i in range(len(pos))]).reshape(-1, 3)
+    assert np.abs(normals - gel).max() < 1e-12
+    mid = (pos[:, 0] > 10) & (pos[:, 0] < 70)
+    radial = pos[mid] * [0.0, 1.0, 1.0]
+    radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+    assert np.einsum("ij,ij->i", normals[mid], radial).min() > 0.95
+
+
+def test_the_bench_extremity_measure_finds_the_five_fingertips_of_a_hand():
+    """Issue 35's rig-free measure (``bench/extremities.py``: maxima of the geodesic distance
+    inside the voxelised solid from the body's centre of mass that stick out more than their
+    width) on the test hand: exactly five extremities, one at each fingertip (the capsule's
+    end, r beyond its axis' end) to within two voxels, each with the finger's radius r (4 mm)
+    to within a voxel; the palm's far end (an ellipsoid: it sticks out less than its width) is
+    none."""
+    import sys
+    from pathlib import Path
+
+    from osteon.autoskeleton.mesh import check_mesh
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from extremities import extremities
+
+    v, f, fingers, r = hand()
+    wv, wf, _ = check_mesh(v, f)
+    ex = extremities(wv, wf, split_pieces(wv, wf))
+    assert len(ex.tips) == 5
+    for a, b in fingers:
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        tip = b + r * (b - a) / np.linalg.norm(b - a)
+        k = int(np.argmin(np.linalg.norm(ex.tips - tip, axis=1)))
+        assert np.linalg.norm(ex.tips[k] - tip) < 2 * np.sqrt(3) * ex.h, (tip, ex.tips[k])
+        assert abs(ex.radius[k] - r) < ex.h * np.sqrt(3), ex.radius[k]

@@ -23,6 +23,10 @@
 6. ``weights``: one-hot binding smoothed on the simplified mesh, interpolated to the full mesh,
    at most 4 bones per vertex; joined pieces take the weights of the body next to them, loose
    pieces their nearest bone.
+7. ``thin``: thin branches the simplified mesh lost (a toe, a claw, an ear 1.5-3 mm thick),
+   found on the full mesh: a vertex farthest from its bone among its neighbours whose straight
+   line to the bone stays inside, and whose part beyond the limb's surface is longer than
+   ``spur`` x its width and at least as thick as printable, gets a bone from the bone to it.
 """
 
 from __future__ import annotations
@@ -43,6 +47,7 @@ from .junctions import recentre_junctions
 from .mesh import check_mesh, piece_labels
 from .pieces import Pieces, split_pieces
 from .prune import prune
+from .thin import add_thin_branches
 from .tree import Body, make_body, make_tree
 from .weights import fill_node_bones, skin_weights
 
@@ -105,7 +110,8 @@ def _skeleton_and_weights(body: Body, cs, root: str, spur: float, bend: float, s
                       np.array(bones.parents, np.int64),
                       [f"auto_{i:02d}" for i in range(len(bones.heads))])
     node_bone = fill_node_bones(tree, bones.node_bone)
-    return sk, skin_weights(body, tree, node_bone, sk.num_bones, smooth)
+    full = skin_weights(body, tree, node_bone, sk.num_bones, smooth)
+    return add_thin_branches(body, sk, full, spur)
 
 
 def _rig_one(v: np.ndarray, f: np.ndarray, root: str | np.ndarray, *, target: int,
@@ -113,7 +119,7 @@ def _rig_one(v: np.ndarray, f: np.ndarray, root: str | np.ndarray, *, target: in
              min_t: float) -> tuple[Skeleton, np.ndarray]:
     """Steps 1-6 on one welded piece ``v`` (V,3) mm, ``f`` (F,3): (Skeleton, (V,B) weights)."""
     cs = curve_skeleton(v, f, target, deterministic, root)
-    body = make_body(v, f, up, cs)
+    body = make_body(v, f, up, cs, min_t)
     return _skeleton_and_weights(body, cs, root, spur, bend, smooth, min_t)
 
 

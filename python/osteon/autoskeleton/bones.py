@@ -51,29 +51,34 @@ def rdp(points: np.ndarray, tol: float) -> list[int]:
 
 
 def branch_polyline(body: Body, tree: Tree, ch: list[list[int]], start: int, first: int
-                    ) -> tuple[list[int], np.ndarray, list[int]]:
+                    ) -> tuple[list[int], np.ndarray, list[int], list[int]]:
     """The branch from node ``start`` through ``first`` to the next junction or leaf:
     (its nodes, its polyline (K,3) mm with a leaf's end point, bpath: the node of each
-    polyline point (points past a limb's end: none))."""
+    polyline point (points past a limb's end: none), joints: polyline indices that must end
+    a bone (the end bone's end before a tip bone))."""
     path = [start, first]
     while len(ch[path[-1]]) == 1:
         path.append(ch[path[-1]][0])
     pts = tree.npos[path].copy()
     end = path[-1]
     bpath = path
+    joints: list[int] = []
     if not ch[end]:  # leaf: reach the limb's end, short of its end cap
-        stop, k = limb_end(body, tree, pts, end)
-        if len(stop) > 1:  # a joint at the limb's base: the leaf's node goes to the last bone
-            bpath = [*path[:k], *[end] * len(stop)]
+        stop, k, tipped = limb_end(body, tree, pts, end)
+        if len(stop) > 1:  # a joint at the limb's base or a tip bone: the leaf's node goes to
+            bpath = [*path[:k], *[end] * len(stop)]  # the last bone
+        if tipped:  # the end bone's end, where the tip bone starts
+            joints = [k + len(stop) - 2]
         pts = np.vstack([pts[:k], stop])
     if start == tree.root and len(ch[start]) == 1:  # the root is an end: reach it
         d = pts[0] - pts[min(2, len(pts) - 1)]
         if np.linalg.norm(d) > 0:
-            stop, k = limb_end(body, tree, pts[::-1], tree.root)
+            stop, k, _ = limb_end(body, tree, pts[::-1], tree.root, tip=False)
             stop = stop[-1:]  # (no joint at the base here: the root end is one bone)
             bpath = [path[0], *path[len(pts) - k :]]  # bpath[0] is never assigned
+            joints = [j + 1 - (len(pts) - k) for j in joints]
             pts = np.vstack([stop, pts[len(pts) - k :]])
-    return path, pts, bpath
+    return path, pts, bpath, joints
 
 
 def breakpoints(pts: np.ndarray, tol: float, size: float) -> list[int]:
@@ -116,9 +121,11 @@ def make_bones(body: Body, tree: Tree, bend: float) -> Bones:
     while stack:
         start, pbone = stack.pop()
         for c in ch[start]:
-            path, pts, bpath = branch_polyline(body, tree, ch, start, c)
+            path, pts, bpath, joints = branch_polyline(body, tree, ch, start, c)
             rad = float(np.median(tree.nradius[path]))
             kept = breakpoints(pts, bend * max(rad, 1e-3 * body.size), body.size)
+            if len(kept) >= 2 and joints:  # a tip bone's joint stays, whatever the bend
+                kept = sorted({*kept, *(j for j in joints if 0 < j < len(pts) - 1)})
             if len(kept) < 2:
                 continue
             stack.append((path[-1], add_chain(out, pts, kept, bpath, pbone)))

@@ -179,9 +179,64 @@ def local_radius(pos: np.ndarray, normals: np.ndarray, surface, size: float) -> 
     return r
 
 
+def mesh_triangles(m) -> np.ndarray:
+    """(F,3) vertex ids of the triangles of the pygel3d ``Manifold`` ``m``, each in its face's
+    order, from one call into GEL (its OBJ writer, into a temporary file).
+
+    Why: pygel3d hands out a face's vertices one Python call per face and one more per corner
+    (``circulate_face``, ``IntVector.__getitem__``); on RigNet 8210's 12 rigged pieces these
+    and the per-face and per-vertex normal calls took about half of the 0.8 s CPU spent
+    measuring radii (issue 35)."""
+    import tempfile
+
+    from pygel3d import hmesh
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, "m.obj")
+        hmesh.obj_save(path, m)
+        with open(path) as file:
+            text = "\n" + file.read()  # "v x y z" lines, then "f a b c" lines (from 1)
+    start = text.find("\nf ")
+    faces = text[start:] if start >= 0 else ""
+    tri = np.array(faces.replace("f ", " ").split(), np.int64) - 1
+    if len(tri) != 3 * faces.count("\nf "):
+        raise ValueError("the simplified mesh has faces that are not triangles")
+    tri = tri.reshape(-1, 3)
+    if text.count("\nv ") != m.no_allocated_vertices():
+        tri = np.fromiter(m.vertices(), np.int64)[tri]  # (OBJ numbers the vertices in use)
+    return tri
+
+
+def triangle_edges(tri: np.ndarray) -> np.ndarray:
+    """(E,2) edges of the triangles ``tri`` (F,3), each once (i < j), in (i, j) order."""
+    pairs = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    return np.unique(pairs, axis=0)
+
+
+def unit_rows(x: np.ndarray) -> np.ndarray:
+    """Rows of ``x`` (n,3) scaled to length 1 (rows of length 0 left as they are, as GEL's
+    ``cond_normalize``)."""
+    n = np.linalg.norm(x, axis=1, keepdims=True)
+    return np.divide(x, n, out=x.copy(), where=n > 0)
+
+
+def vertex_normals(pos: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """(n,3) unit normals of the vertices ``pos`` (n,3) of the triangles ``tri`` (F,3): GEL's
+    ``normal(m, v)`` for all at once, the sum over a vertex's faces of the face's normal
+    (from the two edges leaving the vertex, each of length 1) times its angle there."""
+    out = np.zeros_like(pos)
+    for k in range(3):
+        v, nxt, prv = tri[:, k], tri[:, (k + 1) % 3], tri[:, (k + 2) % 3]
+        e1, e0 = unit_rows(pos[nxt] - pos[v]), unit_rows(pos[prv] - pos[v])
+        angle = np.arccos(np.clip(np.einsum("ij,ij->i", e0, e1), -1.0, 1.0))
+        np.add.at(out, v, angle[:, None] * unit_rows(np.cross(e1, e0)))
+    return unit_rows(out)
+
+
 def vertex_radius(m, surface, size: float, faces: bool = True
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """(positions (n,3) mm, a view of ``m``'s; the local limb radius (n,) mm at each vertex) of
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(positions (n,3) mm, a view of ``m``'s; the local limb radius (n,) mm at each vertex;
+    the triangles (F,3), :func:`mesh_triangles`) of
     the pygel3d ``Manifold`` ``m`` (triangles): :func:`local_radius` from the vertex or, with
     ``faces``, the larger of that and the smallest from the centres of its faces.
 
@@ -192,17 +247,15 @@ def vertex_radius(m, surface, size: float, faces: bool = True
     ~0.3 s CPU on a 20 k-face model and changed its bones)."""
     pos = m.positions()
     n = len(pos)
-    normals = np.array([m.vertex_normal(i) for i in range(n)], dtype=np.float64).reshape(n, 3)
-    radius = local_radius(np.array(pos), normals, surface, size)
-    fids = [int(i) for i in m.faces()] if faces else []
-    if not fids:
-        return pos, radius
-    tri = np.array([list(m.circulate_face(i, "v")) for i in fids], np.int64)
-    fnormal = np.array([m.face_normal(i) for i in fids], np.float64).reshape(-1, 3)
+    tri = mesh_triangles(m)
+    radius = local_radius(np.array(pos), vertex_normals(np.array(pos), tri), surface, size)
+    if not faces or not len(tri):
+        return pos, radius, tri
+    fnormal = unit_rows(np.cross(pos[tri[:, 1]] - pos[tri[:, 0]], pos[tri[:, 2]] - pos[tri[:, 0]]))
     fradius = local_radius(pos[tri].mean(1), fnormal, surface, size)
     around = np.full(n, np.inf)
     np.minimum.at(around, tri.ravel(), np.repeat(fradius, 3))
-    return pos, np.maximum(radius, np.where(np.isfinite(around), around, 0.0))
+    return pos, np.maximum(radius, np.where(np.isfinite(around), around, 0.0)), tri
 
 
 def refine_by_radius(m, surface, size: float, target: int) -> int:
@@ -222,12 +275,12 @@ def refine_by_radius(m, surface, size: float, target: int) -> int:
     ones shorter than that on the thick parts, so about 2π / SPACING vertices ring every limb
     as on a fine mesh.  Weights stay per original vertex (interpolated from the nearest
     vertices of the skeletonised copy, :mod:`osteon.autoskeleton.weights`)."""
-    from pygel3d import graph, hmesh
+    from pygel3d import hmesh
 
     rounds = 0
     while 4 * m.no_allocated_faces() <= target:  # (split: ~2 x faces vertices, <= target / 2)
-        pos, radius = vertex_radius(m, surface, size)
-        edges = graph_edges(graph.from_mesh(m), len(pos))
+        pos, radius, tri = vertex_radius(m, surface, size)
+        edges = triangle_edges(tri)  # (their order does not matter here)
         a, b = edges[:, 0], edges[:, 1]
         limit = REFINE * SPACING * np.minimum(radius[a], radius[b])
         if (np.linalg.norm(pos[a] - pos[b], axis=1) > limit).mean() <= LONG_SHARE:
@@ -246,12 +299,16 @@ def coarsen_by_radius(m, surface, size: float, faces: bool = False) -> int:
     limb, so the skeleton's cost is about (vertices) x (vertices round the thickest part); a
     quadric-simplified mesh of 1 500 vertices puts as many round a torso or a palm as the
     whole of a finger.  Evening out the vertices per limb width keeps every finger's vertices
-    and divides the skeleton's cost by 2-6 (issue 35).  Returns the number collapsed."""
+    and divides the skeleton's cost by 2-6 (issue 35).  Returns the number collapsed.
+
+    The edges are taken in pygel3d's graph order (each vertex's neighbours as it circulates
+    them), not sorted: equal ratios (a mirror-symmetric model's two sides) are collapsed in
+    that order, and sorted edges changed the bones of 6 of the 13 RigNet models in several
+    pieces (9477: 17 -> 19 bones)."""
     from pygel3d import graph
 
-    pos, radius = vertex_radius(m, surface, size, faces)  # pos: a view: collapses move it
-    n = len(pos)
-    edges = graph_edges(graph.from_mesh(m), n)
+    pos, radius, _tri = vertex_radius(m, surface, size, faces)  # pos: a view: collapses move it
+    edges = graph_edges(graph.from_mesh(m), len(pos))
     if not len(edges):
         return 0
     a, b = edges[:, 0], edges[:, 1]

@@ -73,7 +73,36 @@ def _surface_axis(ends: np.ndarray, start: np.ndarray
     return (c + d * t.min())[None], c, d
 
 
-def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int) -> tuple[np.ndarray, int]:
+def _tip(body: Body, pts: np.ndarray, radius: np.ndarray, capped: np.ndarray,
+         stop: np.ndarray, i: int) -> np.ndarray | None:
+    """Where a tapering limb's tip bone ends (3,) mm, or None: ``pts`` (400,3) the limb's
+    axis from its end inwards, ``radius`` (400,) mm the distance to the surface there,
+    ``capped`` (400,) whether the end is ``END_RATIO`` radii away; ``stop`` = ``pts[i]``: where
+    the end bone stops (the sliver rule).
+
+    The rule (issue 35): past the sliver rule's stop the axis goes on to the first point,
+    walking in from the end, that is END_RATIO radii from the end and still as thick as the
+    thinnest printable wall (radius >= ``body.min_t`` / 2); if that point lies further out than
+    twice the radius at the stop (the tip is longer than it is wide) and the axis between
+    them stays inside the mesh, a tip bone runs there.  Why: on a pointed limb (a tail, an
+    ear, a horn, a claw) the sections fall under a tenth of the limb's median area a third
+    of its taper short of its point, so the end bone left the tip unposed; the stop stays a
+    joint (the sections up to it are the limb's; those beyond are thin, flagged by the
+    analysis' own too-thin rule)."""
+    ok = np.flatnonzero((radius[:i] >= 0.5 * body.min_t) & capped[:i])
+    if not len(ok):
+        return None
+    more = pts[ok[0]]
+    if np.linalg.norm(more - stop) <= 2.0 * max(float(radius[i]), 1e-3 * body.size):
+        return None
+    s = np.linspace(0.0, 1.0, 20)[:, None]
+    if not (body.inner_radius(stop + s * (more - stop)) > 0).all():
+        return None
+    return more
+
+
+def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int, tip: bool = True
+             ) -> tuple[np.ndarray, int, bool]:
     """Where a limb's end bone stops (mm).  ``line`` (K,3): the branch's polyline from its
     start out to the limb's last node ``leaf``.
 
@@ -89,8 +118,12 @@ def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int) -> tuple[np.nd
     reaches back to the branch's start (a finger with one skeleton node), the axis of the
     limb's own surface (:func:`_surface_axis`), and the bone gets a joint at the limb's base.
 
-    Returns (points (P,3), k): the bone's polyline is ``line[:k]`` then ``points``
-    (1 <= k <= K; P = 1, the end point, or 2, the limb's base and its end point)."""
+    With ``tip``, a tapering limb's end bone is followed by a tip bone to its point
+    (:func:`_tip`).
+
+    Returns (points (P,3), k, tipped): the bone's polyline is ``line[:k]`` then ``points``
+    (1 <= k <= K; P = 1, the end point, or 2, the limb's base and its end point; with a tip
+    bone (``tipped``) one more point, the tip bone's end)."""
     n = len(line)
     # The limb's own radius: the median over its nodes outside the body's ball at the
     # branch's start (those inside it measure the body, not the limb).
@@ -99,7 +132,7 @@ def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int) -> tuple[np.nd
     rad = max(float(np.median(r_line[own] if own.any() else r_line)), 1e-3 * body.size)
     axis = _end_axis(line, rad)
     if axis is None:
-        return line[-1][None], max(n - 1, 1)
+        return line[-1][None], max(n - 1, 1), False
     stretch, c, d = axis
     ends = body.v[body.is_used & (tree.owner[body.near_i[:, 0]] == leaf)]  # the limb's end
     base = np.zeros((0, 3))
@@ -111,18 +144,24 @@ def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int) -> tuple[np.nd
     a = c + d * ((stretch[0] - c) @ d)  # the axis point level with the stretch's start
     length = far - a @ d
     if length <= 0:
-        return line[-1][None], max(n - 1, 1)
+        return line[-1][None], max(n - 1, 1), False
     t = np.linspace(length, 0.0, 400)  # from the end inwards
     pts = a + t[:, None] * d
     radius = body.inner_radius(pts)
     # ... and not a sliver: at least a tenth of the limb's median section area (the
     # engine's sliver rule), i.e. radius >= sqrt(0.1) x the limb's median radius.
-    ok = np.flatnonzero((radius >= math.sqrt(0.1) * rad) & (length - t >= END_RATIO * radius))
+    capped = length - t >= END_RATIO * radius
+    ok = np.flatnonzero((radius >= math.sqrt(0.1) * rad) & capped)
     stop = pts[ok[0]] if len(ok) else a
+    if tip:
+        more = _tip(body, pts, radius, capped, stop, ok[0] if len(ok) else len(t) - 1)
+        if more is not None:
+            return (np.vstack([base, stop, more]),
+                    1 if len(base) else max(n - len(stretch) + 1, 1), True)
     if len(base):  # a joint at the limb's base only if the straight bone would leave the mesh
         s = np.linspace(0.0, 1.0, 50)[:, None]
         if (body.inner_radius(line[0] + s * (stop - line[0])) > 0).all():
-            return stop[None], 1
-        return np.vstack([base, stop]), 1
+            return stop[None], 1, False
+        return np.vstack([base, stop]), 1, False
     k = n - len(stretch) + 1  # the bone keeps the nodes before the last stretch
-    return stop[None], max(k, 1)
+    return stop[None], max(k, 1), False

@@ -24,7 +24,8 @@ class Body:
     v (V,3) mm, f (F,3): the welded mesh; used (U,): vertices in a face; is_used (V,) bool;
     size mm: the largest bounding-box side; up (3,) unit; spos (S,3) mm, sedges (E,2): the
     simplified mesh; near_d (V,4) mm, near_i (V,4): each vertex's nearest simplified vertices;
-    surface: pygel3d ``MeshDistance`` of the full mesh."""
+    surface: pygel3d ``MeshDistance`` of the full mesh; min_t mm: the thinnest printable
+    wall (a limb thinner than this is not printed, so no bone reaches into it)."""
 
     v: np.ndarray
     f: np.ndarray
@@ -37,6 +38,7 @@ class Body:
     near_d: np.ndarray
     near_i: np.ndarray
     surface: Any
+    min_t: float = 0.8
 
     def inner_radius(self, pts: np.ndarray) -> np.ndarray:
         """(N,) distance from each point (N,3) inside the mesh to its surface, mm (0 outside)."""
@@ -45,8 +47,10 @@ class Body:
         return np.maximum(-d, 0.0)
 
 
-def make_body(v: np.ndarray, f: np.ndarray, up: np.ndarray, cs: CurveSkeleton) -> Body:
-    """The :class:`Body` of the welded mesh ``v`` (V,3) mm, ``f`` (F,3) and its curve skeleton."""
+def make_body(v: np.ndarray, f: np.ndarray, up: np.ndarray, cs: CurveSkeleton,
+              min_t: float = 0.8) -> Body:
+    """The :class:`Body` of the welded mesh ``v`` (V,3) mm, ``f`` (F,3) and its curve skeleton
+    (``min_t``: the thinnest printable wall, mm)."""
     used = np.unique(f)
     size = float(np.ptp(v[used], axis=0).max())
     kq = min(4, len(cs.spos))
@@ -54,7 +58,7 @@ def make_body(v: np.ndarray, f: np.ndarray, up: np.ndarray, cs: CurveSkeleton) -
     is_used = np.zeros(len(v), bool)
     is_used[used] = True
     return Body(v, f, used, is_used, size, up, cs.spos, cs.sedges,
-                near_d.reshape(len(v), kq), near_i.reshape(len(v), kq), cs.surface)
+                near_d.reshape(len(v), kq), near_i.reshape(len(v), kq), cs.surface, min_t)
 
 
 @dataclass

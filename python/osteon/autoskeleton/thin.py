@@ -1,0 +1,178 @@
+"""Step 7: thin side branches the simplified mesh lost (units: mm).
+
+The curve skeleton is computed on a copy simplified to the detail target, where a toe, a claw
+or a wing finger 1.5-3 mm thick is a few triangles or nothing, so it gets no branch (issue 35).
+This step looks for such features on the full-resolution mesh, after the bones are made:
+
+* every vertex's distance d to the bone it is bound to most (its largest weight), and the
+  vertices where d is a local maximum over their mesh neighbours: points that stick out of
+  their bone's limb;
+* such a point c is the tip of a thin branch when the straight line from c to its bone's
+  nearest point q stays inside the mesh and the part of it beyond the limb's own surface
+  (length L = d - R, R: the distance from q to the surface) is longer than ``spur`` x its
+  width (2 x the largest distance to the surface along that part), as for a leaf branch in
+  ``prune``; it must be at least as thick as printable (``min_t``) and no bone may already
+  end within its width of c;
+* candidates are taken longest first, and one within the width of a longer one already
+  tested (kept or not) is the same feature (neighbouring maxima of d on one toe's end or
+  along one rim).
+
+Each tip gets a bone from q (a child of the bone q lies on) to the first point in from c that
+is ``END_RATIO`` radii from c and at least ``min_t`` / 2 thick, and the vertices beyond the
+limb's surface that lie nearer that bone than their own go to it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+from scipy.spatial import cKDTree
+
+from .._api import Skeleton
+from .ends import END_RATIO
+from .tree import Body
+
+#: samples along the line from a tip to its bone
+SAMPLES = 32
+
+
+def _segment_points(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N,3) the nearest points to ``p`` (N,3) on the segments ``a``-``b`` (N,3 each)."""
+    ab = b - a
+    den = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    t = np.clip(np.einsum("ij,ij->i", p - a, ab) / den, 0.0, 1.0)
+    return a + t[:, None] * ab
+
+
+def _local_maxima(body: Body, d: np.ndarray) -> np.ndarray:
+    """Vertex ids (used vertices) where ``d`` (V,) is at least that of every mesh neighbour."""
+    f = body.f
+    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
+    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    best = np.full(len(d), -np.inf)
+    np.maximum.at(best, a, d[b])
+    np.maximum.at(best, b, d[a])
+    return body.used[d[body.used] >= best[body.used]]
+
+
+def _mesh_graph(body: Body) -> sparse.csr_matrix:
+    """(V,V) adjacency of the mesh's vertices along its edges."""
+    f = body.f
+    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
+    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    n = len(body.v)
+    return sparse.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(n, n)).tocsr()
+
+
+def _finger_like(body: Body, graph: sparse.csr_matrix, kd: cKDTree, c: int, out: np.ndarray,
+                 half: float, spur: float) -> bool:
+    """Whether the mesh around tip vertex ``c`` less than ``half`` mm in from it along the unit
+    ``out`` (3,) (pointing from the bone out to the tip: the outer half of the branch) makes
+    a branch longer than ``spur`` x its width: the branch's length (2 ``half``) against twice
+    the largest distance from the line through ``c`` along ``out`` of the vertices there
+    connected to ``c`` (``kd``: a k-d tree of the mesh's vertices).  A finger passes; the rim
+    of a flat part (a palm's edge) is a wide cap there and does not."""
+    tip = body.v[c]
+    sel = np.array(sorted(kd.query_ball_point(tip, 2.0 * half + 1e-9)), np.int64)
+    sel = sel[(body.v[sel] - tip) @ out >= -half]  # (<= 0 near the tip)
+    if c not in sel:
+        return False
+    rows = graph[sel].tocoo()  # the edges among ``sel`` (sorted), in its own numbering
+    j = np.minimum(np.searchsorted(sel, rows.col), len(sel) - 1)
+    inside = sel[j] == rows.col
+    sub = sparse.coo_matrix((rows.data[inside], (rows.row[inside], j[inside])),
+                            shape=(len(sel), len(sel)))
+    _n, label = csgraph.connected_components(sub, directed=False)
+    part = sel[label == label[np.searchsorted(sel, c)]]
+    rel = body.v[part] - tip
+    lateral = np.linalg.norm(rel - np.outer(rel @ out, out), axis=1)
+    return 2.0 * half > spur * 2.0 * float(lateral.max())
+
+
+def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
+          ) -> tuple[list[tuple[int, np.ndarray, np.ndarray, float]], np.ndarray]:
+    """([(bone, head q (3,), tail (3,), width mm)] of the thin branches found, longest first;
+    (V,) each vertex's distance to its bone ``owner``, mm)."""
+    v = body.v
+    q_all = _segment_points(v, sk.heads[owner], sk.tails[owner])
+    d = np.linalg.norm(v - q_all, axis=1)
+    cand = _local_maxima(body, d)
+    if not len(cand):
+        return [], d
+    q = q_all[cand]
+    big_r = body.inner_radius(q)
+    stick = d[cand] - big_r
+    keep = stick > body.min_t  # (a branch at least as long as the thinnest wall is wide)
+    cand, q, stick = cand[keep], q[keep], stick[keep]
+    ends = np.concatenate([sk.heads, sk.tails])
+    graph = _mesh_graph(body)
+    kd = cKDTree(v)
+    kept: list[tuple[int, np.ndarray, np.ndarray, float, np.ndarray]] = []
+    order = np.argsort(-stick, kind="stable")  # longest first: a shorter tip near a longer
+    cand, q, stick = cand[order], q[order], stick[order]  # one's is the same feature
+    dist = np.linalg.norm(q - v[cand], axis=1)
+    frac = (np.arange(SAMPLES) + 0.5) / SAMPLES
+    seen_tip = np.zeros((len(cand), 3))  # the tips tested so far and their widths
+    seen_width = np.zeros(len(cand))
+    n_seen = 0
+    for c, qc, length, dc in zip(cand, q, stick, dist, strict=True):
+        length = float(length)
+        tip = v[c]
+        if n_seen and (np.linalg.norm(seen_tip[:n_seen] - tip, axis=1)
+                       <= seen_width[:n_seen]).any():
+            continue  # within the width of a longer one's tip: the same feature
+        u = (qc - tip) / dc
+        s = frac * dc
+        rho = body.inner_radius(tip + s[:, None] * u)
+        if not (rho > 0).all():
+            continue  # the line leaves the mesh: not a straight branch off this bone
+        out = s <= length
+        width = 2.0 * float(rho[out].max()) if out.any() else 0.0
+        if width < body.min_t or length <= spur * width:
+            continue  # thinner than printable, or a bump: not longer than wide
+        seen_tip[n_seen], seen_width[n_seen] = tip, width
+        n_seen += 1
+        if np.linalg.norm(ends - tip, axis=1).min() <= width:
+            continue  # a bone already ends there
+        if not _finger_like(body, graph, kd, int(c), -u, 0.5 * length, spur):
+            continue  # a ridge or a rim (a flat part's edge), not a branch
+        stop = np.flatnonzero((s >= END_RATIO * rho) & (rho >= 0.5 * body.min_t))
+        tail = tip + s[stop[0]] * u if len(stop) else tip + 0.5 * length * u
+        kept.append((int(owner[c]), qc, tail, width, tip))
+    return [(b, qc, tail, width) for b, qc, tail, width, _tip in kept], d
+
+
+def add_thin_branches(body: Body, sk: Skeleton, full: np.ndarray, spur: float
+                      ) -> tuple[Skeleton, np.ndarray]:
+    """(Skeleton, (V,B') weights) with a bone for every thin branch of ``body`` that ``sk``
+    (weights ``full`` (V,B)) misses; unchanged if there is none."""
+    if sk.num_bones == 0 or not len(body.used):
+        return sk, full
+    owner = np.argmax(full, axis=1)
+    tips, own_d = _tips(body, sk, owner, spur)
+    if not tips:
+        return sk, full
+    heads, tails = list(sk.heads), list(sk.tails)
+    parents, names = list(sk.parents), list(sk.names)
+    new_owner = owner.copy()
+    for b, qc, tail, _width in tips:
+        nb = len(heads)
+        heads.append(qc)
+        tails.append(tail)
+        parents.append(b)
+        names.append(f"auto_{nb:02d}")
+        axis = tail - qc
+        n = float(np.linalg.norm(axis))
+        idx = np.flatnonzero(owner == b)  # (only the vertices of the bone it hangs from)
+        v = body.v[idx]
+        beyond = ((v - qc) @ (axis / n)) > float(body.inner_radius(qc[None])[0])
+        near = np.linalg.norm(v - _segment_points(v, np.broadcast_to(qc, v.shape),
+                                                  np.broadcast_to(tail, v.shape)), axis=1)
+        new_owner[idx[beyond & (near < own_d[idx])]] = nb
+    out = np.zeros((len(full), len(heads)))
+    out[:, : full.shape[1]] = full
+    moved = new_owner != owner
+    out[moved] = 0.0
+    out[moved, new_owner[moved]] = 1.0
+    return Skeleton(np.array(heads), np.array(tails), np.array(parents, np.int64), names), out
