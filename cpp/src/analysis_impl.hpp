@@ -218,6 +218,9 @@ struct RunState {
   std::atomic<int> local_used{0}, local_failed{0};
   long retried = 0;
 
+  // check_vertices compared the vertices with the last run's: Impl::moved_vertices lists those
+  // that moved, Impl::changed_blocks the blocks that hold them (false: no last run).
+  bool vertices_compared = false;
   // Live reuse (reuse_last_run): per vertex, whether it moved since the last run (null: not
   // known, e.g. a full or partial run); the Analyzer's storage.
   const std::vector<std::uint8_t>* moved = nullptr;
@@ -262,7 +265,13 @@ struct Analyzer::Impl {
   LoosePieceFinder loose_finder;
   MomentArmIndex arm_index;
 
-  // Scratch of reuse_last_run: per vertex, moved since the last run (RunState::moved).
+  // check_vertices: the vertices in blocks, each block's box (mm; the last run's once it ended),
+  // this run's blocks that differ bitwise from the last run's and, in them, the vertices that
+  // moved (ascending); per vertex, moved or not (RunState::moved; 0 but for moved_vertices).
+  static constexpr Index kVertexBlock = 1024;
+  std::vector<Vec3> block_lo, block_hi;
+  std::vector<Index> changed_blocks;
+  std::vector<std::int32_t> moved_vertices;
   std::vector<std::uint8_t> moved_scratch;
   // The faces with a moved vertex (RunState::moved_faces), and whether `grid` holds the last
   // run's mesh (that run built it).
@@ -312,6 +321,8 @@ struct Analyzer::Impl {
   // Stages of a run, in order (files listed at the top of this header).
   /// Checks the skeleton, options and vertices; sets the mesh view, size and gap tolerance.
   void check_inputs(RunState& run);
+  /// Step of check_inputs: the vertices finite, their diagonal, and which moved since last run.
+  void check_vertices(RunState& run);
   /// 1. Each vertex's bone: its dominant weight, or the nearest bone where it has none.
   void assign_vertex_bones(RunState& run);
   /// 2. Full runs: the load tree and the sections (interior planes, joints, free ends), with the
