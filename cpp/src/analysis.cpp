@@ -194,6 +194,7 @@ void Analyzer::Impl::forget_last_run() {
   stress_memo.valid = false;
   corner_memo.forget();
   arm_index.forget_slabs();
+  load_memo.clear();
 }
 
 void Analyzer::Impl::check_inputs(RunState& run) {

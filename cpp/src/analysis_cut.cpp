@@ -311,7 +311,8 @@ void Analyzer::Impl::find_loose_pieces_and_arms(RunState& run) {
       for (std::int32_t v : piece) loose_vertex[v] = 1;
   }
   arm_index.build(mesh, sk, tree, run.vertex_bone, slab_params,
-                  loose.empty() ? nullptr : &loose_vertex, run.moved);
+                  loose.empty() ? nullptr : &loose_vertex, run.moved,
+                  run.moved != nullptr ? &moved_vertices : nullptr);
   run.arms = &arm_index;
 }
 

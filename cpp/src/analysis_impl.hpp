@@ -300,6 +300,17 @@ struct Analyzer::Impl {
     std::vector<std::int32_t> vertex_slab;  // sections of the bone below vertex_param
   } stress_memo;
 
+  // The last run's load point per section and the query that found it (section_loads): live
+  // mode asks the moment-arm index again only where the query or its region changed.
+  struct LoadMemo {
+    int bone = -1, boundary = -1;
+    bool plus_side = false;
+    Vec3 center = Vec3::Zero();
+    double arm = 0.0;
+    Index vertex = -1;
+  };
+  std::vector<LoadMemo> load_memo;
+
   // The last run's corners (notch_reuse.hpp): live mode searches only those a change reaches.
   CornerMemo corner_memo;
 
