@@ -195,6 +195,7 @@ void Analyzer::Impl::forget_last_run() {
   corner_memo.forget();
   arm_index.forget_slabs();
   load_memo.clear();
+  last_reach2.clear();
 }
 
 void Analyzer::Impl::check_inputs(RunState& run) {

@@ -224,6 +224,9 @@ struct RunState {
   // Live reuse (reuse_last_run): per vertex, whether it moved since the last run (null: not
   // known, e.g. a full or partial run); the Analyzer's storage.
   const std::vector<std::uint8_t>* moved = nullptr;
+  // Live reuse (list_bone_vertices): per bone, whether a vertex of it moved, its head or tail
+  // did, or its vertices are others than the last run's (empty: not known, all changed).
+  std::vector<std::uint8_t> bone_changed;
 
   // What changed since the last run (partial and live runs): junction cores whose neighbour
   // planes reach it are re-checked. all_changed: a fresh run.
@@ -281,6 +284,12 @@ struct Analyzer::Impl {
   std::vector<Index> vertex_face_start;
   std::vector<std::int32_t> vertex_faces, corner_scratch;
   std::vector<std::uint8_t> face_listed, corner_listed;
+  // Live mode: each bone's vertices in vertex order (CSR, for the vertex bones `bone_list_of`),
+  // and each bone's largest squared distance of a vertex from its axis in the last run (mm^2).
+  std::vector<Index> bone_vertex_start;
+  std::vector<std::int32_t> bone_vertex_list;
+  std::vector<int> bone_list_of;
+  std::vector<double> last_reach2;
   bool grid_holds_last_run = false;
   // The last run's per-vertex stress and what it was computed from: in live mode a vertex whose
   // bone, position, bone head and axis and its bone's section params are bitwise unchanged lies
@@ -298,6 +307,7 @@ struct Analyzer::Impl {
     std::vector<std::uint8_t> vertex_culled;
     std::vector<double> vertex_param;       // mm along the bone (vertices with sections)
     std::vector<std::int32_t> vertex_slab;  // sections of the bone below vertex_param
+    std::vector<std::int32_t> work;         // scratch: the vertices a live update visits
   } stress_memo;
 
   // The last run's load point per section and the query that found it (section_loads): live
@@ -346,8 +356,13 @@ struct Analyzer::Impl {
   /// The faces with a moved vertex (moved_faces_scratch, each once) and the box of their
   /// corners' old and new positions (reuse_last_run, something moved).
   void list_moved_faces(RunState& run, Box3& moved_box);
+  /// Live mode: each bone's vertices (kept while the vertex bones stay) and which bones changed
+  /// (RunState::bone_changed).
+  void list_bone_vertices(RunState& run);
   /// 3a. The face grid, each bone's local-cut radius and its axis crossings.
   void prepare_cuts(RunState& run);
+  /// Step of prepare_cuts: each bone's largest squared distance of a vertex from its axis.
+  void bone_reach2(RunState& run);
   /// 3b. Phase 1: one local cut per family of parallel planes; queues what it cannot prove.
   void cut_local(RunState& run);
   /// 3c. Phase 2: queued sections re-cut wider or whole (and, beside them, the loose pieces

@@ -1,6 +1,7 @@
 // What a run may keep from the last one: partial re-analysis (the correction loop) and exact
 // reuse of unchanged sections (live mode) (Analyzer::Impl).
 #include <algorithm>
+#include <cstring>
 #include <utility>
 #include <vector>
 
@@ -50,6 +51,7 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
   moved_faces.clear();
   run.moved_faces = &moved_faces;
   if (any_moved) list_moved_faces(run, moved_box);
+  list_bone_vertices(run);
   const Vec3 center = 0.5 * (moved_box.lo + moved_box.hi),
              half = 0.5 * (moved_box.hi - moved_box.lo);
   run.all_changed = false;
@@ -120,6 +122,31 @@ void Analyzer::Impl::list_moved_faces(RunState& run, Box3& moved_box) {
                        last_vertices[3 * static_cast<Index>(c) + 2]));
   }
   for (std::int32_t f : moved_faces) face_listed[f] = 0;
+}
+
+void Analyzer::Impl::list_bone_vertices(RunState& run) {
+  const std::vector<int>& vertex_bone = run.vertex_bone;
+  const int nb = num_bones;
+  std::vector<std::uint8_t>& changed = run.bone_changed;
+  const bool same =
+      bone_list_of.size() == vertex_bone.size() &&
+      std::memcmp(bone_list_of.data(), vertex_bone.data(), vertex_bone.size() * sizeof(int)) == 0;
+  if (!same) {  // every bone's vertices listed again; every bone counts as changed
+    bone_vertex_start.assign(nb + 1, 0);
+    for (int b : vertex_bone) ++bone_vertex_start[b + 1];
+    for (int b = 0; b < nb; ++b) bone_vertex_start[b + 1] += bone_vertex_start[b];
+    bone_vertex_list.resize(vertex_bone.size());
+    std::vector<Index> fill(bone_vertex_start.begin(), bone_vertex_start.end() - 1);
+    for (Index v = 0; v < num_vertices; ++v)
+      bone_vertex_list[fill[vertex_bone[v]]++] = static_cast<std::int32_t>(v);
+    bone_list_of = vertex_bone;
+    changed.assign(nb, 1);
+    return;
+  }
+  changed.assign(nb, 0);
+  for (int b = 0; b < nb; ++b)
+    changed[b] = !(run.sk.heads[b] == last_heads[b] && run.sk.tails[b] == last_tails[b]);
+  for (const std::int32_t v : moved_vertices) changed[vertex_bone[v]] = 1;
 }
 
 void Analyzer::Impl::remember_inputs(const RunState& run) {

@@ -117,12 +117,27 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   const int* last_bone = moved != nullptr ? memo.vertex_bone.data() : nullptr;
   double* vparam = keep ? memo.vertex_param.data() : nullptr;
   std::int32_t* vslab = keep ? memo.vertex_slab.data() : nullptr;
+  // Live mode: only the vertices of bones with a moved vertex, another frame or changed
+  // sections are visited (every other vertex keeps its value, as the test below would decide).
+  const std::int32_t* work = nullptr;
+  Index count = num_vertices;
+  if (moved != nullptr && !run.bone_changed.empty() && same_bits(memo.vertex_bone, vertex_bone)) {
+    std::vector<std::int32_t>& list = memo.work;
+    list.clear();
+    for (int b = 0; b < nb; ++b)
+      if (run.bone_changed[b] || !place_same[b] || !all_same[b])
+        list.insert(list.end(), bone_vertex_list.begin() + bone_vertex_start[b],
+                    bone_vertex_list.begin() + bone_vertex_start[b + 1]);
+    work = list.data();
+    count = static_cast<Index>(list.size());
+  }
   const Index block = 8192;
   detail::parallel_for(
-      static_cast<long>((num_vertices + block - 1) / block), options.threads, [&](long chunk, int) {
+      static_cast<long>((count + block - 1) / block), options.threads, [&](long chunk, int) {
         run.check_cancel();
-        const Index end = std::min(num_vertices, (chunk + 1) * block);
-        for (Index v = chunk * block; v < end; ++v) {
+        const Index end = std::min(count, (chunk + 1) * block);
+        for (Index k = chunk * block; k < end; ++k) {
+          const Index v = work != nullptr ? work[k] : k;
           const int b = vertex_bone[v];
           const auto& p = sp[b];
           if (p.empty() || (any_loose && loose_vertex[v])) {
@@ -167,7 +182,7 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   memo.culled = std::move(prof.culled);
   memo.heads.assign(sk.heads.begin(), sk.heads.begin() + nb);
   memo.axis.assign(run.axis.begin(), run.axis.begin() + nb);
-  memo.vertex_bone = vertex_bone;
+  if (!same_bits(memo.vertex_bone, vertex_bone)) memo.vertex_bone = vertex_bone;
   if (any_loose)
     memo.loose_vertex = loose_vertex;
   else
