@@ -61,6 +61,43 @@ BoneProfiles bone_profiles(const std::vector<SectionSpec>& specs,
   return out;
 }
 
+// Per bone, whether its section params, head and axis are the memo's (place_same) and which of
+// its sections' stress or culling changed (entry_changed; all_same: none).
+void compare_with_memo(const BoneProfiles& prof, const Analyzer::Impl::VertexStressMemo& memo,
+                       const std::vector<Vec3>& heads, const std::vector<Vec3>& axis,
+                       std::vector<std::uint8_t>& place_same, std::vector<std::uint8_t>& all_same,
+                       std::vector<std::vector<std::uint8_t>>& entry_changed) {
+  const auto& sp = prof.param;
+  const auto& ss = prof.stress;
+  const auto& sc = prof.culled;
+  for (std::size_t b = 0; b < place_same.size(); ++b) {
+    place_same[b] = same_bits(sp[b], memo.param[b]) &&
+                    std::memcmp(heads[b].data(), memo.heads[b].data(), sizeof(Vec3)) == 0 &&
+                    std::memcmp(axis[b].data(), memo.axis[b].data(), sizeof(Vec3)) == 0;
+    if (!place_same[b]) continue;
+    entry_changed[b].resize(sp[b].size());
+    bool any = false;
+    for (std::size_t j = 0; j < sp[b].size(); ++j) {
+      entry_changed[b][j] = std::memcmp(&ss[b][j], &memo.stress[b][j], sizeof(double)) != 0 ||
+                            sc[b][j] != memo.culled[b][j];
+      any |= entry_changed[b][j] != 0;
+    }
+    all_same[b] = !any;
+  }
+}
+
+// The vertices of the bones that changed or whose place or sections did not stay (`start`,
+// `list`: each bone's vertices), into `work`.
+void list_work(const std::vector<std::uint8_t>& changed,
+               const std::vector<std::uint8_t>& place_same,
+               const std::vector<std::uint8_t>& all_same, const std::vector<Index>& start,
+               const std::vector<std::int32_t>& list, std::vector<std::int32_t>& work) {
+  work.clear();
+  for (std::size_t b = 0; b < changed.size(); ++b)
+    if (changed[b] || !place_same[b] || !all_same[b])
+      work.insert(work.end(), list.begin() + start[b], list.begin() + start[b + 1]);
+}
+
 }  // namespace
 
 void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
@@ -87,20 +124,7 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
       memo.vertex_stress.size() == std::size_t(num_vertices) &&
       (any_loose ? same_bits(memo.loose_vertex, loose_vertex) : memo.loose_vertex.empty())) {
     moved = run.moved->data();
-    for (int b = 0; b < nb; ++b) {
-      place_same[b] = same_bits(sp[b], memo.param[b]) &&
-                      std::memcmp(sk.heads[b].data(), memo.heads[b].data(), sizeof(Vec3)) == 0 &&
-                      std::memcmp(run.axis[b].data(), memo.axis[b].data(), sizeof(Vec3)) == 0;
-      if (!place_same[b]) continue;
-      entry_changed[b].resize(sp[b].size());
-      bool any = false;
-      for (std::size_t j = 0; j < sp[b].size(); ++j) {
-        entry_changed[b][j] = std::memcmp(&ss[b][j], &memo.stress[b][j], sizeof(double)) != 0 ||
-                              sc[b][j] != memo.culled[b][j];
-        any |= entry_changed[b][j] != 0;
-      }
-      all_same[b] = !any;
-    }
+    compare_with_memo(prof, memo, sk.heads, run.axis, place_same, all_same, entry_changed);
     r.vertex_stress.swap(memo.vertex_stress);  // the last values; changed ones are overwritten
     r.vertex_culled.swap(memo.vertex_culled);
   } else {
@@ -122,14 +146,10 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   const std::int32_t* work = nullptr;
   Index count = num_vertices;
   if (moved != nullptr && !run.bone_changed.empty() && same_bits(memo.vertex_bone, vertex_bone)) {
-    std::vector<std::int32_t>& list = memo.work;
-    list.clear();
-    for (int b = 0; b < nb; ++b)
-      if (run.bone_changed[b] || !place_same[b] || !all_same[b])
-        list.insert(list.end(), bone_vertex_list.begin() + bone_vertex_start[b],
-                    bone_vertex_list.begin() + bone_vertex_start[b + 1]);
-    work = list.data();
-    count = static_cast<Index>(list.size());
+    list_work(run.bone_changed, place_same, all_same, bone_vertex_start, bone_vertex_list,
+              memo.work);
+    work = memo.work.data();
+    count = static_cast<Index>(memo.work.size());
   }
   const Index block = 8192;
   detail::parallel_for(
