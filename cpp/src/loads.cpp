@@ -161,10 +161,9 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
                      vertex_capacity_ >= mesh.num_vertices;
   const bool same_skip = reuse && compare_with_last_build(s, skip);
   // The same vertices per bone, slabs per bone and tree: only the moved bones are built again.
-  const bool same_layout = same_skip && moved_list != nullptr &&
-                           group_offset_ == last_group_offset_ &&
-                           static_cast<int>(bone_vertex_start_.size()) == nb + 1 &&
-                           last_children_ == tree.children && same_bits(vertex_bone, last_bone_);
+  const bool same_layout =
+      same_skip && moved_list != nullptr && group_offset_ == last_group_offset_ &&
+      static_cast<int>(bone_vertex_start_.size()) == nb + 1 && same_bits(vertex_bone, last_bone_);
   const bool kept = same_layout && rebuild_moved_bones(mesh, s, moved->data(), *moved_list);
   if (kept) {
     subtree_boxes(tree);
@@ -177,8 +176,8 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
   // Only an index that is rebuilt with `moved` (live mode) keeps its inputs for the next build.
   if (moved != nullptr) {
     remember_build(s, vertex_bone, skip, kept);
-    last_children_ = tree.children;
     mark_kept_regions(tree);
+    last_children_ = tree.children;
   } else {
     slabs_known_ = false;
     region_kept_.clear();
@@ -243,8 +242,7 @@ void MomentArmIndex::place_vertex(const MeshView& mesh, const Skeleton& s, Index
 }
 
 // Live builds: the bones with a moved vertex or another head, axis or slabs grouped, packed and
-// boxed again in their part of the index, the others kept (bone_kept_). False when a moved
-// bone's slab needs another number of buckets (the layout moves: a full build follows).
+// boxed again in their part of the index, the others kept (bone_kept_).
 bool MomentArmIndex::rebuild_moved_bones(const MeshView& mesh, const Skeleton& s,
                                          const std::uint8_t* moved,
                                          const std::vector<std::int32_t>& moved_list) {
@@ -258,14 +256,45 @@ bool MomentArmIndex::rebuild_moved_bones(const MeshView& mesh, const Skeleton& s
   }
   for (int b = 0; b < nb; ++b)
     if (!bone_kept_[b]) regroup_bone(mesh, s, b, moved);
-  for (int b = 0; b < nb; ++b) {
-    if (bone_kept_[b]) continue;
+  // Each slab's buckets: the kept bones' as they are, the others' for their new counts.
+  std::vector<Index>& offset = next_bucket_offset_;
+  offset.assign(group_offset_[nb] + 1, 0);
+  for (int b = 0; b < nb; ++b)
     for (Index g = group_offset_[b]; g < group_offset_[b + 1]; ++g)
-      if (buckets_for(group_count_[g]) != bucket_offset_[g + 1] - bucket_offset_[g]) return false;
-  }
+      offset[g + 1] = offset[g] + (bone_kept_[b] ? bucket_offset_[g + 1] - bucket_offset_[g]
+                                                 : buckets_for(group_count_[g]));
+  if (offset != bucket_offset_) move_buckets();
   for (int b = 0; b < nb; ++b)
     if (!bone_kept_[b]) repack_bone(mesh, b);
   return true;
+}
+
+// The bucket arrays laid out for next_bucket_offset_: the kept bones' buckets and bucket boxes
+// copied to their new places (their packed vertices stay: each bone's lie after the bones
+// before it), the others' left empty for repack_bone.
+void MomentArmIndex::move_buckets() {
+  const int nb = static_cast<int>(group_offset_.size()) - 1;
+  const std::vector<Index>& offset = next_bucket_offset_;
+  const Index nbuckets = offset.back();
+  const double inf = std::numeric_limits<double>::infinity();
+  next_buckets_.assign(nbuckets, Group{});
+  next_lo_.assign(2 * nbuckets, Vec3::Constant(inf));
+  next_hi_.assign(2 * nbuckets, Vec3::Constant(-inf));
+  for (int b = 0; b < nb; ++b) {
+    if (!bone_kept_[b]) continue;
+    const Index from = bucket_offset_[group_offset_[b]], to = offset[group_offset_[b]];
+    const Index n = bucket_offset_[group_offset_[b + 1]] - from;
+    std::copy(buckets_.begin() + from, buckets_.begin() + from + n, next_buckets_.begin() + to);
+    std::copy(bucket_lo_.begin() + 2 * from, bucket_lo_.begin() + 2 * (from + n),
+              next_lo_.begin() + 2 * to);
+    std::copy(bucket_hi_.begin() + 2 * from, bucket_hi_.begin() + 2 * (from + n),
+              next_hi_.begin() + 2 * to);
+  }
+  buckets_.swap(next_buckets_);
+  bucket_lo_.swap(next_lo_);
+  bucket_hi_.swap(next_hi_);
+  bucket_offset_.swap(next_bucket_offset_);
+  if (bucket_fill_.size() < static_cast<std::size_t>(nbuckets)) bucket_fill_.resize(nbuckets);
 }
 
 // Bone b's vertices into its groups (as group_vertices: an unmoved vertex of a bone whose head,
@@ -300,7 +329,7 @@ void MomentArmIndex::repack_bone(const MeshView& mesh, int b) {
     ++fill[vertex_group[v]];
   }
   const double inf = std::numeric_limits<double>::infinity();
-  Index at = buckets_[k0].begin;
+  Index at = bone_vertex_start_[b];  // the kept vertices of the bones before b come first
   for (Index k = k0; k < k1; ++k) {
     const Index n = fill[k];
     buckets_[k].begin = fill[k] = at;
@@ -480,12 +509,14 @@ void MomentArmIndex::subtree_boxes(const LoadTree& tree) {
   }
 }
 
-// region_kept_: the bone and every bone beyond it kept (the tree is the last build's).
+// region_kept_: the bone and every bone beyond it kept, with the last build's children (the
+// same bones joined at the same params).
 void MomentArmIndex::mark_kept_regions(const LoadTree& tree) {
   region_kept_.assign(bone_kept_.size(), 0);
+  if (last_children_.size() != tree.children.size()) return;
   for (auto it = tree.order.rbegin(); it != tree.order.rend(); ++it) {
     const int b = *it;
-    bool kept = bone_kept_[b] != 0;
+    bool kept = bone_kept_[b] != 0 && tree.children[b] == last_children_[b];
     for (const auto& [child, param] : tree.children[b]) {
       (void)param;
       kept = kept && region_kept_[child] != 0;

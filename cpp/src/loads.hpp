@@ -139,6 +139,10 @@ class MomentArmIndex {
   void regroup_bone(const MeshView& mesh, const Skeleton& skeleton, int b,
                     const std::uint8_t* moved);
   void repack_bone(const MeshView& mesh, int b);
+  void move_buckets();
+  std::vector<Index> next_bucket_offset_;  // scratch of rebuild_moved_bones
+  std::vector<Group> next_buckets_;
+  std::vector<Vec3> next_lo_, next_hi_;
   void subtree_boxes(const LoadTree& tree);
   void mark_kept_regions(const LoadTree& tree);
   bool compare_with_last_build(const Skeleton& skeleton, const std::vector<std::uint8_t>* skip);
