@@ -4,11 +4,11 @@
 // (the way Manifold's impl.h maps methods to files):
 //
 //   analysis.cpp                Analyzer, validate_options, analyze, Impl::run (the pipeline),
-//                               Impl::check_inputs
+//                               Impl::check_inputs, Impl::check_vertices
 //   analysis_plan.cpp           Impl::assign_vertex_bones, Impl::plan_sections
-//   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run (list_moved_faces),
-//                               Impl::remember_inputs
-//   analysis_cut.cpp            Impl::prepare_cuts, Impl::cut_local (phase 1),
+//   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run (list_moved_faces,
+//                               list_bone_vertices), Impl::remember_inputs
+//   analysis_cut.cpp            Impl::prepare_cuts (bone_reach2), Impl::cut_local (phase 1),
 //                               Impl::cut_retries (phase 2)
 //   analysis_junction.cpp       Impl::find_junction_cores
 //   analysis_loads.cpp          Impl::compute_loads
