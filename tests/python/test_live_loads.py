@@ -37,3 +37,21 @@ def test_load_points_follow_the_moved_arm_like_one_off_analyses(root):
     # would keep the straight arm's); held at the arm, they stay bit for bit.
     moved = any(not np.array_equal(body_arms[0], a) for a in body_arms[1:])
     assert moved == (root == 0)
+
+
+def test_a_live_update_checks_its_moved_vertices_and_recovers():
+    # The engine checks the vertices in blocks kept from run to run: a NaN in an update is
+    # refused (the first bad row named), and the update after it is a one-off analysis's again.
+    v, f = body_and_arm()
+    _, sk0 = posed(v, 0.0)
+    kw = {"force": 1.0, "interval": 2.0, "root": 0}
+    an = osteon.Analyzer(f, len(v), sk0, **kw)
+    an.run(*posed(v, 0.0))
+    bad, sk = posed(v, 10.0)
+    first = int(np.flatnonzero(v[:, 0] > 39.0)[5])
+    bad[first, 1] = np.nan
+    bad[first + 3, 2] = np.inf
+    with pytest.raises(ValueError, match=f"NaN or infinity \\((row|vertex) {first}\\)"):
+        an.run(bad, sk)
+    vp, sk = posed(v, 20.0)
+    assert_close(an.run(vp, sk), osteon.analyze(vp, f, sk, **kw))
