@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -16,35 +17,19 @@ namespace osteon {
 
 namespace {
 
-// Whether every coordinate is finite and, if so, the bounding-box diagonal (mm; the same bits as
-// bounding_diagonal: a minimum and maximum per axis, exact in any order), over chunks of vertices
-// on all workers (with 1.5M faces these two passes were ~2 % of a run's instructions, serial).
-bool finite_diagonal(const MeshView& mesh, int threads, double& diag) {
-  const Index block = detail::kVerticesPerPass;
-  const long chunks = static_cast<long>((mesh.num_vertices + block - 1) / block);
-  std::vector<Vec3> lo(chunks), hi(chunks);
-  std::vector<std::uint8_t> finite(chunks, 1);
-  detail::parallel_for(chunks, threads, [&](long chunk, int) {
-    const Index begin = chunk * block, end = std::min(mesh.num_vertices, begin + block);
-    bool ok = true;
-    for (Index i = 3 * begin; i < 3 * end; ++i) ok &= std::isfinite(mesh.vertices[i]);
-    finite[chunk] = ok;
-    if (!ok) return;
-    Vec3 l = mesh.vertex(begin), h = l;
-    for (Index i = begin + 1; i < end; ++i) {
-      const Vec3 p = mesh.vertex(i);
-      l = l.cwiseMin(p);
-      h = h.cwiseMax(p);
-    }
-    lo[chunk] = l;
-    hi[chunk] = h;
-  });
-  if (std::find(finite.begin(), finite.end(), 0) != finite.end()) return false;
-  for (long c = 1; c < chunks; ++c) {
-    lo[0] = lo[0].cwiseMin(lo[c]);
-    hi[0] = hi[0].cwiseMax(hi[c]);
+// Whether every coordinate of the vertices [begin, end) is finite and, if so, their box (mm).
+bool finite_box(const MeshView& mesh, Index begin, Index end, Vec3& lo, Vec3& hi) {
+  bool ok = true;
+  for (Index i = 3 * begin; i < 3 * end; ++i) ok &= std::isfinite(mesh.vertices[i]);
+  if (!ok) return false;
+  Vec3 l = mesh.vertex(begin), h = l;
+  for (Index i = begin + 1; i < end; ++i) {
+    const Vec3 p = mesh.vertex(i);
+    l = l.cwiseMin(p);
+    h = h.cwiseMax(p);
   }
-  diag = chunks > 0 ? (hi[0] - lo[0]).norm() : 0.0;
+  lo = l;
+  hi = h;
   return true;
 }
 
@@ -209,6 +194,8 @@ void Analyzer::Impl::forget_last_run() {
   stress_memo.valid = false;
   corner_memo.forget();
   arm_index.forget_slabs();
+  load_memo.clear();
+  last_reach2.clear();
 }
 
 void Analyzer::Impl::check_inputs(RunState& run) {
@@ -224,12 +211,71 @@ void Analyzer::Impl::check_inputs(RunState& run) {
   validate_options(options, sk);
   run.mesh =
       MeshView{run.vertices, num_vertices, faces.data(), static_cast<Index>(faces.size() / 3)};
-  if (!finite_diagonal(run.mesh, options.threads, run.diag))
+  check_vertices(run);
+  run.gap = options.gap_tolerance >= 0 ? options.gap_tolerance : 0.01 * run.diag;
+}
+
+// The vertices in blocks of kVertexBlock, each block's box kept from run to run: a block
+// bitwise equal to the last run's (live mode: all but the moved limb's) keeps its box, and its
+// vertices passed this check then; the others are checked for finiteness and boxed (on all
+// workers from kVerticesPerPass vertices up). The diagonal is the same bits as one pass over
+// every vertex (a minimum and maximum per axis, exact in any order); the blocks that differ and
+// the vertices in them that moved are listed for the stages after (RunState::vertices_compared).
+void Analyzer::Impl::check_vertices(RunState& run) {
+  const MeshView& mesh = run.mesh;
+  const Index nblocks = (num_vertices + kVertexBlock - 1) / kVertexBlock;
+  const bool have_last = last_vertices.size() == static_cast<std::size_t>(3 * num_vertices) &&
+                         static_cast<Index>(block_lo.size()) == nblocks;
+  block_lo.resize(nblocks);
+  block_hi.resize(nblocks);
+  changed_blocks.clear();
+  for (Index k = 0; k < nblocks; ++k) {
+    const Index begin = k * kVertexBlock, end = std::min(num_vertices, begin + kVertexBlock);
+    if (!have_last || std::memcmp(run.vertices + 3 * begin, last_vertices.data() + 3 * begin,
+                                  3 * (end - begin) * sizeof(double)) != 0)
+      changed_blocks.push_back(k);
+  }
+  const long per_job = std::max<long>(1, detail::kVerticesPerPass / kVertexBlock);
+  const long nchanged = static_cast<long>(changed_blocks.size());
+  std::vector<std::uint8_t> finite((nchanged + per_job - 1) / per_job, 1);
+  detail::parallel_for(static_cast<long>(finite.size()), options.threads, [&](long job, int) {
+    for (long c = job * per_job; c < std::min(nchanged, (job + 1) * per_job); ++c) {
+      const Index k = changed_blocks[c];
+      const Index begin = k * kVertexBlock, end = std::min(num_vertices, begin + kVertexBlock);
+      if (!finite_box(mesh, begin, end, block_lo[k], block_hi[k])) {
+        finite[job] = 0;
+        return;
+      }
+    }
+  });
+  if (std::find(finite.begin(), finite.end(), 0) != finite.end())
     for (Index i = 0; i < 3 * num_vertices; ++i)
       if (!std::isfinite(run.vertices[i]))
         throw std::invalid_argument("vertices contain NaN or infinity (vertex " +
                                     std::to_string(i / 3) + ")");
-  run.gap = options.gap_tolerance >= 0 ? options.gap_tolerance : 0.01 * run.diag;
+  Vec3 lo = block_lo[0], hi = block_hi[0];
+  for (Index k = 1; k < nblocks; ++k) {
+    lo = lo.cwiseMin(block_lo[k]);
+    hi = hi.cwiseMax(block_hi[k]);
+  }
+  run.diag = (hi - lo).norm();
+  // The moved vertices (ascending) and their flags (all 0 but theirs between runs).
+  moved_scratch.resize(num_vertices, 0);
+  for (std::int32_t v : moved_vertices) moved_scratch[v] = 0;
+  moved_vertices.clear();
+  run.vertices_compared = have_last;
+  if (!have_last) return;
+  for (const Index k : changed_blocks) {
+    const Index end = std::min(num_vertices, (k + 1) * kVertexBlock);
+    for (Index v = k * kVertexBlock; v < end; ++v) {
+      const double* a = run.vertices + 3 * v;
+      const double* b = last_vertices.data() + 3 * v;
+      if (a[0] != b[0] || a[1] != b[1] || a[2] != b[2]) {
+        moved_scratch[v] = 1;
+        moved_vertices.push_back(static_cast<std::int32_t>(v));
+      }
+    }
+  }
 }
 
 AnalysisResult analyze(const MeshView& mesh, const Skeleton& skeleton, const BoneWeights* weights,

@@ -149,23 +149,8 @@ void Analyzer::Impl::prepare_cuts(RunState& run) {
   run.axis.resize(nb);
   std::vector<double>& reach = run.reach;
   for (int b = 0; b < nb; ++b) run.axis[b] = sk.direction(b);
-  // Each bone's farthest vertex from its axis, over chunks of vertices on all workers: a
-  // maximum, so the same bits in any order (large meshes only: see kVerticesPerPass).
-  const Index block = detail::kVerticesPerPass;
-  const long chunks = static_cast<long>((num_vertices + block - 1) / block);
-  std::vector<std::vector<double>> chunk_reach(chunks, std::vector<double>(nb, 0.0));
-  detail::parallel_for(chunks, threads, [&](long chunk, int) {
-    std::vector<double>& far = chunk_reach[chunk];
-    for (Index v = chunk * block, end = std::min(num_vertices, (chunk + 1) * block); v < end; ++v) {
-      const int b = run.vertex_bone[v];
-      const Vec3 rel = mesh.vertex(v) - sk.heads[b];
-      const Vec3& d = run.axis[b];
-      far[b] = std::max(far[b], (rel - rel.dot(d) * d).squaredNorm());
-    }
-  });
-  for (const std::vector<double>& far : chunk_reach)
-    for (int b = 0; b < nb; ++b) reach[b] = std::max(reach[b], far[b]);
-  for (int b = 0; b < nb; ++b) reach[b] = 2.5 * std::sqrt(reach[b]) + 2.0 * h;
+  bone_reach2(run);
+  for (int b = 0; b < nb; ++b) reach[b] = 2.5 * std::sqrt(last_reach2[b]) + 2.0 * h;
   run.crossings.assign(nb, {});
   std::vector<std::uint8_t> need_crossings(nb, 0);
   for (std::size_t i = 0; i < specs.size(); ++i)
@@ -180,6 +165,44 @@ void Analyzer::Impl::prepare_cuts(RunState& run) {
   // the narrower one left out (cut_mesh's `exclude`), so no triangle is cut twice.
   run.kept.assign(specs.size(), {});
   run.retry.assign(specs.size(), kNone);
+}
+
+// Each bone's farthest vertex from its axis (squared, mm^2: last_reach2): a maximum, so the same
+// bits in any order. Live mode: a bone with no moved vertex and the same head and tail keeps the
+// last run's, the others pass over their own vertices; else over chunks of all vertices on all
+// workers (large meshes only: see kVerticesPerPass).
+void Analyzer::Impl::bone_reach2(RunState& run) {
+  const MeshView& mesh = run.mesh;
+  const Skeleton& sk = run.sk;
+  const int nb = num_bones;
+  auto far2 = [&](Index v, int b) {
+    const Vec3 rel = mesh.vertex(v) - sk.heads[b];
+    const Vec3& d = run.axis[b];
+    return (rel - rel.dot(d) * d).squaredNorm();
+  };
+  if (!run.bone_changed.empty() && static_cast<int>(last_reach2.size()) == nb) {
+    for (int b = 0; b < nb; ++b) {
+      if (!run.bone_changed[b]) continue;
+      double far = 0.0;
+      for (Index k = bone_vertex_start[b]; k < bone_vertex_start[b + 1]; ++k)
+        far = std::max(far, far2(bone_vertex_list[k], b));
+      last_reach2[b] = far;
+    }
+    return;
+  }
+  const Index block = detail::kVerticesPerPass;
+  const long chunks = static_cast<long>((num_vertices + block - 1) / block);
+  std::vector<std::vector<double>> chunk_reach(chunks, std::vector<double>(nb, 0.0));
+  detail::parallel_for(chunks, options.threads, [&](long chunk, int) {
+    std::vector<double>& far = chunk_reach[chunk];
+    for (Index v = chunk * block, end = std::min(num_vertices, (chunk + 1) * block); v < end; ++v) {
+      const int b = run.vertex_bone[v];
+      far[b] = std::max(far[b], far2(v, b));
+    }
+  });
+  last_reach2.assign(nb, 0.0);
+  for (const std::vector<double>& far : chunk_reach)
+    for (int b = 0; b < nb; ++b) last_reach2[b] = std::max(last_reach2[b], far[b]);
 }
 
 void Analyzer::Impl::cut_local(RunState& run) {
@@ -311,7 +334,8 @@ void Analyzer::Impl::find_loose_pieces_and_arms(RunState& run) {
       for (std::int32_t v : piece) loose_vertex[v] = 1;
   }
   arm_index.build(mesh, sk, tree, run.vertex_bone, slab_params,
-                  loose.empty() ? nullptr : &loose_vertex, run.moved);
+                  loose.empty() ? nullptr : &loose_vertex, run.moved,
+                  run.moved != nullptr ? &moved_vertices : nullptr);
   run.arms = &arm_index;
 }
 

@@ -4,11 +4,11 @@
 // (the way Manifold's impl.h maps methods to files):
 //
 //   analysis.cpp                Analyzer, validate_options, analyze, Impl::run (the pipeline),
-//                               Impl::check_inputs
+//                               Impl::check_inputs, Impl::check_vertices
 //   analysis_plan.cpp           Impl::assign_vertex_bones, Impl::plan_sections
-//   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run (list_moved_faces),
-//                               Impl::remember_inputs
-//   analysis_cut.cpp            Impl::prepare_cuts, Impl::cut_local (phase 1),
+//   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run (list_moved_faces,
+//                               list_bone_vertices), Impl::remember_inputs
+//   analysis_cut.cpp            Impl::prepare_cuts (bone_reach2), Impl::cut_local (phase 1),
 //                               Impl::cut_retries (phase 2)
 //   analysis_junction.cpp       Impl::find_junction_cores
 //   analysis_loads.cpp          Impl::compute_loads
@@ -218,9 +218,15 @@ struct RunState {
   std::atomic<int> local_used{0}, local_failed{0};
   long retried = 0;
 
+  // check_vertices compared the vertices with the last run's: Impl::moved_vertices lists those
+  // that moved, Impl::changed_blocks the blocks that hold them (false: no last run).
+  bool vertices_compared = false;
   // Live reuse (reuse_last_run): per vertex, whether it moved since the last run (null: not
   // known, e.g. a full or partial run); the Analyzer's storage.
   const std::vector<std::uint8_t>* moved = nullptr;
+  // Live reuse (list_bone_vertices): per bone, whether a vertex of it moved, its head or tail
+  // did, or its vertices are others than the last run's (empty: not known, all changed).
+  std::vector<std::uint8_t> bone_changed;
 
   // What changed since the last run (partial and live runs): junction cores whose neighbour
   // planes reach it are re-checked. all_changed: a fresh run.
@@ -262,7 +268,13 @@ struct Analyzer::Impl {
   LoosePieceFinder loose_finder;
   MomentArmIndex arm_index;
 
-  // Scratch of reuse_last_run: per vertex, moved since the last run (RunState::moved).
+  // check_vertices: the vertices in blocks, each block's box (mm; the last run's once it ended),
+  // this run's blocks that differ bitwise from the last run's and, in them, the vertices that
+  // moved (ascending); per vertex, moved or not (RunState::moved; 0 but for moved_vertices).
+  static constexpr Index kVertexBlock = 1024;
+  std::vector<Vec3> block_lo, block_hi;
+  std::vector<Index> changed_blocks;
+  std::vector<std::int32_t> moved_vertices;
   std::vector<std::uint8_t> moved_scratch;
   // The faces with a moved vertex (RunState::moved_faces), and whether `grid` holds the last
   // run's mesh (that run built it).
@@ -272,6 +284,12 @@ struct Analyzer::Impl {
   std::vector<Index> vertex_face_start;
   std::vector<std::int32_t> vertex_faces, corner_scratch;
   std::vector<std::uint8_t> face_listed, corner_listed;
+  // Live mode: each bone's vertices in vertex order (CSR, for the vertex bones `bone_list_of`),
+  // and each bone's largest squared distance of a vertex from its axis in the last run (mm^2).
+  std::vector<Index> bone_vertex_start;
+  std::vector<std::int32_t> bone_vertex_list;
+  std::vector<int> bone_list_of;
+  std::vector<double> last_reach2;
   bool grid_holds_last_run = false;
   // The last run's per-vertex stress and what it was computed from: in live mode a vertex whose
   // bone, position, bone head and axis and its bone's section params are bitwise unchanged lies
@@ -289,7 +307,19 @@ struct Analyzer::Impl {
     std::vector<std::uint8_t> vertex_culled;
     std::vector<double> vertex_param;       // mm along the bone (vertices with sections)
     std::vector<std::int32_t> vertex_slab;  // sections of the bone below vertex_param
+    std::vector<std::int32_t> work;         // scratch: the vertices a live update visits
   } stress_memo;
+
+  // The last run's load point per section and the query that found it (section_loads): live
+  // mode asks the moment-arm index again only where the query or its region changed.
+  struct LoadMemo {
+    int bone = -1, boundary = -1;
+    bool plus_side = false;
+    Vec3 center = Vec3::Zero();
+    double arm = 0.0;
+    Index vertex = -1;
+  };
+  std::vector<LoadMemo> load_memo;
 
   // The last run's corners (notch_reuse.hpp): live mode searches only those a change reaches.
   CornerMemo corner_memo;
@@ -312,6 +342,8 @@ struct Analyzer::Impl {
   // Stages of a run, in order (files listed at the top of this header).
   /// Checks the skeleton, options and vertices; sets the mesh view, size and gap tolerance.
   void check_inputs(RunState& run);
+  /// Step of check_inputs: the vertices finite, their diagonal, and which moved since last run.
+  void check_vertices(RunState& run);
   /// 1. Each vertex's bone: its dominant weight, or the nearest bone where it has none.
   void assign_vertex_bones(RunState& run);
   /// 2. Full runs: the load tree and the sections (interior planes, joints, free ends), with the
@@ -324,8 +356,13 @@ struct Analyzer::Impl {
   /// The faces with a moved vertex (moved_faces_scratch, each once) and the box of their
   /// corners' old and new positions (reuse_last_run, something moved).
   void list_moved_faces(RunState& run, Box3& moved_box);
+  /// Live mode: each bone's vertices (kept while the vertex bones stay) and which bones changed
+  /// (RunState::bone_changed).
+  void list_bone_vertices(RunState& run);
   /// 3a. The face grid, each bone's local-cut radius and its axis crossings.
   void prepare_cuts(RunState& run);
+  /// Step of prepare_cuts: each bone's largest squared distance of a vertex from its axis.
+  void bone_reach2(RunState& run);
   /// 3b. Phase 1: one local cut per family of parallel planes; queues what it cannot prove.
   void cut_local(RunState& run);
   /// 3c. Phase 2: queued sections re-cut wider or whole (and, beside them, the loose pieces

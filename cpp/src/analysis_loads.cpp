@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 #include "analysis_impl.hpp"
@@ -146,6 +147,8 @@ AnalysisResult Analyzer::Impl::section_loads(RunState& run) {
   r.section_flags.resize(ns);
   run.timer.lap("moment index");
   const MomentArmIndex& arms = *run.arms;
+  const bool recall = run.moved != nullptr && load_memo.size() == static_cast<std::size_t>(ns);
+  if (!recall) load_memo.assign(ns, LoadMemo{});
   detail::parallel_for((ns + 63) / 64, options.threads, [&](long chunk, int) {
     run.check_cancel();
     const int end = std::min(ns, static_cast<int>(chunk + 1) * 64);
@@ -161,7 +164,21 @@ AnalysisResult Analyzer::Impl::section_loads(RunState& run) {
       r.section_flags[i] = st.flags;
       const Vec3 center = st.found ? st.center : spec.point;
       r.section_center[i] = center;
-      const auto [arm, vertex] = arms.farthest(spec.bone, spec.boundary, spec.plus_side, center);
+      // Live mode: the last run's load point when the query and every point it could take are
+      // the last run's (the same answer, bit for bit).
+      LoadMemo& memo = load_memo[i];
+      if (!(recall && memo.bone == spec.bone && memo.boundary == spec.boundary &&
+            memo.plus_side == spec.plus_side && memo.center == center &&
+            arms.region_kept(spec.bone))) {
+        std::tie(memo.arm, memo.vertex) =
+            arms.farthest(spec.bone, spec.boundary, spec.plus_side, center);
+        memo.bone = spec.bone;
+        memo.boundary = spec.boundary;
+        memo.plus_side = spec.plus_side;
+        memo.center = center;
+      }
+      const double arm = memo.arm;
+      const Index vertex = memo.vertex;
       r.moment_arm[i] = arm;
       r.load_point[i] = vertex >= 0 ? mesh.vertex(vertex) : center;
       r.moment[i] = options.force * arm;

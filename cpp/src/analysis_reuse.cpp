@@ -1,6 +1,7 @@
 // What a run may keep from the last one: partial re-analysis (the correction loop) and exact
 // reuse of unchanged sections (live mode) (Analyzer::Impl).
 #include <algorithm>
+#include <cstring>
 #include <utility>
 #include <vector>
 
@@ -38,26 +39,19 @@ void Analyzer::Impl::mark_dirty(RunState& run) {
 void Analyzer::Impl::reuse_last_run(RunState& run) {
   if (!(run.may_reuse && run.prev_specs.size() == specs.size())) return;
   const Skeleton& sk = run.sk;
-  const double* vertices = run.vertices;
   const std::vector<SectionSpec>& prev_specs = run.prev_specs;
   std::vector<SectionState>& prev_states = run.prev_states;  // moved into `states` once reused
   // Exact reuse: a section keeps its geometry when its bone, plane and downstream side are
   // bitwise the same and no moved triangle reaches the region its cut was proven in.
+  // (check_vertices compared the vertices: may_reuse needs the last run's.)
   Box3 moved_box;
-  std::vector<std::uint8_t>& moved = moved_scratch;
-  moved.resize(num_vertices);  // every entry written below
-  run.moved = &moved;
-  bool any_moved = false;
+  run.moved = &moved_scratch;
+  const bool any_moved = !moved_vertices.empty();
   std::vector<std::int32_t>& moved_faces = moved_faces_scratch;
   moved_faces.clear();
   run.moved_faces = &moved_faces;
-  for (Index v = 0; v < num_vertices; ++v) {
-    const double* a = vertices + 3 * v;
-    const double* b = last_vertices.data() + 3 * v;
-    moved[v] = a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
-    any_moved |= moved[v] != 0;
-  }
   if (any_moved) list_moved_faces(run, moved_box);
+  list_bone_vertices(run);
   const Vec3 center = 0.5 * (moved_box.lo + moved_box.hi),
              half = 0.5 * (moved_box.hi - moved_box.lo);
   run.all_changed = false;
@@ -102,12 +96,10 @@ void Analyzer::Impl::list_moved_faces(RunState& run, Box3& moved_box) {
   }
   // The faces of the moved vertices, each once, and the corners of those faces (moved or not):
   // the box of their old and new positions is the box of the moved triangles.
-  const std::vector<std::uint8_t>& moved = *run.moved;
   std::vector<std::int32_t>& moved_faces = moved_faces_scratch;
   std::vector<std::int32_t>& corners = corner_scratch;
   corners.clear();
-  for (Index v = 0; v < num_vertices; ++v) {
-    if (!moved[v]) continue;
+  for (const Index v : moved_vertices) {
     for (Index k = vertex_face_start[v]; k < vertex_face_start[v + 1]; ++k) {
       const std::int32_t f = vertex_faces[k];
       if (face_listed[f]) continue;
@@ -132,8 +124,41 @@ void Analyzer::Impl::list_moved_faces(RunState& run, Box3& moved_box) {
   for (std::int32_t f : moved_faces) face_listed[f] = 0;
 }
 
+void Analyzer::Impl::list_bone_vertices(RunState& run) {
+  const std::vector<int>& vertex_bone = run.vertex_bone;
+  const int nb = num_bones;
+  std::vector<std::uint8_t>& changed = run.bone_changed;
+  const bool same =
+      bone_list_of.size() == vertex_bone.size() &&
+      std::memcmp(bone_list_of.data(), vertex_bone.data(), vertex_bone.size() * sizeof(int)) == 0;
+  if (!same) {  // every bone's vertices listed again; every bone counts as changed
+    bone_vertex_start.assign(nb + 1, 0);
+    for (int b : vertex_bone) ++bone_vertex_start[b + 1];
+    for (int b = 0; b < nb; ++b) bone_vertex_start[b + 1] += bone_vertex_start[b];
+    bone_vertex_list.resize(vertex_bone.size());
+    std::vector<Index> fill(bone_vertex_start.begin(), bone_vertex_start.end() - 1);
+    for (Index v = 0; v < num_vertices; ++v)
+      bone_vertex_list[fill[vertex_bone[v]]++] = static_cast<std::int32_t>(v);
+    bone_list_of = vertex_bone;
+    changed.assign(nb, 1);
+    return;
+  }
+  changed.assign(nb, 0);
+  for (int b = 0; b < nb; ++b)
+    changed[b] = !(run.sk.heads[b] == last_heads[b] && run.sk.tails[b] == last_tails[b]);
+  for (const std::int32_t v : moved_vertices) changed[vertex_bone[v]] = 1;
+}
+
 void Analyzer::Impl::remember_inputs(const RunState& run) {
-  last_vertices.assign(run.vertices, run.vertices + 3 * num_vertices);
+  // The blocks that differ from the last run's are copied (check_vertices listed them).
+  if (run.vertices_compared && last_vertices.size() == static_cast<std::size_t>(3 * num_vertices))
+    for (const Index k : changed_blocks) {
+      const Index begin = 3 * k * kVertexBlock,
+                  end = std::min(3 * num_vertices, begin + 3 * kVertexBlock);
+      std::copy(run.vertices + begin, run.vertices + end, last_vertices.begin() + begin);
+    }
+  else
+    last_vertices.assign(run.vertices, run.vertices + 3 * num_vertices);
   last_heads = run.sk.heads;
   last_tails = run.sk.tails;
   last_parents = run.sk.parents;

@@ -61,6 +61,43 @@ BoneProfiles bone_profiles(const std::vector<SectionSpec>& specs,
   return out;
 }
 
+// Per bone, whether its section params, head and axis are the memo's (place_same) and which of
+// its sections' stress or culling changed (entry_changed; all_same: none).
+void compare_with_memo(const BoneProfiles& prof, const Analyzer::Impl::VertexStressMemo& memo,
+                       const std::vector<Vec3>& heads, const std::vector<Vec3>& axis,
+                       std::vector<std::uint8_t>& place_same, std::vector<std::uint8_t>& all_same,
+                       std::vector<std::vector<std::uint8_t>>& entry_changed) {
+  const auto& sp = prof.param;
+  const auto& ss = prof.stress;
+  const auto& sc = prof.culled;
+  for (std::size_t b = 0; b < place_same.size(); ++b) {
+    place_same[b] = same_bits(sp[b], memo.param[b]) &&
+                    std::memcmp(heads[b].data(), memo.heads[b].data(), sizeof(Vec3)) == 0 &&
+                    std::memcmp(axis[b].data(), memo.axis[b].data(), sizeof(Vec3)) == 0;
+    if (!place_same[b]) continue;
+    entry_changed[b].resize(sp[b].size());
+    bool any = false;
+    for (std::size_t j = 0; j < sp[b].size(); ++j) {
+      entry_changed[b][j] = std::memcmp(&ss[b][j], &memo.stress[b][j], sizeof(double)) != 0 ||
+                            sc[b][j] != memo.culled[b][j];
+      any |= entry_changed[b][j] != 0;
+    }
+    all_same[b] = !any;
+  }
+}
+
+// The vertices of the bones that changed or whose place or sections did not stay (`start`,
+// `list`: each bone's vertices), into `work`.
+void list_work(const std::vector<std::uint8_t>& changed,
+               const std::vector<std::uint8_t>& place_same,
+               const std::vector<std::uint8_t>& all_same, const std::vector<Index>& start,
+               const std::vector<std::int32_t>& list, std::vector<std::int32_t>& work) {
+  work.clear();
+  for (std::size_t b = 0; b < changed.size(); ++b)
+    if (changed[b] || !place_same[b] || !all_same[b])
+      work.insert(work.end(), list.begin() + start[b], list.begin() + start[b + 1]);
+}
+
 }  // namespace
 
 void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
@@ -87,20 +124,7 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
       memo.vertex_stress.size() == std::size_t(num_vertices) &&
       (any_loose ? same_bits(memo.loose_vertex, loose_vertex) : memo.loose_vertex.empty())) {
     moved = run.moved->data();
-    for (int b = 0; b < nb; ++b) {
-      place_same[b] = same_bits(sp[b], memo.param[b]) &&
-                      std::memcmp(sk.heads[b].data(), memo.heads[b].data(), sizeof(Vec3)) == 0 &&
-                      std::memcmp(run.axis[b].data(), memo.axis[b].data(), sizeof(Vec3)) == 0;
-      if (!place_same[b]) continue;
-      entry_changed[b].resize(sp[b].size());
-      bool any = false;
-      for (std::size_t j = 0; j < sp[b].size(); ++j) {
-        entry_changed[b][j] = std::memcmp(&ss[b][j], &memo.stress[b][j], sizeof(double)) != 0 ||
-                              sc[b][j] != memo.culled[b][j];
-        any |= entry_changed[b][j] != 0;
-      }
-      all_same[b] = !any;
-    }
+    compare_with_memo(prof, memo, sk.heads, run.axis, place_same, all_same, entry_changed);
     r.vertex_stress.swap(memo.vertex_stress);  // the last values; changed ones are overwritten
     r.vertex_culled.swap(memo.vertex_culled);
   } else {
@@ -117,12 +141,23 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   const int* last_bone = moved != nullptr ? memo.vertex_bone.data() : nullptr;
   double* vparam = keep ? memo.vertex_param.data() : nullptr;
   std::int32_t* vslab = keep ? memo.vertex_slab.data() : nullptr;
+  // Live mode: only the vertices of bones with a moved vertex, another frame or changed
+  // sections are visited (every other vertex keeps its value, as the test below would decide).
+  const std::int32_t* work = nullptr;
+  Index count = num_vertices;
+  if (moved != nullptr && !run.bone_changed.empty() && same_bits(memo.vertex_bone, vertex_bone)) {
+    list_work(run.bone_changed, place_same, all_same, bone_vertex_start, bone_vertex_list,
+              memo.work);
+    work = memo.work.data();
+    count = static_cast<Index>(memo.work.size());
+  }
   const Index block = 8192;
   detail::parallel_for(
-      static_cast<long>((num_vertices + block - 1) / block), options.threads, [&](long chunk, int) {
+      static_cast<long>((count + block - 1) / block), options.threads, [&](long chunk, int) {
         run.check_cancel();
-        const Index end = std::min(num_vertices, (chunk + 1) * block);
-        for (Index v = chunk * block; v < end; ++v) {
+        const Index end = std::min(count, (chunk + 1) * block);
+        for (Index k = chunk * block; k < end; ++k) {
+          const Index v = work != nullptr ? work[k] : k;
           const int b = vertex_bone[v];
           const auto& p = sp[b];
           if (p.empty() || (any_loose && loose_vertex[v])) {
@@ -167,7 +202,7 @@ void Analyzer::Impl::compute_vertex_stress(RunState& run, AnalysisResult& r) {
   memo.culled = std::move(prof.culled);
   memo.heads.assign(sk.heads.begin(), sk.heads.begin() + nb);
   memo.axis.assign(run.axis.begin(), run.axis.begin() + nb);
-  memo.vertex_bone = vertex_bone;
+  if (!same_bits(memo.vertex_bone, vertex_bone)) memo.vertex_bone = vertex_bone;
   if (any_loose)
     memo.loose_vertex = loose_vertex;
   else

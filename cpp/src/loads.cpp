@@ -98,6 +98,25 @@ LoadTree build_load_tree(const Skeleton& s, int held_bone,
 }
 
 namespace {
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+// Buckets of a slab with `count` vertices: ~16 vertices each (fewer, wider buckets cost more
+// scanning, more cost heap work).
+constexpr Index kBucket = 16;
+inline Index buckets_for(Index count) {
+  return std::max<Index>(1, (count + kBucket - 1) / kBucket);
+}
+
+// The bucket (of k) of a vertex at pseudo-angle `angle` in [0, 4].
+inline Index bucket_at(double angle, Index k) {
+  const double q = angle * (0.25 * static_cast<double>(k));
+  return q > 0 ? (q < static_cast<double>(k) ? static_cast<Index>(q) : k - 1) : 0;
+}
+
 // A bottom-up tree of boxes over m leaves (each with .lo, .hi): node i in [1, 2m) at lo/hi[i],
 // leaves m + j, node i < m the box of nodes 2i and 2i+1.
 template <class Leaf>
@@ -124,13 +143,15 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
                            const std::vector<int>& vertex_bone,
                            const std::vector<std::vector<double>>& slab_params,
                            const std::vector<std::uint8_t>* skip,
-                           const std::vector<std::uint8_t>* moved) {
+                           const std::vector<std::uint8_t>* moved,
+                           const std::vector<std::int32_t>* moved_list) {
   tree_ = &tree;
   last_slab_params_.swap(slab_params_);
   slab_params_ = slab_params;
   const int nb = s.num_bones();
   // Slab j of bone b holds the vertices with params in [p[j-1], p[j]) (slab 0: below p[0],
   // last slab: at or above the last param); a section at boundary i splits slabs <= i from > i.
+  last_group_offset_.swap(group_offset_);
   group_offset_.assign(nb + 1, 0);
   for (int b = 0; b < nb; ++b)
     group_offset_[b + 1] = group_offset_[b] + static_cast<Index>(slab_params_[b].size()) + 1;
@@ -138,54 +159,190 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
                      static_cast<Index>(moved->size()) == mesh.num_vertices &&
                      static_cast<Index>(last_bone_.size()) == mesh.num_vertices &&
                      vertex_capacity_ >= mesh.num_vertices;
-  if (reuse) compare_with_last_build(s, skip);
-  group_vertices(mesh, s, vertex_bone, skip, reuse ? moved->data() : nullptr);
-  pack_buckets(mesh, skip);
-  build_box_trees(tree);
+  const bool same_skip = reuse && compare_with_last_build(s, skip);
+  // The same vertices per bone, slabs per bone and tree: only the moved bones are built again.
+  const bool same_layout =
+      same_skip && moved_list != nullptr && group_offset_ == last_group_offset_ &&
+      static_cast<int>(bone_vertex_start_.size()) == nb + 1 && same_bits(vertex_bone, last_bone_);
+  const bool kept = same_layout && rebuild_moved_bones(mesh, s, moved->data(), *moved_list);
+  if (kept) {
+    subtree_boxes(tree);
+  } else {
+    bone_kept_.assign(nb, 0);
+    group_vertices(mesh, s, vertex_bone, skip, reuse ? moved->data() : nullptr);
+    pack_buckets(mesh, skip);
+    build_box_trees(tree);
+  }
   // Only an index that is rebuilt with `moved` (live mode) keeps its inputs for the next build.
-  if (moved != nullptr)
-    remember_build(s, vertex_bone, skip);
-  else
+  if (moved != nullptr) {
+    remember_build(s, vertex_bone, skip, kept);
+    mark_kept_regions(tree);
+    last_children_ = tree.children;
+  } else {
     slabs_known_ = false;
+    region_kept_.clear();
+  }
 }
-
-namespace {
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-}  // namespace
 
 // bone_same_[b]: bone b's head, axis and slab params are bitwise the last build's (and the
 // vertices left out are the same), so an unmoved vertex of b lies in the same slab at the same
 // angle.
-void MomentArmIndex::compare_with_last_build(const Skeleton& s,
+bool MomentArmIndex::compare_with_last_build(const Skeleton& s,
                                              const std::vector<std::uint8_t>* skip) {
   const int nb = s.num_bones();
   bone_same_.assign(nb, 0);
   const bool same_skip = skip == nullptr ? last_skip_.empty() : same_bits(*skip, last_skip_);
   if (!same_skip || static_cast<int>(last_head_.size()) != nb ||
       static_cast<int>(last_slab_params_.size()) != nb)
-    return;
+    return false;
   for (int b = 0; b < nb; ++b) {
     const Vec3 axis = s.direction(b);
     bone_same_[b] = std::memcmp(s.heads[b].data(), last_head_[b].data(), sizeof(Vec3)) == 0 &&
                     std::memcmp(axis.data(), last_axis_[b].data(), sizeof(Vec3)) == 0 &&
                     same_bits(slab_params_[b], last_slab_params_[b]);
   }
+  return true;
 }
 
 void MomentArmIndex::remember_build(const Skeleton& s, const std::vector<int>& vertex_bone,
-                                    const std::vector<std::uint8_t>* skip) {
-  last_bone_ = vertex_bone;
+                                    const std::vector<std::uint8_t>* skip, bool kept) {
   last_head_.assign(s.heads.begin(), s.heads.begin() + s.num_bones());
   last_axis_ = axis_;
+  slabs_known_ = true;
+  if (kept) return;  // the same vertices of each bone as the last build's
+  last_bone_ = vertex_bone;
   if (skip != nullptr)
     last_skip_ = *skip;
   else
     last_skip_.clear();
-  slabs_known_ = true;
+  // Each bone's kept vertices in vertex order.
+  const int nb = s.num_bones();
+  const Index nv = static_cast<Index>(vertex_bone.size());
+  bone_vertex_start_.assign(nb + 1, 0);
+  for (Index v = 0; v < nv; ++v)
+    if (skip == nullptr || !(*skip)[v]) ++bone_vertex_start_[vertex_bone[v] + 1];
+  for (int b = 0; b < nb; ++b) bone_vertex_start_[b + 1] += bone_vertex_start_[b];
+  bone_vertices_.resize(bone_vertex_start_[nb]);
+  std::vector<Index> fill(bone_vertex_start_.begin(), bone_vertex_start_.end() - 1);
+  for (Index v = 0; v < nv; ++v)
+    if (skip == nullptr || !(*skip)[v])
+      bone_vertices_[fill[vertex_bone[v]]++] = static_cast<std::int32_t>(v);
+}
+
+// Bone b's vertex v: its slab within the bone (vertex_slab_) and its pseudo-angle in [0, 4]
+// around the bone axis (vertex_angle_: a monotone function of the angle in the bone's frame
+// u, v: no atan).
+void MomentArmIndex::place_vertex(const MeshView& mesh, const Skeleton& s, Index v, int b) {
+  const Vec3 d = mesh.vertex(v) - s.heads[b];
+  vertex_slab_[v] = static_cast<Index>(detail::upper_index(slab_params_[b], d.dot(axis_[b])));
+  const double du = d.dot(frame_u_[b]), dv = d.dot(frame_v_[b]);
+  const double sum = std::abs(du) + std::abs(dv);
+  const double r = sum > 0 ? du / sum : 1.0;
+  vertex_angle_[v] = dv >= 0 ? 1.0 - r : 3.0 + r;
+}
+
+// Live builds: the bones with a moved vertex or another head, axis or slabs grouped, packed and
+// boxed again in their part of the index, the others kept (bone_kept_).
+bool MomentArmIndex::rebuild_moved_bones(const MeshView& mesh, const Skeleton& s,
+                                         const std::uint8_t* moved,
+                                         const std::vector<std::int32_t>& moved_list) {
+  const int nb = s.num_bones();
+  bone_kept_.assign(bone_same_.begin(), bone_same_.end());
+  for (std::int32_t v : moved_list) bone_kept_[last_bone_[v]] = 0;
+  for (int b = 0; b < nb; ++b) {
+    axis_[b] = s.direction(b);
+    frame_u_[b] = axis_[b].unitOrthogonal();
+    frame_v_[b] = axis_[b].cross(frame_u_[b]);
+  }
+  for (int b = 0; b < nb; ++b)
+    if (!bone_kept_[b]) regroup_bone(mesh, s, b, moved);
+  // Each slab's buckets: the kept bones' as they are, the others' for their new counts.
+  std::vector<Index>& offset = next_bucket_offset_;
+  offset.assign(group_offset_[nb] + 1, 0);
+  for (int b = 0; b < nb; ++b)
+    for (Index g = group_offset_[b]; g < group_offset_[b + 1]; ++g)
+      offset[g + 1] = offset[g] + (bone_kept_[b] ? bucket_offset_[g + 1] - bucket_offset_[g]
+                                                 : buckets_for(group_count_[g]));
+  if (offset != bucket_offset_) move_buckets();
+  for (int b = 0; b < nb; ++b)
+    if (!bone_kept_[b]) repack_bone(mesh, b);
+  return true;
+}
+
+// The bucket arrays laid out for next_bucket_offset_: the kept bones' buckets and bucket boxes
+// copied to their new places (their packed vertices stay: each bone's lie after the bones
+// before it), the others' left empty for repack_bone.
+void MomentArmIndex::move_buckets() {
+  const int nb = static_cast<int>(group_offset_.size()) - 1;
+  const std::vector<Index>& offset = next_bucket_offset_;
+  const Index nbuckets = offset.back();
+  const double inf = std::numeric_limits<double>::infinity();
+  next_buckets_.assign(nbuckets, Group{});
+  next_lo_.assign(2 * nbuckets, Vec3::Constant(inf));
+  next_hi_.assign(2 * nbuckets, Vec3::Constant(-inf));
+  for (int b = 0; b < nb; ++b) {
+    if (!bone_kept_[b]) continue;
+    const Index from = bucket_offset_[group_offset_[b]], to = offset[group_offset_[b]];
+    const Index n = bucket_offset_[group_offset_[b + 1]] - from;
+    std::copy(buckets_.begin() + from, buckets_.begin() + from + n, next_buckets_.begin() + to);
+    std::copy(bucket_lo_.begin() + 2 * from, bucket_lo_.begin() + 2 * (from + n),
+              next_lo_.begin() + 2 * to);
+    std::copy(bucket_hi_.begin() + 2 * from, bucket_hi_.begin() + 2 * (from + n),
+              next_hi_.begin() + 2 * to);
+  }
+  buckets_.swap(next_buckets_);
+  bucket_lo_.swap(next_lo_);
+  bucket_hi_.swap(next_hi_);
+  bucket_offset_.swap(next_bucket_offset_);
+  if (bucket_fill_.size() < static_cast<std::size_t>(nbuckets)) bucket_fill_.resize(nbuckets);
+}
+
+// Bone b's vertices into its groups (as group_vertices: an unmoved vertex of a bone whose head,
+// axis and slabs are the same keeps its slab and angle).
+void MomentArmIndex::regroup_bone(const MeshView& mesh, const Skeleton& s, int b,
+                                  const std::uint8_t* moved) {
+  const Index g0 = group_offset_[b];
+  std::fill(group_count_.begin() + g0, group_count_.begin() + group_offset_[b + 1], 0);
+  const bool same = bone_same_[b] != 0;
+  for (Index k = bone_vertex_start_[b]; k < bone_vertex_start_[b + 1]; ++k) {
+    const Index v = bone_vertices_[k];
+    if (!same || moved[v]) place_vertex(mesh, s, v, b);
+    const Index g = g0 + vertex_slab_[v];
+    vertex_group_[v] = g;
+    ++group_count_[g];
+  }
+}
+
+// Bone b's vertices into its buckets, packed in its part of packed_xyz_ (the same place: the
+// same vertices before it), and its boxes: as pack_buckets and build_box_trees for this bone.
+void MomentArmIndex::repack_bone(const MeshView& mesh, int b) {
+  const Index g0 = group_offset_[b], g1 = group_offset_[b + 1];
+  const Index k0 = bucket_offset_[g0], k1 = bucket_offset_[g1];
+  Index* const vertex_group = vertex_group_.get();
+  std::vector<Index>& fill = bucket_fill_;
+  std::fill(fill.begin() + k0, fill.begin() + k1, 0);
+  const Index first = bone_vertex_start_[b], last = bone_vertex_start_[b + 1];
+  for (Index i = first; i < last; ++i) {
+    const Index v = bone_vertices_[i], g = vertex_group[v];
+    vertex_group[v] =
+        bucket_offset_[g] + bucket_at(vertex_angle_[v], bucket_offset_[g + 1] - bucket_offset_[g]);
+    ++fill[vertex_group[v]];
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  Index at = bone_vertex_start_[b];  // the kept vertices of the bones before b come first
+  for (Index k = k0; k < k1; ++k) {
+    const Index n = fill[k];
+    buckets_[k].begin = fill[k] = at;
+    buckets_[k].end = at += n;
+    buckets_[k].lo = Vec3::Constant(inf);
+    buckets_[k].hi = Vec3::Constant(-inf);
+  }
+  for (Index i = first; i < last; ++i) {
+    const Index v = bone_vertices_[i];
+    pack_vertex(mesh, v, buckets_[vertex_group[v]], fill[vertex_group[v]]++);
+  }
+  for (Index g = g0; g < g1; ++g) bucket_tree(g);
+  bone_tree(b);
 }
 
 // Each kept vertex's group (vertex_group_; its slab within its bone: vertex_slab_) and its
@@ -208,7 +365,6 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
   }
   Index* const vertex_group = vertex_group_.get();
   Index* const vertex_slab = vertex_slab_.get();  // the slab within its bone (kept)
-  double* const vertex_angle = vertex_angle_.get();
   std::vector<Index>& group_count = group_count_;
   group_count.assign(ngroups, 0);
   std::vector<Vec3>&axis = axis_, &frame_u = frame_u_, &frame_v = frame_v_;
@@ -232,15 +388,10 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
       ++group_count[g];
       continue;
     }
-    const Vec3 d = mesh.vertex(v) - s.heads[b];
-    vertex_slab[v] = static_cast<Index>(detail::upper_index(slab_params_[b], d.dot(axis[b])));
+    place_vertex(mesh, s, v, b);
     const Index g = group_offset_[b] + vertex_slab[v];
     vertex_group[v] = g;
     ++group_count[g];
-    const double du = d.dot(frame_u[b]), dv = d.dot(frame_v[b]);
-    const double sum = std::abs(du) + std::abs(dv);
-    const double r = sum > 0 ? du / sum : 1.0;
-    vertex_angle[v] = dv >= 0 ? 1.0 - r : 3.0 + r;
   }
 }
 
@@ -252,12 +403,9 @@ void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::u
   const double* const vertex_angle = vertex_angle_.get();
   const std::vector<Index>& group_count = group_count_;
   auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
-  // Buckets: ~16 vertices each (fewer, wider buckets cost more scanning, more cost heap work).
-  constexpr Index kBucket = 16;
   bucket_offset_.assign(ngroups + 1, 0);
   for (Index g = 0; g < ngroups; ++g)
-    bucket_offset_[g + 1] =
-        bucket_offset_[g] + std::max<Index>(1, (group_count[g] + kBucket - 1) / kBucket);
+    bucket_offset_[g + 1] = bucket_offset_[g] + buckets_for(group_count[g]);
   const Index nbuckets = bucket_offset_[ngroups];
   std::vector<Index>& count = bucket_count_;
   count.assign(nbuckets + 1, 0);
@@ -266,10 +414,9 @@ void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::u
     if (skipped(v)) continue;
     ++kept;
     const Index g = vertex_group[v];
-    const Index k = bucket_offset_[g + 1] - bucket_offset_[g];
-    const double q = vertex_angle[v] * (0.25 * static_cast<double>(k));
-    const Index j = q > 0 ? (q < static_cast<double>(k) ? static_cast<Index>(q) : k - 1) : 0;
-    vertex_group[v] = bucket_offset_[g] + j;  // from here on: the vertex's bucket
+    // From here on: the vertex's bucket.
+    vertex_group[v] =
+        bucket_offset_[g] + bucket_at(vertex_angle[v], bucket_offset_[g + 1] - bucket_offset_[g]);
     ++count[vertex_group[v] + 1];
   }
   for (Index g = 0; g < nbuckets; ++g) count[g + 1] += count[g];
@@ -290,16 +437,19 @@ void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::u
   fill.assign(count.begin(), count.end() - 1);
   for (Index v = 0; v < mesh.num_vertices; ++v) {
     if (skipped(v)) continue;
-    Group& bucket = buckets_[vertex_group[v]];
-    const Index k = fill[vertex_group[v]]++;
-    const Vec3 p = mesh.vertex(v);
-    packed_xyz_[3 * k] = p.x();
-    packed_xyz_[3 * k + 1] = p.y();
-    packed_xyz_[3 * k + 2] = p.z();
-    packed_index_[k] = v;
-    bucket.lo = bucket.lo.cwiseMin(p);
-    bucket.hi = bucket.hi.cwiseMax(p);
+    pack_vertex(mesh, v, buckets_[vertex_group[v]], fill[vertex_group[v]]++);
   }
+}
+
+// Vertex v at place k of packed_xyz_, in `bucket` (its box grown).
+void MomentArmIndex::pack_vertex(const MeshView& mesh, Index v, Group& bucket, Index k) {
+  const Vec3 p = mesh.vertex(v);
+  packed_xyz_[3 * k] = p.x();
+  packed_xyz_[3 * k + 1] = p.y();
+  packed_xyz_[3 * k + 2] = p.z();
+  packed_index_[k] = v;
+  bucket.lo = bucket.lo.cwiseMin(p);
+  bucket.hi = bucket.hi.cwiseMax(p);
 }
 
 // The box trees: over each group's buckets, over each bone's slabs, and each bone's subtree box
@@ -309,29 +459,40 @@ void MomentArmIndex::build_box_trees(const LoadTree& tree) {
   const int nb = static_cast<int>(group_offset_.size()) - 1;
   const Index nbuckets = bucket_offset_[ngroups];
   const double inf = std::numeric_limits<double>::infinity();
-  // A bottom-up tree over the buckets of each group (leaves k + j, parents i = (k + j) / 2, ...);
-  // its root (or single leaf) is the group's box.
   groups_.assign(ngroups, Group{});
   bucket_lo_.assign(2 * nbuckets, Vec3::Constant(inf));
   bucket_hi_.assign(2 * nbuckets, Vec3::Constant(-inf));
-  for (Index g = 0; g < ngroups; ++g) {
-    const Index first = bucket_offset_[g], k = bucket_offset_[g + 1] - first;
-    Vec3* lo = bucket_lo_.data() + 2 * first;
-    Vec3* hi = bucket_hi_.data() + 2 * first;
-    box_tree(buckets_.data() + first, k, lo, hi);
-    groups_[g].begin = buckets_[first].begin;
-    groups_[g].end = buckets_[first + k - 1].end;
-    groups_[g].lo = lo[1];
-    groups_[g].hi = hi[1];
-  }
-  // Each bone's tree of slab boxes (leaves m + j, parents i = (m + j) / 2, ...).
+  for (Index g = 0; g < ngroups; ++g) bucket_tree(g);
   node_lo_.assign(2 * ngroups, Vec3::Constant(inf));
   node_hi_.assign(2 * ngroups, Vec3::Constant(-inf));
-  for (int b = 0; b < nb; ++b) {
-    const Index first = group_offset_[b], m = group_offset_[b + 1] - first;
-    box_tree(groups_.data() + first, m, node_lo_.data() + 2 * first, node_hi_.data() + 2 * first);
-  }
-  // Subtree boxes, leaves first (reverse breadth-first order).
+  for (int b = 0; b < nb; ++b) bone_tree(b);
+  subtree_boxes(tree);
+}
+
+// A bottom-up tree over the buckets of group g (leaves k + j, parents i = (k + j) / 2, ...); its
+// root (or single leaf) is the group's box.
+void MomentArmIndex::bucket_tree(Index g) {
+  const Index first = bucket_offset_[g], k = bucket_offset_[g + 1] - first;
+  Vec3* lo = bucket_lo_.data() + 2 * first;
+  Vec3* hi = bucket_hi_.data() + 2 * first;
+  box_tree(buckets_.data() + first, k, lo, hi);
+  groups_[g].begin = buckets_[first].begin;
+  groups_[g].end = buckets_[first + k - 1].end;
+  groups_[g].lo = lo[1];
+  groups_[g].hi = hi[1];
+}
+
+// Bone b's tree of slab boxes (leaves m + j, parents i = (m + j) / 2, ...).
+void MomentArmIndex::bone_tree(int b) {
+  const Index first = group_offset_[b], m = group_offset_[b + 1] - first;
+  box_tree(groups_.data() + first, m, node_lo_.data() + 2 * first, node_hi_.data() + 2 * first);
+}
+
+// Each bone's subtree box (the bone and every bone beyond it in `tree`), leaves first (reverse
+// breadth-first order).
+void MomentArmIndex::subtree_boxes(const LoadTree& tree) {
+  const int nb = static_cast<int>(group_offset_.size()) - 1;
+  const double inf = std::numeric_limits<double>::infinity();
   subtree_lo_.assign(nb, Vec3::Constant(inf));
   subtree_hi_.assign(nb, Vec3::Constant(-inf));
   for (auto it = tree.order.rbegin(); it != tree.order.rend(); ++it) {
@@ -345,6 +506,22 @@ void MomentArmIndex::build_box_trees(const LoadTree& tree) {
       subtree_lo_[b] = subtree_lo_[b].cwiseMin(subtree_lo_[child]);
       subtree_hi_[b] = subtree_hi_[b].cwiseMax(subtree_hi_[child]);
     }
+  }
+}
+
+// region_kept_: the bone and every bone beyond it kept, with the last build's children (the
+// same bones joined at the same params).
+void MomentArmIndex::mark_kept_regions(const LoadTree& tree) {
+  region_kept_.assign(bone_kept_.size(), 0);
+  if (last_children_.size() != tree.children.size()) return;
+  for (auto it = tree.order.rbegin(); it != tree.order.rend(); ++it) {
+    const int b = *it;
+    bool kept = bone_kept_[b] != 0 && tree.children[b] == last_children_[b];
+    for (const auto& [child, param] : tree.children[b]) {
+      (void)param;
+      kept = kept && region_kept_[child] != 0;
+    }
+    region_kept_[b] = kept;
   }
 }
 

@@ -49,13 +49,26 @@ class MomentArmIndex {
   /// `moved` (optional, #V): which vertices moved since the last build (live mode); a vertex
   /// that did not, on the same bone, whose bone's head, axis and slabs are bitwise the same,
   /// keeps its slab and angle from then (the same numbers: the index is the same).
+  /// `moved_list` (with `moved`: the moved vertices, each once): when every vertex keeps its bone
+  /// and every bone its number of slabs and of buckets per slab, a bone with no moved vertex
+  /// whose head, axis and slabs are the last build's keeps its part of the index as it is (the
+  /// same bits: bone_kept) and only the other bones' vertices are grouped and packed again.
   void build(const MeshView& mesh, const Skeleton& skeleton, const LoadTree& tree,
              const std::vector<int>& vertex_bone,
              const std::vector<std::vector<double>>& slab_params,
              const std::vector<std::uint8_t>* skip = nullptr,
-             const std::vector<std::uint8_t>* moved = nullptr);
+             const std::vector<std::uint8_t>* moved = nullptr,
+             const std::vector<std::int32_t>* moved_list = nullptr);
   /// The next build computes every vertex's slab anew (its inputs are not the last build's).
-  void forget_slabs() { slabs_known_ = false; }
+  void forget_slabs() {
+    slabs_known_ = false;
+    region_kept_.clear();
+  }
+  /// Whether this build kept bone b's part of the index and that of every bone beyond it in the
+  /// tree, the tree unchanged: any farthest() query of b gives the last build's answer.
+  bool region_kept(int bone) const {
+    return bone < static_cast<int>(region_kept_.size()) && region_kept_[bone] != 0;
+  }
 
   /// Farthest downstream vertex from `center` (mm) for a section of `bone` at slab boundary
   /// `boundary` (index into slab_params[bone]); downstream is the far side (plus = beyond the
@@ -95,6 +108,10 @@ class MomentArmIndex {
                       const std::uint8_t* moved);
   void pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip);
   void build_box_trees(const LoadTree& tree);
+  void place_vertex(const MeshView& mesh, const Skeleton& skeleton, Index v, int b);
+  void pack_vertex(const MeshView& mesh, Index v, Group& bucket, Index k);
+  void bucket_tree(Index g);
+  void bone_tree(int b);
   // Scratch of build(), kept for its storage.
   std::unique_ptr<Index[]> vertex_group_;
   std::unique_ptr<double[]> vertex_angle_;
@@ -110,9 +127,27 @@ class MomentArmIndex {
   std::vector<std::uint8_t> last_skip_;
   // Per bone, whether the last build's slabs of its unmoved vertices still hold.
   std::vector<std::uint8_t> bone_same_;
-  void compare_with_last_build(const Skeleton& skeleton, const std::vector<std::uint8_t>* skip);
+  // Live builds: each bone's kept vertices in vertex order (CSR over last_bone_), the last
+  // build's slab count per bone (group_offset_), its tree, and which bones (and regions) this
+  // build kept.
+  std::vector<Index> bone_vertex_start_, last_group_offset_;
+  std::vector<std::int32_t> bone_vertices_;
+  std::vector<std::vector<std::pair<int, double>>> last_children_;
+  std::vector<std::uint8_t> bone_kept_, region_kept_;
+  bool rebuild_moved_bones(const MeshView& mesh, const Skeleton& skeleton,
+                           const std::uint8_t* moved, const std::vector<std::int32_t>& moved_list);
+  void regroup_bone(const MeshView& mesh, const Skeleton& skeleton, int b,
+                    const std::uint8_t* moved);
+  void repack_bone(const MeshView& mesh, int b);
+  void move_buckets();
+  std::vector<Index> next_bucket_offset_;  // scratch of rebuild_moved_bones
+  std::vector<Group> next_buckets_;
+  std::vector<Vec3> next_lo_, next_hi_;
+  void subtree_boxes(const LoadTree& tree);
+  void mark_kept_regions(const LoadTree& tree);
+  bool compare_with_last_build(const Skeleton& skeleton, const std::vector<std::uint8_t>* skip);
   void remember_build(const Skeleton& skeleton, const std::vector<int>& vertex_bone,
-                      const std::vector<std::uint8_t>* skip);
+                      const std::vector<std::uint8_t>* skip, bool kept);
 };
 
 }  // namespace osteon
