@@ -12,12 +12,31 @@
 #include "line_triangle.hpp"
 #include "osteon/slicer.hpp"
 #include "parallel.hpp"
+#include "prefetch.hpp"
 
 namespace osteon {
 
 namespace {
 
 constexpr int kBlock = 4;  // cells per block edge
+
+// bin_faces: faces per chunk (the cells of a chunk's faces found, then counted).
+constexpr Index kBinChunk = 256;
+
+// How many faces (corners, entries) ahead the loops of the build prefetch what they will gather:
+// 24 from 131 072 vertices on (3 MB of coordinates: cow x16 29.7 against 37.6 CPU ms per grid,
+// cow x64 111 against 208), never below (cow x4's 46k vertices stay in the caches: the same time,
+// and the prefetches would be ~6 M more instructions). "Never": a distance no index reaches.
+inline Index prefetch_distance(const MeshView& mesh) {
+  return mesh.num_vertices >= 131072 ? Index(24) : Index(1) << 60;
+}
+
+// Prefetches the coordinates of vertex v (24 bytes: up to two cache lines).
+inline void prefetch_vertex(const MeshView& mesh, std::int32_t v) {
+  const double* p = mesh.vertices + 3 * static_cast<Index>(v);
+  detail::prefetch(p);
+  detail::prefetch(p + 2);
+}
 
 }  // namespace
 
@@ -317,7 +336,9 @@ void FaceGrid::entries_from(const MeshView& mesh, Index k0) {
 // Entries [begin, end): vertex list[e - begin] and its coordinates (storage already sized).
 void FaceGrid::write_entries(const MeshView& mesh, const std::int32_t* list, Index begin,
                              Index end) {
+  const Index ahead = prefetch_distance(mesh);
   for (Index e = begin; e < end; ++e) {
+    if (e + ahead < end) prefetch_vertex(mesh, list[e + ahead - begin]);
     const std::int32_t v = list[e - begin];
     const double* p = mesh.vertices + 3 * static_cast<Index>(v);
     entry_vertex_[e] = v;
@@ -331,6 +352,7 @@ void FaceGrid::write_entries(const MeshView& mesh, const std::int32_t* list, Ind
 // faces per cell and part (part_count_), and how far each cell's triangles stick out of it
 // (part_overhang_; so that a cell's box = its grid box widened by that, without a second pass).
 void FaceGrid::bin_faces(const MeshView& mesh, const Layout& grid, int parts) {
+  const Index ahead = prefetch_distance(mesh);
   const Index nf = mesh.num_faces, total = grid.total;
   std::int32_t* cell_of = cell_of_.reserve(nf);
   float* face_reach = face_reach_.reserve(nf);
@@ -348,13 +370,23 @@ void FaceGrid::bin_faces(const MeshView& mesh, const Layout& grid, int parts) {
     auto& count = part_count[part];
     auto& overhang = part_overhang[part];
     const Index begin = nf * part / parts, end = nf * (part + 1) / parts;
-    for (Index f = begin; f < end; ++f) {
-      float r;
-      const Index id = file_face(mesh, grid, mesh.faces + 3 * f, r);
-      cell_of[f] = static_cast<std::int32_t>(id);
-      face_reach[f] = r;
-      ++count[id];
-      overhang[id] = std::max(overhang[id], r);
+    for (Index c0 = begin; c0 < end; c0 += kBinChunk) {
+      const Index c1 = std::min(end, c0 + kBinChunk);
+      for (Index f = c0; f < c1; ++f) {
+        if (f + ahead < end)
+          for (int k = 0; k < 3; ++k) prefetch_vertex(mesh, mesh.faces[3 * (f + ahead) + k]);
+        cell_of[f] =
+            static_cast<std::int32_t>(file_face(mesh, grid, mesh.faces + 3 * f, face_reach[f]));
+      }
+      for (Index f = c0; f < c1; ++f) {
+        if (f + ahead < c1) {
+          detail::prefetch(&count[cell_of[f + ahead]]);
+          detail::prefetch(&overhang[cell_of[f + ahead]]);
+        }
+        const std::int32_t id = cell_of[f];
+        ++count[id];
+        overhang[id] = std::max(overhang[id], face_reach[f]);
+      }
     }
   });
 }
@@ -363,6 +395,7 @@ void FaceGrid::bin_faces(const MeshView& mesh, const Layout& grid, int parts) {
 // triangles of a cell after the earlier parts', so the order is the sequential one whatever the
 // number of workers. The parts' overhangs are merged into part_overhang_[0].
 void FaceGrid::sort_faces_by_cell(const MeshView& mesh, Index total, int parts) {
+  const Index ahead = prefetch_distance(mesh);
   const Index nf = mesh.num_faces;
   auto& part_count = part_count_;
   auto& part_overhang = part_overhang_;
@@ -386,6 +419,8 @@ void FaceGrid::sort_faces_by_cell(const MeshView& mesh, Index total, int parts) 
     auto& fill = part_count[part];
     const Index begin = nf * part / parts, end = nf * (part + 1) / parts;
     for (Index f = begin; f < end; ++f) {
+      if (f + 2 * ahead < end) detail::prefetch(&fill[cell_of[f + 2 * ahead]]);
+      if (f + ahead < end) detail::prefetch(faces_.get() + 3 * fill[cell_of[f + ahead]]);
       const Index k = fill[cell_of[f]]++;
       faces_[3 * k] = mesh.faces[3 * f];
       faces_[3 * k + 1] = mesh.faces[3 * f + 1];
@@ -442,6 +477,7 @@ void FaceGrid::collect_cells(const Layout& grid) {
 }
 
 void FaceGrid::build_entries(const MeshView& mesh, int parts) {
+  const Index ahead = prefetch_distance(mesh);
   // Part p lists the distinct vertices of cells cells * p / parts .. (first appearance order),
   // numbered from 0; the entries of the earlier parts are added afterwards (so the result does
   // not depend on the number of parts).
@@ -464,11 +500,13 @@ void FaceGrid::build_entries(const MeshView& mesh, int parts) {
     slot.assign(mesh.num_vertices, -1);
     std::int32_t* list = part_lists_[part].reserve(3 * (start_[c1] - start_[c0]));  // <= 1 a corner
     std::int32_t* corner = face_entries_.get();
+    const Index last = 3 * start_[c1];
     std::int32_t n = 0;
     for (Index c = c0; c < c1; ++c) {
       const std::int32_t first = n;
       vstart_[c] = first;
       for (Index k = 3 * start_[c], stop = 3 * start_[c + 1]; k < stop; ++k) {
+        if (k + ahead < last) detail::prefetch(&slot[faces_[k + ahead]]);
         const std::int32_t v = faces_[k];
         std::int32_t e = slot[v];
         if (e < first) {

@@ -7,8 +7,13 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "parallel.hpp"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace osteon {
 namespace {
@@ -127,6 +132,39 @@ std::vector<int> dominant_bones(const BoneWeights& w) {
 
 namespace {
 
+// Whether any value of data[begin, end) is bad (NaN, infinite, negative beyond round-off): no
+// branch and no early exit. The compiler does not vectorise a floating-point comparison that
+// NaN makes unordered, so on SSE2 two lanes are tested at a time (cmpnge / cmpnle: true for NaN);
+// on cow x64's 6.2M entries the scalar test was half of the dominant-bone pass.
+bool any_bad_weight(const double* data, Index begin, Index end) {
+  const double lo = -kNegativeTolerance, hi = std::numeric_limits<double>::max();
+  Index k = begin;
+  bool bad = false;
+#if defined(__SSE2__)
+  const __m128d vlo = _mm_set1_pd(lo), vhi = _mm_set1_pd(hi);
+  __m128d acc = _mm_setzero_pd();
+  for (; k + 4 <= end; k += 4) {
+    const __m128d a = _mm_loadu_pd(data + k), b = _mm_loadu_pd(data + k + 2);
+    acc = _mm_or_pd(acc, _mm_or_pd(_mm_cmpnge_pd(a, vlo), _mm_cmpnle_pd(a, vhi)));
+    acc = _mm_or_pd(acc, _mm_or_pd(_mm_cmpnge_pd(b, vlo), _mm_cmpnle_pd(b, vhi)));
+  }
+  bad = _mm_movemask_pd(acc) != 0;
+#endif
+  for (; k < end; ++k) bad |= !(data[k] >= lo) | !(data[k] <= hi);
+  return bad;
+}
+
+// Whether any bone of bones[begin, end) is out of range (one unsigned comparison: a negative bone
+// is above the limit); this loop vectorises.
+template <class BoneIndex>
+bool any_bad_bone(const BoneIndex* bones, Index begin, Index end, int num_bones) {
+  using Unsigned = std::make_unsigned_t<BoneIndex>;
+  const Unsigned limit = static_cast<Unsigned>(num_bones);
+  Unsigned bad = 0;
+  for (Index k = begin; k < end; ++k) bad |= static_cast<Unsigned>(bones[k]) >= limit;
+  return bad != 0;
+}
+
 template <class BoneIndex>
 std::vector<int> dominant_bones_of_csr(const Index* indptr, const BoneIndex* indices,
                                        const double* data, Index num_vertices, int num_bones,
@@ -141,10 +179,8 @@ std::vector<int> dominant_bones_of_csr(const Index* indptr, const BoneIndex* ind
   std::vector<int> dom(num_vertices, -1);
   detail::parallel_for(chunks, threads, [&](long chunk, int) {
     const Index v0 = chunk * block, v1 = std::min(num_vertices, v0 + block);
-    bool bad = false;
-    for (Index k = indptr[v0]; k < indptr[v1]; ++k)
-      bad |= !(data[k] >= -kNegativeTolerance && data[k] <= std::numeric_limits<double>::max()) |
-             (indices[k] < 0) | (indices[k] >= num_bones);
+    const bool bad = any_bad_weight(data, indptr[v0], indptr[v1]) |
+                     any_bad_bone(indices, indptr[v0], indptr[v1], num_bones);
     chunk_bad[chunk] = bad;
     if (bad) return;
     for (Index v = v0; v < v1; ++v) dom[v] = row_argmax(indptr[v], indptr[v + 1], indices, data);
