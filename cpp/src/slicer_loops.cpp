@@ -334,6 +334,48 @@ void close_small_gaps(PlaneCut& cut, double gap_tolerance) {
   chains.swap(remaining);
 }
 
+// A total order of points (x, then y; NaN last), for the canonical order below.
+bool point_less(const Vec2& a, const Vec2& b) {
+  auto key = [](double t) { return std::make_pair(std::isnan(t), std::isnan(t) ? 0.0 : t); };
+  const auto ax = key(a.x()), bx = key(b.x());
+  return ax < bx || (ax == bx && key(a.y()) < key(b.y()));
+}
+
+bool points_less(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
+  if (a.size() != b.size()) return a.size() < b.size();
+  return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(), point_less);
+}
+
+// Rotates a closed loop to start at its least point (point_less), so that it does not depend
+// on which segment the walk started from; of several rotations starting there, the least.
+void start_at_least_point(std::vector<Vec2>& loop) {
+  const std::size_t n = loop.size();
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < n; ++k)
+    if (point_less(loop[k], loop[best])) best = k;
+  // The same least point again (rare: a loop through one point twice): compare the rotations.
+  auto rotation_less = [&](std::size_t a, std::size_t b) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec2 &p = loop[(a + k) % n], &q = loop[(b + k) % n];
+      if (point_less(p, q)) return true;
+      if (point_less(q, p)) return false;
+    }
+    return false;
+  };
+  for (std::size_t k = best + 1; k < n; ++k)
+    if (!point_less(loop[best], loop[k]) && rotation_less(k, best)) best = k;
+  std::rotate(loop.begin(), loop.begin() + static_cast<std::ptrdiff_t>(best), loop.end());
+}
+
+// The loops and chains in an order of their own: each loop from its least point, the loops and
+// the chains sorted. The segments' order (the grid cells' order, which depends on the grid's
+// layout) then changes nothing downstream, not even the last bits of a sum over a loop.
+void canonical_order(PlaneCut& cut) {
+  for (auto& loop : cut.loops) start_at_least_point(loop);
+  std::sort(cut.loops.begin(), cut.loops.end(), points_less);
+  std::sort(cut.open_chains.begin(), cut.open_chains.end(), points_less);
+}
+
 }  // namespace
 
 PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_tolerance) {
@@ -344,11 +386,16 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   const std::vector<CutSegment>* source =
       pair_segment_ends(input, scratch, deduplicated, cut.flags);
   walk_segment_chains(source->data(), source->size(), scratch, cut);
-  if (!cut.open_chains.empty() && gap_tolerance > 0) close_small_gaps(cut, gap_tolerance);
+  if (!cut.open_chains.empty() && gap_tolerance > 0) {
+    // Chains sorted first: the gaps' ties are broken by the chains' order.
+    std::sort(cut.open_chains.begin(), cut.open_chains.end(), points_less);
+    close_small_gaps(cut, gap_tolerance);
+  }
   // Drop degenerate loops (fewer than three points cannot bound area).
   cut.loops.erase(std::remove_if(cut.loops.begin(), cut.loops.end(),
                                  [](const std::vector<Vec2>& l) { return l.size() < 3; }),
                   cut.loops.end());
+  canonical_order(cut);
   return cut;
 }
 

@@ -290,9 +290,12 @@ class FaceGrid {
 };
 
 /// Cuts every triangle of the mesh that crosses the plane; appends to `out`. With a grid only
-/// the cells the plane passes through are visited; with a region only cells near it; with
-/// `exclude` (grid only) not the cells near that region, so that a cut grown from `exclude` to
-/// `region` adds exactly the triangles the smaller cut left out.
+/// the cells the plane passes through are visited. With a region only the triangles whose
+/// segment meets it are cut (comes within its radius of its axis or point); with `exclude` not
+/// those whose segment meets that region, so that a cut grown from `exclude` to `region` (the
+/// same axis, a wider radius) adds exactly the triangles the smaller cut left out. Which
+/// triangles a region keeps is decided per segment, so it does not depend on the grid's layout
+/// (a loop around the region's point is clipped open exactly where it leaves the region).
 void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
               const FaceGrid* grid = nullptr, const CutRegion* region = nullptr,
               const CutRegion* exclude = nullptr);
