@@ -98,6 +98,16 @@ PlaneFrame PlaneFrame::make(const Vec3& origin, const Vec3& normal) {
 
 namespace {
 
+// False only when the box (center, half extents, mm) surely misses the region; a box that
+// overflowed (NaN: coordinates near the double range, where a float overhang is infinite) may
+// meet it. The box's test must never drop a cell that holds a segment the filter keeps.
+bool box_may_meet(const CutRegion& region, const Vec3& center, const Vec3& half) {
+  Vec3 d = center - region.point;
+  d -= d.dot(region.axis) * region.axis;
+  const double reach = region.radius + half.norm();
+  return !(d.squaredNorm() > reach * reach);
+}
+
 // Calls cell_fn(c) for each cell meeting a slab that may hold a segment the region filter keeps
 // (its box may reach into `region`, and does not lie wholly inside `exclude`), in the grid's
 // order. Which cells these are depends on the grid's layout; the segments kept do not
@@ -109,19 +119,21 @@ void for_cells_in_slab(const FaceGrid& grid, const Vec3& n, double lo, double hi
   if (region != nullptr) {
     wider = *region;
     wider.radius += region_slack(*region);
-    region = &wider;
   }
   if (exclude != nullptr) {
     narrower = *exclude;
     narrower.radius -= region_slack(*exclude);
-    exclude = &narrower;
   }
   for (Index k = 0; k < grid.num_blocks(); ++k) {
-    if (!grid.block_meets(k, n, lo, hi, region)) continue;
-    if (exclude != nullptr && grid.block_within(k, *exclude)) continue;
+    if (!grid.block_meets(k, n, lo, hi)) continue;
+    if (region != nullptr && !box_may_meet(wider, grid.block_center(k), grid.block_half(k)))
+      continue;
+    if (exclude != nullptr && grid.block_within(k, narrower)) continue;
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
-      if (!grid.meets(c, n, lo, hi, region)) continue;
-      if (exclude != nullptr && exclude->holds_box(grid.cell_center(c), grid.cell_half(c)))
+      if (!grid.meets(c, n, lo, hi)) continue;
+      if (region != nullptr && !box_may_meet(wider, grid.cell_center(c), grid.cell_half(c)))
+        continue;
+      if (exclude != nullptr && narrower.holds_box(grid.cell_center(c), grid.cell_half(c)))
         continue;
       cell_fn(c);
     }

@@ -297,20 +297,26 @@ void close_small_gaps(PlaneCut& cut, double gap_tolerance) {
   auto walk = [&](std::size_t start_end, bool cycle) {
     std::vector<Vec2> pts;
     std::size_t end = start_end;
+    std::size_t reversed = 0;  // points of the chains walked against their own direction
     while (true) {
       const std::size_t chain = end / 2;
       if (done[chain]) break;
       done[chain] = 1;
       // Enter the chain at `end`, traverse to its other end.
-      if (end % 2 == 0)
+      if (end % 2 == 0) {
         pts.insert(pts.end(), chains[chain].begin(), chains[chain].end());
-      else
+      } else {
         pts.insert(pts.end(), chains[chain].rbegin(), chains[chain].rend());
+        reversed += chains[chain].size();
+      }
       const std::size_t exit_end = end ^ 1u;
       if (link[exit_end] < 0) break;
       end = static_cast<std::size_t>(link[exit_end]);
     }
     if (cycle) {
+      // A loop keeps the direction of most of its points' chains (the segments' direction says
+      // material from hole), not of whichever chain the walk started from.
+      if (2 * reversed > pts.size()) std::reverse(pts.begin(), pts.end());
       if (pts.size() >= 3) cut.loops.push_back(std::move(pts));
     } else {
       remaining.push_back(std::move(pts));

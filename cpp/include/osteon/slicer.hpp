@@ -151,6 +151,9 @@ class FaceGrid {
   Index num_blocks() const { return static_cast<Index>(block_center_.size()); }
   Index block_begin(Index k) const { return block_start_[k]; }
   Index block_end(Index k) const { return block_start_[k + 1]; }
+  /// Block k's box (centre and half extents, mm): the box of its cells' boxes.
+  const Vec3& block_center(Index k) const { return block_center_[k]; }
+  const Vec3& block_half(Index k) const { return block_half_[k]; }
   /// True when block k's box may be touched by the region.
   bool block_near(Index k, const CutRegion& region) const {
     return region.meets_box(block_center_[k], block_half_[k]);
