@@ -108,13 +108,32 @@ bool box_may_meet(const CutRegion& region, const Vec3& center, const Vec3& half)
   return !(d.squaredNorm() > reach * reach);
 }
 
-// Calls cell_fn(c) for each cell meeting a slab that may hold a segment the region filter keeps
-// (its box may reach into `region`, and does not lie wholly inside `exclude`), in the grid's
-// order. Which cells these are depends on the grid's layout; the segments kept do not
-// (SegmentFilter decides each one).
+// Calls cell_fn(c) for each cell meeting a slab that may hold a triangle the region filter
+// keeps, in the grid's order. `per_segment` (cut_mesh's region test per segment): the cells
+// whose box may reach into `region` and does not lie wholly inside `exclude` -- which cells
+// these are depends on the grid's layout, the segments kept do not (SegmentFilter decides each
+// one). Otherwise the cells themselves are the filter: those whose box may reach into `region`
+// and not into `exclude`.
 template <class Fn>
 void for_cells_in_slab(const FaceGrid& grid, const Vec3& n, double lo, double hi,
-                       const CutRegion* region, const CutRegion* exclude, Fn&& cell_fn) {
+                       const CutRegion* region, const CutRegion* exclude, bool per_segment,
+                       Fn&& cell_fn) {
+  if (!per_segment) {
+    for (Index k = 0; k < grid.num_blocks(); ++k) {
+      if (!grid.block_meets(k, n, lo, hi, region)) continue;
+      // A cell was visited by the `exclude` cut when both its block and itself are near
+      // `exclude` (the two tests are not nested: a cell's bounding sphere may stick out of its
+      // block's).
+      const bool block_excluded = exclude != nullptr && grid.block_near(k, *exclude);
+      if (block_excluded && grid.block_within(k, *exclude)) continue;
+      for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+        if (!grid.meets(c, n, lo, hi, region)) continue;
+        if (block_excluded && grid.near(c, *exclude)) continue;
+        cell_fn(c);
+      }
+    }
+    return;
+  }
   CutRegion wider, narrower;
   if (region != nullptr) {
     wider = *region;
@@ -144,12 +163,13 @@ void for_cells_in_slab(const FaceGrid& grid, const Vec3& n, double lo, double hi
 // triangles.
 template <class Fn>
 void for_faces_in_slab(const MeshView& mesh, const FaceGrid* grid, const Vec3& n, double lo,
-                       double hi, const CutRegion* region, const CutRegion* exclude, Fn&& fn) {
+                       double hi, const CutRegion* region, const CutRegion* exclude,
+                       bool per_segment, Fn&& fn) {
   if (grid == nullptr) {
     for (Index f = 0; f < mesh.num_faces; ++f) fn(mesh.faces + 3 * f);
     return;
   }
-  for_cells_in_slab(*grid, n, lo, hi, region, exclude, [&](Index c) {
+  for_cells_in_slab(*grid, n, lo, hi, region, exclude, per_segment, [&](Index c) {
     const std::int32_t* t = grid->faces() + 3 * grid->begin(c);
     for (Index f = grid->begin(c); f < grid->end(c); ++f, t += 3) fn(t);
   });
@@ -158,11 +178,14 @@ void for_faces_in_slab(const MeshView& mesh, const FaceGrid* grid, const Vec3& n
 }  // namespace
 
 void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
-              const FaceGrid* grid, const CutRegion* region, const CutRegion* exclude) {
+              const FaceGrid* grid, const CutRegion* region, const CutRegion* exclude,
+              bool per_segment) {
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
   const SegmentFilter filter{region, exclude};
-  const bool filtered = region != nullptr || exclude != nullptr;
+  // Without a grid a region is always decided per segment (there are no cells to decide by).
+  per_segment = per_segment || grid == nullptr;
+  const bool filtered = per_segment && (region != nullptr || exclude != nullptr);
   // Face f given its corners' heights.
   auto cut_face_at = [&](const std::int32_t* f, double height[3]) {
     const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
@@ -181,7 +204,8 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
     cut_face_at(f, height);
   };
   if (grid == nullptr || !grid->tight_bounds()) {
-    for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude, cut_face);
+    for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude, per_segment,
+                      cut_face);
     return;
   }
   // The same cells, but a cell or a run of its faces whose tight box the plane misses is skipped
@@ -200,7 +224,7 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
   const std::int32_t* entries = grid->face_entries();
   thread_local std::vector<double> cell_heights;
   std::vector<double>& heights = cell_heights;
-  for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, [&](Index c) {
+  for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, per_segment, [&](Index c) {
     FaceGrid::TightBoxes boxes;
     const Index begin = grid->begin(c), end = grid->end(c);
     const FaceGrid::Tight state = grid->tight_boxes(c, boxes);
@@ -264,8 +288,6 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
   const double offset = plane.normal.dot(plane.origin);
   const double inv = 1.0 / spacing;
   const double top = static_cast<double>(count);
-  const SegmentFilter filter{region, exclude};
-  const bool filtered = region != nullptr || exclude != nullptr;
   double* __restrict ht = height.get();
   std::int32_t* __restrict bk = bucket.get();
   // Heights and buckets of vertices begin .. end.
@@ -297,7 +319,7 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
       CutSegment seg;
       Vec3 world[2];
       emit_segment(mesh, plane, f, above, h, seg, world);
-      if (!filtered || filter.keeps(world)) out[k - 1].push_back(seg);
+      out[k - 1].push_back(seg);
     }
   };
   if (grid == nullptr) {
@@ -316,7 +338,7 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
   std::vector<Index>& visited = visited_cells;
   visited.clear();
   for_cells_in_slab(*grid, plane.normal, offset + first * spacing, offset + last * spacing, region,
-                    exclude, [&](Index c) { visited.push_back(c); });
+                    exclude, false, [&](Index c) { visited.push_back(c); });
   for (std::size_t i = 0, j = 0; i < visited.size(); i = j) {
     for (j = i + 1; j < visited.size() && visited[j] == visited[j - 1] + 1;) ++j;
     heights(gx, gy, gz, grid->vertex_begin(visited[i]), grid->vertex_end(visited[j - 1]),

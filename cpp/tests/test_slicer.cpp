@@ -132,14 +132,14 @@ TEST(Slicer, ARegionKeepsTheTrianglesWhoseSegmentMeetsItWhateverTheGrid) {
   for (int k = 0; k < 12; ++k) {
     const double x = 5.0 + 4.3 * k;
     const PlaneFrame plane = PlaneFrame::make(Vec3(x, 0, 0), Vec3(1, 0.1 * (k % 3), 0));
-    const Vec3 axis = k % 2 == 0 ? Vec3::Zero() : Vec3::UnitX();
-    const CutRegion region{Vec3(x, 25 + k, 3.0 * (k % 4)), axis, 12.0 + 0.7 * k};
+    const Vec3 axis = k % 2 == 0 ? Vec3(Vec3::Zero()) : Vec3(Vec3::UnitX());
+    const CutRegion region{Vec3(x, 30 + k, 3.0 * (k % 4)), axis, 12.0 + 0.7 * k};
     std::vector<CutSegment> whole, none, a, b, c;
     cut_mesh(m.view(), plane, whole, nullptr);
     cut_mesh(m.view(), plane, none, nullptr, &region);
-    cut_mesh(m.view(), plane, a, &fine, &region);
-    cut_mesh(m.view(), plane, b, &coarse, &region);
-    cut_mesh(m.view(), plane, c, &wide_box, &region);
+    cut_mesh(m.view(), plane, a, &fine, &region, nullptr, true);
+    cut_mesh(m.view(), plane, b, &coarse, &region, nullptr, true);
+    cut_mesh(m.view(), plane, c, &wide_box, &region, nullptr, true);
     EXPECT_EQ(cut_keys(a), cut_keys(none)) << k;
     EXPECT_EQ(cut_keys(b), cut_keys(none)) << k;
     EXPECT_EQ(cut_keys(c), cut_keys(none)) << k;

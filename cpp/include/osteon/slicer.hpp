@@ -293,15 +293,16 @@ class FaceGrid {
 };
 
 /// Cuts every triangle of the mesh that crosses the plane; appends to `out`. With a grid only
-/// the cells the plane passes through are visited. With a region only the triangles whose
-/// segment meets it are cut (comes within its radius of its axis or point); with `exclude` not
-/// those whose segment meets that region, so that a cut grown from `exclude` to `region` (the
-/// same axis, a wider radius) adds exactly the triangles the smaller cut left out. Which
-/// triangles a region keeps is decided per segment, so it does not depend on the grid's layout
-/// (a loop around the region's point is clipped open exactly where it leaves the region).
+/// the cells the plane passes through are visited; with a region only cells near it; with
+/// `exclude` (grid only) not the cells near that region, so that a cut grown from `exclude` to
+/// `region` adds exactly the triangles the smaller cut left out. With `per_segment` (and always
+/// without a grid) the region is decided per triangle instead: a triangle is cut when its own
+/// segment comes within the region's radius of its axis or point (and not within `exclude`'s),
+/// so which triangles are cut -- where a loop around the region's point is clipped open -- does
+/// not depend on the grid's layout. (A cut and its grown cuts must use the same mode.)
 void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
               const FaceGrid* grid = nullptr, const CutRegion* region = nullptr,
-              const CutRegion* exclude = nullptr);
+              const CutRegion* exclude = nullptr, bool per_segment = false);
 
 /// Cuts the mesh by `count` parallel planes base + k*spacing*normal, k = 1..count, in one pass.
 /// out[k-1] receives plane k's segments, in coordinates of the frame `plane` (whose origin is
