@@ -352,25 +352,40 @@ bool points_less(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
   return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(), point_less);
 }
 
-// Rotates a closed loop to start at its least point (point_less), so that it does not depend
-// on which segment the walk started from; of several rotations starting there, the least.
+// Rotates a closed loop to start at its least point (x, then y), so that it does not depend
+// on which segment the walk started from; of several rotations starting there (a loop through
+// one point twice, rare), the least. One pass of plain comparisons (a NaN is never least).
 void start_at_least_point(std::vector<Vec2>& loop) {
   const std::size_t n = loop.size();
   std::size_t best = 0;
-  for (std::size_t k = 1; k < n; ++k)
-    if (point_less(loop[k], loop[best])) best = k;
-  // The same least point again (rare: a loop through one point twice): compare the rotations.
-  auto rotation_less = [&](std::size_t a, std::size_t b) {
-    for (std::size_t k = 0; k < n; ++k) {
-      const Vec2 &p = loop[(a + k) % n], &q = loop[(b + k) % n];
-      if (point_less(p, q)) return true;
-      if (point_less(q, p)) return false;
+  bool tie = false;
+  double bx = loop[0].x(), by = loop[0].y();
+  for (std::size_t k = 1; k < n; ++k) {
+    const double x = loop[k].x(), y = loop[k].y();
+    if (x < bx || (x == bx && y < by)) {
+      best = k;
+      bx = x;
+      by = y;
+      tie = false;
+    } else if (x == bx && y == by) {
+      tie = true;
     }
-    return false;
-  };
-  for (std::size_t k = best + 1; k < n; ++k)
-    if (!point_less(loop[best], loop[k]) && rotation_less(k, best)) best = k;
-  std::rotate(loop.begin(), loop.begin() + static_cast<std::ptrdiff_t>(best), loop.end());
+  }
+  if (tie) {
+    auto rotation_less = [&](std::size_t a, std::size_t b) {
+      for (std::size_t k = 0; k < n; ++k) {
+        const Vec2 &p = loop[(a + k) % n], &q = loop[(b + k) % n];
+        if (point_less(p, q)) return true;
+        if (point_less(q, p)) return false;
+      }
+      return false;
+    };
+    const std::size_t first = best;
+    for (std::size_t k = 0; k < n; ++k)
+      if (k != first && loop[k].x() == bx && loop[k].y() == by && rotation_less(k, best)) best = k;
+  }
+  if (best != 0)
+    std::rotate(loop.begin(), loop.begin() + static_cast<std::ptrdiff_t>(best), loop.end());
 }
 
 // The loops and chains in an order of their own: each loop from its least point, the loops and
