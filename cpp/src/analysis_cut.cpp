@@ -34,9 +34,11 @@ bool inside_at(const RunState& run, int b, double param) {
 // A loop clipped by the region (an open polyline here) cannot lie inside a closed local loop
 // (the region is convex), so it can only matter if it reaches the chosen outer boundary's box
 // (a hole of it) or encloses the point (then the parity test fails or it comes with a partner).
+// A section flagged open (an open polyline's box meets the region's box) is not proven either:
+// the flag would be the clip's, not the mesh's (the whole plane's cut says which).
 bool local_ok(RunState& run, const PlaneCut& cut, const SectionGeometry& geom, bool inside) {
-  bool ok = !(cut.flags & kFlagNonManifold) && geom.found && geom.containing >= 1 &&
-            (geom.containing % 2 == 1) == inside;
+  bool ok = !(cut.flags & kFlagNonManifold) && geom.found && !(geom.flags & kFlagOpen) &&
+            geom.containing >= 1 && (geom.containing % 2 == 1) == inside;
   if (ok && !cut.open_chains.empty()) {
     Vec2 lo = geom.polygon.outer[0], hi = lo;
     for (const Vec2& p : geom.polygon.outer) {

@@ -1,5 +1,5 @@
-// Stage 3d of a run: the effective section at junctions (docs/method.md, Sections; docs/junctions.md)
-// (Analyzer::Impl).
+// Stage 3d of a run: the effective section at junctions (docs/method.md, Sections;
+// docs/junctions.md) (Analyzer::Impl).
 //
 // Where a side branch grows out of a bone, the plane through the junction also cuts the stub of
 // the branch, and beam theory would count it. By Saint-Venant's principle a stub shorter than
@@ -256,7 +256,8 @@ bool Analyzer::Impl::cut_neighbour_planes(RunState& run, int i, double delta,
     frame.origin += (side == 0 ? -delta : delta) * frame.normal;
     const CutRegion ball{frame.origin, Vec3::Zero(), 3.0 * extent + delta};
     segs.clear();
-    cut_mesh(run.mesh, frame, segs, &run.grid, &ball);
+    // Per segment: the loop is clipped where it leaves the ball, whatever the grid's cells.
+    cut_mesh(run.mesh, frame, segs, &run.grid, &ball, nullptr, /*per_segment=*/true);
     const PlaneCut cut = assemble_loops(segs, 0.0);
     SectionGeometry geom = select_region(cut, nullptr);
     if (geom.found && !(geom.flags & kFlagOutside)) {

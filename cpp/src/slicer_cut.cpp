@@ -22,8 +22,10 @@ inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
 // The segment keeps the face's orientation: it runs from the edge that goes down (above to below
 // in the face's winding) to the edge that goes up, so that a closed outward-facing surface gives
 // counter-clockwise loops in (u, v) and an inward-facing one clockwise loops.
+// `world` receives the endpoints in mesh coordinates (mm), for the region test.
 inline void emit_segment(const MeshView& mesh, const PlaneFrame& plane, const std::int32_t* f,
-                         const bool above[3], const double height[3], CutSegment& seg) {
+                         const bool above[3], const double height[3], CutSegment& seg,
+                         Vec3 world[2]) {
   for (int e = 0; e < 3; ++e) {
     const int i = e, j = (e + 1) % 3;
     if (above[i] == above[j]) continue;
@@ -37,7 +39,41 @@ inline void emit_segment(const MeshView& mesh, const PlaneFrame& plane, const st
                  pi[2] + lambda * (pj[2] - pi[2]));
     seg.edge[n] = edge_key(f[i], f[j]);
     seg.point[n] = plane.to_plane(p);
+    world[n] = p;
   }
+}
+
+// True when the segment a-b (mm) comes within the region's radius of its axis line (a ball: of
+// its point). One formula for every cut, so whether a triangle's segment counts depends on the
+// segment alone (not on the grid cell it was filed in), and is monotone in the radius: a
+// segment that meets a region meets every wider one around the same axis.
+inline bool segment_meets(const CutRegion& region, const Vec3& a, const Vec3& b) {
+  Vec3 p = a - region.point, q = b - region.point;
+  p -= p.dot(region.axis) * region.axis;
+  q -= q.dot(region.axis) * region.axis;
+  const double r2 = region.radius * region.radius;
+  if (p.squaredNorm() <= r2 || q.squaredNorm() <= r2) return true;
+  const Vec3 d = q - p;
+  const double len2 = d.squaredNorm();
+  const double t = len2 > 0 ? std::clamp(-p.dot(d) / len2, 0.0, 1.0) : 0.0;
+  return (p + t * d).squaredNorm() <= r2;
+}
+
+// Which segments a cut keeps: those meeting `region` (if any) and not `exclude` (if any).
+struct SegmentFilter {
+  const CutRegion* region;
+  const CutRegion* exclude;
+  bool keeps(const Vec3 world[2]) const {
+    return (region == nullptr || segment_meets(*region, world[0], world[1])) &&
+           (exclude == nullptr || !segment_meets(*exclude, world[0], world[1]));
+  }
+};
+
+// How far (mm) the cells' tests widen a region (and narrow `exclude`): more than the rounding
+// of segment_meets and of the segments' points, so that a cell the grid skips holds no segment
+// the filter would keep.
+inline double region_slack(const CutRegion& region) {
+  return 1e-9 * (region.radius + region.point.cwiseAbs().maxCoeff());
 }
 
 }  // namespace
@@ -62,35 +98,78 @@ PlaneFrame PlaneFrame::make(const Vec3& origin, const Vec3& normal) {
 
 namespace {
 
-// Calls cell_fn(c) for each cell meeting a slab (and the region, and not near `exclude`), in the
-// grid's order.
+// False only when the box (center, half extents, mm) surely misses the region; a box that
+// overflowed (NaN: coordinates near the double range, where a float overhang is infinite) may
+// meet it. The box's test must never drop a cell that holds a segment the filter keeps.
+bool box_may_meet(const CutRegion& region, const Vec3& center, const Vec3& half) {
+  Vec3 d = center - region.point;
+  d -= d.dot(region.axis) * region.axis;
+  const double reach = region.radius + half.norm();
+  return !(d.squaredNorm() > reach * reach);
+}
+
+// Calls cell_fn(c) for each cell meeting a slab that may hold a triangle the region filter
+// keeps, in the grid's order. `per_segment` (cut_mesh's region test per segment): the cells
+// whose box may reach into `region` and does not lie wholly inside `exclude` -- which cells
+// these are depends on the grid's layout, the segments kept do not (SegmentFilter decides each
+// one). Otherwise the cells themselves are the filter: those whose box may reach into `region`
+// and not into `exclude`.
 template <class Fn>
 void for_cells_in_slab(const FaceGrid& grid, const Vec3& n, double lo, double hi,
-                       const CutRegion* region, const CutRegion* exclude, Fn&& cell_fn) {
+                       const CutRegion* region, const CutRegion* exclude, bool per_segment,
+                       Fn&& cell_fn) {
+  if (!per_segment) {
+    for (Index k = 0; k < grid.num_blocks(); ++k) {
+      if (!grid.block_meets(k, n, lo, hi, region)) continue;
+      // A cell was visited by the `exclude` cut when both its block and itself are near
+      // `exclude` (the two tests are not nested: a cell's bounding sphere may stick out of its
+      // block's).
+      const bool block_excluded = exclude != nullptr && grid.block_near(k, *exclude);
+      if (block_excluded && grid.block_within(k, *exclude)) continue;
+      for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+        if (!grid.meets(c, n, lo, hi, region)) continue;
+        if (block_excluded && grid.near(c, *exclude)) continue;
+        cell_fn(c);
+      }
+    }
+    return;
+  }
+  CutRegion wider, narrower;
+  if (region != nullptr) {
+    wider = *region;
+    wider.radius += region_slack(*region);
+  }
+  if (exclude != nullptr) {
+    narrower = *exclude;
+    narrower.radius -= region_slack(*exclude);
+  }
   for (Index k = 0; k < grid.num_blocks(); ++k) {
-    if (!grid.block_meets(k, n, lo, hi, region)) continue;
-    // A cell was visited by the `exclude` cut when both its block and itself are near `exclude`
-    // (the two tests are not nested: a cell's bounding sphere may stick out of its block's).
-    const bool block_excluded = exclude != nullptr && grid.block_near(k, *exclude);
-    if (block_excluded && grid.block_within(k, *exclude)) continue;
+    if (!grid.block_meets(k, n, lo, hi)) continue;
+    if (region != nullptr && !box_may_meet(wider, grid.block_center(k), grid.block_half(k)))
+      continue;
+    if (exclude != nullptr && grid.block_within(k, narrower)) continue;
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
-      if (!grid.meets(c, n, lo, hi, region)) continue;
-      if (block_excluded && grid.near(c, *exclude)) continue;
+      if (!grid.meets(c, n, lo, hi)) continue;
+      if (region != nullptr && !box_may_meet(wider, grid.cell_center(c), grid.cell_half(c)))
+        continue;
+      if (exclude != nullptr && narrower.holds_box(grid.cell_center(c), grid.cell_half(c)))
+        continue;
       cell_fn(c);
     }
   }
 }
 
-// Visits the triangles (vertex index triples) of the cells meeting a slab (and the region, and
-// not near `exclude`), or all triangles.
+// Visits the triangles (vertex index triples) of the cells for_cells_in_slab visits, or all
+// triangles.
 template <class Fn>
 void for_faces_in_slab(const MeshView& mesh, const FaceGrid* grid, const Vec3& n, double lo,
-                       double hi, const CutRegion* region, const CutRegion* exclude, Fn&& fn) {
+                       double hi, const CutRegion* region, const CutRegion* exclude,
+                       bool per_segment, Fn&& fn) {
   if (grid == nullptr) {
     for (Index f = 0; f < mesh.num_faces; ++f) fn(mesh.faces + 3 * f);
     return;
   }
-  for_cells_in_slab(*grid, n, lo, hi, region, exclude, [&](Index c) {
+  for_cells_in_slab(*grid, n, lo, hi, region, exclude, per_segment, [&](Index c) {
     const std::int32_t* t = grid->faces() + 3 * grid->begin(c);
     for (Index f = grid->begin(c); f < grid->end(c); ++f, t += 3) fn(t);
   });
@@ -99,16 +178,22 @@ void for_faces_in_slab(const MeshView& mesh, const FaceGrid* grid, const Vec3& n
 }  // namespace
 
 void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
-              const FaceGrid* grid, const CutRegion* region, const CutRegion* exclude) {
+              const FaceGrid* grid, const CutRegion* region, const CutRegion* exclude,
+              bool per_segment) {
   const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
   const double offset = plane.normal.dot(plane.origin);
+  const SegmentFilter filter{region, exclude};
+  // Without a grid a region is always decided per segment (there are no cells to decide by).
+  per_segment = per_segment || grid == nullptr;
+  const bool filtered = per_segment && (region != nullptr || exclude != nullptr);
   // Face f given its corners' heights.
   auto cut_face_at = [&](const std::int32_t* f, double height[3]) {
     const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
     if (above[0] == above[1] && above[1] == above[2]) return;
     CutSegment seg;
-    emit_segment(mesh, plane, f, above, height, seg);
-    out.push_back(seg);
+    Vec3 world[2];
+    emit_segment(mesh, plane, f, above, height, seg, world);
+    if (!filtered || filter.keeps(world)) out.push_back(seg);
   };
   auto cut_face = [&](const std::int32_t* f) {
     double height[3];
@@ -119,7 +204,8 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
     cut_face_at(f, height);
   };
   if (grid == nullptr || !grid->tight_bounds()) {
-    for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude, cut_face);
+    for_faces_in_slab(mesh, grid, plane.normal, offset, offset, region, exclude, per_segment,
+                      cut_face);
     return;
   }
   // The same cells, but a cell or a run of its faces whose tight box the plane misses is skipped
@@ -138,7 +224,7 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
   const std::int32_t* entries = grid->face_entries();
   thread_local std::vector<double> cell_heights;
   std::vector<double>& heights = cell_heights;
-  for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, [&](Index c) {
+  for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, per_segment, [&](Index c) {
     FaceGrid::TightBoxes boxes;
     const Index begin = grid->begin(c), end = grid->end(c);
     const FaceGrid::Tight state = grid->tight_boxes(c, boxes);
@@ -231,7 +317,8 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
         h[j] = ht[e[j]] - c;
       }
       CutSegment seg;
-      emit_segment(mesh, plane, f, above, h, seg);
+      Vec3 world[2];
+      emit_segment(mesh, plane, f, above, h, seg, world);
       out[k - 1].push_back(seg);
     }
   };
@@ -251,7 +338,7 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
   std::vector<Index>& visited = visited_cells;
   visited.clear();
   for_cells_in_slab(*grid, plane.normal, offset + first * spacing, offset + last * spacing, region,
-                    exclude, [&](Index c) { visited.push_back(c); });
+                    exclude, false, [&](Index c) { visited.push_back(c); });
   for (std::size_t i = 0, j = 0; i < visited.size(); i = j) {
     for (j = i + 1; j < visited.size() && visited[j] == visited[j - 1] + 1;) ++j;
     heights(gx, gy, gz, grid->vertex_begin(visited[i]), grid->vertex_end(visited[j - 1]),

@@ -297,20 +297,26 @@ void close_small_gaps(PlaneCut& cut, double gap_tolerance) {
   auto walk = [&](std::size_t start_end, bool cycle) {
     std::vector<Vec2> pts;
     std::size_t end = start_end;
+    std::size_t reversed = 0;  // points of the chains walked against their own direction
     while (true) {
       const std::size_t chain = end / 2;
       if (done[chain]) break;
       done[chain] = 1;
       // Enter the chain at `end`, traverse to its other end.
-      if (end % 2 == 0)
+      if (end % 2 == 0) {
         pts.insert(pts.end(), chains[chain].begin(), chains[chain].end());
-      else
+      } else {
         pts.insert(pts.end(), chains[chain].rbegin(), chains[chain].rend());
+        reversed += chains[chain].size();
+      }
       const std::size_t exit_end = end ^ 1u;
       if (link[exit_end] < 0) break;
       end = static_cast<std::size_t>(link[exit_end]);
     }
     if (cycle) {
+      // A loop keeps the direction of most of its points' chains (the segments' direction says
+      // material from hole), not of whichever chain the walk started from.
+      if (2 * reversed > pts.size()) std::reverse(pts.begin(), pts.end());
       if (pts.size() >= 3) cut.loops.push_back(std::move(pts));
     } else {
       remaining.push_back(std::move(pts));
@@ -334,6 +340,63 @@ void close_small_gaps(PlaneCut& cut, double gap_tolerance) {
   chains.swap(remaining);
 }
 
+// A total order of points (x, then y; NaN last), for the canonical order below.
+bool point_less(const Vec2& a, const Vec2& b) {
+  auto key = [](double t) { return std::make_pair(std::isnan(t), std::isnan(t) ? 0.0 : t); };
+  const auto ax = key(a.x()), bx = key(b.x());
+  return ax < bx || (ax == bx && key(a.y()) < key(b.y()));
+}
+
+bool points_less(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
+  if (a.size() != b.size()) return a.size() < b.size();
+  return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(), point_less);
+}
+
+// Rotates a closed loop to start at its least point (x, then y), so that it does not depend
+// on which segment the walk started from; of several rotations starting there (a loop through
+// one point twice, rare), the least. One pass of plain comparisons (a NaN is never least).
+void start_at_least_point(std::vector<Vec2>& loop) {
+  const std::size_t n = loop.size();
+  std::size_t best = 0;
+  bool tie = false;
+  double bx = loop[0].x(), by = loop[0].y();
+  for (std::size_t k = 1; k < n; ++k) {
+    const double x = loop[k].x(), y = loop[k].y();
+    if (x < bx || (x == bx && y < by)) {
+      best = k;
+      bx = x;
+      by = y;
+      tie = false;
+    } else if (x == bx && y == by) {
+      tie = true;
+    }
+  }
+  if (tie) {
+    auto rotation_less = [&](std::size_t a, std::size_t b) {
+      for (std::size_t k = 0; k < n; ++k) {
+        const Vec2 &p = loop[(a + k) % n], &q = loop[(b + k) % n];
+        if (point_less(p, q)) return true;
+        if (point_less(q, p)) return false;
+      }
+      return false;
+    };
+    const std::size_t first = best;
+    for (std::size_t k = 0; k < n; ++k)
+      if (k != first && loop[k].x() == bx && loop[k].y() == by && rotation_less(k, best)) best = k;
+  }
+  if (best != 0)
+    std::rotate(loop.begin(), loop.begin() + static_cast<std::ptrdiff_t>(best), loop.end());
+}
+
+// The loops and chains in an order of their own: each loop from its least point, the loops and
+// the chains sorted. The segments' order (the grid cells' order, which depends on the grid's
+// layout) then changes nothing downstream, not even the last bits of a sum over a loop.
+void canonical_order(PlaneCut& cut) {
+  for (auto& loop : cut.loops) start_at_least_point(loop);
+  std::sort(cut.loops.begin(), cut.loops.end(), points_less);
+  std::sort(cut.open_chains.begin(), cut.open_chains.end(), points_less);
+}
+
 }  // namespace
 
 PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_tolerance) {
@@ -344,11 +407,16 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   const std::vector<CutSegment>* source =
       pair_segment_ends(input, scratch, deduplicated, cut.flags);
   walk_segment_chains(source->data(), source->size(), scratch, cut);
-  if (!cut.open_chains.empty() && gap_tolerance > 0) close_small_gaps(cut, gap_tolerance);
+  if (!cut.open_chains.empty() && gap_tolerance > 0) {
+    // Chains sorted first: the gaps' ties are broken by the chains' order.
+    std::sort(cut.open_chains.begin(), cut.open_chains.end(), points_less);
+    close_small_gaps(cut, gap_tolerance);
+  }
   // Drop degenerate loops (fewer than three points cannot bound area).
   cut.loops.erase(std::remove_if(cut.loops.begin(), cut.loops.end(),
                                  [](const std::vector<Vec2>& l) { return l.size() < 3; }),
                   cut.loops.end());
+  canonical_order(cut);
   return cut;
 }
 

@@ -151,6 +151,9 @@ class FaceGrid {
   Index num_blocks() const { return static_cast<Index>(block_center_.size()); }
   Index block_begin(Index k) const { return block_start_[k]; }
   Index block_end(Index k) const { return block_start_[k + 1]; }
+  /// Block k's box (centre and half extents, mm): the box of its cells' boxes.
+  const Vec3& block_center(Index k) const { return block_center_[k]; }
+  const Vec3& block_half(Index k) const { return block_half_[k]; }
   /// True when block k's box may be touched by the region.
   bool block_near(Index k, const CutRegion& region) const {
     return region.meets_box(block_center_[k], block_half_[k]);
@@ -292,10 +295,14 @@ class FaceGrid {
 /// Cuts every triangle of the mesh that crosses the plane; appends to `out`. With a grid only
 /// the cells the plane passes through are visited; with a region only cells near it; with
 /// `exclude` (grid only) not the cells near that region, so that a cut grown from `exclude` to
-/// `region` adds exactly the triangles the smaller cut left out.
+/// `region` adds exactly the triangles the smaller cut left out. With `per_segment` (and always
+/// without a grid) the region is decided per triangle instead: a triangle is cut when its own
+/// segment comes within the region's radius of its axis or point (and not within `exclude`'s),
+/// so which triangles are cut -- where a loop around the region's point is clipped open -- does
+/// not depend on the grid's layout. (A cut and its grown cuts must use the same mode.)
 void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegment>& out,
               const FaceGrid* grid = nullptr, const CutRegion* region = nullptr,
-              const CutRegion* exclude = nullptr);
+              const CutRegion* exclude = nullptr, bool per_segment = false);
 
 /// Cuts the mesh by `count` parallel planes base + k*spacing*normal, k = 1..count, in one pass.
 /// out[k-1] receives plane k's segments, in coordinates of the frame `plane` (whose origin is
