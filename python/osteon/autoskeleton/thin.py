@@ -45,11 +45,15 @@ def _segment_points(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a + t[:, None] * ab
 
 
+def _half_edges(body: Body) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b) (3F,) each: the start and end vertex of every triangle side, in face order."""
+    f = body.f
+    return f.ravel(order="F"), f[:, [1, 2, 0]].ravel(order="F")
+
+
 def _local_maxima(body: Body, d: np.ndarray) -> np.ndarray:
     """Vertex ids (used vertices) where ``d`` (V,) is at least that of every mesh neighbour."""
-    f = body.f
-    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
-    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    a, b = _half_edges(body)
     best = np.full(len(d), -np.inf)
     np.maximum.at(best, a, d[b])
     np.maximum.at(best, b, d[a])
@@ -58,9 +62,7 @@ def _local_maxima(body: Body, d: np.ndarray) -> np.ndarray:
 
 def _mesh_graph(body: Body) -> sparse.csr_matrix:
     """(V,V) adjacency of the mesh's vertices along its edges."""
-    f = body.f
-    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
-    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    a, b = _half_edges(body)
     n = len(body.v)
     return sparse.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(n, n)).tocsr()
 
