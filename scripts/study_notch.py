@@ -40,6 +40,19 @@ The rule under test in round 3 (trained on rounds 1 and 2 and the tests/data mod
 plane inside the fillet refers Kt to the thin diameter taken from the thin side's profile
 (cpp/src/notch.cpp ``nominal_radius``; docs/notch.md "Governing stress"); the Kt fit unchanged.
 
+Round 4 (PRE-REGISTERED 2026-11-27 in the commit whose message says "pre-registered": these
+shapes, the rule and the acceptance were committed before any FEM or osteon run on them; none
+of them was used before). The rule under test: Kt is the larger of Roark's fit (unchanged) and
+Tipton, Sorem & Rolovic's (1996) finite-element fit (cpp/src/notch.cpp ``kt_at``; docs/notch.md
+"Kt", "Round 4"); the finder and the plane-in-fillet rule unchanged. Six new bars, same bars,
+FEM, osteon side and acceptance:
+
+    sharp (r/d <= 0.04):                     (1.4, 0.02) (2.0, 0.02) (2.7, 0.025) (1.6, 0.04)
+    ((2.0, 0.02): h/r = 25, outside Roark's fit, h/r <= 20)
+    blunter, a control that the larger fit does not overshoot:
+                                             (1.8, 0.1) (2.4, 0.2)
+    ((2.4, 0.2) puts the 2 mm interval's plane at z = 0.4 in its r = 1.2 mm fillet)
+
 Round 1 (pre-registered with f030df8; NO LONGER HELD OUT: its shapes were used to fix the
 sharp-edge tolerance in cpp/src/notch.cpp, docs/notch.md). Its FEM values are the ones that
 round's run printed (docs/notch.md), stored in the cache as they were, not re-run.
@@ -92,6 +105,7 @@ CACHE = Path(__file__).with_name("study_notch_fem.json")
 SCRIPT_VERSION = 2  # the FEM side's settings below; a change of them is a new version
 
 ROUNDS = {  # (D/d, r/d)
+    "4": [(1.4, 0.02), (2.0, 0.02), (2.7, 0.025), (1.6, 0.04), (1.8, 0.1), (2.4, 0.2)],
     "3": [(1.25, 0.025), (1.7, 0.02), (2.9, 0.03), (1.9, 0.28), (2.6, 0.22), (1.3, 0.12),
           (1.45, 0.15), (2.1, 0.07)],
     "2": [(1.2, 0.02), (1.2, 0.09), (3.0, 0.02), (3.0, 0.3), (2.2, 0.03), (1.35, 0.06),

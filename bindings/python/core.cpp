@@ -637,6 +637,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("FLAG_NOTCH") = static_cast<int>(kFlagNotch);
   m.def("shoulder_fillet_kt", &shoulder_fillet_kt, py::arg("big_diameter"),
         py::arg("small_diameter"), py::arg("radius"),
-        "Kt of a stepped round bar's shoulder fillet in bending (D, d, r in mm; Roark Table 17.1 "
-        "/ Peterson Chart 3.11; clamped on the safe side outside the fit, docs/notch.md)");
+        "Kt of a stepped round bar's shoulder fillet in bending (D, d, r in mm; the larger of "
+        "Roark Table 17.1 / Peterson Chart 3.11, clamped on the safe side outside its range, and "
+        "Tipton, Sorem & Rolovic 1996's FEM fit; docs/notch.md)");
 }

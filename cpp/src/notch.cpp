@@ -45,14 +45,32 @@ double fit_kt(double h_over_r, double t) {
   return kt;
 }
 
-// Kt for one D/d at one r/d, clamped to the fit's h/r range on the safe side.
-double kt_at(double step, double r_over_d) {
+// Roark's fit for one D/d at one r/d, clamped to its h/r range on the safe side.
+double roark_kt_at(double step, double r_over_d) {
   const double h_over_r = (step - 1.0) / (2.0 * r_over_d);
   const double t = 1.0 - 1.0 / step;  // 2h / D
   if (h_over_r <= 20.0) return std::max(1.0, fit_kt(std::max(h_over_r, 0.25), t));
   // Sharper than the fit: Neuber, Kt - 1 ~ sqrt(depth / radius), continued from h/r = 20.
   const double at_edge = std::max(1.0, fit_kt(20.0, t));
   return 1.0 + (at_edge - 1.0) * std::sqrt(h_over_r / 20.0);
+}
+
+// Tipton, Sorem & Rolovic, "Updated stress concentration factors for filleted shafts in bending
+// and tension", ASME J. Mech. Design 118 (1996) 321-327: a fit of their finite-element Kt (the
+// largest principal stress over 32 M / (pi d^3)), Kt = 0.632 + 0.377 (D/d)^-4.4 + sqrt(a / b) /
+// sqrt(r/d), a = -0.14 - 0.363 (D/d)^2 + 0.503 (D/d)^4, b = 1 - 2.39 (D/d)^2 + 3.368 (D/d)^4.
+// (a = 0 at D = d, where Kt = 1.009.)
+double tipton_kt_at(double step, double r_over_d) {
+  const double s2 = step * step, s4 = s2 * s2;
+  const double a = std::max(0.0, -0.14 - 0.363 * s2 + 0.503 * s4);
+  const double b = 1.0 - 2.39 * s2 + 3.368 * s4;
+  return 0.632 + 0.377 * std::pow(step, -4.4) + std::sqrt(a / b / r_over_d);
+}
+
+// Kt for one D/d at one r/d: the larger of the two published fits (safe side). Roark's fit of
+// the photoelastic charts reads under Tipton et al.'s FEM at sharp fillets (docs/notch.md).
+double kt_at(double step, double r_over_d) {
+  return std::max(roark_kt_at(step, r_over_d), tipton_kt_at(step, r_over_d));
 }
 
 // The faces near one corner and their vertices' normals, weighted by the face angle at the

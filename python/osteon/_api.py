@@ -843,9 +843,11 @@ def correct(
 
 def shoulder_fillet_kt(big_diameter: float, small_diameter: float, radius: float) -> float:
     """Kt of a stepped round bar's shoulder fillet in bending: big and small diameter D > d and
-    fillet radius r, mm (Roark's Formulas 7th ed. Table 17.1, the fit of Peterson's charts;
-    clamped on the safe side outside 0.25 <= h/r <= 20 and D/d <= 3; docs/notch.md). 1 when
-    D <= d. Raises ValueError for a non-positive or non-finite length."""
+    fillet radius r, mm: the larger of Roark's Formulas 7th ed. Table 17.1 (the fit of Peterson's
+    photoelastic charts; clamped on the safe side outside 0.25 <= h/r <= 20) and the
+    finite-element fit of Tipton, Sorem & Rolovic (ASME J. Mech. Design 118, 1996), which reads
+    higher at sharp fillets; D/d capped at 3 (docs/notch.md, "Kt"). 1 when D <= d. Raises
+    ValueError for a non-positive or non-finite length."""
     big = _positive(big_diameter, "big_diameter", "mm")
     small = _positive(small_diameter, "small_diameter", "mm")
     r = _positive(radius, "radius", "mm")
