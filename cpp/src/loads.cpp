@@ -389,8 +389,8 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
   const int* last_bone = last_bone_.data();
   chunk_count_.resize(chunks);
   detail::parallel_for(chunks, chunks, [&](long c, int) {
-    std::vector<Index>& group_count = chunk_count_[c];
-    group_count.assign(ngroups, 0);
+    chunk_count_[c].assign(ngroups, 0);
+    Index* const group_count = chunk_count_[c].data();
     const Index v1 = chunk_end(mesh.num_vertices, c + 1, chunks);
     for (Index v = chunk_end(mesh.num_vertices, c, chunks); v < v1; ++v) {
       if (skip != nullptr && (*skip)[v] != 0) continue;
@@ -424,8 +424,8 @@ void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::u
   const Index nbuckets = bucket_offset_[ngroups];
   chunk_count_.resize(chunks);
   detail::parallel_for(chunks, chunks, [&](long c, int) {
-    std::vector<Index>& count = chunk_count_[c];
-    count.assign(nbuckets, 0);
+    chunk_count_[c].assign(nbuckets, 0);
+    Index* const count = chunk_count_[c].data();
     const Index v1 = chunk_end(nv, c + 1, chunks);
     for (Index v = chunk_end(nv, c, chunks); v < v1; ++v) {
       if (skipped(v)) continue;
