@@ -110,7 +110,7 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
 constexpr Index kBucket = 16;
 // The first vertex (or bucket) of chunk c of `chunks` over n.
 inline Index chunk_end(Index n, long c, int chunks) {
-  return static_cast<Index>(static_cast<__int128>(n) * c / chunks);
+  return n * c / chunks;  // n * chunks stays far below 2^63
 }
 
 inline Index buckets_for(Index count) {
