@@ -8,6 +8,7 @@
 // Otherwise the whole plane is cut.
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -322,6 +323,7 @@ std::vector<int> Analyzer::Impl::retry_units(RunState& run) {
 void Analyzer::Impl::find_loose_pieces_and_arms(RunState& run) {
   const MeshView& mesh = run.mesh;
   const Skeleton& sk = run.sk;
+  const auto start = std::chrono::steady_clock::now();
   // Loose pieces fall off the print: their vertices are no load point (full runs; the
   // correction's partial re-cuts move no piece apart, so they keep the last run's).
   if (!run.partial) {
@@ -335,10 +337,17 @@ void Analyzer::Impl::find_loose_pieces_and_arms(RunState& run) {
     for (const auto& piece : loose)
       for (std::int32_t v : piece) loose_vertex[v] = 1;
   }
+  const auto indexed = std::chrono::steady_clock::now();
   arm_index.build(mesh, sk, tree, run.vertex_bone, slab_params,
                   loose.empty() ? nullptr : &loose_vertex, run.moved,
-                  run.moved != nullptr ? &moved_vertices : nullptr);
+                  run.moved != nullptr ? &moved_vertices : nullptr, options.threads);
   run.arms = &arm_index;
+  if (run.timer.on)
+    std::fprintf(
+        stderr, "loose pieces %.3f ms, moment-arm index %.3f ms wall (in phase 2)\n",
+        std::chrono::duration<double, std::milli>(indexed - start).count(),
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - indexed)
+            .count());
 }
 
 // A joint's queued section: a ball grown around its point (twice, three times wider each), then

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "parallel.hpp"
 #include "sorted_index.hpp"
 
 namespace osteon {
@@ -107,6 +108,11 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
 // Buckets of a slab with `count` vertices: ~16 vertices each (fewer, wider buckets cost more
 // scanning, more cost heap work).
 constexpr Index kBucket = 16;
+// The first vertex (or bucket) of chunk c of `chunks` over n.
+inline Index chunk_end(Index n, long c, int chunks) {
+  return n * c / chunks;  // n * chunks stays far below 2^63
+}
+
 inline Index buckets_for(Index count) {
   return std::max<Index>(1, (count + kBucket - 1) / kBucket);
 }
@@ -144,7 +150,7 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
                            const std::vector<std::vector<double>>& slab_params,
                            const std::vector<std::uint8_t>* skip,
                            const std::vector<std::uint8_t>* moved,
-                           const std::vector<std::int32_t>* moved_list) {
+                           const std::vector<std::int32_t>* moved_list, int threads) {
   tree_ = &tree;
   last_slab_params_.swap(slab_params_);
   slab_params_ = slab_params;
@@ -169,9 +175,13 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
     subtree_boxes(tree);
   } else {
     bone_kept_.assign(nb, 0);
-    group_vertices(mesh, s, vertex_bone, skip, reuse ? moved->data() : nullptr);
-    pack_buckets(mesh, skip);
-    build_box_trees(tree);
+    // From kVerticesPerPass vertices up, one chunk of vertices per worker.
+    const int chunks = mesh.num_vertices >= detail::kVerticesPerPass
+                           ? detail::worker_count(threads, mesh.num_vertices)
+                           : 1;
+    group_vertices(mesh, s, vertex_bone, skip, reuse ? moved->data() : nullptr, chunks);
+    pack_buckets(mesh, skip, chunks);
+    build_box_trees(tree, chunks);
   }
   // Only an index that is rebuilt with `moved` (live mode) keeps its inputs for the next build.
   if (moved != nullptr) {
@@ -264,6 +274,8 @@ bool MomentArmIndex::rebuild_moved_bones(const MeshView& mesh, const Skeleton& s
       offset[g + 1] = offset[g] + (bone_kept_[b] ? bucket_offset_[g + 1] - bucket_offset_[g]
                                                  : buckets_for(group_count_[g]));
   if (offset != bucket_offset_) move_buckets();
+  if (bucket_fill_.size() < static_cast<std::size_t>(bucket_offset_.back()))
+    bucket_fill_.resize(bucket_offset_.back());
   for (int b = 0; b < nb; ++b)
     if (!bone_kept_[b]) repack_bone(mesh, b);
   return true;
@@ -294,7 +306,6 @@ void MomentArmIndex::move_buckets() {
   bucket_lo_.swap(next_lo_);
   bucket_hi_.swap(next_hi_);
   bucket_offset_.swap(next_bucket_offset_);
-  if (bucket_fill_.size() < static_cast<std::size_t>(nbuckets)) bucket_fill_.resize(nbuckets);
 }
 
 // Bone b's vertices into its groups (as group_vertices: an unmoved vertex of a bone whose head,
@@ -348,11 +359,11 @@ void MomentArmIndex::repack_bone(const MeshView& mesh, int b) {
 // Each kept vertex's group (vertex_group_; its slab within its bone: vertex_slab_) and its
 // pseudo-angle in [0, 4] around the bone axis
 // (vertex_angle_: a monotone function of the angle in the bone's frame u, v: no atan); the
-// vertices per group (group_count_).
+// vertices per group (group_count_). One job per chunk of vertices.
 void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
                                     const std::vector<int>& vertex_bone,
                                     const std::vector<std::uint8_t>* skip,
-                                    const std::uint8_t* moved) {
+                                    const std::uint8_t* moved, int chunks) {
   const int nb = s.num_bones();
   const Index ngroups = group_offset_[nb];
   // (Scratch arrays left uninitialised: every kept vertex's entry is written before it is read.)
@@ -365,8 +376,6 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
   }
   Index* const vertex_group = vertex_group_.get();
   Index* const vertex_slab = vertex_slab_.get();  // the slab within its bone (kept)
-  std::vector<Index>& group_count = group_count_;
-  group_count.assign(ngroups, 0);
   std::vector<Vec3>&axis = axis_, &frame_u = frame_u_, &frame_v = frame_v_;
   axis.resize(nb);
   frame_u.resize(nb);
@@ -376,69 +385,93 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
     frame_u[b] = axis[b].unitOrthogonal();
     frame_v[b] = axis[b].cross(frame_u[b]);
   }
-  auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
   const std::uint8_t* bone_same = bone_same_.data();
   const int* last_bone = last_bone_.data();
-  for (Index v = 0; v < mesh.num_vertices; ++v) {
-    if (skipped(v)) continue;
-    const int b = vertex_bone[v];
-    if (moved != nullptr && !moved[v] && last_bone[v] == b && bone_same[b]) {
-      const Index g = group_offset_[b] + vertex_slab[v];  // the last build's slab and angle
+  chunk_count_.resize(chunks);
+  detail::parallel_for(chunks, chunks, [&](long c, int) {
+    chunk_count_[c].assign(ngroups, 0);
+    Index* const group_count = chunk_count_[c].data();
+    const Index v1 = chunk_end(mesh.num_vertices, c + 1, chunks);
+    for (Index v = chunk_end(mesh.num_vertices, c, chunks); v < v1; ++v) {
+      if (skip != nullptr && (*skip)[v] != 0) continue;
+      const int b = vertex_bone[v];
+      // An unmoved vertex on the same bone keeps the last build's slab and angle.
+      if (moved == nullptr || moved[v] || last_bone[v] != b || !bone_same[b])
+        place_vertex(mesh, s, v, b);
+      const Index g = group_offset_[b] + vertex_slab[v];
       vertex_group[v] = g;
       ++group_count[g];
-      continue;
     }
-    place_vertex(mesh, s, v, b);
-    const Index g = group_offset_[b] + vertex_slab[v];
-    vertex_group[v] = g;
-    ++group_count[g];
-  }
+  });
+  group_count_.swap(chunk_count_[0]);
+  for (int c = 1; c < chunks; ++c)
+    for (Index g = 0; g < ngroups; ++g) group_count_[g] += chunk_count_[c][g];
 }
 
 // The vertices in buckets of ~16 per group (sectors around the bone axis), packed by bucket
-// (packed_xyz_, packed_index_), each bucket with its box.
-void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip) {
+// (packed_xyz_, packed_index_) in vertex order within each bucket (so the same index whatever
+// the chunks: chunk c's vertices of a bucket come after chunk c - 1's). One job per chunk.
+void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip,
+                                  int chunks) {
   const Index ngroups = group_offset_.back();
   Index* const vertex_group = vertex_group_.get();
   const double* const vertex_angle = vertex_angle_.get();
-  const std::vector<Index>& group_count = group_count_;
+  const Index nv = mesh.num_vertices;
   auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
   bucket_offset_.assign(ngroups + 1, 0);
   for (Index g = 0; g < ngroups; ++g)
-    bucket_offset_[g + 1] = bucket_offset_[g] + buckets_for(group_count[g]);
+    bucket_offset_[g + 1] = bucket_offset_[g] + buckets_for(group_count_[g]);
   const Index nbuckets = bucket_offset_[ngroups];
-  std::vector<Index>& count = bucket_count_;
-  count.assign(nbuckets + 1, 0);
-  Index kept = 0;
-  for (Index v = 0; v < mesh.num_vertices; ++v) {
-    if (skipped(v)) continue;
-    ++kept;
-    const Index g = vertex_group[v];
-    // From here on: the vertex's bucket.
-    vertex_group[v] =
-        bucket_offset_[g] + bucket_at(vertex_angle[v], bucket_offset_[g + 1] - bucket_offset_[g]);
-    ++count[vertex_group[v] + 1];
-  }
-  for (Index g = 0; g < nbuckets; ++g) count[g + 1] += count[g];
+  chunk_count_.resize(chunks);
+  detail::parallel_for(chunks, chunks, [&](long c, int) {
+    chunk_count_[c].assign(nbuckets, 0);
+    Index* const count = chunk_count_[c].data();
+    const Index v1 = chunk_end(nv, c + 1, chunks);
+    for (Index v = chunk_end(nv, c, chunks); v < v1; ++v) {
+      if (skipped(v)) continue;
+      const Index g = vertex_group[v];
+      // From here on: the vertex's bucket.
+      vertex_group[v] =
+          bucket_offset_[g] + bucket_at(vertex_angle[v], bucket_offset_[g + 1] - bucket_offset_[g]);
+      ++count[vertex_group[v]];
+    }
+  });
+  // Each bucket's range, and within it each chunk's first place (chunk_count_ from here on).
   const double inf = std::numeric_limits<double>::infinity();
-  buckets_.assign(nbuckets, Group{});
-  for (Index g = 0; g < nbuckets; ++g) {
-    buckets_[g].begin = count[g];
-    buckets_[g].end = count[g + 1];
-    buckets_[g].lo = Vec3::Constant(inf);
-    buckets_[g].hi = Vec3::Constant(-inf);
+  buckets_.resize(nbuckets);
+  Index at = 0;
+  for (Index k = 0; k < nbuckets; ++k) {
+    Group& bucket = buckets_[k];
+    bucket.begin = at;
+    for (int c = 0; c < chunks; ++c) {
+      const Index n = chunk_count_[c][k];
+      chunk_count_[c][k] = at;
+      at += n;
+    }
+    bucket.end = at;
+    bucket.lo = Vec3::Constant(inf);
+    bucket.hi = Vec3::Constant(-inf);
   }
-  if (packed_capacity_ < kept) {
-    packed_xyz_.reset(new double[3 * kept]);
-    packed_index_.reset(new Index[kept]);
-    packed_capacity_ = kept;
+  if (packed_capacity_ < at) {
+    packed_xyz_.reset(new double[3 * at]);
+    packed_index_.reset(new Index[at]);
+    packed_capacity_ = at;
   }
-  std::vector<Index>& fill = bucket_fill_;
-  fill.assign(count.begin(), count.end() - 1);
-  for (Index v = 0; v < mesh.num_vertices; ++v) {
-    if (skipped(v)) continue;
-    pack_vertex(mesh, v, buckets_[vertex_group[v]], fill[vertex_group[v]]++);
-  }
+  double* const xyz = packed_xyz_.get();
+  Index* const index = packed_index_.get();
+  detail::parallel_for(chunks, chunks, [&](long c, int) {
+    Index* const fill = chunk_count_[c].data();
+    const Index v1 = chunk_end(nv, c + 1, chunks);
+    for (Index v = chunk_end(nv, c, chunks); v < v1; ++v) {
+      if (skipped(v)) continue;
+      const Index k = fill[vertex_group[v]]++;
+      const Vec3 p = mesh.vertex(v);
+      xyz[3 * k] = p.x();
+      xyz[3 * k + 1] = p.y();
+      xyz[3 * k + 2] = p.z();
+      index[k] = v;
+    }
+  });
 }
 
 // Vertex v at place k of packed_xyz_, in `bucket` (its box grown).
@@ -453,16 +486,36 @@ void MomentArmIndex::pack_vertex(const MeshView& mesh, Index v, Group& bucket, I
 }
 
 // The box trees: over each group's buckets, over each bone's slabs, and each bone's subtree box
-// (the bone and every bone beyond it in `tree`).
-void MomentArmIndex::build_box_trees(const LoadTree& tree) {
+// (the bone and every bone beyond it in `tree`). Each bucket's box from its packed vertices, in
+// their order (as pack_vertex grows it), and its group's tree: one job per chunk of groups with
+// about as many buckets.
+void MomentArmIndex::build_box_trees(const LoadTree& tree, int chunks) {
   const Index ngroups = group_offset_.back();
   const int nb = static_cast<int>(group_offset_.size()) - 1;
   const Index nbuckets = bucket_offset_[ngroups];
   const double inf = std::numeric_limits<double>::infinity();
-  groups_.assign(ngroups, Group{});
+  groups_.resize(ngroups);
   bucket_lo_.assign(2 * nbuckets, Vec3::Constant(inf));
   bucket_hi_.assign(2 * nbuckets, Vec3::Constant(-inf));
-  for (Index g = 0; g < ngroups; ++g) bucket_tree(g);
+  const double* const xyz = packed_xyz_.get();
+  auto group_at = [&](Index k) {  // the first group whose buckets start at or after bucket k
+    return std::lower_bound(bucket_offset_.begin(), bucket_offset_.end(), k) -
+           bucket_offset_.begin();
+  };
+  detail::parallel_for(chunks, chunks, [&](long c, int) {
+    const Index g1 = group_at(chunk_end(nbuckets, c + 1, chunks));
+    for (Index g = group_at(chunk_end(nbuckets, c, chunks)); g < g1; ++g) {
+      for (Index k = bucket_offset_[g]; k < bucket_offset_[g + 1]; ++k) {
+        Group& bucket = buckets_[k];
+        for (Index i = bucket.begin; i < bucket.end; ++i) {
+          const Vec3 p(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+          bucket.lo = bucket.lo.cwiseMin(p);
+          bucket.hi = bucket.hi.cwiseMax(p);
+        }
+      }
+      bucket_tree(g);
+    }
+  });
   node_lo_.assign(2 * ngroups, Vec3::Constant(inf));
   node_hi_.assign(2 * ngroups, Vec3::Constant(-inf));
   for (int b = 0; b < nb; ++b) bone_tree(b);

@@ -53,12 +53,14 @@ class MomentArmIndex {
   /// and every bone its number of slabs and of buckets per slab, a bone with no moved vertex
   /// whose head, axis and slabs are the last build's keeps its part of the index as it is (the
   /// same bits: bone_kept) and only the other bones' vertices are grouped and packed again.
+  /// `threads` (0 = all cores): a full build of kVerticesPerPass vertices or more is split over
+  /// that many workers (the same index).
   void build(const MeshView& mesh, const Skeleton& skeleton, const LoadTree& tree,
              const std::vector<int>& vertex_bone,
              const std::vector<std::vector<double>>& slab_params,
              const std::vector<std::uint8_t>* skip = nullptr,
              const std::vector<std::uint8_t>* moved = nullptr,
-             const std::vector<std::int32_t>* moved_list = nullptr);
+             const std::vector<std::int32_t>* moved_list = nullptr, int threads = 1);
   /// The next build computes every vertex's slab anew (its inputs are not the last build's).
   void forget_slabs() {
     slabs_known_ = false;
@@ -105,9 +107,9 @@ class MomentArmIndex {
   // The steps of build(): vertices into groups (slabs), groups into buckets, the box trees.
   void group_vertices(const MeshView& mesh, const Skeleton& skeleton,
                       const std::vector<int>& vertex_bone, const std::vector<std::uint8_t>* skip,
-                      const std::uint8_t* moved);
-  void pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip);
-  void build_box_trees(const LoadTree& tree);
+                      const std::uint8_t* moved, int chunks);
+  void pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip, int chunks);
+  void build_box_trees(const LoadTree& tree, int chunks);
   void place_vertex(const MeshView& mesh, const Skeleton& skeleton, Index v, int b);
   void pack_vertex(const MeshView& mesh, Index v, Group& bucket, Index k);
   void bucket_tree(Index g);
@@ -116,7 +118,8 @@ class MomentArmIndex {
   std::unique_ptr<Index[]> vertex_group_;
   std::unique_ptr<double[]> vertex_angle_;
   Index vertex_capacity_ = 0;
-  std::vector<Index> group_count_, bucket_count_, bucket_fill_;
+  std::vector<Index> group_count_, bucket_fill_;
+  std::vector<std::vector<Index>> chunk_count_;  // per chunk of vertices: group or bucket counts
   std::vector<Vec3> axis_, frame_u_, frame_v_;
   // Each kept vertex's slab (group) and what it was computed from, kept for the next build.
   std::unique_ptr<Index[]> vertex_slab_;

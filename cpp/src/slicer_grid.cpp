@@ -20,7 +20,8 @@ namespace {
 
 constexpr int kBlock = 4;  // cells per block edge
 
-// bin_faces: faces per chunk (the cells of a chunk's faces found, then counted).
+// bin_faces: faces per chunk (the cells of a chunk's faces found, then counted), from 131 072
+// vertices on (where it prefetches; below, one plain loop: cow x4 10.5 -> 9.1 M instructions).
 constexpr Index kBinChunk = 256;
 
 // How many faces (corners, entries) ahead the loops of the build prefetch what they will gather:
@@ -370,6 +371,17 @@ void FaceGrid::bin_faces(const MeshView& mesh, const Layout& grid, int parts) {
     auto& count = part_count[part];
     auto& overhang = part_overhang[part];
     const Index begin = nf * part / parts, end = nf * (part + 1) / parts;
+    if (ahead >= nf) {  // no prefetch (the vertices stay in the caches): one plain loop
+      for (Index f = begin; f < end; ++f) {
+        float r;
+        const Index id = file_face(mesh, grid, mesh.faces + 3 * f, r);
+        cell_of[f] = static_cast<std::int32_t>(id);
+        face_reach[f] = r;
+        ++count[id];
+        overhang[id] = std::max(overhang[id], r);
+      }
+      return;
+    }
     for (Index c0 = begin; c0 < end; c0 += kBinChunk) {
       const Index c1 = std::min(end, c0 + kBinChunk);
       for (Index f = c0; f < c1; ++f) {

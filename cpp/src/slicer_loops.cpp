@@ -80,6 +80,53 @@ std::pair<std::uint64_t, std::uint64_t> segment_key(const CutSegment& s) {
                                : std::make_pair(s.edge[1], s.edge[0]);
 }
 
+// A total order of points (x, then y; NaN last), for the canonical order below.
+bool point_less(const Vec2& a, const Vec2& b) {
+  auto key = [](double t) { return std::make_pair(std::isnan(t), std::isnan(t) ? 0.0 : t); };
+  const auto ax = key(a.x()), bx = key(b.x());
+  return ax < bx || (ax == bx && key(a.y()) < key(b.y()));
+}
+
+bool points_less(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
+  if (a.size() != b.size()) return a.size() < b.size();
+  return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(), point_less);
+}
+
+// Where a closed loop of n points starts when it starts at its least point (x, then y), so that
+// it does not depend on which segment the walk started from; of several rotations starting
+// there (a loop through one point twice, rare), the least. One pass of plain comparisons (a NaN
+// is never least).
+std::size_t least_rotation(const Vec2* loop, std::size_t n) {
+  std::size_t best = 0;
+  bool tie = false;
+  double bx = loop[0].x(), by = loop[0].y();
+  for (std::size_t k = 1; k < n; ++k) {
+    const double x = loop[k].x(), y = loop[k].y();
+    if (x < bx || (x == bx && y < by)) {
+      best = k;
+      bx = x;
+      by = y;
+      tie = false;
+    } else if (x == bx && y == by) {
+      tie = true;
+    }
+  }
+  if (tie) {
+    auto rotation_less = [&](std::size_t a, std::size_t b) {
+      for (std::size_t k = 0; k < n; ++k) {
+        const Vec2 &p = loop[(a + k) % n], &q = loop[(b + k) % n];
+        if (point_less(p, q)) return true;
+        if (point_less(q, p)) return false;
+      }
+      return false;
+    };
+    const std::size_t first = best;
+    for (std::size_t k = 0; k < n; ++k)
+      if (k != first && loop[k].x() == bx && loop[k].y() == by && rotation_less(k, best)) best = k;
+  }
+  return best;
+}
+
 // Scratch reused per thread (a run assembles thousands of cuts).
 struct LoopScratch {
   EdgeTable table;
@@ -203,8 +250,13 @@ void walk_segment_chains(const CutSegment* segments, std::size_t m, LoopScratch&
       chain.insert(chain.end(), forward, forward + nf);
       cut.open_chains.push_back(std::move(chain));
     } else {
-      // One allocation of the exact size (the scratch grows once per thread, not per loop).
-      cut.loops.emplace_back(forward, forward + nf);
+      // One allocation of the exact size (the scratch grows once per thread, not per loop),
+      // the loop copied from its least point on (canonical_order; a degenerate one is dropped).
+      const std::size_t best = nf >= 3 ? least_rotation(forward, nf) : 0;
+      std::vector<Vec2>& loop = cut.loops.emplace_back();
+      loop.reserve(nf);
+      loop.insert(loop.end(), forward + best, forward + nf);
+      loop.insert(loop.end(), forward, forward + best);
     }
   }
 }
@@ -340,59 +392,17 @@ void close_small_gaps(PlaneCut& cut, double gap_tolerance) {
   chains.swap(remaining);
 }
 
-// A total order of points (x, then y; NaN last), for the canonical order below.
-bool point_less(const Vec2& a, const Vec2& b) {
-  auto key = [](double t) { return std::make_pair(std::isnan(t), std::isnan(t) ? 0.0 : t); };
-  const auto ax = key(a.x()), bx = key(b.x());
-  return ax < bx || (ax == bx && key(a.y()) < key(b.y()));
-}
-
-bool points_less(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
-  if (a.size() != b.size()) return a.size() < b.size();
-  return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(), point_less);
-}
-
-// Rotates a closed loop to start at its least point (x, then y), so that it does not depend
-// on which segment the walk started from; of several rotations starting there (a loop through
-// one point twice, rare), the least. One pass of plain comparisons (a NaN is never least).
-void start_at_least_point(std::vector<Vec2>& loop) {
-  const std::size_t n = loop.size();
-  std::size_t best = 0;
-  bool tie = false;
-  double bx = loop[0].x(), by = loop[0].y();
-  for (std::size_t k = 1; k < n; ++k) {
-    const double x = loop[k].x(), y = loop[k].y();
-    if (x < bx || (x == bx && y < by)) {
-      best = k;
-      bx = x;
-      by = y;
-      tie = false;
-    } else if (x == bx && y == by) {
-      tie = true;
-    }
+// The loops and chains in an order of their own: each loop from its least point (the first
+// `started` loops were copied out of the walk that way), the loops and the chains sorted. The
+// segments' order (the grid cells' order, which depends on the grid's layout) then changes nothing
+// downstream, not even the last bits of a sum over a loop.
+void canonical_order(PlaneCut& cut, std::size_t started) {
+  for (std::size_t i = started; i < cut.loops.size(); ++i) {
+    std::vector<Vec2>& loop = cut.loops[i];
+    const std::size_t best = least_rotation(loop.data(), loop.size());
+    if (best != 0)
+      std::rotate(loop.begin(), loop.begin() + static_cast<std::ptrdiff_t>(best), loop.end());
   }
-  if (tie) {
-    auto rotation_less = [&](std::size_t a, std::size_t b) {
-      for (std::size_t k = 0; k < n; ++k) {
-        const Vec2 &p = loop[(a + k) % n], &q = loop[(b + k) % n];
-        if (point_less(p, q)) return true;
-        if (point_less(q, p)) return false;
-      }
-      return false;
-    };
-    const std::size_t first = best;
-    for (std::size_t k = 0; k < n; ++k)
-      if (k != first && loop[k].x() == bx && loop[k].y() == by && rotation_less(k, best)) best = k;
-  }
-  if (best != 0)
-    std::rotate(loop.begin(), loop.begin() + static_cast<std::ptrdiff_t>(best), loop.end());
-}
-
-// The loops and chains in an order of their own: each loop from its least point, the loops and
-// the chains sorted. The segments' order (the grid cells' order, which depends on the grid's
-// layout) then changes nothing downstream, not even the last bits of a sum over a loop.
-void canonical_order(PlaneCut& cut) {
-  for (auto& loop : cut.loops) start_at_least_point(loop);
   std::sort(cut.loops.begin(), cut.loops.end(), points_less);
   std::sort(cut.open_chains.begin(), cut.open_chains.end(), points_less);
 }
@@ -407,6 +417,10 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   const std::vector<CutSegment>* source =
       pair_segment_ends(input, scratch, deduplicated, cut.flags);
   walk_segment_chains(source->data(), source->size(), scratch, cut);
+  // The walk's loops of three points or more start at their least point already.
+  const std::size_t started = static_cast<std::size_t>(
+      std::count_if(cut.loops.begin(), cut.loops.end(),
+                    [](const std::vector<Vec2>& l) { return l.size() >= 3; }));
   if (!cut.open_chains.empty() && gap_tolerance > 0) {
     // Chains sorted first: the gaps' ties are broken by the chains' order.
     std::sort(cut.open_chains.begin(), cut.open_chains.end(), points_less);
@@ -416,7 +430,7 @@ PlaneCut assemble_loops(const std::vector<CutSegment>& input, double gap_toleran
   cut.loops.erase(std::remove_if(cut.loops.begin(), cut.loops.end(),
                                  [](const std::vector<Vec2>& l) { return l.size() < 3; }),
                   cut.loops.end());
-  canonical_order(cut);
+  canonical_order(cut, started);
   return cut;
 }
 

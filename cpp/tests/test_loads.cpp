@@ -296,3 +296,58 @@ TEST(MomentArmIndex, RebuiltIndexAnswersAsAFreshOne) {
   }
   EXPECT_GT(checked, 100);
 }
+
+TEST(MomentArmIndex, BuildSplitOverWorkersAnswersAsAScan) {
+  // From kVerticesPerPass vertices up the full build is split into one chunk of vertices per
+  // worker. Rings of integer points around the bones (ties at equal distances) repeated 26
+  // times (135 720 vertices: every point has copies in every chunk, exact ties whose smallest
+  // index must win), every 7th vertex skipped; built with 1, 2 and 3 workers (uneven chunks):
+  // each answer equals a scan of the downstream vertices.
+  const Skeleton s = tee();
+  const LoadTree tree = build_load_tree(s, -1, {});
+  const std::vector<std::vector<double>> params = {
+      {0, 1, 2, 2, 5, 11, 20, 31, 50}, {0, 8, 16, 24, 32}, {10}};
+  const int ring[][2] = {{5, 0},  {4, 3},   {3, 4},   {0, 5},  {-3, 4}, {-4, 3},
+                         {-5, 0}, {-4, -3}, {-3, -4}, {0, -5}, {3, -4}, {4, -3}};
+  std::vector<double> xyz;
+  std::vector<int> vertex_bone;
+  for (int copy = 0; copy < 26; ++copy)
+    for (int b = 0; b < s.num_bones(); ++b) {
+      const Vec3 d = s.direction(b);
+      for (int t = -2; t <= static_cast<int>(s.length(b)) + 2; ++t)
+        for (int r = 1; r <= 3; ++r)
+          for (const auto& q : ring) {
+            const Vec3 off = d.x() != 0 ? Vec3(0, r * q[0], r * q[1]) : Vec3(r * q[0], 0, r * q[1]);
+            const Vec3 p = s.heads[b] + static_cast<double>(t) * d + off;
+            xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+            vertex_bone.push_back(b);
+          }
+    }
+  const Index nv = static_cast<Index>(vertex_bone.size());
+  ASSERT_GE(nv, 131072);
+  const MeshView mesh{xyz.data(), nv, nullptr, 0};
+  std::vector<std::uint8_t> skip(nv, 0);
+  for (Index v = 3; v < nv; v += 7) skip[v] = 1;
+  MomentArmIndex index;
+  int checked = 0;
+  for (const int threads : {1, 2, 3}) {
+    index.build(mesh, s, tree, vertex_bone, params, &skip, nullptr, nullptr, threads);
+    for (int b = 0; b < s.num_bones(); ++b)
+      for (int i = 0; i < static_cast<int>(params[b].size()); ++i)
+        for (const bool plus : {true, false})
+          for (const Vec3& off : {Vec3(0, 0, 0), Vec3(0.3, -0.2, 0.1)}) {
+            const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + off;
+            const auto [best, best_v] =
+                scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c, &skip);
+            const auto [arm, vertex] = index.farthest(b, i, plus, c);
+            if (best_v < 0) {
+              EXPECT_EQ(vertex, -1);
+              continue;
+            }
+            EXPECT_EQ(arm, std::sqrt(best)) << "threads " << threads << " bone " << b;
+            EXPECT_EQ(vertex, best_v) << "threads " << threads << " bone " << b << " at " << i;
+            ++checked;
+          }
+  }
+  EXPECT_GT(checked, 100);
+}
