@@ -703,6 +703,31 @@ def test_radius_inputs_from_the_triangles_in_bulk_match_pygel3d_and_the_shape():
     assert np.einsum("ij,ij->i", normals[mid], radial).min() > 0.95
 
 
+def test_graph_edges_and_weld_read_in_bulk_match_the_slow_reading():
+    """Issue 35 (Make skeleton under 2 s): the edges of pygel3d graphs are read from GEL's graph
+    writer in one call (``curve.graph_edges``) and the weld's distinct rows from one lexsort
+    (``mesh.unique_rows``). On a capsule's mesh graph and on its curve skeleton the edges are
+    pygel3d's own, node by node, in the same order (the order in which edges are collapsed
+    decides the bones); the weld gives np.unique's rows, first occurrences and inverse."""
+    from osteon.autoskeleton import curve, mesh
+    from pygel3d import graph, hmesh
+
+    v, f = capsule(length=60.0, radius=5.0, n=16, stations=12, cap=4)
+    m = hmesh.Manifold.from_triangles(v, f)
+    g = graph.from_mesh(m)
+    skel, _map = graph.LS_skeleton_and_map(g, sampling=False)
+    for gr in (g, skel):
+        n = len(gr.positions())
+        slow = [(i, j) for i in gr.nodes() for j in gr.neighbors(i) if i < j]
+        assert curve.graph_edges(gr, n).tolist() == [list(e) for e in slow]
+    assert len(curve.graph_edges(g, len(v))) == 3 * len(f) // 2  # a closed mesh: E = 3F/2
+    key = np.random.default_rng(1).integers(-3, 3, (500, 3))
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    got_first, got_inverse = mesh.unique_rows(key)
+    assert got_first.tolist() == first.tolist()
+    assert got_inverse.tolist() == inverse.ravel().tolist()
+
+
 def test_the_bench_extremity_measure_finds_the_five_fingertips_of_a_hand():
     """Issue 35's rig-free measure (``bench/extremities.py``: maxima of the geodesic distance
     inside the voxelised solid from the body's centre of mass that stick out more than their

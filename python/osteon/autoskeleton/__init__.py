@@ -186,4 +186,4 @@ def auto_skeleton(
         sk, full = rig(v, f, root)
     else:
         sk, full = rig_pieces(v, f, split_pieces(v, f), root, rig)
-    return sk, sparse.csr_matrix(full[weld])
+    return sk, sparse.csr_matrix(full)[weld]  # (sparse first: 4 of B columns a row)

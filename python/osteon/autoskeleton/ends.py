@@ -101,6 +101,28 @@ def _tip(body: Body, pts: np.ndarray, radius: np.ndarray, capped: np.ndarray,
     return more
 
 
+#: points of a limb's axis measured at a time, from its end inwards (:func:`_radius_to_stop`)
+CHUNK = 50
+
+
+def _radius_to_stop(body: Body, pts: np.ndarray, from_end: np.ndarray, least: float
+                    ) -> np.ndarray:
+    """(K,) the inner radius mm at the points ``pts`` (K,3) of a limb's axis, ``from_end`` (K,)
+    mm from its end, from the end inwards up to the first that is ``END_RATIO`` radii from the
+    end and at least ``least`` mm thick (the end bone's stop in :func:`limb_end`); NaN past it.
+
+    Why: only the points up to the stop decide where the end bone and a tip bone end; measured
+    ``CHUNK`` at a time they cost a fifth of all 400 (issue 35: 0.08 s CPU on the cow x4)."""
+    radius = np.full(len(pts), np.nan)
+    for lo in range(0, len(pts), CHUNK):
+        hi = min(lo + CHUNK, len(pts))
+        r = body.inner_radius(pts[lo:hi])
+        radius[lo:hi] = r
+        if ((r >= least) & (from_end[lo:hi] >= END_RATIO * r)).any():
+            break
+    return radius
+
+
 def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int, tip: bool = True
              ) -> tuple[np.ndarray, int, bool]:
     """Where a limb's end bone stops (mm).  ``line`` (K,3): the branch's polyline from its
@@ -147,11 +169,12 @@ def limb_end(body: Body, tree: Tree, line: np.ndarray, leaf: int, tip: bool = Tr
         return line[-1][None], max(n - 1, 1), False
     t = np.linspace(length, 0.0, 400)  # from the end inwards
     pts = a + t[:, None] * d
-    radius = body.inner_radius(pts)
     # ... and not a sliver: at least a tenth of the limb's median section area (the
     # engine's sliver rule), i.e. radius >= sqrt(0.1) x the limb's median radius.
-    capped = length - t >= END_RATIO * radius
-    ok = np.flatnonzero((radius >= math.sqrt(0.1) * rad) & capped)
+    radius = _radius_to_stop(body, pts, length - t, math.sqrt(0.1) * rad)
+    with np.errstate(invalid="ignore"):  # (NaN: beyond the stop, not measured)
+        capped = length - t >= END_RATIO * radius
+        ok = np.flatnonzero((radius >= math.sqrt(0.1) * rad) & capped)
     stop = pts[ok[0]] if len(ok) else a
     if tip:
         more = _tip(body, pts, radius, capped, stop, ok[0] if len(ok) else len(t) - 1)

@@ -12,6 +12,24 @@ from scipy.sparse import csgraph
 from .._api import _faces, _float_rows
 
 
+def used_vertices(faces: np.ndarray, num_vertices: int) -> np.ndarray:
+    """(U,) the vertices in some face of ``faces`` (F,3), ascending (``np.unique(faces)``
+    without its sort: 2 ms instead of 20 ms on the cow x4's 280 k corners)."""
+    return np.flatnonzero(np.bincount(faces.ravel(), minlength=num_vertices))
+
+
+def unique_rows(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(first (W,), inverse (N,)) of the distinct rows of the int array ``key`` (N,3) as
+    ``np.unique(key, axis=0, return_index=True, return_inverse=True)`` gives them (rows in
+    lexicographic order, first: each one's first occurrence), from one ``lexsort``."""
+    order = np.lexsort(key.T[::-1])
+    ordered = key[order]
+    new = np.r_[True, (ordered[1:] != ordered[:-1]).any(1)]
+    inverse = np.empty(len(key), np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return order[new], inverse
+
+
 def piece_labels(faces: np.ndarray, num_vertices: int) -> tuple[int, np.ndarray]:
     """Connected pieces of a mesh over its face edges.
 
@@ -32,7 +50,7 @@ def _check_volume(v: np.ndarray, f: np.ndarray) -> None:
     """ValueError for a mesh with no size, no area, no thickness or no enclosed volume."""
     a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
     area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    pts = v[np.unique(f)]
+    pts = v[used_vertices(f, len(v))]
     size = float(np.ptp(pts, axis=0).max())
     if not size > 0:
         raise ValueError("degenerate mesh: all vertices coincide (size 0 mm)")
@@ -64,12 +82,11 @@ def check_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray, np.nd
     if len(f) < 4:
         raise ValueError(f"mesh has {len(f)} faces; a closed mesh needs at least 4")
     _check_volume(v, f)
-    size = float(np.ptp(v[np.unique(f)], axis=0).max())
+    size = float(np.ptp(v[used_vertices(f, len(v))], axis=0).max())
     # Weld coincident vertices (STL and other triangle soups): the skeleton is computed on the
     # welded mesh, the weights are returned for the caller's vertices.
     key = np.round(v / (1e-9 * size)).astype(np.int64)
-    _, first, weld = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    weld = weld.ravel()
+    first, weld = unique_rows(key)
     v = v[first]
     f = weld[f]
     f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])].astype(np.int32)

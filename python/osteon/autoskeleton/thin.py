@@ -67,27 +67,63 @@ def _mesh_graph(body: Body) -> sparse.csr_matrix:
     return sparse.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(n, n)).tocsr()
 
 
-def _finger_like(body: Body, graph: sparse.csr_matrix, kd: cKDTree, c: int, out: np.ndarray,
-                 half: float, spur: float) -> bool:
+class _Neighbourhood:
+    """The mesh's vertex graph and a k-d tree of its vertices, built on first use (most meshes
+    have no candidate that gets as far as :func:`_finger_like`)."""
+
+    def __init__(self, body: Body):
+        self.body = body
+        self._graph: sparse.csr_matrix | None = None
+        self._kd: cKDTree | None = None
+        self._local = np.full(len(body.v), -1, np.int64)  # vertex -> index in a selection
+
+    @property
+    def graph(self) -> sparse.csr_matrix:
+        if self._graph is None:
+            self._graph = _mesh_graph(self.body)
+        return self._graph
+
+    @property
+    def kd(self) -> cKDTree:
+        if self._kd is None:  # (unbalanced: half the build time, the same query answers)
+            self._kd = cKDTree(self.body.v, balanced_tree=False, compact_nodes=False)
+        return self._kd
+
+    def component(self, sel: np.ndarray, c: int) -> np.ndarray:
+        """The vertices of ``sel`` (sorted ids) joined to vertex ``c`` (in ``sel``) by mesh
+        edges between vertices of ``sel``."""
+        graph, local = self.graph, self._local
+        local[sel] = np.arange(len(sel))
+        starts, count = graph.indptr[sel], np.diff(graph.indptr)[sel]
+        first = np.cumsum(count) - count
+        at = np.repeat(starts - first, count) + np.arange(int(count.sum()))
+        nbr = local[graph.indices[at]]
+        row = np.repeat(np.arange(len(sel)), count)
+        inside = nbr >= 0
+        indptr = np.r_[0, np.cumsum(np.bincount(row[inside], minlength=len(sel)))]
+        sub = sparse.csr_matrix((np.ones(int(inside.sum())), nbr[inside], indptr),
+                                shape=(len(sel), len(sel)))
+        _n, label = csgraph.connected_components(sub, directed=False)
+        part = sel[label == label[local[c]]]
+        local[sel] = -1
+        return part
+
+
+def _finger_like(body: Body, near: _Neighbourhood, c: int, out: np.ndarray, half: float,
+                 spur: float) -> bool:
     """Whether the mesh around tip vertex ``c`` less than ``half`` mm in from it along the unit
     ``out`` (3,) (pointing from the bone out to the tip: the outer half of the branch) makes
     a branch longer than ``spur`` x its width: the branch's length (2 ``half``) against twice
     the largest distance from the line through ``c`` along ``out`` of the vertices there
-    connected to ``c`` (``kd``: a k-d tree of the mesh's vertices).  A finger passes; the rim
-    of a flat part (a palm's edge) is a wide cap there and does not."""
+    connected to ``c``.  A finger passes; the rim of a flat part (a palm's edge) is a wide cap
+    there and does not."""
     tip = body.v[c]
-    sel = np.array(sorted(kd.query_ball_point(tip, 2.0 * half + 1e-9)), np.int64)
+    sel = np.asarray(near.kd.query_ball_point(tip, 2.0 * half + 1e-9, return_sorted=True),
+                     np.int64)
     sel = sel[(body.v[sel] - tip) @ out >= -half]  # (<= 0 near the tip)
     if c not in sel:
         return False
-    rows = graph[sel].tocoo()  # the edges among ``sel`` (sorted), in its own numbering
-    j = np.minimum(np.searchsorted(sel, rows.col), len(sel) - 1)
-    inside = sel[j] == rows.col
-    sub = sparse.coo_matrix((rows.data[inside], (rows.row[inside], j[inside])),
-                            shape=(len(sel), len(sel)))
-    _n, label = csgraph.connected_components(sub, directed=False)
-    part = sel[label == label[np.searchsorted(sel, c)]]
-    rel = body.v[part] - tip
+    rel = body.v[near.component(sel, c)] - tip
     lateral = np.linalg.norm(rel - np.outer(rel @ out, out), axis=1)
     return 2.0 * half > spur * 2.0 * float(lateral.max())
 
@@ -106,19 +142,17 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
     big_r = body.inner_radius(q)
     stick = d[cand] - big_r
     keep = stick > body.min_t  # (a branch at least as long as the thinnest wall is wide)
-    cand, q, stick = cand[keep], q[keep], stick[keep]
-    ends = np.concatenate([sk.heads, sk.tails])
-    graph = _mesh_graph(body)
-    kd = cKDTree(v)
-    kept: list[tuple[int, np.ndarray, np.ndarray, float, np.ndarray]] = []
-    order = np.argsort(-stick, kind="stable")  # longest first: a shorter tip near a longer
-    cand, q, stick = cand[order], q[order], stick[order]  # one's is the same feature
+    order = np.argsort(-stick[keep], kind="stable")  # longest first: a shorter tip near a
+    cand, q, stick, big_r = (x[keep][order] for x in (cand, q, stick, big_r))  # longer one's
+    ends = np.concatenate([sk.heads, sk.tails])  # is the same feature
+    near = _Neighbourhood(body)
+    kept: list[tuple[int, np.ndarray, np.ndarray, float]] = []
     dist = np.linalg.norm(q - v[cand], axis=1)
     frac = (np.arange(SAMPLES) + 0.5) / SAMPLES
     seen_tip = np.zeros((len(cand), 3))  # the tips tested so far and their widths
     seen_width = np.zeros(len(cand))
     n_seen = 0
-    for c, qc, length, dc in zip(cand, q, stick, dist, strict=True):
+    for c, qc, length, dc, r_q in zip(cand, q, stick, dist, big_r, strict=True):
         length = float(length)
         tip = v[c]
         if n_seen and (np.linalg.norm(seen_tip[:n_seen] - tip, axis=1)
@@ -126,23 +160,43 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
             continue  # within the width of a longer one's tip: the same feature
         u = (qc - tip) / dc
         s = frac * dc
-        rho = body.inner_radius(tip + s[:, None] * u)
-        if not (rho > 0).all():
+        # Only the samples beyond the limb's surface are measured: the others lie within
+        # r_q of qc, inside the ball of radius r_q round qc that is inside the mesh.
+        out = s <= length + 1e-6 * body.size
+        rho = np.full(SAMPLES, np.nan)
+        rho[out] = body.inner_radius(tip + s[out, None] * u)
+        if not (rho[out] > 0).all():
             continue  # the line leaves the mesh: not a straight branch off this bone
-        out = s <= length
-        width = 2.0 * float(rho[out].max()) if out.any() else 0.0
+        width = 2.0 * float(rho[s <= length].max()) if (s <= length).any() else 0.0
         if width < body.min_t or length <= spur * width:
             continue  # thinner than printable, or a bump: not longer than wide
         seen_tip[n_seen], seen_width[n_seen] = tip, width
         n_seen += 1
         if np.linalg.norm(ends - tip, axis=1).min() <= width:
             continue  # a bone already ends there
-        if not _finger_like(body, graph, kd, int(c), -u, 0.5 * length, spur):
+        if not _finger_like(body, near, int(c), -u, 0.5 * length, spur):
             continue  # a ridge or a rim (a flat part's edge), not a branch
-        stop = np.flatnonzero((s >= END_RATIO * rho) & (rho >= 0.5 * body.min_t))
-        tail = tip + s[stop[0]] * u if len(stop) else tip + 0.5 * length * u
-        kept.append((int(owner[c]), qc, tail, width, tip))
-    return [(b, qc, tail, width) for b, qc, tail, width, _tip in kept], d
+        tail = _tail(body, tip, u, s, rho, length)
+        kept.append((int(owner[c]), qc, tail, width))
+    return kept, d
+
+
+def _tail(body: Body, tip: np.ndarray, u: np.ndarray, s: np.ndarray, rho: np.ndarray,
+          length: float) -> np.ndarray:
+    """Where a thin branch's bone ends (3,) mm: the first sample in from ``tip`` along the unit
+    ``u`` (at distances ``s`` (K,) mm, ascending; inner radii ``rho`` (K,) mm, NaN where not
+    measured yet: the samples inside the limb, measured here only if none before them stops)
+    that is ``END_RATIO`` radii from the tip and at least ``min_t`` / 2 thick; failing that,
+    half the branch's ``length`` in from the tip."""
+    todo = np.isnan(rho)
+    for _ in range(2):
+        with np.errstate(invalid="ignore"):  # (NaN compares False)
+            stop = np.flatnonzero((s >= END_RATIO * rho) & (rho >= 0.5 * body.min_t))
+        if len(stop) or not todo.any():
+            break
+        rho = rho.copy()
+        rho[todo] = body.inner_radius(tip + s[todo, None] * u)
+    return tip + s[stop[0]] * u if len(stop) else tip + 0.5 * length * u
 
 
 def add_thin_branches(body: Body, sk: Skeleton, full: np.ndarray, spur: float

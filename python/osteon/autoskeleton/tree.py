@@ -15,6 +15,7 @@ from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
 from .curve import CurveSkeleton
+from .mesh import used_vertices
 
 
 @dataclass
@@ -51,7 +52,7 @@ def make_body(v: np.ndarray, f: np.ndarray, up: np.ndarray, cs: CurveSkeleton,
               min_t: float = 0.8) -> Body:
     """The :class:`Body` of the welded mesh ``v`` (V,3) mm, ``f`` (F,3) and its curve skeleton
     (``min_t``: the thinnest printable wall, mm)."""
-    used = np.unique(f)
+    used = used_vertices(f, len(v))
     size = float(np.ptp(v[used], axis=0).max())
     kq = min(4, len(cs.spos))
     near_d, near_i = cKDTree(cs.spos).query(v, k=kq)
