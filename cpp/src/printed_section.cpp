@@ -89,6 +89,42 @@ std::vector<Vec2> to_plane(const Path64& path, const Vec2& es, const Vec2& et) {
   return loop;
 }
 
+// True when no point of the region of `paths` (outer boundaries counter-clockwise, holes
+// clockwise, non-overlapping) lies `depth` (units) or more inside it, i.e. its inset by `depth`
+// is empty, proven by its second moments: a region holding a disc of radius r has, about its
+// own centroid, a second moment of at least pi r^4 / 4 in every direction (the disc's about its
+// centre; the parallel axes and the rest of the region only add), so r <= (4 lambda_min /
+// pi)^(1/4). The moments are summed about the first vertex (no cancellation of large
+// coordinates); the test keeps a relative margin of 1e-6 for their rounding.
+bool thinner_than(const Paths64& paths, double depth) {
+  if (!(depth > 0) || paths.empty() || paths[0].empty()) return false;
+  const double x0 = static_cast<double>(paths[0][0].x), y0 = static_cast<double>(paths[0][0].y);
+  double a = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;  // twice, 6x, 12x, 12x, 24x
+  for (const Path64& path : paths)
+    for (std::size_t k = 0; k < path.size(); ++k) {
+      const auto& p = path[k];
+      const auto& q = path[k + 1 == path.size() ? 0 : k + 1];
+      const double px = static_cast<double>(p.x) - x0, py = static_cast<double>(p.y) - y0;
+      const double qx = static_cast<double>(q.x) - x0, qy = static_cast<double>(q.y) - y0;
+      const double cross = px * qy - qx * py;
+      a += cross;
+      sx += cross * (px + qx);
+      sy += cross * (py + qy);
+      sxx += cross * (px * px + px * qx + qx * qx);
+      syy += cross * (py * py + py * qy + qy * qy);
+      sxy += cross * (px * qy + 2 * px * py + 2 * qx * qy + qx * py);
+    }
+  const double area = a / 2;
+  if (!(area > 0)) return false;
+  const double cx = sx / 6 / area, cy = sy / 6 / area;
+  const double jxx = sxx / 12 - area * cx * cx, jyy = syy / 12 - area * cy * cy;
+  const double jxy = sxy / 24 - area * cx * cy;
+  const double mean = 0.5 * (jxx + jyy), half = std::hypot(0.5 * (jxx - jyy), jxy);
+  const double lambda_min = mean - half;  // the smaller principal second moment
+  const double disc = M_PI / 4 * depth * depth * depth * depth;
+  return lambda_min < disc * (1 - 1e-6) - 1e-6 * (mean + half);
+}
+
 // Moments of a set of regions about a reference point c: area, first moment, second moment.
 struct Moments {
   double area = 0.0;
@@ -283,6 +319,31 @@ Paths64 collapsed_outside(const Paths64& paths, const Clipper2Lib::Rect64& box) 
   return out;
 }
 
+// The inset's loops less its outer boundaries whose layer area is under min_area (mm^2) by a
+// margin, and less the holes when no outer boundary is left. Exact for the skins' islands: an
+// island lies inside one outer boundary of the inset (the skins only remove material), so its
+// area is at most that boundary's (holes only subtract), plus what rounding its crossings to
+// units adds (under one unit times its perimeter: the margin, 1e-3 of min_area, is 7e6 units^2 at
+// 70 mm^2, i.e. an island 700 mm long inside a boundary of under 70 mm^2), so it falls under the
+// small-area rule anyway. Removing the boundary changes the winding numbers
+// only inside it (islands there, nested ones included, are smaller still), and its crossings
+// only split pieces that bound none of the islands left (the inset's loops do not touch). The
+// caller's box then bounds the islands left, and the shifted cuts are shortened to it.
+Paths64 without_small_outers(const Paths64& eroded, double layer_per_section, double min_area) {
+  if (!(min_area > 0)) return eroded;
+  const double limit = (1.0 - 1e-3) * min_area / layer_per_section * kScale * kScale;  // units^2
+  Paths64 kept;
+  bool any_outer = false;
+  for (const Path64& path : eroded) {
+    const double a = Clipper2Lib::Area(path);
+    if (a > 0 && a < limit) continue;
+    any_outer |= a > 0;
+    kept.push_back(path);
+  }
+  if (!any_outer) kept.clear();
+  return kept;
+}
+
 // sparse_islands by winding_region and collect_loops; false where the loops are not in
 // general position.
 bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int64_t shift,
@@ -290,18 +351,20 @@ bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int6
                         double min_area, const Vec2& es, const Vec2& et,
                         std::vector<SectionPolygon>& islands) {
   if (shift == 0) return collect_loops(eroded, layer_per_section, min_area, es, et, islands);
+  const Paths64 inset = without_small_outers(eroded, layer_per_section, min_area);
+  if (inset.empty()) return true;  // every island would be under min_area: none is sparse
   Paths64 region;
-  Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(eroded);  // the region lies in the inset
+  Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(inset);  // the region lies in the inset
   box.left -= 2, box.top -= 2, box.right += 2, box.bottom += 2;
   if (max_slope >= M_PI / 2) {
     const Paths64 up = collapsed_outside(Clipper2Lib::TranslatePaths(section, shift, 0), box);
     const Paths64 down = collapsed_outside(Clipper2Lib::TranslatePaths(section, -shift, 0), box);
-    return detail::winding_region({&eroded, &up, &down}, in_both_shifted, region) &&
+    return detail::winding_region({&inset, &up, &down}, in_both_shifted, region) &&
            collect_loops(region, layer_per_section, min_area, es, et, islands);
   }
   const Paths64 sweeps = collapsed_outside(
       flat_skin_sweeps(section, static_cast<double>(shift), sin_theta, max_slope), box);
-  return detail::winding_region({&eroded, &sweeps}, outside_flat_skins, region) &&
+  return detail::winding_region({&inset, &sweeps}, outside_flat_skins, region) &&
          collect_loops(region, layer_per_section, min_area, es, et, islands);
 }
 
@@ -468,12 +531,15 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   if (options.wall_depth > 0) {
     const double delta = options.wall_depth * kScale;
     const double arc_tolerance = std::max(0.005 * kScale, 0.01 * delta);
-    eroded =
-        stretched(reference ? Clipper2Lib::InflatePaths(
-                                  stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
-                                  Clipper2Lib::EndType::Polygon, 2.0, arc_tolerance)
-                            : detail::wall_inset(stretched(section, stretch), delta, arc_tolerance),
-                  1.0 / stretch);
+    const Paths64 wide = stretched(section, stretch);
+    if (!reference && thinner_than(wide, delta - arc_tolerance - 4.0))
+      eroded.clear();  // no point lies that deep inside: all walls, no inset to compute
+    else
+      eroded = stretched(
+          reference ? Clipper2Lib::InflatePaths(wide, -delta, Clipper2Lib::JoinType::Round,
+                                                Clipper2Lib::EndType::Polygon, 2.0, arc_tolerance)
+                    : detail::wall_inset(wide, delta, arc_tolerance),
+          1.0 / stretch);
     // Less the arcs' chords and 4 units for the rounding of the stretch there and back.
     wall_reach = (delta - arc_tolerance) / stretch - 4.0;
   }
@@ -516,11 +582,14 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
     return out;
   }
   // Skins, and small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
-  sparse_islands(reference, section, eroded, skins ? shift : 0, sin_theta, options.skin_max_slope,
-                 layer_per_section, min_area, es, et, islands);
+  // (No inset: no island, the section is all walls.)
+  if (!eroded.empty())
+    sparse_islands(reference, section, eroded, skins ? shift : 0, sin_theta, options.skin_max_slope,
+                   layer_per_section, min_area, es, et, islands);
   for (const SectionPolygon& island : islands)
     sparse.add(section_properties(island), solid.centroid);
-  if (skins && options.skin_growth > 0 && options.layer_height > 0 && sin_theta > 1e-6)
+  if (skins && !islands.empty() && options.skin_growth > 0 && options.layer_height > 0 &&
+      sin_theta > 1e-6)
     remove_widened_skins(section, eroded, islands, sin_theta, options, es, et, solid.centroid,
                          sparse);
   out.infill_area = std::min(sparse.area, eroded_area);
