@@ -125,6 +125,19 @@ bool thinner_than(const Paths64& paths, double depth) {
   return lambda_min < disc * (1 - 1e-6) - 1e-6 * (mean + half);
 }
 
+// Whether thinner_than is worth asking: the cut's own second moments (before the outline's
+// simplification), in the stretched (s, t) axes (a stretch k of s scales J_ss by k^3, J_st by
+// k^2 and J_tt by k), under twice the disc's of radius `depth` (mm). Only a filter: where it
+// says no, the inset is computed as always (the bound of the outline as offset decides).
+bool may_be_thinner(const SectionProperties& solid, const Vec2& es, const Vec2& et, double k,
+                    double depth) {
+  const Mat2& j = solid.second_moment;
+  const double jss = k * k * k * es.dot(j * es), jtt = k * et.dot(j * et);
+  const double jst = k * k * es.dot(j * et);
+  const double lambda_min = 0.5 * (jss + jtt) - std::hypot(0.5 * (jss - jtt), jst);
+  return lambda_min < 2.0 * M_PI / 4 * depth * depth * depth * depth;
+}
+
 // Moments of a set of regions about a reference point c: area, first moment, second moment.
 struct Moments {
   double area = 0.0;
@@ -532,7 +545,8 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
     const double delta = options.wall_depth * kScale;
     const double arc_tolerance = std::max(0.005 * kScale, 0.01 * delta);
     const Paths64 wide = stretched(section, stretch);
-    if (!reference && thinner_than(wide, delta - arc_tolerance - 4.0))
+    if (!reference && may_be_thinner(solid, es, et, stretch, options.wall_depth) &&
+        thinner_than(wide, delta - arc_tolerance - 4.0))
       eroded.clear();  // no point lies that deep inside: all walls, no inset to compute
     else
       eroded = stretched(
