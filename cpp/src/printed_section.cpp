@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -94,7 +95,8 @@ std::vector<Vec2> to_plane(const Path64& path, const Vec2& es, const Vec2& et) {
 // is empty, proven by its second moments: a region holding a disc of radius r has, about its
 // own centroid, a second moment of at least pi r^4 / 4 in every direction (the disc's about its
 // centre; the parallel axes and the rest of the region only add), so r <= (4 lambda_min /
-// pi)^(1/4). The moments are summed about the first vertex (no cancellation of large
+// pi)^(1/4); and its extent across any direction is at least 2 r (the minor principal axis
+// is taken). The moments are summed about the first vertex (no cancellation of large
 // coordinates); the test keeps a relative margin of 1e-6 for their rounding.
 bool thinner_than(const Paths64& paths, double depth) {
   if (!(depth > 0) || paths.empty() || paths[0].empty()) return false;
@@ -122,7 +124,20 @@ bool thinner_than(const Paths64& paths, double depth) {
   const double mean = 0.5 * (jxx + jyy), half = std::hypot(0.5 * (jxx - jyy), jxy);
   const double lambda_min = mean - half;  // the smaller principal second moment
   const double disc = M_PI / 4 * depth * depth * depth * depth;
-  return lambda_min < disc * (1 - 1e-6) - 1e-6 * (mean + half);
+  if (lambda_min < disc * (1 - 1e-6) - 1e-6 * (mean + half)) return true;
+  // The region's extent across the minor principal axis (e), which a disc of radius r
+  // needs to be at least 2 r: thin long sections, whose moments the length makes large.
+  // (any direction bounds r; the minor axis (-jxy, jxx - lambda_min) bounds it best)
+  const double ax = -jxy, ay = 0.5 * (jxx - jyy) + half, norm = std::hypot(ax, ay);
+  const double ux = norm > 0 ? ax / norm : 1.0, uy = norm > 0 ? ay / norm : 0.0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Path64& path : paths)
+    for (const auto& p : path) {
+      const double d = (static_cast<double>(p.x) - x0) * ux + (static_cast<double>(p.y) - y0) * uy;
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+  return hi - lo < 2 * depth * (1 - 1e-9);
 }
 
 // Whether thinner_than is worth asking: the cut's own second moments (before the outline's
@@ -135,7 +150,10 @@ bool may_be_thinner(const SectionProperties& solid, const Vec2& es, const Vec2& 
   const double jss = k * k * k * es.dot(j * es), jtt = k * et.dot(j * et);
   const double jst = k * k * es.dot(j * et);
   const double lambda_min = 0.5 * (jss + jtt) - std::hypot(0.5 * (jss - jtt), jst);
-  return lambda_min < 2.0 * M_PI / 4 * depth * depth * depth * depth;
+  // A region of extent w across a direction has a second moment of at most area w^2 / 4
+  // across it (a variance over an interval of length w), so w >= 2 sqrt(lambda_min / area).
+  return lambda_min < 2.0 * M_PI / 4 * depth * depth * depth * depth ||
+         lambda_min < 1.1 * k * solid.area * depth * depth;
 }
 
 // Moments of a set of regions about a reference point c: area, first moment, second moment.
@@ -343,7 +361,6 @@ Paths64 collapsed_outside(const Paths64& paths, const Clipper2Lib::Rect64& box) 
 // only split pieces that bound none of the islands left (the inset's loops do not touch). The
 // caller's box then bounds the islands left, and the shifted cuts are shortened to it.
 Paths64 without_small_outers(const Paths64& eroded, double layer_per_section, double min_area) {
-  if (!(min_area > 0)) return eroded;
   const double limit = (1.0 - 1e-3) * min_area / layer_per_section * kScale * kScale;  // units^2
   Paths64 kept;
   bool any_outer = false;
@@ -364,7 +381,9 @@ bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int6
                         double min_area, const Vec2& es, const Vec2& et,
                         std::vector<SectionPolygon>& islands) {
   if (shift == 0) return collect_loops(eroded, layer_per_section, min_area, es, et, islands);
-  const Paths64 inset = without_small_outers(eroded, layer_per_section, min_area);
+  Paths64 kept;  // with the small-area rule: the inset less its small outer boundaries
+  if (min_area > 0) kept = without_small_outers(eroded, layer_per_section, min_area);
+  const Paths64& inset = min_area > 0 ? kept : eroded;
   if (inset.empty()) return true;  // every island would be under min_area: none is sparse
   Paths64 region;
   Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(inset);  // the region lies in the inset
