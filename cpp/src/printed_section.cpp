@@ -350,18 +350,17 @@ Paths64 collapsed_outside(const Paths64& paths, const Clipper2Lib::Rect64& box) 
   return out;
 }
 
-// The inset's loops less its outer boundaries whose layer area is under min_area (mm^2) by a
-// margin, and less the holes when no outer boundary is left. Exact for the skins' islands: an
-// island lies inside one outer boundary of the inset (the skins only remove material), so its
-// area is at most that boundary's (holes only subtract), plus what rounding its crossings to
-// units adds (under one unit times its perimeter: the margin, 1e-3 of min_area, is 7e6 units^2 at
-// 70 mm^2, i.e. an island 700 mm long inside a boundary of under 70 mm^2), so it falls under the
-// small-area rule anyway. Removing the boundary changes the winding numbers
-// only inside it (islands there, nested ones included, are smaller still), and its crossings
-// only split pieces that bound none of the islands left (the inset's loops do not touch). The
-// caller's box then bounds the islands left, and the shifted cuts are shortened to it.
-Paths64 without_small_outers(const Paths64& eroded, double layer_per_section, double min_area) {
-  const double limit = (1.0 - 1e-3) * min_area / layer_per_section * kScale * kScale;  // units^2
+// The inset's loops less its outer boundaries of area under `limit` (units^2: the section area
+// of min_area less a margin), and less the holes when no outer boundary is left. Exact for the
+// skins' islands: an island lies inside one outer boundary of the inset (the skins only remove
+// material), so its area is at most that boundary's (holes only subtract), plus what rounding its
+// crossings to units adds (under one unit times its perimeter: the margin, 1e-3 of min_area, is 7e6
+// units^2 at 70 mm^2, i.e. an island 700 mm long inside a boundary of under 70 mm^2), so it falls
+// under the small-area rule anyway. Removing the boundary changes the winding numbers only inside
+// it (islands there, nested ones included, are smaller still), and its crossings only split pieces
+// that bound none of the islands left (the inset's loops do not touch). The caller's box then
+// bounds the islands left, and the shifted cuts are shortened to it.
+Paths64 without_small_outers(const Paths64& eroded, double limit) {
   Paths64 kept;
   bool any_outer = false;
   for (const Path64& path : eroded) {
@@ -381,9 +380,14 @@ bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int6
                         double min_area, const Vec2& es, const Vec2& et,
                         std::vector<SectionPolygon>& islands) {
   if (shift == 0) return collect_loops(eroded, layer_per_section, min_area, es, et, islands);
-  Paths64 kept;  // with the small-area rule: the inset less its small outer boundaries
-  if (min_area > 0) kept = without_small_outers(eroded, layer_per_section, min_area);
-  const Paths64& inset = min_area > 0 ? kept : eroded;
+  // With the small-area rule: the inset less its small outer boundaries (copied only if any).
+  const double small = (1.0 - 1e-3) * min_area / layer_per_section * kScale * kScale;  // units^2
+  const bool drop = std::any_of(eroded.begin(), eroded.end(), [small](const Path64& path) {
+    const double a = Clipper2Lib::Area(path);
+    return a > 0 && a < small;
+  });
+  const Paths64 kept = drop ? without_small_outers(eroded, small) : Paths64{};
+  const Paths64& inset = drop ? kept : eroded;
   if (inset.empty()) return true;  // every island would be under min_area: none is sparse
   Paths64 region;
   Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(inset);  // the region lies in the inset
