@@ -558,8 +558,15 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   const double stretch = layered ? 1.0 / std::max(c, kMinCos) : 1.0;
   // The cut's outline within kSimplify of it (a mesh cut is finely faceted; the slicer
   // itself simplifies its slices to ~0.01 mm): what the offsets cost scales with its vertices.
+  // A shell's outline within its round joins' own tolerance (1 % of its depth: 0.02 mm for a
+  // 2 mm shell), as precise as its inset: no rule of the shell has a threshold, so W moves
+  // smoothly (<= 2.4e-3 of W on tests/data); FDM keeps kSimplify, where a coarser outline moves
+  // islands across the small-area and widening thresholds (docs/performance.md, print8).
   Paths64 section = to_clipper(cut, es, et);
-  for (Path64& path : section) path = detail::simplify_closed(path, kSimplify * kScale);
+  const double simplify = options.kind == PrintOptions::kShell
+                              ? std::max(kSimplify, 0.01 * options.wall_depth)
+                              : kSimplify;
+  for (Path64& path : section) path = detail::simplify_closed(path, simplify * kScale);
   // Walls: the cut eroded by the wall ellipse (FDM) or by the shell (resin), as an isotropic
   // inset in stretched coordinates; round joins within 0.005 mm or 1 % of the depth.
   Paths64 eroded = section;
