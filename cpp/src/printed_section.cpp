@@ -382,10 +382,11 @@ bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int6
   if (shift == 0) return collect_loops(eroded, layer_per_section, min_area, es, et, islands);
   // With the small-area rule: the inset less its small outer boundaries (copied only if any).
   const double small = (1.0 - 1e-3) * min_area / layer_per_section * kScale * kScale;  // units^2
-  const bool drop = std::any_of(eroded.begin(), eroded.end(), [small](const Path64& path) {
-    const double a = Clipper2Lib::Area(path);
-    return a > 0 && a < small;
-  });
+  const bool drop =
+      small > 0 && std::any_of(eroded.begin(), eroded.end(), [small](const Path64& path) {
+        const double a = Clipper2Lib::Area(path);
+        return a > 0 && a < small;
+      });
   const Paths64 kept = drop ? without_small_outers(eroded, small) : Paths64{};
   const Paths64& inset = drop ? kept : eroded;
   if (inset.empty()) return true;  // every island would be under min_area: none is sparse
