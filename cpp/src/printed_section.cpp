@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -87,6 +88,72 @@ std::vector<Vec2> to_plane(const Path64& path, const Vec2& es, const Vec2& et) {
   for (std::size_t k = 0; k < path.size(); ++k)
     loop[k] = (static_cast<double>(path[k].x) * es + static_cast<double>(path[k].y) * et) / kScale;
   return loop;
+}
+
+// True when no point of the region of `paths` (outer boundaries counter-clockwise, holes
+// clockwise, non-overlapping) lies `depth` (units) or more inside it, i.e. its inset by `depth`
+// is empty, proven by its second moments: a region holding a disc of radius r has, about its
+// own centroid, a second moment of at least pi r^4 / 4 in every direction (the disc's about its
+// centre; the parallel axes and the rest of the region only add), so r <= (4 lambda_min /
+// pi)^(1/4); and its extent across any direction is at least 2 r (the minor principal axis
+// is taken). The moments are summed about the first vertex (no cancellation of large
+// coordinates); the test keeps a relative margin of 1e-6 for their rounding.
+bool thinner_than(const Paths64& paths, double depth) {
+  if (!(depth > 0) || paths.empty() || paths[0].empty()) return false;
+  const double x0 = static_cast<double>(paths[0][0].x), y0 = static_cast<double>(paths[0][0].y);
+  double a = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;  // twice, 6x, 12x, 12x, 24x
+  for (const Path64& path : paths)
+    for (std::size_t k = 0; k < path.size(); ++k) {
+      const auto& p = path[k];
+      const auto& q = path[k + 1 == path.size() ? 0 : k + 1];
+      const double px = static_cast<double>(p.x) - x0, py = static_cast<double>(p.y) - y0;
+      const double qx = static_cast<double>(q.x) - x0, qy = static_cast<double>(q.y) - y0;
+      const double cross = px * qy - qx * py;
+      a += cross;
+      sx += cross * (px + qx);
+      sy += cross * (py + qy);
+      sxx += cross * (px * px + px * qx + qx * qx);
+      syy += cross * (py * py + py * qy + qy * qy);
+      sxy += cross * (px * qy + 2 * px * py + 2 * qx * qy + qx * py);
+    }
+  const double area = a / 2;
+  if (!(area > 0)) return false;
+  const double cx = sx / 6 / area, cy = sy / 6 / area;
+  const double jxx = sxx / 12 - area * cx * cx, jyy = syy / 12 - area * cy * cy;
+  const double jxy = sxy / 24 - area * cx * cy;
+  const double mean = 0.5 * (jxx + jyy), half = std::hypot(0.5 * (jxx - jyy), jxy);
+  const double lambda_min = mean - half;  // the smaller principal second moment
+  const double disc = M_PI / 4 * depth * depth * depth * depth;
+  if (lambda_min < disc * (1 - 1e-6) - 1e-6 * (mean + half)) return true;
+  // The region's extent across the minor principal axis (e), which a disc of radius r
+  // needs to be at least 2 r: thin long sections, whose moments the length makes large.
+  // (any direction bounds r; the minor axis (-jxy, jxx - lambda_min) bounds it best)
+  const double ax = -jxy, ay = 0.5 * (jxx - jyy) + half, norm = std::hypot(ax, ay);
+  const double ux = norm > 0 ? ax / norm : 1.0, uy = norm > 0 ? ay / norm : 0.0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Path64& path : paths)
+    for (const auto& p : path) {
+      const double d = (static_cast<double>(p.x) - x0) * ux + (static_cast<double>(p.y) - y0) * uy;
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+  return hi - lo < 2 * depth * (1 - 1e-9);
+}
+
+// Whether thinner_than is worth asking: the cut's own second moments (before the outline's
+// simplification), in the stretched (s, t) axes (a stretch k of s scales J_ss by k^3, J_st by
+// k^2 and J_tt by k), under twice the disc's of radius `depth` (mm). Only a filter: where it
+// says no, the inset is computed as always (the bound of the outline as offset decides).
+bool may_be_thinner(const SectionProperties& solid, const Vec2& es, const Vec2& et, double k,
+                    double depth) {
+  const Mat2& j = solid.second_moment;
+  const double jss = k * k * k * es.dot(j * es), jtt = k * et.dot(j * et);
+  const double jst = k * k * es.dot(j * et);
+  const double lambda_min = 0.5 * (jss + jtt) - std::hypot(0.5 * (jss - jtt), jst);
+  // A region of extent w across a direction has a second moment of at most area w^2 / 4
+  // across it (a variance over an interval of length w), so w >= 2 sqrt(lambda_min / area).
+  return lambda_min < 2.0 * M_PI / 4 * depth * depth * depth * depth ||
+         lambda_min < 1.1 * k * solid.area * depth * depth;
 }
 
 // Moments of a set of regions about a reference point c: area, first moment, second moment.
@@ -283,6 +350,29 @@ Paths64 collapsed_outside(const Paths64& paths, const Clipper2Lib::Rect64& box) 
   return out;
 }
 
+// The inset's loops less its outer boundaries of area under `limit` (units^2: the section area
+// of min_area less a margin), and less the holes when no outer boundary is left. Exact for the
+// skins' islands: an island lies inside one outer boundary of the inset (the skins only remove
+// material), so its area is at most that boundary's (holes only subtract), plus what rounding its
+// crossings to units adds (under one unit times its perimeter: the margin, 1e-3 of min_area, is 7e6
+// units^2 at 70 mm^2, i.e. an island 700 mm long inside a boundary of under 70 mm^2), so it falls
+// under the small-area rule anyway. Removing the boundary changes the winding numbers only inside
+// it (islands there, nested ones included, are smaller still), and its crossings only split pieces
+// that bound none of the islands left (the inset's loops do not touch). The caller's box then
+// bounds the islands left, and the shifted cuts are shortened to it.
+Paths64 without_small_outers(const Paths64& eroded, double limit) {
+  Paths64 kept;
+  bool any_outer = false;
+  for (const Path64& path : eroded) {
+    const double a = Clipper2Lib::Area(path);
+    if (a > 0 && a < limit) continue;
+    any_outer |= a > 0;
+    kept.push_back(path);
+  }
+  if (!any_outer) kept.clear();
+  return kept;
+}
+
 // sparse_islands by winding_region and collect_loops; false where the loops are not in
 // general position.
 bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int64_t shift,
@@ -290,18 +380,28 @@ bool islands_by_winding(const Paths64& section, const Paths64& eroded, std::int6
                         double min_area, const Vec2& es, const Vec2& et,
                         std::vector<SectionPolygon>& islands) {
   if (shift == 0) return collect_loops(eroded, layer_per_section, min_area, es, et, islands);
+  // With the small-area rule: the inset less its small outer boundaries (copied only if any).
+  const double small = (1.0 - 1e-3) * min_area / layer_per_section * kScale * kScale;  // units^2
+  const bool drop =
+      small > 0 && std::any_of(eroded.begin(), eroded.end(), [small](const Path64& path) {
+        const double a = Clipper2Lib::Area(path);
+        return a > 0 && a < small;
+      });
+  const Paths64 kept = drop ? without_small_outers(eroded, small) : Paths64{};
+  const Paths64& inset = drop ? kept : eroded;
+  if (inset.empty()) return true;  // every island would be under min_area: none is sparse
   Paths64 region;
-  Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(eroded);  // the region lies in the inset
+  Clipper2Lib::Rect64 box = Clipper2Lib::GetBounds(inset);  // the region lies in the inset
   box.left -= 2, box.top -= 2, box.right += 2, box.bottom += 2;
   if (max_slope >= M_PI / 2) {
     const Paths64 up = collapsed_outside(Clipper2Lib::TranslatePaths(section, shift, 0), box);
     const Paths64 down = collapsed_outside(Clipper2Lib::TranslatePaths(section, -shift, 0), box);
-    return detail::winding_region({&eroded, &up, &down}, in_both_shifted, region) &&
+    return detail::winding_region({&inset, &up, &down}, in_both_shifted, region) &&
            collect_loops(region, layer_per_section, min_area, es, et, islands);
   }
   const Paths64 sweeps = collapsed_outside(
       flat_skin_sweeps(section, static_cast<double>(shift), sin_theta, max_slope), box);
-  return detail::winding_region({&eroded, &sweeps}, outside_flat_skins, region) &&
+  return detail::winding_region({&inset, &sweeps}, outside_flat_skins, region) &&
          collect_loops(region, layer_per_section, min_area, es, et, islands);
 }
 
@@ -459,8 +559,15 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   const double stretch = layered ? 1.0 / std::max(c, kMinCos) : 1.0;
   // The cut's outline within kSimplify of it (a mesh cut is finely faceted; the slicer
   // itself simplifies its slices to ~0.01 mm): what the offsets cost scales with its vertices.
+  // A shell's outline within its round joins' own tolerance (1 % of its depth: 0.02 mm for a
+  // 2 mm shell), as precise as its inset: no rule of the shell has a threshold, so W moves
+  // smoothly (<= 2.4e-3 of W on tests/data); FDM keeps kSimplify, where a coarser outline moves
+  // islands across the small-area and widening thresholds (docs/performance.md, print8).
   Paths64 section = to_clipper(cut, es, et);
-  for (Path64& path : section) path = detail::simplify_closed(path, kSimplify * kScale);
+  const double simplify = options.kind == PrintOptions::kShell
+                              ? std::max(kSimplify, 0.01 * options.wall_depth)
+                              : kSimplify;
+  for (Path64& path : section) path = detail::simplify_closed(path, simplify * kScale);
   // Walls: the cut eroded by the wall ellipse (FDM) or by the shell (resin), as an isotropic
   // inset in stretched coordinates; round joins within 0.005 mm or 1 % of the depth.
   Paths64 eroded = section;
@@ -468,12 +575,16 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
   if (options.wall_depth > 0) {
     const double delta = options.wall_depth * kScale;
     const double arc_tolerance = std::max(0.005 * kScale, 0.01 * delta);
-    eroded =
-        stretched(reference ? Clipper2Lib::InflatePaths(
-                                  stretched(section, stretch), -delta, Clipper2Lib::JoinType::Round,
-                                  Clipper2Lib::EndType::Polygon, 2.0, arc_tolerance)
-                            : detail::wall_inset(stretched(section, stretch), delta, arc_tolerance),
-                  1.0 / stretch);
+    const Paths64 wide = stretched(section, stretch);
+    if (!reference && may_be_thinner(solid, es, et, stretch, options.wall_depth) &&
+        thinner_than(wide, delta - arc_tolerance - 4.0))
+      eroded.clear();  // no point lies that deep inside: all walls, no inset to compute
+    else
+      eroded = stretched(
+          reference ? Clipper2Lib::InflatePaths(wide, -delta, Clipper2Lib::JoinType::Round,
+                                                Clipper2Lib::EndType::Polygon, 2.0, arc_tolerance)
+                    : detail::wall_inset(wide, delta, arc_tolerance),
+          1.0 / stretch);
     // Less the arcs' chords and 4 units for the rounding of the stretch there and back.
     wall_reach = (delta - arc_tolerance) / stretch - 4.0;
   }
@@ -516,11 +627,14 @@ PrintedSection printed_section(const SectionPolygon& cut, const SectionPropertie
     return out;
   }
   // Skins, and small islands solid: PrusaSlicer's solid_infill_below_area, on the layer's area.
-  sparse_islands(reference, section, eroded, skins ? shift : 0, sin_theta, options.skin_max_slope,
-                 layer_per_section, min_area, es, et, islands);
+  // (No inset: no island, the section is all walls.)
+  if (!eroded.empty())
+    sparse_islands(reference, section, eroded, skins ? shift : 0, sin_theta, options.skin_max_slope,
+                   layer_per_section, min_area, es, et, islands);
   for (const SectionPolygon& island : islands)
     sparse.add(section_properties(island), solid.centroid);
-  if (skins && options.skin_growth > 0 && options.layer_height > 0 && sin_theta > 1e-6)
+  if (skins && !islands.empty() && options.skin_growth > 0 && options.layer_height > 0 &&
+      sin_theta > 1e-6)
     remove_widened_skins(section, eroded, islands, sin_theta, options, es, et, solid.centroid,
                          sparse);
   out.infill_area = std::min(sparse.area, eroded_area);

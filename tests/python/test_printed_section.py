@@ -132,6 +132,32 @@ def test_resin_shell_is_the_tube_whatever_the_build_direction():
         assert a.section_modulus[_middle(a, length)] == pytest.approx(expected, rel=0.01)
 
 
+def test_a_section_thinner_than_its_shell_is_all_shell_and_a_thicker_one_keeps_its_core():
+    """The inset is skipped where the section's second moments prove it empty (an inscribed
+    disc of radius r needs pi r^4 / 4 in every direction): a 2 mm shell of a rod of r = 1.9 mm
+    is the whole section, one of r = 2.3 mm keeps the core of radius 0.3 mm (closed form), to
+    the shell's precision: its outline and its round joins each within 1 % of its depth."""
+    n, length = 256, 20.0
+    shell = osteon.PrintProfile.resin_hollow(2.0)
+    tolerance = 2 * 0.01 * 2.0  # mm on the core's radius
+    for r in (1.9, 2.3):
+        v, f, sk = _bar(circle(r, n), length, "z")
+        a = osteon.analyze(v, f, sk, interval=2.0, print_profile=shell)
+        i = _middle(a, length)
+        core = max(r - 2.0 / math.cos(math.pi / n), 0.0)
+        if core == 0:
+            assert a.section_infill_area[i] == 0.0
+        else:
+            assert (math.pi * (core - tolerance) ** 2 < a.section_infill_area[i]
+                    < math.pi * (core + tolerance) ** 2)
+        assert a.section_wall_area[i] + a.section_infill_area[i] == pytest.approx(
+            a.section_area[i], rel=1e-3)
+        if core == 0:
+            assert a.section_modulus[i] == a.section_solid_modulus[i]
+        else:
+            assert a.section_modulus[i] < a.section_solid_modulus[i]
+
+
 def test_culling_uses_the_printed_modulus():
     v, f, sk = _bar(circle(5.0, 64), 40.0, "x")
     a = osteon.analyze(v, f, sk, print_profile=FDM(infill=0.0), build_direction=(1, 0, 0))
