@@ -2,6 +2,7 @@
 // across small gaps (see osteon/slicer.hpp).
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iterator>
 #include <limits>
 #include <unordered_map>
@@ -80,6 +81,22 @@ std::pair<std::uint64_t, std::uint64_t> segment_key(const CutSegment& s) {
                                : std::make_pair(s.edge[1], s.edge[0]);
 }
 
+// A total order of segments that does not depend on the order they come in (the grid cells'
+// order, which depends on the grid's layout): by their edges' unordered pair (so that duplicates
+// are adjacent), then by orientation, then by the endpoints' bits (a doubled triangle's copies
+// may round their points differently: the one kept must not be whichever came first).
+bool segment_less(const CutSegment& x, const CutSegment& y) {
+  const auto kx = segment_key(x), ky = segment_key(y);
+  if (kx != ky) return kx < ky;
+  if (x.edge[0] != y.edge[0]) return x.edge[0] < y.edge[0];
+  std::uint64_t bx[4], by[4];
+  std::memcpy(bx, x.point[0].data(), 2 * sizeof(double));
+  std::memcpy(bx + 2, x.point[1].data(), 2 * sizeof(double));
+  std::memcpy(by, y.point[0].data(), 2 * sizeof(double));
+  std::memcpy(by + 2, y.point[1].data(), 2 * sizeof(double));
+  return std::lexicographical_compare(bx, bx + 4, by, by + 4);
+}
+
 // A total order of points (x, then y; NaN last), for the canonical order below.
 bool point_less(const Vec2& a, const Vec2& b) {
   auto key = [](double t) { return std::make_pair(std::isnan(t), std::isnan(t) ? 0.0 : t); };
@@ -146,9 +163,12 @@ struct LoopScratch {
 // Pairs the two endpoints of `input`'s segments that lie on the same mesh edge (partner[] in the
 // scratch, both ways; -1 for an endpoint alone on its edge); orientation-agnostic so that
 // inconsistently wound meshes still give loops. An edge with more than two endpoints is first
-// explained by exact duplicate segments (doubled triangles), which are dropped (into
-// `deduplicated`, which the answer then points to); whatever is still non-manifold after that
-// is flagged in `flags`. Returns the segments the partners index.
+// explained by exact duplicate segments (doubled triangles), which are dropped; whatever is still
+// non-manifold after that is flagged in `flags`. When any edge had more than two endpoints, the
+// segments are paired again in a canonical order (`segment_less`, into `deduplicated`, which the
+// answer then points to): which endpoints of a crowded edge pair, and the walk after it, then
+// depend on the mesh and the plane alone, not on the order the grid's cells gave the segments.
+// Returns the segments the partners index.
 const std::vector<CutSegment>* pair_segment_ends(const std::vector<CutSegment>& input,
                                                  LoopScratch& scratch,
                                                  std::vector<CutSegment>& deduplicated,
@@ -171,18 +191,14 @@ const std::vector<CutSegment>* pair_segment_ends(const std::vector<CutSegment>& 
     }
     if (crowded && attempt == 0) {
       deduplicated = input;
-      std::sort(
-          deduplicated.begin(), deduplicated.end(),
-          [](const CutSegment& x, const CutSegment& y) { return segment_key(x) < segment_key(y); });
+      std::sort(deduplicated.begin(), deduplicated.end(), segment_less);
       const auto last = std::unique(deduplicated.begin(), deduplicated.end(),
                                     [](const CutSegment& x, const CutSegment& y) {
                                       return segment_key(x) == segment_key(y);
                                     });
-      if (last != deduplicated.end()) {
-        deduplicated.erase(last, deduplicated.end());
-        source = &deduplicated;
-        continue;
-      }
+      deduplicated.erase(last, deduplicated.end());
+      source = &deduplicated;
+      continue;
     }
     if (crowded) flags |= kFlagNonManifold;
     break;
