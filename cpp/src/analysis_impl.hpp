@@ -196,15 +196,16 @@ struct RunState {
   /// Buckets this run's mesh into `grid` (once per run).
   void build_grid(int threads) {
     if (grid_built) return;
-    // Live update: re-file the moved faces in the kept layout. When a limb left the kept box
-    // (up to a quarter of the faces moved) the grid is rebuilt with a margin, so that the next
-    // poses moving that limb a little further re-file again. Any other build (one-off analyses,
-    // an Analyzer's first run, partial runs, a changed plan, most of the mesh moved) is on the
-    // mesh's own box: the layout of a fresh analysis.
-    const bool live = grid_holds_last_run && moved_faces != nullptr &&
-                      4 * static_cast<Index>(moved_faces->size()) <= mesh.num_faces;
-    const bool refiled = live && grid.refile(mesh, moved_faces->data(),
-                                             static_cast<Index>(moved_faces->size()), threads);
+    // Live update: re-file the moved faces in the kept layout (up to a quarter of the faces
+    // moved; more are faster rebuilt). When a limb left the kept box, or most of the mesh moved,
+    // the grid is rebuilt with a margin, so that the next poses moving that limb a little
+    // further re-file again (the sections do not depend on the layout: docs/performance.md).
+    // Any other build (one-off analyses, an Analyzer's first run, partial runs, a changed plan)
+    // is on the mesh's own box.
+    const bool live = grid_holds_last_run && moved_faces != nullptr;
+    const bool refiled =
+        live && 4 * static_cast<Index>(moved_faces->size()) <= mesh.num_faces &&
+        grid.refile(mesh, moved_faces->data(), static_cast<Index>(moved_faces->size()), threads);
     if (!refiled) grid.build(mesh, 12, threads, live ? kLiveGridMargin : 0.0);
     grid_built = true;
   }

@@ -2,6 +2,7 @@
 // across small gaps (see osteon/slicer.hpp).
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iterator>
 #include <limits>
 #include <unordered_map>
@@ -80,6 +81,22 @@ std::pair<std::uint64_t, std::uint64_t> segment_key(const CutSegment& s) {
                                : std::make_pair(s.edge[1], s.edge[0]);
 }
 
+// A total order of segments that does not depend on the order they come in (the grid cells'
+// order, which depends on the grid's layout): by their edges' unordered pair (so that duplicates
+// are adjacent), then by orientation, then by the endpoints' bits (a doubled triangle's copies
+// may round their points differently: the one kept must not be whichever came first).
+bool segment_less(const CutSegment& x, const CutSegment& y) {
+  const auto kx = segment_key(x), ky = segment_key(y);
+  if (kx != ky) return kx < ky;
+  if (x.edge[0] != y.edge[0]) return x.edge[0] < y.edge[0];
+  std::uint64_t bx[4], by[4];
+  std::memcpy(bx, x.point[0].data(), 2 * sizeof(double));
+  std::memcpy(bx + 2, x.point[1].data(), 2 * sizeof(double));
+  std::memcpy(by, y.point[0].data(), 2 * sizeof(double));
+  std::memcpy(by + 2, y.point[1].data(), 2 * sizeof(double));
+  return std::lexicographical_compare(bx, bx + 4, by, by + 4);
+}
+
 // A total order of points (x, then y; NaN last), for the canonical order below.
 bool point_less(const Vec2& a, const Vec2& b) {
   auto key = [](double t) { return std::make_pair(std::isnan(t), std::isnan(t) ? 0.0 : t); };
@@ -90,6 +107,16 @@ bool point_less(const Vec2& a, const Vec2& b) {
 bool points_less(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
   if (a.size() != b.size()) return a.size() < b.size();
   return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(), point_less);
+}
+
+// Is the loop a (from its rotation ra) less than loop b (from rb), n points each?
+bool rotation_less(const Vec2* a, std::size_t ra, const Vec2* b, std::size_t rb, std::size_t n) {
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec2 &p = a[(ra + k) % n], &q = b[(rb + k) % n];
+    if (point_less(p, q)) return true;
+    if (point_less(q, p)) return false;
+  }
+  return false;
 }
 
 // Where a closed loop of n points starts when it starts at its least point (x, then y), so that
@@ -112,17 +139,11 @@ std::size_t least_rotation(const Vec2* loop, std::size_t n) {
     }
   }
   if (tie) {
-    auto rotation_less = [&](std::size_t a, std::size_t b) {
-      for (std::size_t k = 0; k < n; ++k) {
-        const Vec2 &p = loop[(a + k) % n], &q = loop[(b + k) % n];
-        if (point_less(p, q)) return true;
-        if (point_less(q, p)) return false;
-      }
-      return false;
-    };
     const std::size_t first = best;
     for (std::size_t k = 0; k < n; ++k)
-      if (k != first && loop[k].x() == bx && loop[k].y() == by && rotation_less(k, best)) best = k;
+      if (k != first && loop[k].x() == bx && loop[k].y() == by &&
+          rotation_less(loop, k, loop, best, n))
+        best = k;
   }
   return best;
 }
@@ -146,9 +167,12 @@ struct LoopScratch {
 // Pairs the two endpoints of `input`'s segments that lie on the same mesh edge (partner[] in the
 // scratch, both ways; -1 for an endpoint alone on its edge); orientation-agnostic so that
 // inconsistently wound meshes still give loops. An edge with more than two endpoints is first
-// explained by exact duplicate segments (doubled triangles), which are dropped (into
-// `deduplicated`, which the answer then points to); whatever is still non-manifold after that
-// is flagged in `flags`. Returns the segments the partners index.
+// explained by exact duplicate segments (doubled triangles), which are dropped; whatever is still
+// non-manifold after that is flagged in `flags`. When any edge had more than two endpoints, the
+// segments are paired again in a canonical order (`segment_less`, into `deduplicated`, which the
+// answer then points to): which endpoints of a crowded edge pair, and the walk after it, then
+// depend on the mesh and the plane alone, not on the order the grid's cells gave the segments.
+// Returns the segments the partners index.
 const std::vector<CutSegment>* pair_segment_ends(const std::vector<CutSegment>& input,
                                                  LoopScratch& scratch,
                                                  std::vector<CutSegment>& deduplicated,
@@ -171,18 +195,14 @@ const std::vector<CutSegment>* pair_segment_ends(const std::vector<CutSegment>& 
     }
     if (crowded && attempt == 0) {
       deduplicated = input;
-      std::sort(
-          deduplicated.begin(), deduplicated.end(),
-          [](const CutSegment& x, const CutSegment& y) { return segment_key(x) < segment_key(y); });
+      std::sort(deduplicated.begin(), deduplicated.end(), segment_less);
       const auto last = std::unique(deduplicated.begin(), deduplicated.end(),
                                     [](const CutSegment& x, const CutSegment& y) {
                                       return segment_key(x) == segment_key(y);
                                     });
-      if (last != deduplicated.end()) {
-        deduplicated.erase(last, deduplicated.end());
-        source = &deduplicated;
-        continue;
-      }
+      deduplicated.erase(last, deduplicated.end());
+      source = &deduplicated;
+      continue;
     }
     if (crowded) flags |= kFlagNonManifold;
     break;
@@ -190,8 +210,51 @@ const std::vector<CutSegment>* pair_segment_ends(const std::vector<CutSegment>& 
   return source;
 }
 
+// The chain of `count` segments whose first is `start`, entered at endpoint `in`, walked the
+// other way (partners both ways: pair_segment_ends): each segment entered at the endpoint the
+// given walk leaves it by. out[0 .. count) are those points, last segment's first; for an open
+// chain (`closed` false) out[count] is the start's entry point, the reversed chain's end. A
+// closed loop's points come out in a rotation of its own (least_rotation decides the start).
+void reversed_chain(const CutSegment* segments, const std::int32_t* pair, std::size_t start, int in,
+                    std::size_t count, bool closed, Vec2* out) {
+  if (!closed) out[count] = segments[start].point[in];
+  std::size_t cur = start;
+  for (std::size_t k = 0; k < count; ++k) {
+    out[count - 1 - k] = segments[cur].point[1 - in];
+    const std::int32_t next = pair[2 * cur + (1 - in)];
+    if (next < 0) break;  // the open chain's last segment
+    cur = static_cast<std::size_t>(next / 2);
+    in = next % 2;
+  }
+}
+
+// Copies the closed loop walked from s0 (forward[0 .. n), `reversed` of its segments walked
+// against their own direction) into cut.loops from its least point, in the direction most of its
+// segments run (each keeps its face's orientation; on a tie, the direction whose points come
+// first in point_less's order). On an inconsistently wound surface the walk's direction is the
+// first segment's, i.e. the grid cells' order; a consistent one (reversed = 0) is copied as is.
+void emit_loop(const CutSegment* segments, LoopScratch& scratch, std::size_t s0, std::size_t n,
+               std::size_t reversed, PlaneCut& cut) {
+  const Vec2* points = scratch.forward.data();
+  std::size_t best = n >= 3 ? least_rotation(points, n) : 0;
+  if (2 * reversed >= n && n >= 3) {
+    Vec2* other = scratch.backward.data();
+    reversed_chain(segments, scratch.partner.data(), s0, 0, n, true, other);
+    const std::size_t other_best = least_rotation(other, n);
+    if (2 * reversed > n || rotation_less(other, other_best, points, best, n)) {
+      points = other;
+      best = other_best;
+    }
+  }
+  std::vector<Vec2>& loop = cut.loops.emplace_back();
+  loop.reserve(n);
+  loop.insert(loop.end(), points + best, points + n);
+  loop.insert(loop.end(), points, points + best);
+}
+
 // Walks the paired segments (pair_segment_ends) into chains: closed ones into cut.loops, open
-// ones (from their true start) into cut.open_chains.
+// ones (from their true start) into cut.open_chains, each in the direction most of its segments
+// run (emit_loop).
 void walk_segment_chains(const CutSegment* segments, std::size_t m, LoopScratch& scratch,
                          PlaneCut& cut) {
   const std::int32_t* pair = scratch.partner.data();
@@ -208,12 +271,14 @@ void walk_segment_chains(const CutSegment* segments, std::size_t m, LoopScratch&
   for (std::size_t s0 = 0; s0 < m; ++s0) {
     if (used[s0]) continue;
     std::size_t nf = 0, nb = 0;
+    std::size_t reversed = 0;  // segments walked against their own direction (entered at 1)
     bool closed = false;
     // Walk forward: enter s at endpoint `in`, leave through the other endpoint.
     std::size_t cur = s0;
     int in = 0;
     while (true) {
       used[cur] = 1;
+      reversed += static_cast<std::size_t>(in);
       forward[nf++] = segments[cur].point[in];
       const std::int32_t next = pair[2 * cur + (1 - in)];
       if (next < 0) {
@@ -232,32 +297,41 @@ void walk_segment_chains(const CutSegment* segments, std::size_t m, LoopScratch&
       cur = ns;
       in = next % 2;
     }
-    if (!closed) {
-      // Walk backward from s0's entry endpoint to find the chain's true start.
-      std::int32_t prev = pair[2 * s0 + 0];
-      while (prev >= 0) {
-        const std::size_t ps = static_cast<std::size_t>(prev / 2);
-        if (used[ps]) break;
-        used[ps] = 1;
-        const int out_end = prev % 2;  // we reach ps through this endpoint: it is ps's exit
-        backward[nb++] = segments[ps].point[1 - out_end];
-        prev = pair[2 * ps + (1 - out_end)];
-      }
-      std::vector<Vec2> chain;
-      chain.reserve(nb + nf);
-      chain.insert(chain.end(), std::reverse_iterator<Vec2*>(backward + nb),
-                   std::reverse_iterator<Vec2*>(backward));
-      chain.insert(chain.end(), forward, forward + nf);
-      cut.open_chains.push_back(std::move(chain));
-    } else {
-      // One allocation of the exact size (the scratch grows once per thread, not per loop),
-      // the loop copied from its least point on (canonical_order; a degenerate one is dropped).
-      const std::size_t best = nf >= 3 ? least_rotation(forward, nf) : 0;
-      std::vector<Vec2>& loop = cut.loops.emplace_back();
-      loop.reserve(nf);
-      loop.insert(loop.end(), forward + best, forward + nf);
-      loop.insert(loop.end(), forward, forward + best);
+    if (closed) {
+      emit_loop(segments, scratch, s0, nf, reversed, cut);
+      continue;
     }
+    // Walk backward from s0's entry endpoint to find the chain's true start.
+    std::size_t start = s0;
+    int start_in = 0;
+    std::int32_t prev = pair[2 * s0 + 0];
+    while (prev >= 0) {
+      const std::size_t ps = static_cast<std::size_t>(prev / 2);
+      if (used[ps]) break;
+      used[ps] = 1;
+      const int out_end = prev % 2;  // we reach ps through this endpoint: it is ps's exit
+      reversed += static_cast<std::size_t>(out_end == 0);
+      backward[nb++] = segments[ps].point[1 - out_end];
+      start = ps;
+      start_in = 1 - out_end;
+      prev = pair[2 * ps + (1 - out_end)];
+    }
+    std::vector<Vec2> chain;
+    chain.reserve(nb + nf);
+    chain.insert(chain.end(), std::reverse_iterator<Vec2*>(backward + nb),
+                 std::reverse_iterator<Vec2*>(backward));
+    chain.insert(chain.end(), forward, forward + nf);
+    const std::size_t count = chain.size() - 1;  // segments
+    if (2 * reversed >= count) {
+      // Mostly walked against the segments' direction (or a tie): the chain the other way, each
+      // segment entered at its other endpoint (backward is free again).
+      reversed_chain(segments, pair, start, start_in, count, false, backward);
+      if (2 * reversed > count ||
+          std::lexicographical_compare(backward, backward + count + 1, chain.begin(), chain.end(),
+                                       point_less))
+        chain.assign(backward, backward + count + 1);
+    }
+    cut.open_chains.push_back(std::move(chain));
   }
 }
 
