@@ -71,6 +71,22 @@ void check_correction_options(const CorrectionOptions& co, int nb) {
     throw std::invalid_argument("bone_long_axes must have one axis per bone");
 }
 
+// Why scaling a bone left a section's stress where it was. At a corner (Kt > 1) under blended
+// joint weights the section thickens little, and what it does lowers D/d but also r/d (the
+// fillet does not grow with it), so the peak barely falls (docs/notch.md "Correction"): say so,
+// and what would lower it.
+std::string stuck_reason(const AnalysisResult& a, std::size_t section) {
+  const double kt = section < a.stress_concentration.size() ? a.stress_concentration[section] : 1.0;
+  if (!(kt > 1.0)) return " (blended weights at a joint?)";
+  std::ostringstream out;
+  out.precision(3);
+  out << " (a corner at a joint: Kt " << kt;
+  const double r = section < a.notch_radius.size() ? a.notch_radius[section] : 0.0;
+  if (std::isfinite(r)) out << " at a " << r << " mm fillet";
+  out << "; a larger fillet there lowers the peak)";
+  return out.str();
+}
+
 // The axis each bone scales across: its segment, or the given long axis (unit).
 std::vector<Vec3> bone_long_axes(const Skeleton& sk, const CorrectionOptions& co) {
   const int nb = sk.num_bones();
@@ -263,8 +279,8 @@ CorrectionResult correct(const MeshView& mesh, const Skeleton& sk, const BoneWei
     // No progress on this section: its domain is not this bone's alone (blended joint weights).
     if (!(current.stress[worst] < before_stress * 0.995)) {
       unfixable[worst] = 1;
-      why[worst] =
-          "scaling bone '" + sk.name(bone) + "' does not thicken it (blended weights at a joint?)";
+      why[worst] = "scaling bone '" + sk.name(bone) + "' does not thicken it" +
+                   stuck_reason(current, static_cast<std::size_t>(worst));
     }
   }
   res.bone_scale_x = scales.x;

@@ -49,16 +49,22 @@ def test_correct_matches_engine_and_only_scales_across(sample, engine):
     # no vertex without weight on a scaled bone moves
     after_world = _eval(obj)
     free = ~_weight_on(obj, inp.skeleton.names, scaled)
-    assert free.sum() > 0.5 * len(free)
+    # enough unweighted vertices for the check to mean something (since the sharper Kt of
+    # docs/notch.md round 4 the loop also scales the head and both thighs: 45 % stay free)
+    assert free.sum() > 0.3 * len(free)
     assert np.abs(after_world[free] - rest_world[free]).max() < 1e-6
     assert np.abs(after_world[~free] - rest_world[~free]).max() > 1e-3
     # the result shown is Blender's corrected mesh: nothing weak left; the list shows
-    # the bones that were weak, with their scale
+    # the bones that were weak or were scaled, with their scale (a bone weak before may be
+    # fixed by scaling its neighbour: the neck by the head)
+    before = fix.before
+    weak_before = {inp.skeleton.names[b] for b in np.unique(before.section_bone[before.weak])}
+    shown = scaled | weak_before
     rows = bpy.context.scene.osteon.weak_bones
-    assert {r.name for r in rows} == scaled and not any(r.weak for r in rows)
-    assert all(r.ratio <= 1.0 and r.scale > 1.0 for r in rows)
+    assert {r.name for r in rows} == shown and not any(r.weak for r in rows)
+    assert all(r.ratio <= 1.0 and (r.scale > 1.0) == (r.name in scaled) for r in rows)
     assert last["report"]["converged"] is True
-    assert {b["bone"] for b in last["report"]["weak_bones"]} == scaled
+    assert {b["bone"] for b in last["report"]["weak_bones"]} == shown
 
 
 def _flatten_tail(obj, factor: float = 0.4):
@@ -90,10 +96,16 @@ def test_flat_part_pose_scales_reproduce_the_engine(sample, engine, scaling):
     fix, inp = last["correction"], last["inputs"]
     names = inp.skeleton.names
     tail = names.index("tail")
-    # THIN converges; UNIFORM, scaling the flat tail on both axes, may reach max_scale first
-    # (its base is a corner, docs/notch.md: the peak there falls slowly with a uniform scale)
-    assert fix.converged or (scaling == "UNIFORM"
-                             and fix.bone_scale[tail] == pytest.approx(3.0))
+    # UNIFORM, scaling the flat tail on both axes, may reach max_scale first (its base is a
+    # corner, docs/notch.md: the peak there falls slowly with a uniform scale). Either may stop
+    # at the tail's root corner, which sits under blended joint weights (docs/notch.md
+    # "Correction": THIN stops 5 % over since round 4's Kt); the stop must then say so.
+    after = fix.after
+    stuck_at_corner = (not fix.converged and "a corner at a joint" in fix.reason
+                       and "a larger fillet there lowers the peak" in fix.reason
+                       and bool((after.stress_concentration[after.weak] > 1.0).all()))
+    assert fix.converged or stuck_at_corner or (scaling == "UNIFORM"
+                                                and fix.bone_scale[tail] == pytest.approx(3.0))
     sx, sy, sz = arm.pose.bones["tail"].scale
     assert sy == 1.0
     assert sx == pytest.approx(fix.bone_scale_x[tail], rel=1e-6)
