@@ -203,14 +203,34 @@ def local_radius(pos: np.ndarray, normals: np.ndarray, surface, size: float) -> 
     steps = size * np.geomspace(1e-3, 0.5, 12)
     r = np.full(len(pos), steps[0])
     alive = np.arange(len(pos))
-    offset = np.asarray(surface.signed_distance(pos), dtype=np.float64).reshape(-1)
-    for t in steps:
-        d = np.asarray(surface.signed_distance(pos[alive] - t * normals[alive]), dtype=np.float64)
-        alive = alive[offset[alive] - d.reshape(-1) >= 0.8 * t]
-        if not len(alive):
-            break
-        r[alive] = t
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        offset = signed_distance(surface, pos, pool)
+        for t in steps:
+            d = signed_distance(surface, pos[alive] - t * normals[alive], pool)
+            alive = alive[offset[alive] - d >= 0.8 * t]
+            if not len(alive):
+                break
+            r[alive] = t
     return r
+
+
+#: at least this many points are split between two threads by :func:`signed_distance`
+SPLIT_POINTS = 256
+
+
+def signed_distance(surface, pts: np.ndarray, pool: ThreadPoolExecutor | None = None
+                    ) -> np.ndarray:
+    """(n,) signed distance mm of the points ``pts`` (n,3) mm to ``surface`` (pygel3d
+    ``MeshDistance``, < 0 inside); with ``pool``, the second half of many points is measured
+    on its thread meanwhile (GEL's query is read-only and its ctypes call releases the GIL;
+    each point's distance is the same either way)."""
+    pts = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
+    if pool is None or len(pts) < SPLIT_POINTS:
+        return np.asarray(surface.signed_distance(pts), dtype=np.float64).reshape(-1)
+    half = len(pts) // 2
+    second = pool.submit(surface.signed_distance, pts[half:])
+    first = np.asarray(surface.signed_distance(pts[:half]), dtype=np.float64)
+    return np.concatenate([first, np.asarray(second.result(), dtype=np.float64)])
 
 
 def mesh_triangles(m) -> np.ndarray:
