@@ -10,6 +10,7 @@ import contextlib
 import math
 import os
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,7 +43,9 @@ class CurveSkeleton:
     spos (S,3) mm: simplified mesh vertices; sedges (E,2): its edges (i < j); npos (N,3) mm:
     skeleton nodes; kedges (K,2): skeleton edges; smap (S,): simplified vertex -> skeleton node
     (may hold -1 or out-of-range values, see :func:`osteon.autoskeleton.tree.fix_map`);
-    surface: ``pygel3d.hmesh.MeshDistance`` of the full mesh (signed distance mm, < 0 inside)."""
+    surface: ``pygel3d.hmesh.MeshDistance`` of the full mesh (signed distance mm, < 0 inside);
+    near: (distances (V,k) mm, ids (V,k)) of the nearest ``spos`` (k = min(4, S)) to each
+    vertex of the mesh given to :func:`curve_skeleton` (``None``: not computed there)."""
 
     spos: np.ndarray
     sedges: np.ndarray
@@ -50,6 +53,25 @@ class CurveSkeleton:
     kedges: np.ndarray
     smap: np.ndarray
     surface: Any
+    near: tuple[np.ndarray, np.ndarray] | None = None
+
+
+def _mesh_distance(v: np.ndarray, f: np.ndarray):
+    """pygel3d ``MeshDistance`` of the triangles ``f`` (F,3) on ``v`` (V,3) mm (its own
+    ``Manifold``: the caller's copy is simplified meanwhile)."""
+    from pygel3d import hmesh
+
+    return hmesh.MeshDistance(hmesh.Manifold.from_triangles(v, f))
+
+
+def nearest_vertices(v: np.ndarray, spos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(distances (V,k) mm, ids (V,k)): the k = min(4, S) nearest of ``spos`` (S,3) mm to
+    each of ``v`` (V,3) mm."""
+    from scipy.spatial import cKDTree
+
+    kq = min(4, len(spos))
+    near_d, near_i = cKDTree(spos).query(v, k=kq)
+    return near_d.reshape(len(v), kq), near_i.reshape(len(v), kq)
 
 
 def curve_skeleton(v: np.ndarray, f: np.ndarray, target: int, deterministic: bool = True,
@@ -62,39 +84,51 @@ def curve_skeleton(v: np.ndarray, f: np.ndarray, target: int, deterministic: boo
         from pygel3d import graph, hmesh
     except ImportError as exc:  # pragma: no cover - pygel3d is a dependency
         raise ImportError("auto_skeleton needs pygel3d (pip install pygel3d)") from exc
+    full_v = v
     v, f = predecimate(v, f)
     used = np.unique(f)
-    m = hmesh.Manifold.from_triangles(v, f)
-    if len(m.positions()) < len(used):
-        raise ValueError("mesh is not manifold enough to skeletonise (pygel3d dropped vertices)")
-    # Distance to the full mesh's surface (GEL's MeshDistance keeps its own copy of the
-    # triangles, so the simplification below does not change it).
-    surface = hmesh.MeshDistance(m)
-    size = float(np.ptp(v[used], axis=0).max())
-    refined = False
-    if len(used) > target:  # (a mesh already this small is skeletonised as it is)
-        hmesh.quadric_simplify(m, target / len(used))
-        m.cleanup()
-        coarsen_by_radius(m, surface, size)
-    elif refine_by_radius(m, surface, size, target):
-        coarsen_by_radius(m, surface, size, faces=True)
-        refined = True
-    g = graph.from_mesh(m)
-    pos = np.array(g.positions(), dtype=np.float64)
-    sedges = graph_edges(g, len(pos))
-    if refined and root is not None and not isinstance(root, str):
-        # a split low-poly piece hung from the body at ``root``: level sets from there
-        start = int(np.argmin(((pos - np.asarray(root, np.float64)) ** 2).sum(1)))
-        return CurveSkeleton(pos, sedges, *front_skeleton(pos, sedges, start), surface)
-    with quiet_stdout():  # GEL prints progress lines to C stdout
-        if deterministic:  # every vertex grows a separator: no rand(), same result each run
-            skel, mapping = graph.LS_skeleton_and_map(g, sampling=False)
-        else:  # GEL samples with libc rand() from several threads: differs run to run
-            skel, mapping = graph.MSLS_skeleton_and_map(g)
+    # Why two threads: pygel3d (ctypes) and SciPy's k-d tree release the GIL, so the distance
+    # field is built while the copy is simplified and the full mesh's nearest simplified
+    # vertices are found while the skeleton is grown, on the second core (issue 35: Make
+    # skeleton's wall time); every result is the same as one after the other.
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        # Distance to the full mesh's surface (GEL's MeshDistance keeps its own copy of the
+        # triangles, so the simplification below does not change it).
+        surface_job = pool.submit(_mesh_distance, v, f)
+        m = hmesh.Manifold.from_triangles(v, f)
+        if len(m.positions()) < len(used):
+            raise ValueError("mesh is not manifold enough to skeletonise (pygel3d dropped "
+                             "vertices)")
+        size = float(np.ptp(v[used], axis=0).max())
+        refined = False
+        if len(used) > target:  # (a mesh already this small is skeletonised as it is)
+            hmesh.quadric_simplify(m, target / len(used))
+            m.cleanup()
+            surface = surface_job.result()
+            coarsen_by_radius(m, surface, size)
+        else:
+            surface = surface_job.result()
+            if refine_by_radius(m, surface, size, target):
+                coarsen_by_radius(m, surface, size, faces=True)
+                refined = True
+        g = graph.from_mesh(m)
+        pos = np.array(g.positions(), dtype=np.float64)
+        sedges = graph_edges(g, len(pos))
+        if refined and root is not None and not isinstance(root, str):
+            # a split low-poly piece hung from the body at ``root``: level sets from there
+            start = int(np.argmin(((pos - np.asarray(root, np.float64)) ** 2).sum(1)))
+            return CurveSkeleton(pos, sedges, *front_skeleton(pos, sedges, start), surface)
+        near_job = pool.submit(nearest_vertices, full_v, pos)
+        with quiet_stdout():  # GEL prints progress lines to C stdout
+            if deterministic:  # every vertex grows a separator: no rand(), same each run
+                skel, mapping = graph.LS_skeleton_and_map(g, sampling=False)
+            else:  # GEL samples with libc rand() from several threads: differs run to run
+                skel, mapping = graph.MSLS_skeleton_and_map(g)
+        near = near_job.result()
     npos = np.array(skel.positions(), dtype=np.float64)
     kedges = graph_edges(skel, len(npos))
     vmap = np.fromiter(mapping, dtype=np.int64, count=len(pos))
-    return CurveSkeleton(pos, sedges, npos, kedges, vmap, surface)
+    return CurveSkeleton(pos, sedges, npos, kedges, vmap, surface, near)
 
 
 def front_skeleton(pos: np.ndarray, sedges: np.ndarray, start: int
@@ -169,14 +203,34 @@ def local_radius(pos: np.ndarray, normals: np.ndarray, surface, size: float) -> 
     steps = size * np.geomspace(1e-3, 0.5, 12)
     r = np.full(len(pos), steps[0])
     alive = np.arange(len(pos))
-    offset = np.asarray(surface.signed_distance(pos), dtype=np.float64).reshape(-1)
-    for t in steps:
-        d = np.asarray(surface.signed_distance(pos[alive] - t * normals[alive]), dtype=np.float64)
-        alive = alive[offset[alive] - d.reshape(-1) >= 0.8 * t]
-        if not len(alive):
-            break
-        r[alive] = t
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        offset = signed_distance(surface, pos, pool)
+        for t in steps:
+            d = signed_distance(surface, pos[alive] - t * normals[alive], pool)
+            alive = alive[offset[alive] - d >= 0.8 * t]
+            if not len(alive):
+                break
+            r[alive] = t
     return r
+
+
+#: at least this many points are split between two threads by :func:`signed_distance`
+SPLIT_POINTS = 256
+
+
+def signed_distance(surface, pts: np.ndarray, pool: ThreadPoolExecutor | None = None
+                    ) -> np.ndarray:
+    """(n,) signed distance mm of the points ``pts`` (n,3) mm to ``surface`` (pygel3d
+    ``MeshDistance``, < 0 inside); with ``pool``, the second half of many points is measured
+    on its thread meanwhile (GEL's query is read-only and its ctypes call releases the GIL;
+    each point's distance is the same either way)."""
+    pts = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
+    if pool is None or len(pts) < SPLIT_POINTS:
+        return np.asarray(surface.signed_distance(pts), dtype=np.float64).reshape(-1)
+    half = len(pts) // 2
+    second = pool.submit(surface.signed_distance, pts[half:])
+    first = np.asarray(surface.signed_distance(pts[:half]), dtype=np.float64)
+    return np.concatenate([first, np.asarray(second.result(), dtype=np.float64)])
 
 
 def mesh_triangles(m) -> np.ndarray:

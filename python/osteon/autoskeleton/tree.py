@@ -14,7 +14,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
-from .curve import CurveSkeleton
+from .curve import CurveSkeleton, nearest_vertices
 from .mesh import used_vertices
 
 
@@ -54,12 +54,11 @@ def make_body(v: np.ndarray, f: np.ndarray, up: np.ndarray, cs: CurveSkeleton,
     (``min_t``: the thinnest printable wall, mm)."""
     used = used_vertices(f, len(v))
     size = float(np.ptp(v[used], axis=0).max())
-    kq = min(4, len(cs.spos))
-    near_d, near_i = cKDTree(cs.spos).query(v, k=kq)
+    near_d, near_i = cs.near if cs.near is not None else nearest_vertices(v, cs.spos)
     is_used = np.zeros(len(v), bool)
     is_used[used] = True
-    return Body(v, f, used, is_used, size, up, cs.spos, cs.sedges,
-                near_d.reshape(len(v), kq), near_i.reshape(len(v), kq), cs.surface, min_t)
+    return Body(v, f, used, is_used, size, up, cs.spos, cs.sedges, near_d, near_i, cs.surface,
+                min_t)
 
 
 @dataclass
