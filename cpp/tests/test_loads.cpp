@@ -6,6 +6,7 @@
 #include <limits>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "loads.hpp"
@@ -60,6 +61,48 @@ std::pair<double, Index> scan_farthest(const MeshView& mesh, const Skeleton& s,
     }
   }
   return {best, best_v};
+}
+
+// Checks the index's farthest downstream vertex from c against the scan (arm and vertex; none:
+// -1 and arm 0); `where` names the query in a failure. Returns whether a vertex was compared.
+bool expect_farthest_as_scan(const MomentArmIndex& index, const MeshView& mesh, const Skeleton& s,
+                             const LoadTree& tree, const std::vector<int>& vertex_bone,
+                             const std::vector<std::vector<double>>& params, int b, int i,
+                             bool plus, const Vec3& c, const std::vector<std::uint8_t>* skip,
+                             const std::string& where) {
+  const auto [best, best_v] =
+      scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c, skip);
+  const auto [arm, vertex] = index.farthest(b, i, plus, c);
+  if (best_v < 0) {
+    EXPECT_EQ(vertex, -1) << where;
+    EXPECT_EQ(arm, 0.0) << where;
+    return false;
+  }
+  EXPECT_EQ(arm, std::sqrt(best)) << where;
+  EXPECT_EQ(vertex, best_v) << where;
+  return true;
+}
+
+// Rings of integer points (12 per ring, radii 1-3 times 5) around each of the tee's bones, at
+// every whole mm from 2 before its head to 2 past its tail, `copies` times over: many points at
+// exactly the same distance from a centre on the axis. xyz (3 per point) and each point's bone.
+void ring_points(const Skeleton& s, int copies, std::vector<double>& xyz,
+                 std::vector<int>& vertex_bone) {
+  const int ring[][2] = {{5, 0},  {4, 3},   {3, 4},   {0, 5},  {-3, 4}, {-4, 3},
+                         {-5, 0}, {-4, -3}, {-3, -4}, {0, -5}, {3, -4}, {4, -3}};
+  for (int copy = 0; copy < copies; ++copy)
+    for (int b = 0; b < s.num_bones(); ++b) {
+      const Vec3 d = s.direction(b);
+      for (int t = -2; t <= static_cast<int>(s.length(b)) + 2; ++t)
+        for (int r = 1; r <= 3; ++r)
+          for (const auto& q : ring) {
+            // Integer offsets in the two axes across the bone (bones run along x or y).
+            const Vec3 off = d.x() != 0 ? Vec3(0, r * q[0], r * q[1]) : Vec3(r * q[0], 0, r * q[1]);
+            const Vec3 p = s.heads[b] + static_cast<double>(t) * d + off;
+            xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+            vertex_bone.push_back(b);
+          }
+    }
 }
 }  // namespace
 
@@ -146,17 +189,9 @@ TEST(MomentArmIndex, FarthestDownstreamPointMatchesBruteForce) {
     for (int i = 0; i < static_cast<int>(params[b].size()); ++i) {
       for (const bool plus : {true, false}) {
         const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + Vec3(0.3, -0.2, 0.1);
-        const auto [best, best_v] =
-            scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c);
-        const auto [arm, vertex] = index.farthest(b, i, plus, c);
-        if (best_v < 0) {
-          EXPECT_EQ(vertex, -1);
-          EXPECT_EQ(arm, 0.0);
-          continue;
-        }
-        EXPECT_EQ(arm, std::sqrt(best)) << "bone " << b << " boundary " << i;
-        EXPECT_EQ(vertex, best_v) << "bone " << b << " boundary " << i;
-        ++checked;
+        checked += expect_farthest_as_scan(
+            index, mesh, s, tree, vertex_bone, params, b, i, plus, c, nullptr,
+            "bone " + std::to_string(b) + " boundary " + std::to_string(i));
       }
     }
   }
@@ -175,22 +210,7 @@ TEST(MomentArmIndex, BucketsKeepTiesAndSkippedVerticesLikeAScan) {
       {0, 1, 2, 2, 5, 6, 7, 11, 12, 13, 20, 30, 31, 50}, {0, 4, 8, 12, 16, 20, 24, 28, 32}, {10}};
   std::vector<double> xyz;
   std::vector<int> vertex_bone;
-  const int ring[][2] = {{5, 0},  {4, 3},   {3, 4},   {0, 5},  {-3, 4}, {-4, 3},
-                         {-5, 0}, {-4, -3}, {-3, -4}, {0, -5}, {3, -4}, {4, -3}};
-  for (int b = 0; b < s.num_bones(); ++b) {
-    const Vec3 d = s.direction(b);
-    for (int t = -2; t <= static_cast<int>(s.length(b)) + 2; ++t) {
-      for (int r = 1; r <= 3; ++r) {
-        for (const auto& q : ring) {
-          // Integer offsets in the two axes across the bone (bones run along x or y).
-          const Vec3 off = d.x() != 0 ? Vec3(0, r * q[0], r * q[1]) : Vec3(r * q[0], 0, r * q[1]);
-          const Vec3 p = s.heads[b] + static_cast<double>(t) * d + off;
-          xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
-          vertex_bone.push_back(b);
-        }
-      }
-    }
-  }
+  ring_points(s, 1, xyz, vertex_bone);
   const Index nv = static_cast<Index>(vertex_bone.size());
   const MeshView mesh{xyz.data(), nv, nullptr, 0};
   std::vector<std::uint8_t> skip(nv, 0);
@@ -207,16 +227,10 @@ TEST(MomentArmIndex, BucketsKeepTiesAndSkippedVerticesLikeAScan) {
             const Vec3 off =
                 c_kind == 0 ? Vec3::Zero() : (c_kind == 1 ? Vec3(1, 2, -1) : Vec3(0.3, -0.2, 0.1));
             const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + off;
-            const auto [best, best_v] =
-                scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c, skipped);
-            const auto [arm, vertex] = index.farthest(b, i, plus, c);
-            if (best_v < 0) {
-              EXPECT_EQ(vertex, -1);
-              continue;
-            }
-            EXPECT_EQ(arm, std::sqrt(best)) << "bone " << b << " boundary " << i;
-            EXPECT_EQ(vertex, best_v) << "bone " << b << " boundary " << i << " c " << c_kind;
-            ++checked;
+            checked += expect_farthest_as_scan(
+                index, mesh, s, tree, vertex_bone, params, b, i, plus, c, skipped,
+                "bone " + std::to_string(b) + " boundary " + std::to_string(i) + " c " +
+                    std::to_string(c_kind));
           }
         }
       }
@@ -307,22 +321,9 @@ TEST(MomentArmIndex, BuildSplitOverWorkersAnswersAsAScan) {
   const LoadTree tree = build_load_tree(s, -1, {});
   const std::vector<std::vector<double>> params = {
       {0, 1, 2, 2, 5, 11, 20, 31, 50}, {0, 8, 16, 24, 32}, {10}};
-  const int ring[][2] = {{5, 0},  {4, 3},   {3, 4},   {0, 5},  {-3, 4}, {-4, 3},
-                         {-5, 0}, {-4, -3}, {-3, -4}, {0, -5}, {3, -4}, {4, -3}};
   std::vector<double> xyz;
   std::vector<int> vertex_bone;
-  for (int copy = 0; copy < 26; ++copy)
-    for (int b = 0; b < s.num_bones(); ++b) {
-      const Vec3 d = s.direction(b);
-      for (int t = -2; t <= static_cast<int>(s.length(b)) + 2; ++t)
-        for (int r = 1; r <= 3; ++r)
-          for (const auto& q : ring) {
-            const Vec3 off = d.x() != 0 ? Vec3(0, r * q[0], r * q[1]) : Vec3(r * q[0], 0, r * q[1]);
-            const Vec3 p = s.heads[b] + static_cast<double>(t) * d + off;
-            xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
-            vertex_bone.push_back(b);
-          }
-    }
+  ring_points(s, 26, xyz, vertex_bone);
   const Index nv = static_cast<Index>(vertex_bone.size());
   ASSERT_GE(nv, 131072);
   const MeshView mesh{xyz.data(), nv, nullptr, 0};
@@ -337,16 +338,10 @@ TEST(MomentArmIndex, BuildSplitOverWorkersAnswersAsAScan) {
         for (const bool plus : {true, false})
           for (const Vec3& off : {Vec3(0, 0, 0), Vec3(0.3, -0.2, 0.1)}) {
             const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + off;
-            const auto [best, best_v] =
-                scan_farthest(mesh, s, tree, vertex_bone, params, b, i, plus, c, &skip);
-            const auto [arm, vertex] = index.farthest(b, i, plus, c);
-            if (best_v < 0) {
-              EXPECT_EQ(vertex, -1);
-              continue;
-            }
-            EXPECT_EQ(arm, std::sqrt(best)) << "threads " << threads << " bone " << b;
-            EXPECT_EQ(vertex, best_v) << "threads " << threads << " bone " << b << " at " << i;
-            ++checked;
+            checked += expect_farthest_as_scan(index, mesh, s, tree, vertex_bone, params, b, i,
+                                               plus, c, &skip,
+                                               "threads " + std::to_string(threads) + " bone " +
+                                                   std::to_string(b) + " at " + std::to_string(i));
           }
   }
   EXPECT_GT(checked, 100);
