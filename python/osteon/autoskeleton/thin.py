@@ -7,13 +7,6 @@ This step looks for such features on the full-resolution mesh, after the bones a
 * every vertex's distance d to the bone it is bound to most (its largest weight), and the
   vertices where d is a local maximum over their mesh neighbours: points that stick out of
   their bone's limb;
-* and, not depending on any bone, the vertices where g, the geodesic distance along the
-  mesh's edges from the vertex nearest the root bone's head (the piece's core), is a local
-  maximum over their mesh neighbours: points farthest from the core along the surface (the
-  extremity detection of Hilaga et al., SIGGRAPH 2001, and of the mesh-segmentation
-  literature, on the surface). A tip whose d does not peak there (the end of a wing or a foot
-  bound to a bone whose distance grows toward a rim or a heel) is still a candidate; it is
-  then tested against the bone it is bound to most, like the others;
 * such a point c is the tip of a thin branch when the straight line from c to its bone's
   nearest point q stays inside the mesh and the part of it beyond the limb's own surface
   (length L = d - R, R: the distance from q to the surface) is longer than ``spur`` x its
