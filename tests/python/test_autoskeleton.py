@@ -753,3 +753,28 @@ def test_the_bench_extremity_measure_finds_the_five_fingertips_of_a_hand():
         k = int(np.argmin(np.linalg.norm(ex.tips - tip, axis=1)))
         assert np.linalg.norm(ex.tips[k] - tip) < 2 * np.sqrt(3) * ex.h, (tip, ex.tips[k])
         assert abs(ex.radius[k] - r) < ex.h * np.sqrt(3), ex.radius[k]
+
+
+def test_cli_skeleton_takes_the_minimum_printable_thickness_from_the_material(tmp_path, capsys):
+    """``osteon skeleton --material``: the T's bars printed 0.56 mm thick (the 82 mm T at 3.8
+    mm) are thinner than FDM prints (PLA: 0.8 mm, two 0.4 mm lines) and its leaf branches get
+    no bone, as with ``min_thickness=0.8``; resin prints them (0.3 mm, osteon.materials) and
+    all three ends keep their bones. The default is the FDM one."""
+    from osteon.cli import main
+    from osteon.io import read_tgf, write_mesh
+
+    v, f = t_shape()
+    mesh = tmp_path / "t.stl"
+    write_mesh(mesh, v, f)
+    ends = {}
+    for material in (None, "PLA", "resin"):
+        out = tmp_path / f"{material}.tgf"
+        extra = [] if material is None else ["--material", material]
+        assert main(["skeleton", str(mesh), "--out", str(out), "--height-mm", "3.8", "-q",
+                     *extra]) == 0
+        _, _, heads, tails, parents = read_tgf(out)
+        ends[material] = len(free_ends(osteon.Skeleton(heads, tails, parents)))
+    assert ends == {None: 2, "PLA": 2, "resin": 3}
+    assert main(["skeleton", str(mesh), "--out", str(tmp_path / "x.tgf"), "--material",
+                 "wood"]) != 0
+    assert "unknown material 'wood'" in capsys.readouterr().err
