@@ -185,5 +185,5 @@ def auto_skeleton(
     if piece_labels(f, len(v))[0] == 1:
         sk, full = rig(v, f, root)
     else:
-        sk, full = rig_pieces(v, f, split_pieces(v, f), root, rig)
+        sk, full = rig_pieces(v, f, split_pieces(v, f), root, rig, spur, min_t)
     return sk, sparse.csr_matrix(full)[weld]  # (sparse first: 4 of B columns a row)
