@@ -11,8 +11,11 @@ be, on the union of the pieces:
 
 * the piece must be a solid: closed, or its holes closed by ``pieces.cap_holes`` (a sheet is
   not a limb);
-* b: the bone most of its vertices are bound to (the weights copied from the body); c: its
-  vertex farthest from b; q: the nearest point of b to c;
+* b: the bone nearest (by distance to its segment) to the piece's contact vertex, the one
+  deepest inside the rigged pieces or, if none is inside, nearest their surface (the weights
+  copied from the body come from its nearest vertex, which on a low-poly mesh can lie on
+  another limb: one of 1347's hand boxes was bound to a hip bone); c: its vertex farthest from
+  b; q: the nearest point of b to c;
 * the straight line from c to q stays inside the union of the piece and the rigged pieces
   (inner radius > 0 at 32 samples, the inner radius of the union being the largest of the
   pieces' own: each piece is closed, so a point inside one is inside the union);
