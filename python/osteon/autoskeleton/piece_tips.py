@@ -23,9 +23,11 @@ be, on the union of the pieces:
   longer than ``spur`` x its width (2 x the largest inner radius along that part) and that
   width is at least ``min_thickness`` (printable), as for a thin branch;
 * no bone ends within that width of c;
-* the piece is not a flat plate there: its vertices less than L / 2 in from c along the line
-  lie within L / (2 ``spur``) of the line through their own centroid parallel to it (a
-  finger's outer half; the rim of a plate is as broad as the plate);
+* the piece is not a flat plate there: its vertices less than L in from c along the line (its
+  part beyond the limb's surface) lie within L / (2 ``spur``) of the line through their own
+  centroid parallel to it (a finger; a plate is as broad as it is long). (Half of L, as the
+  thin step's outer half, let a fin of a low-poly test through: with only its corners as
+  vertices and the line slanted, its outer half held two corners on one edge.)
 
 then a bone runs from q (a child of b) to the first point in from c that is ``END_RATIO``
 radii from c and printable (``thin._tail``), and the piece's vertices nearer that bone than b
@@ -51,16 +53,21 @@ class _Union:
         self.meshes, self.min_t, self.base = meshes, min_t, base
         self._dist: list | None = None
 
-    def inner_radius(self, pts: np.ndarray) -> np.ndarray:
-        """(N,) distance from each point (N,3) to the union's surface, mm (0 outside): the
-        largest of the pieces' own (a point inside one closed piece is inside the union)."""
+    def signed(self, pts: np.ndarray) -> np.ndarray:
+        """(N,) the smallest of the pieces' signed distances at each point (N,3), mm (< 0
+        inside one of them: minus the inner radius of the union)."""
         if self._dist is None:
             self._dist = [_mesh_distance(*m) for m in self.meshes]
         pts = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
-        r = np.zeros(len(pts))
+        d = np.full(len(pts), np.inf)
         for m in self._dist:
-            r = np.maximum(r, -np.atleast_1d(np.asarray(m.signed_distance(pts), np.float64)))
-        return r if self.base is None else np.maximum(r, self.base.inner_radius(pts))
+            d = np.minimum(d, np.atleast_1d(np.asarray(m.signed_distance(pts), np.float64)))
+        return d if self.base is None else np.minimum(d, self.base.signed(pts))
+
+    def inner_radius(self, pts: np.ndarray) -> np.ndarray:
+        """(N,) distance from each point (N,3) to the union's surface, mm (0 outside): the
+        largest of the pieces' own (a point inside one closed piece is inside the union)."""
+        return np.maximum(-self.signed(pts), 0.0)
 
 
 def _flat(pts: np.ndarray, c: np.ndarray, u: np.ndarray, length: float, spur: float) -> bool:
@@ -115,8 +122,10 @@ def add_piece_tips(v: np.ndarray, sk: Skeleton, full: np.ndarray,
     body = _Union(rigged, min_t)
     moves: list[tuple[np.ndarray, int]] = []
     for verts, mesh in small:
-        b = int(np.bincount(np.argmax(full[verts], axis=1)).argmax())
         pts = v[verts]
+        contact = pts[int(np.argmin(body.signed(pts)))]
+        b = int(np.argmin(_distance_to(np.broadcast_to(contact, sk.heads.shape), sk.heads,
+                                       sk.tails)))
         bone = _piece_tip(pts, sk.heads[b], sk.tails[b], _Union([mesh], min_t, body), ends,
                           spur)
         if bone is None:
