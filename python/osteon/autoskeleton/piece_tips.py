@@ -23,11 +23,13 @@ be, on the union of the pieces:
   longer than ``spur`` x its width (2 x the largest inner radius along that part) and that
   width is at least ``min_thickness`` (printable), as for a thin branch;
 * no bone ends within that width of c;
-* the piece is not a flat plate there: its vertices less than L in from c along the line (its
-  part beyond the limb's surface) lie within L / (2 ``spur``) of the line through their own
-  centroid parallel to it (a finger; a plate is as broad as it is long). (Half of L, as the
-  thin step's outer half, let a fin of a low-poly test through: with only its corners as
-  vertices and the line slanted, its outer half held two corners on one edge.)
+* the piece is not a plate: it reaches farther along the line (the spread of its vertices'
+  projections on it) than ``spur`` x across it (their spread along the principal axis of their
+  projections on the plane normal to it). A fin standing out of a body is as broad as it
+  stands out, a finger or a horn is not. (Tried first, on the vertices less than L / 2 and
+  then L in from c, from the line through their centroid, as the thin step's outer half: with
+  only a low-poly box's corners as vertices and the line slanted from a corner, the first let a
+  test fin through and the second stopped 1347's hand boxes.)
 
 then a bone runs from q (a child of b) to the first point in from c that is ``END_RATIO``
 radii from c and printable (``thin._tail``), and the piece's vertices nearer that bone than b
@@ -71,10 +73,10 @@ class _Union:
 
 
 def _flat(pts: np.ndarray, c: np.ndarray, u: np.ndarray, length: float, spur: float) -> bool:
-    """Whether the vertices ``pts`` (n,3) less than ``length`` / 2 in from ``c`` along the unit
+    """Whether the vertices ``pts`` (n,3) less than ``length`` in from ``c`` along the unit
     ``u`` (from c inward) spread farther than ``length`` / (2 ``spur``) from the line through
-    their centroid along ``u`` (a plate's rim, not a finger's outer half)."""
-    outer = pts[(pts - c) @ u <= 0.5 * length]
+    their centroid along ``u`` (a plate, not a finger)."""
+    outer = pts[(pts - c) @ u <= length]
     rel = outer - outer.mean(0)
     lateral = np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)
     return 2.0 * spur * float(lateral.max()) >= length
