@@ -11,11 +11,8 @@ be, on the union of the pieces:
 
 * the piece must be a solid: closed, or its holes closed by ``pieces.cap_holes`` (a sheet is
   not a limb);
-* b: the bone nearest (by distance to its segment) to the piece's contact vertex, the one
-  deepest inside the rigged pieces or, if none is inside, nearest their surface (the weights
-  copied from the body come from its nearest vertex, which on a low-poly mesh can lie on
-  another limb: one of 1347's hand boxes was bound to a hip bone); c: its vertex farthest from
-  b; q: the nearest point of b to c;
+* b: the bone most of its vertices are bound to (the weights copied from the body); c: its
+  vertex farthest from b; q: the nearest point of b to c;
 * the straight line from c to q stays inside the union of the piece and the rigged pieces
   (inner radius > 0 at 32 samples, the inner radius of the union being the largest of the
   pieces' own: each piece is closed, so a point inside one is inside the union);
@@ -23,13 +20,9 @@ be, on the union of the pieces:
   longer than ``spur`` x its width (2 x the largest inner radius along that part) and that
   width is at least ``min_thickness`` (printable), as for a thin branch;
 * no bone ends within that width of c;
-* the piece is not a plate: it reaches farther along the line (the spread of its vertices'
-  projections on it) than ``spur`` x across it (their spread along the principal axis of their
-  projections on the plane normal to it). A fin standing out of a body is as broad as it
-  stands out, a finger or a horn is not. (Tried first, on the vertices less than L / 2 and
-  then L in from c, from the line through their centroid, as the thin step's outer half: with
-  only a low-poly box's corners as vertices and the line slanted from a corner, the first let a
-  test fin through and the second stopped 1347's hand boxes.)
+* the piece is not a flat plate there: its vertices less than L / 2 in from c along the line
+  lie within L / (2 ``spur``) of the line through their own centroid parallel to it (a
+  finger's outer half; the rim of a plate is as broad as the plate);
 
 then a bone runs from q (a child of b) to the first point in from c that is ``END_RATIO``
 radii from c and printable (``thin._tail``), and the piece's vertices nearer that bone than b
@@ -55,28 +48,23 @@ class _Union:
         self.meshes, self.min_t, self.base = meshes, min_t, base
         self._dist: list | None = None
 
-    def signed(self, pts: np.ndarray) -> np.ndarray:
-        """(N,) the smallest of the pieces' signed distances at each point (N,3), mm (< 0
-        inside one of them: minus the inner radius of the union)."""
-        if self._dist is None:
-            self._dist = [_mesh_distance(*m) for m in self.meshes]
-        pts = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
-        d = np.full(len(pts), np.inf)
-        for m in self._dist:
-            d = np.minimum(d, np.atleast_1d(np.asarray(m.signed_distance(pts), np.float64)))
-        return d if self.base is None else np.minimum(d, self.base.signed(pts))
-
     def inner_radius(self, pts: np.ndarray) -> np.ndarray:
         """(N,) distance from each point (N,3) to the union's surface, mm (0 outside): the
         largest of the pieces' own (a point inside one closed piece is inside the union)."""
-        return np.maximum(-self.signed(pts), 0.0)
+        if self._dist is None:
+            self._dist = [_mesh_distance(*m) for m in self.meshes]
+        pts = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
+        r = np.zeros(len(pts))
+        for m in self._dist:
+            r = np.maximum(r, -np.atleast_1d(np.asarray(m.signed_distance(pts), np.float64)))
+        return r if self.base is None else np.maximum(r, self.base.inner_radius(pts))
 
 
 def _flat(pts: np.ndarray, c: np.ndarray, u: np.ndarray, length: float, spur: float) -> bool:
-    """Whether the vertices ``pts`` (n,3) less than ``length`` in from ``c`` along the unit
+    """Whether the vertices ``pts`` (n,3) less than ``length`` / 2 in from ``c`` along the unit
     ``u`` (from c inward) spread farther than ``length`` / (2 ``spur``) from the line through
-    their centroid along ``u`` (a plate, not a finger)."""
-    outer = pts[(pts - c) @ u <= length]
+    their centroid along ``u`` (a plate's rim, not a finger's outer half)."""
+    outer = pts[(pts - c) @ u <= 0.5 * length]
     rel = outer - outer.mean(0)
     lateral = np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)
     return 2.0 * spur * float(lateral.max()) >= length
@@ -124,10 +112,8 @@ def add_piece_tips(v: np.ndarray, sk: Skeleton, full: np.ndarray,
     body = _Union(rigged, min_t)
     moves: list[tuple[np.ndarray, int]] = []
     for verts, mesh in small:
+        b = int(np.bincount(np.argmax(full[verts], axis=1)).argmax())
         pts = v[verts]
-        contact = pts[int(np.argmin(body.signed(pts)))]
-        b = int(np.argmin(_distance_to(np.broadcast_to(contact, sk.heads.shape), sk.heads,
-                                       sk.tails)))
         bone = _piece_tip(pts, sk.heads[b], sk.tails[b], _Union([mesh], min_t, body), ends,
                           spur)
         if bone is None:
