@@ -215,17 +215,28 @@ def test_pieces_touching_the_body_join_it_and_loose_ones_are_reported():
     with pytest.warns(LoosePiecesWarning, match="1 loose piece"):
         sk, w = osteon.auto_skeleton(v, f)
     check_weights(w, len(v), sk.num_bones)
-    # the head is rigged as it would be alone: same bones (the small pieces get none)
+    # the head is rigged as it would be alone: same bones; the eyes get none, the beak (r = 3
+    # mm, 13 mm past the head's tip: longer than wide, a limb end modelled as a small piece,
+    # ``autoskeleton.piece_tips``) one, hung from the head's bone and ending within 1.5 of its
+    # radii of its tip (x = 103 mm)
     sk_head, w_head = osteon.auto_skeleton(*parts[0])
-    assert np.array_equal(sk.heads, sk_head.heads) and np.array_equal(sk.tails, sk_head.tails)
-    assert (w[: counts[1]] != w_head).nnz == 0
+    nh = sk_head.num_bones
+    assert sk.num_bones == nh + 1
+    assert np.array_equal(sk.heads[:nh], sk_head.heads)
+    assert np.array_equal(sk.tails[:nh], sk_head.tails)
+    assert np.array_equal(sk.parents[:nh], sk_head.parents)
+    assert np.linalg.norm(sk.tails[nh] - [103, 0, 0]) < 1.5 * 3.0
+    assert sk.heads[nh][0] > 70 and sk.tails[sk.parents[nh]][0] > 70  # from the head's front
+    assert (w[: counts[1], :nh] != w_head).nnz == 0
+    beak = slice(counts[4], counts[5])
+    assert (w[beak].argmax(1) == nh).mean() > 0.5  # most of the beak moves with its bone
     # the loose prop is bound whole to one bone (the one nearest it)
     prop = w[counts[loose] : counts[loose + 1]].toarray()
     assert np.all(prop.max(1) == 1.0) and len(set(prop.argmax(1))) == 1
     # an eye moves with the head next to it: its weights are the head's nearest vertex's
     eye = slice(counts[1], counts[2])
     nearest = np.linalg.norm(v[eye][:, None] - parts[0][0][None], axis=2).argmin(1)
-    assert (w[eye] != w_head[nearest]).nnz == 0
+    assert (w[eye][:, :nh] != w_head[nearest]).nnz == 0 and w[eye][:, nh].nnz == 0
 
 
 def test_a_limb_modelled_apart_gets_bones_of_its_own():
@@ -613,7 +624,8 @@ def test_a_long_closed_limb_modelled_apart_gets_bones_but_a_beak_does_not():
     model's size, 11 x longer than wide) crossing a body capsule (r = 10 mm, 80 mm) gets bones
     to its tip within 1.5 radii, as RigNet 1347's closed arms (before: under BIG_PIECE x the
     body's volume, no bones, its tip 5 radii from any bone end); the test creature's beak (0.18
-    of its size) still gets none (``test_pieces_touching_the_body_join_it_...``)."""
+    of its size) gets no chain of its own, only a tip bone
+    (``test_pieces_touching_the_body_join_it_...``)."""
     body = capsule_along((0, 0, 0), (80, 0, 0), 10.0, n=16, cap_stations=5, stations=10)
     arm = capsule_along((40, 0, 0), (40, 0, -60), 3.0, n=8, cap_stations=3, stations=12)
     v, f = merge(body, arm)
@@ -753,3 +765,48 @@ def test_the_bench_extremity_measure_finds_the_five_fingertips_of_a_hand():
         k = int(np.argmin(np.linalg.norm(ex.tips - tip, axis=1)))
         assert np.linalg.norm(ex.tips[k] - tip) < 2 * np.sqrt(3) * ex.h, (tip, ex.tips[k])
         assert abs(ex.radius[k] - r) < ex.h * np.sqrt(3), ex.radius[k]
+
+
+def test_cli_skeleton_takes_the_minimum_printable_thickness_from_the_material(tmp_path, capsys):
+    """``osteon skeleton --material``: the T's bars printed 0.56 mm thick (the 82 mm T at 3.8
+    mm) are thinner than FDM prints (PLA: 0.8 mm, two 0.4 mm lines) and its leaf branches get
+    no bone, as with ``min_thickness=0.8``; resin prints them (0.3 mm, osteon.materials) and
+    all three ends keep their bones. The default is the FDM one."""
+    from osteon.cli import main
+    from osteon.io import read_tgf, write_mesh
+
+    v, f = t_shape()
+    mesh = tmp_path / "t.stl"
+    write_mesh(mesh, v, f)
+    ends = {}
+    for material in (None, "PLA", "resin"):
+        out = tmp_path / f"{material}.tgf"
+        extra = [] if material is None else ["--material", material]
+        assert main(["skeleton", str(mesh), "--out", str(out), "--height-mm", "3.8", "-q",
+                     *extra]) == 0
+        _, _, heads, tails, parents = read_tgf(out)
+        ends[material] = len(free_ends(osteon.Skeleton(heads, tails, parents)))
+    assert ends == {None: 2, "PLA": 2, "resin": 3}
+    assert main(["skeleton", str(mesh), "--out", str(tmp_path / "x.tgf"), "--material",
+                 "wood"]) != 0
+    assert "unknown material 'wood'" in capsys.readouterr().err
+
+
+def test_a_limb_end_modelled_as_a_small_piece_gets_a_bone_but_a_plate_does_not():
+    """RigNet 1347's hands are small open boxes glued under its arms' ends, too small for
+    bones of their own (``assemble``), so no bone reached them (4.4-8.1 limb radii). A 6 mm
+    box sticking 10 mm out of a capsule's end is tested as a thin branch on the union of the
+    pieces (``autoskeleton.piece_tips``) and gets a bone ending inside it within 1.5 of its
+    half-widths of its end face; a fin 2.4 mm thick and 16 mm long standing 10 mm out of the
+    capsule's side (a plate: its outer half as broad as it is long) gets none."""
+    body = capsule_along((0, 0, 0), (80, 0, 0), 10.0, n=16, cap_stations=5, stations=10)
+    v, f = merge(body, box((88, -3, -3), (100, 3, 3)), box((28, -1.2, 8), (44, 1.2, 20)))
+    p = split_pieces(v, f)
+    assert len(p.joined) == 2 and not p.loose
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    assert len(sk.roots) == 1
+    ends = np.concatenate([sk.heads, sk.tails])
+    in_box = ends[(ends[:, 0] > 90) & (np.abs(ends[:, 1:]) < 3).all(1)]
+    assert len(in_box) == 1 and 100 - in_box[0, 0] < 1.5 * 3.0
+    assert ends[:, 2].max() < 10.0  # no bone into the fin

@@ -27,6 +27,9 @@
    found on the full mesh: a vertex farthest from its bone among its neighbours whose straight
    line to the bone stays inside, and whose part beyond the limb's surface is longer than
    ``spur`` x its width and at least as thick as printable, gets a bone from the bone to it.
+   ``piece_tips``: a joined piece too small for bones of its own (a hand glued on as a box, a
+   beak) is tested the same way on the union of the pieces and, if it is a limb end, gets a
+   bone from the bone it is bound to.
 """
 
 from __future__ import annotations
@@ -185,5 +188,5 @@ def auto_skeleton(
     if piece_labels(f, len(v))[0] == 1:
         sk, full = rig(v, f, root)
     else:
-        sk, full = rig_pieces(v, f, split_pieces(v, f), root, rig)
+        sk, full = rig_pieces(v, f, split_pieces(v, f), root, rig, spur, min_t)
     return sk, sparse.csr_matrix(full)[weld]  # (sparse first: 4 of B columns a row)

@@ -21,6 +21,7 @@ from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
 from .._api import Skeleton
+from .piece_tips import add_piece_tips
 from .pieces import Pieces, cap_holes
 
 #: a joined closed piece enclosing at least BIG_PIECE x the main body's volume gets bones
@@ -142,7 +143,7 @@ class _Unit:
     size: float
 
 
-def _unit(v: np.ndarray, pf: np.ndarray, limb: float) -> _Unit:
+def _unit(v: np.ndarray, pf: np.ndarray) -> _Unit:
     """The :class:`_Unit` of the faces ``pf`` (global vertex indices) of one part."""
     verts, local = np.unique(pf, return_inverse=True)
     pv, lf = v[verts], local.reshape(pf.shape).astype(np.int32)
@@ -151,11 +152,11 @@ def _unit(v: np.ndarray, pf: np.ndarray, limb: float) -> _Unit:
     size = float(np.ptp(pv, axis=0).max())
     volume = abs(float(np.einsum("ij,ij->", pv[lf[:, 0]], np.cross(pv[lf[:, 1]], pv[lf[:, 2]]))
                        / 6.0)) if closed else 0.0
-    mesh = (pv, lf) if closed else (cap_holes(pv, lf) if size >= limb else None)
+    mesh = (pv, lf) if closed else cap_holes(pv, lf)  # (small ones too: piece_tips)
     return _Unit(verts, mesh, closed, volume, size)
 
 
-def _joined_units(v: np.ndarray, f: np.ndarray, pieces: Pieces, limb: float) -> list[_Unit]:
+def _joined_units(v: np.ndarray, f: np.ndarray, pieces: Pieces) -> list[_Unit]:
     """Every joined piece as one :class:`_Unit`, or, if some edge of it is in more than two
     faces, one per :func:`manifold_parts` part."""
     units = []
@@ -166,29 +167,31 @@ def _joined_units(v: np.ndarray, f: np.ndarray, pieces: Pieces, limb: float) -> 
         if np.unique(edges, axis=0, return_counts=True)[1].max() <= 2:
             verts = pieces.vertices_of([k])
             pv, lf = submesh(v, f, verts)
-            mesh = (pv, lf) if pieces.closed[k] else (
-                cap_holes(pv, lf) if pieces.size[k] >= limb else None)
+            mesh = (pv, lf) if pieces.closed[k] else cap_holes(pv, lf)
             units.append(_Unit(verts, mesh, bool(pieces.closed[k]), float(pieces.volume[k]),
                                float(pieces.size[k])))
         else:
-            units += [_unit(v, pf[part], limb) for part in manifold_parts(pf)]
+            units += [_unit(v, pf[part]) for part in manifold_parts(pf)]
     return units
 
 
-def rig_pieces(v: np.ndarray, f: np.ndarray, pieces: Pieces, root: str, rig: RigOne
-               ) -> tuple[Skeleton, np.ndarray]:
-    """Skeleton and (V,B) dense weights of the welded mesh ``v``, ``f`` in several pieces."""
+def rig_pieces(v: np.ndarray, f: np.ndarray, pieces: Pieces, root: str, rig: RigOne,
+               spur: float = 1.0, min_t: float = 0.8) -> tuple[Skeleton, np.ndarray]:
+    """Skeleton and (V,B) dense weights of the welded mesh ``v``, ``f`` in several pieces
+    (``spur``, ``min_t`` mm: as for thin branches, for the small pieces that are limb ends)."""
     model_size = float(np.ptp(v[pieces.labels >= 0], axis=0).max())
     limb = LIMB_SIZE * model_size
     main_verts = pieces.vertices_of([pieces.main])
     body_volume = float(pieces.volume[pieces.main])
-    big = [u for u in _joined_units(v, f, pieces, limb) if u.mesh is not None and (
+    units = _joined_units(v, f, pieces)
+    is_big = [u.mesh is not None and (
         (u.volume >= BIG_PIECE * body_volume
          or (u.size >= CLOSED_LIMB_SIZE * model_size and elongated(u.mesh[0])))
-        if u.closed else u.size >= limb)]
+        if u.closed else u.size >= limb) for u in units]
+    big = [u for u, b in zip(units, is_big, strict=True) if b]
     parts, rigged = [], np.zeros(0, np.int64)
-    for verts, (pv, pf) in [(main_verts, submesh(v, f, main_verts)),
-                            *[(u.verts, u.mesh) for u in big]]:
+    meshes = [(main_verts, submesh(v, f, main_verts)), *[(u.verts, u.mesh) for u in big]]
+    for verts, (pv, pf) in meshes:
         at: str | np.ndarray = root
         if len(rigged):  # rooted where the piece meets the pieces rigged before it
             d, _ = cKDTree(v[rigged]).query(pv)
@@ -201,6 +204,10 @@ def rig_pieces(v: np.ndarray, f: np.ndarray, pieces: Pieces, root: str, rig: Rig
     small = np.setdiff1d(pieces.vertices_of(pieces.joined), rigged)
     if len(small):  # eyes, teeth, a beak: the weights of the body next to them
         full[small] = full[rigged[cKDTree(v[rigged]).query(v[small])[1]]]
+        tips = [(np.setdiff1d(u.verts, rigged), u.mesh) for u, b in zip(units, is_big, strict=True)
+                if not b and u.mesh is not None]
+        sk, full = add_piece_tips(v, sk, full, [(vs, m) for vs, m in tips if len(vs)],
+                                  [m for _verts, m in meshes], spur, min_t)
     for k in pieces.loose:  # a loose piece: whole to the bone nearest its centre
         verts = pieces.vertices_of([k])
         full[verts] = 0.0

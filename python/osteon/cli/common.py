@@ -142,8 +142,9 @@ def auto_model_of(args, axis, root="centre"):
     t = time.perf_counter()
     try:  # limbs thinner than the material prints get no bone
         min_t = min_thickness_mm(settings_from_args(args))
-    except (AttributeError, ValueError):  # a command without material options
-        min_t = None
+    except (AttributeError, ValueError):  # a command without the analysis's options
+        material = getattr(args, "material", None)  # (osteon skeleton: --material only)
+        min_t = None if material is None else materials.get(material).min_thickness_mm
     sk, w = auto_skeleton(m.vertices, m.faces, root=root, min_thickness=min_t)
     note = (f"skeleton: made by osteon.auto_skeleton ({sk.num_bones} bones in "
             f"{time.perf_counter() - t:.1f} s); no skeleton file was given or found")

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import materials
 from . import common
 
 
@@ -28,6 +29,11 @@ def add_parser(sub):
     ps.add_argument("--height-mm", type=float, default=120.0,
                     help="printed size used for the skeleton's mm parameters (default 120)")
     ps.add_argument("--axis", default="longest", choices=("longest", "x", "y", "z"))
+    ps.add_argument("--material", default=materials.DEFAULT_MATERIAL, metavar="NAME",
+                    help="material preset whose minimum printable thickness decides which thin "
+                    "limbs get bones: " + ", ".join(f"{m.key} {m.min_thickness_mm:g} mm"
+                                                    for m in materials.MATERIALS)
+                    + f" (default {materials.DEFAULT_MATERIAL})")
     ps.add_argument("-q", "--quiet", action="store_true")
     return ps
 
