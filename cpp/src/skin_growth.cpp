@@ -17,8 +17,9 @@ using Intervals = std::vector<Interval>;     // sorted, disjoint
 
 // Each row's intervals of a region, rows flattened (CSR: row k's intervals are
 // intervals[start[k] .. start[k + 1])): crossings of the row line with every edge (half-open in
-// s, so a vertex on the line counts once), sorted and paired (even-odd). The edges that cross rows are
-// listed once (crossing_edges), then counted per row and filled: a section has hundreds of rows.
+// s, so a vertex on the line counts once), sorted and paired (even-odd). The edges that cross rows
+// are listed once (crossing_edges), then counted per row and filled: a section has hundreds of
+// rows.
 struct RowIntervals {
   std::vector<int> start;
   std::vector<Interval> intervals;
