@@ -282,6 +282,14 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   for (int n = n_lo; n < n_hi; ++n) {
     const Span room = fill.at(n), sparse_row = kept.at(n);
     if (room.empty() || sparse_row.empty()) continue;
+    // Only the other rows' surfaces are widened: none within `layers`, nothing grows.
+    const auto& ts = top.start;
+    const auto& bs = bottom.start;
+    if (ts[static_cast<std::size_t>(std::min(n + layers, rows))] ==
+            ts[static_cast<std::size_t>(n) + 1] &&
+        bs[static_cast<std::size_t>(n)] ==
+            bs[static_cast<std::size_t>(std::max(n - layers + 1, 0))])
+      continue;
     w.solid.clear();
     w.widened.clear();
     bool grown = false;
