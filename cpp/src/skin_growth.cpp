@@ -17,8 +17,9 @@ using Intervals = std::vector<Interval>;     // sorted, disjoint
 
 // Each row's intervals of a region, rows flattened (CSR: row k's intervals are
 // intervals[start[k] .. start[k + 1])): crossings of the row line with every edge (half-open in
-// s, so a vertex on the line counts once), sorted and paired (even-odd). Two passes over the
-// edges (count, then fill) keep it to two allocations per region: a section has hundreds of rows.
+// s, so a vertex on the line counts once), sorted and paired (even-odd). The edges that cross rows
+// are listed once (crossing_edges), then counted per row and filled: a section has hundreds of
+// rows.
 struct RowIntervals {
   std::vector<int> start;
   std::vector<Interval> intervals;
@@ -34,44 +35,73 @@ struct RowIntervals {
   }
 };
 
-// The crossings of rows k_lo <= k < k_hi (s = s_first + k pitch, k counted from the first row
-// whatever the range, so a row's crossings do not depend on the range asked).
-template <class Visit>
-void for_each_crossing(const StLoops& loops, double s_first, double pitch, int k_lo, int k_hi,
-                       Visit visit) {
-  for (const auto& loop : loops)
-    for (std::size_t i = 0; i < loop.size(); ++i) {
-      const Vec2& a = loop[i];
-      const Vec2& b = loop[i + 1 == loop.size() ? 0 : i + 1];
-      if (a.x() == b.x()) continue;
-      const double lo = std::min(a.x(), b.x()), hi = std::max(a.x(), b.x());
-      // max(ceil(q), 0) without a call to ceil: the first row at or above lo, give or take
-      // the rounding that the test s < lo below takes care of.
-      const double q = (lo - s_first) / pitch;
-      int k0 = 0;
-      if (q > 0) k0 = static_cast<int>(q), k0 += static_cast<double>(k0) < q;
-      for (int k = std::max(k0, k_lo); k < k_hi; ++k) {
-        const double s = s_first + k * pitch;
-        if (s >= hi) break;
-        if (s < lo) continue;
-        visit(k, a.y() + (s - a.x()) / (b.x() - a.x()) * (b.y() - a.y()));
-      }
+// An edge that crosses rows: its ends and its rows first <= k < last.
+struct Crossing {
+  const Vec2* a;
+  const Vec2* b;
+  int first, last;
+};
+
+// The edges that cross rows k_lo <= k < k_hi (s = s_first + k pitch, k counted from the first
+// row whatever the range, so a row's crossings do not depend on the range asked), each with
+// its rows lo <= s < hi (a vertex on a row counts once). A vertex's slot is the number of rows
+// 0 <= k < rows with s_first + k pitch < x (the crossings' own expression, monotone in k), so an
+// edge's rows are its ends' slots' range. Found walking each loop: the first vertex's slot by
+// division, then corrected by the tests; every other one from its predecessor's, one step per
+// row crossed: most edges (shorter than a row's pitch) cost a comparison or two, no division.
+void crossing_edges(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
+                    int k_hi, std::vector<Crossing>& out) {
+  out.clear();
+  auto slot_of = [&](double x, int r) {
+    while (r < rows && s_first + r * pitch < x) ++r;
+    while (r > 0 && !(s_first + (r - 1) * pitch < x)) --r;
+    return r;
+  };
+  auto add = [&](const Vec2& a, const Vec2& b, int ra, int rb) {
+    const int k0 = std::max(std::min(ra, rb), k_lo), k1 = std::min(std::max(ra, rb), k_hi);
+    if (k0 < k1) out.push_back({&a, &b, k0, k1});
+  };
+  for (const auto& loop : loops) {
+    if (loop.empty()) continue;
+    const double q = (loop.front().x() - s_first) / pitch;
+    const int r0 = slot_of(loop.front().x(),
+                           q > 0 ? static_cast<int>(std::min(q, static_cast<double>(rows))) : 0);
+    int r = r0;
+    for (std::size_t i = 1; i < loop.size(); ++i) {
+      const int next = slot_of(loop[i].x(), r);
+      if (next != r) add(loop[i - 1], loop[i], r, next);
+      r = next;
     }
+    if (r != r0) add(loop.back(), loop.front(), r, r0);
+  }
 }
 
 // Rows outside k_lo <= k < k_hi are left empty.
 RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
                            int k_hi) {
   k_lo = std::max(k_lo, 0), k_hi = std::min(k_hi, rows);
+  std::vector<Crossing> edges;
+  crossing_edges(loops, s_first, pitch, rows, k_lo, k_hi, edges);
+  // count[k + 1]: row k's crossings (+1 at an edge's first row, -1 past its last, summed), then
+  // count[k]: where row k's start.
   std::vector<int> count(static_cast<std::size_t>(rows) + 1, 0);
-  for_each_crossing(loops, s_first, pitch, k_lo, k_hi,
-                    [&](int k, double) { ++count[static_cast<std::size_t>(k) + 1]; });
+  for (const Crossing& e : edges) {
+    ++count[static_cast<std::size_t>(e.first) + 1];
+    if (e.last < rows) --count[static_cast<std::size_t>(e.last) + 1];
+  }
+  for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
   for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
   std::vector<double> t(static_cast<std::size_t>(count.back()));
   std::vector<int> fill(count.begin(), count.end() - 1);
-  for_each_crossing(loops, s_first, pitch, k_lo, k_hi, [&](int k, double y) {
-    t[static_cast<std::size_t>(fill[static_cast<std::size_t>(k)]++)] = y;
-  });
+  for (const Crossing& e : edges) {
+    const Vec2& a = *e.a;
+    const Vec2& b = *e.b;
+    for (int k = e.first; k < e.last; ++k) {
+      const double s = s_first + k * pitch;
+      t[static_cast<std::size_t>(fill[static_cast<std::size_t>(k)]++)] =
+          a.y() + (s - a.x()) / (b.x() - a.x()) * (b.y() - a.y());
+    }
+  }
   RowIntervals out;
   out.start.assign(static_cast<std::size_t>(rows) + 1, 0);
   out.intervals.resize(t.size() / 2);  // at most one interval per two crossings
@@ -173,7 +203,10 @@ void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int la
     }
     return h;
   };
-  auto keep_overlapping = [](Intervals& v, std::size_t from, const Interval& h) {
+  // (the hull only where the row has surfaces: a row without any needs none)
+  auto keep_overlapping = [&reach](Intervals& v, std::size_t from, int n0, int n1) {
+    if (from == v.size()) return;
+    const Interval h = reach(n0, n1);
     std::size_t n = from;
     for (std::size_t i = from; i < v.size(); ++i)
       if (v[i].second > h.first && v[i].first < h.second) v[n++] = v[i];
@@ -183,10 +216,10 @@ void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int la
     if (k >= k_lo && k < k_hi) {
       std::size_t from = top.intervals.size();
       subtract_into(cut.at(k), cut.row(k + 1), top.intervals);
-      keep_overlapping(top.intervals, from, reach(k - layers + 1, k));
+      keep_overlapping(top.intervals, from, k - layers + 1, k);
       from = bottom.intervals.size();
       subtract_into(cut.at(k), cut.row(k - 1), bottom.intervals);
-      keep_overlapping(bottom.intervals, from, reach(k, k + layers - 1));
+      keep_overlapping(bottom.intervals, from, k, k + layers - 1);
     }
     top.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(top.intervals.size());
     bottom.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(bottom.intervals.size());
@@ -249,6 +282,14 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   for (int n = n_lo; n < n_hi; ++n) {
     const Span room = fill.at(n), sparse_row = kept.at(n);
     if (room.empty() || sparse_row.empty()) continue;
+    // Only the other rows' surfaces are widened: none within `layers`, nothing grows.
+    const auto& ts = top.start;
+    const auto& bs = bottom.start;
+    if (ts[static_cast<std::size_t>(std::min(n + layers, rows))] ==
+            ts[static_cast<std::size_t>(n) + 1] &&
+        bs[static_cast<std::size_t>(n)] ==
+            bs[static_cast<std::size_t>(std::max(n - layers + 1, 0))])
+      continue;
     w.solid.clear();
     w.widened.clear();
     bool grown = false;
