@@ -286,7 +286,7 @@ inline Index slab_of(const Frame& f, double t) {
 // Bone b's vertex v: its slab within the bone (vertex_slab_) and its pseudo-angle in [0, 4]
 // around the bone axis (vertex_angle_: a monotone function of the angle in the bone's frame
 // u, v: no atan).
-void MomentArmIndex::place_vertex(const MeshView& mesh, Index v, int b) {
+inline void MomentArmIndex::place_vertex(const MeshView& mesh, Index v, int b) {
   const BoneFrame& f = frames_[b];
   const Vec3 d = mesh.vertex(v) - f.head;
   vertex_slab_[v] = static_cast<std::int32_t>(slab_of(f, d.dot(f.axis)));
