@@ -217,7 +217,8 @@ bool MomentArmIndex::compare_with_last_build(const Skeleton& s,
 void MomentArmIndex::remember_build(const Skeleton& s, const std::vector<int>& vertex_bone,
                                     const std::vector<std::uint8_t>* skip, bool kept) {
   last_head_.assign(s.heads.begin(), s.heads.begin() + s.num_bones());
-  last_axis_ = axis_;
+  last_axis_.resize(frames_.size());
+  for (std::size_t b = 0; b < frames_.size(); ++b) last_axis_[b] = frames_[b].axis;
   slabs_known_ = true;
   if (kept) return;  // the same vertices of each bone as the last build's
   last_bone_ = vertex_bone;
@@ -239,13 +240,57 @@ void MomentArmIndex::remember_build(const Skeleton& s, const std::vector<int>& v
       bone_vertices_[fill[vertex_bone[v]]++] = static_cast<std::int32_t>(v);
 }
 
+// Each bone's frame (frames_): its head, axis and the pseudo-angle's perpendiculars, and its slab
+// params with the constants of the slab search.
+void MomentArmIndex::set_frames(const Skeleton& s) {
+  const int nb = s.num_bones();
+  frames_.resize(nb);
+  for (int b = 0; b < nb; ++b) {
+    BoneFrame& f = frames_[b];
+    f.head = s.heads[b];
+    f.axis = s.direction(b);
+    f.u = f.axis.unitOrthogonal();
+    f.v = f.axis.cross(f.u);
+    const std::vector<double>& p = slab_params_[b];
+    f.params = p.data();
+    f.count = static_cast<Index>(p.size());
+    f.first = p.empty() ? 0.0 : p.front();
+    f.last = p.empty() ? 0.0 : p.back();
+    f.scale = f.count > 1 && f.last > f.first
+                  ? static_cast<double>(f.count - 1) / (f.last - f.first)
+                  : 0.0;
+  }
+}
+
+namespace {
+// detail::upper_index(params, t) (the first param above t) with the bone's constants: any first
+// guess in [1, count - 1] walks to the same index (it is unique in sorted params), so the guess
+// multiplies by the precomputed scale instead of dividing.
+template <class Frame>
+inline Index slab_of(const Frame& f, double t) {
+  const double* p = f.params;
+  const Index n = f.count;
+  if (n == 0 || t < f.first) return 0;
+  if (!(t >= f.first)) return std::upper_bound(p, p + n, t) - p;  // NaN
+  if (t >= f.last) return n;
+  // first <= t < last: the answer lies in [1, n - 1] (and last > first, so scale > 0).
+  const double guess = (t - f.first) * f.scale;
+  Index j = guess < static_cast<double>(n - 1) ? static_cast<Index>(guess) : n - 1;
+  if (j < 1) j = 1;
+  while (p[j - 1] > t) --j;
+  while (p[j] <= t) ++j;
+  return j;
+}
+}  // namespace
+
 // Bone b's vertex v: its slab within the bone (vertex_slab_) and its pseudo-angle in [0, 4]
 // around the bone axis (vertex_angle_: a monotone function of the angle in the bone's frame
 // u, v: no atan).
-void MomentArmIndex::place_vertex(const MeshView& mesh, const Skeleton& s, Index v, int b) {
-  const Vec3 d = mesh.vertex(v) - s.heads[b];
-  vertex_slab_[v] = static_cast<Index>(detail::upper_index(slab_params_[b], d.dot(axis_[b])));
-  const double du = d.dot(frame_u_[b]), dv = d.dot(frame_v_[b]);
+inline void MomentArmIndex::place_vertex(const MeshView& mesh, Index v, int b) {
+  const BoneFrame& f = frames_[b];
+  const Vec3 d = mesh.vertex(v) - f.head;
+  vertex_slab_[v] = static_cast<std::int32_t>(slab_of(f, d.dot(f.axis)));
+  const double du = d.dot(f.u), dv = d.dot(f.v);
   const double sum = std::abs(du) + std::abs(dv);
   const double r = sum > 0 ? du / sum : 1.0;
   vertex_angle_[v] = dv >= 0 ? 1.0 - r : 3.0 + r;
@@ -259,13 +304,9 @@ bool MomentArmIndex::rebuild_moved_bones(const MeshView& mesh, const Skeleton& s
   const int nb = s.num_bones();
   bone_kept_.assign(bone_same_.begin(), bone_same_.end());
   for (std::int32_t v : moved_list) bone_kept_[last_bone_[v]] = 0;
-  for (int b = 0; b < nb; ++b) {
-    axis_[b] = s.direction(b);
-    frame_u_[b] = axis_[b].unitOrthogonal();
-    frame_v_[b] = axis_[b].cross(frame_u_[b]);
-  }
+  set_frames(s);
   for (int b = 0; b < nb; ++b)
-    if (!bone_kept_[b]) regroup_bone(mesh, s, b, moved);
+    if (!bone_kept_[b]) regroup_bone(mesh, b, moved);
   // Each slab's buckets: the kept bones' as they are, the others' for their new counts.
   std::vector<Index>& offset = next_bucket_offset_;
   offset.assign(group_offset_[nb] + 1, 0);
@@ -310,16 +351,15 @@ void MomentArmIndex::move_buckets() {
 
 // Bone b's vertices into its groups (as group_vertices: an unmoved vertex of a bone whose head,
 // axis and slabs are the same keeps its slab and angle).
-void MomentArmIndex::regroup_bone(const MeshView& mesh, const Skeleton& s, int b,
-                                  const std::uint8_t* moved) {
+void MomentArmIndex::regroup_bone(const MeshView& mesh, int b, const std::uint8_t* moved) {
   const Index g0 = group_offset_[b];
   std::fill(group_count_.begin() + g0, group_count_.begin() + group_offset_[b + 1], 0);
   const bool same = bone_same_[b] != 0;
   for (Index k = bone_vertex_start_[b]; k < bone_vertex_start_[b + 1]; ++k) {
     const Index v = bone_vertices_[k];
-    if (!same || moved[v]) place_vertex(mesh, s, v, b);
+    if (!same || moved[v]) place_vertex(mesh, v, b);
     const Index g = g0 + vertex_slab_[v];
-    vertex_group_[v] = g;
+    vertex_group_[v] = static_cast<std::int32_t>(g);
     ++group_count_[g];
   }
 }
@@ -329,7 +369,7 @@ void MomentArmIndex::regroup_bone(const MeshView& mesh, const Skeleton& s, int b
 void MomentArmIndex::repack_bone(const MeshView& mesh, int b) {
   const Index g0 = group_offset_[b], g1 = group_offset_[b + 1];
   const Index k0 = bucket_offset_[g0], k1 = bucket_offset_[g1];
-  Index* const vertex_group = vertex_group_.get();
+  std::int32_t* const vertex_group = vertex_group_.get();
   std::vector<Index>& fill = bucket_fill_;
   std::fill(fill.begin() + k0, fill.begin() + k1, 0);
   const Index first = bone_vertex_start_[b], last = bone_vertex_start_[b + 1];
@@ -368,23 +408,15 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
   const Index ngroups = group_offset_[nb];
   // (Scratch arrays left uninitialised: every kept vertex's entry is written before it is read.)
   if (vertex_capacity_ < mesh.num_vertices) {
-    vertex_group_.reset(new Index[mesh.num_vertices]);
+    vertex_group_.reset(new std::int32_t[mesh.num_vertices]);
     vertex_angle_.reset(new double[mesh.num_vertices]);
-    vertex_slab_.reset(new Index[mesh.num_vertices]);
+    vertex_slab_.reset(new std::int32_t[mesh.num_vertices]);
     vertex_capacity_ = mesh.num_vertices;
     moved = nullptr;  // nothing kept
   }
-  Index* const vertex_group = vertex_group_.get();
-  Index* const vertex_slab = vertex_slab_.get();  // the slab within its bone (kept)
-  std::vector<Vec3>&axis = axis_, &frame_u = frame_u_, &frame_v = frame_v_;
-  axis.resize(nb);
-  frame_u.resize(nb);
-  frame_v.resize(nb);
-  for (int b = 0; b < nb; ++b) {
-    axis[b] = s.direction(b);
-    frame_u[b] = axis[b].unitOrthogonal();
-    frame_v[b] = axis[b].cross(frame_u[b]);
-  }
+  std::int32_t* const vertex_group = vertex_group_.get();
+  std::int32_t* const vertex_slab = vertex_slab_.get();  // the slab within its bone (kept)
+  set_frames(s);
   const std::uint8_t* bone_same = bone_same_.data();
   const int* last_bone = last_bone_.data();
   chunk_count_.resize(chunks);
@@ -397,9 +429,9 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
       const int b = vertex_bone[v];
       // An unmoved vertex on the same bone keeps the last build's slab and angle.
       if (moved == nullptr || moved[v] || last_bone[v] != b || !bone_same[b])
-        place_vertex(mesh, s, v, b);
+        place_vertex(mesh, v, b);
       const Index g = group_offset_[b] + vertex_slab[v];
-      vertex_group[v] = g;
+      vertex_group[v] = static_cast<std::int32_t>(g);
       ++group_count[g];
     }
   });
@@ -414,7 +446,7 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
 void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip,
                                   int chunks) {
   const Index ngroups = group_offset_.back();
-  Index* const vertex_group = vertex_group_.get();
+  std::int32_t* const vertex_group = vertex_group_.get();
   const double* const vertex_angle = vertex_angle_.get();
   const Index nv = mesh.num_vertices;
   auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
@@ -454,11 +486,11 @@ void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::u
   }
   if (packed_capacity_ < at) {
     packed_xyz_.reset(new double[3 * at]);
-    packed_index_.reset(new Index[at]);
+    packed_index_.reset(new std::int32_t[at]);
     packed_capacity_ = at;
   }
   double* const xyz = packed_xyz_.get();
-  Index* const index = packed_index_.get();
+  std::int32_t* const index = packed_index_.get();
   detail::parallel_for(chunks, chunks, [&](long c, int) {
     Index* const fill = chunk_count_[c].data();
     const Index v1 = chunk_end(nv, c + 1, chunks);
@@ -469,7 +501,7 @@ void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::u
       xyz[3 * k] = p.x();
       xyz[3 * k + 1] = p.y();
       xyz[3 * k + 2] = p.z();
-      index[k] = v;
+      index[k] = static_cast<std::int32_t>(v);
     }
   });
 }
@@ -480,7 +512,7 @@ void MomentArmIndex::pack_vertex(const MeshView& mesh, Index v, Group& bucket, I
   packed_xyz_[3 * k] = p.x();
   packed_xyz_[3 * k + 1] = p.y();
   packed_xyz_[3 * k + 2] = p.z();
-  packed_index_[k] = v;
+  packed_index_[k] = static_cast<std::int32_t>(v);
   bucket.lo = bucket.lo.cwiseMin(p);
   bucket.hi = bucket.hi.cwiseMax(p);
 }

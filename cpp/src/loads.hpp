@@ -101,28 +101,38 @@ class MomentArmIndex {
   std::vector<Vec3> bucket_lo_, bucket_hi_;
   // Written in full by the constructor, so left uninitialized on allocation (a zero-fill pass
   // would cost as much as the scatter that fills them).
-  std::unique_ptr<double[]> packed_xyz_;   // vertices grouped by (bone, slab), xyz interleaved, mm
-  std::unique_ptr<Index[]> packed_index_;  // original vertex index of each packed vertex
-  Index packed_capacity_ = 0;              // vertices packed_xyz_ and packed_index_ have room for
+  std::unique_ptr<double[]> packed_xyz_;  // vertices grouped by (bone, slab), xyz interleaved, mm
+  std::unique_ptr<std::int32_t[]> packed_index_;  // original vertex index of each packed vertex
+  Index packed_capacity_ = 0;  // vertices packed_xyz_ and packed_index_ have room for
   // The steps of build(): vertices into groups (slabs), groups into buckets, the box trees.
   void group_vertices(const MeshView& mesh, const Skeleton& skeleton,
                       const std::vector<int>& vertex_bone, const std::vector<std::uint8_t>* skip,
                       const std::uint8_t* moved, int chunks);
   void pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip, int chunks);
   void build_box_trees(const LoadTree& tree, int chunks);
-  void place_vertex(const MeshView& mesh, const Skeleton& skeleton, Index v, int b);
+  // A bone's frame for placing its vertices, computed once per build: its head and axis, two
+  // perpendiculars (the pseudo-angle's u, v) and its slab params with the search's constants.
+  struct BoneFrame {
+    Vec3 head, axis, u, v;
+    const double* params = nullptr;  // slab_params_[b]
+    Index count = 0;                 // its size
+    double first = 0, last = 0;      // params[0], params[count - 1]
+    double scale = 0;                // (count - 1) / (last - first): the search's first guess
+  };
+  void set_frames(const Skeleton& skeleton);
+  void place_vertex(const MeshView& mesh, Index v, int b);
   void pack_vertex(const MeshView& mesh, Index v, Group& bucket, Index k);
   void bucket_tree(Index g);
   void bone_tree(int b);
   // Scratch of build(), kept for its storage.
-  std::unique_ptr<Index[]> vertex_group_;
+  std::unique_ptr<std::int32_t[]> vertex_group_;  // (32 bits: less memory to stream)
   std::unique_ptr<double[]> vertex_angle_;
   Index vertex_capacity_ = 0;
   std::vector<Index> group_count_, bucket_fill_;
   std::vector<std::vector<Index>> chunk_count_;  // per chunk of vertices: group or bucket counts
-  std::vector<Vec3> axis_, frame_u_, frame_v_;
+  std::vector<BoneFrame> frames_;
   // Each kept vertex's slab (group) and what it was computed from, kept for the next build.
-  std::unique_ptr<Index[]> vertex_slab_;
+  std::unique_ptr<std::int32_t[]> vertex_slab_;
   bool slabs_known_ = false;
   std::vector<int> last_bone_;
   std::vector<Vec3> last_head_, last_axis_;
@@ -139,8 +149,7 @@ class MomentArmIndex {
   std::vector<std::uint8_t> bone_kept_, region_kept_;
   bool rebuild_moved_bones(const MeshView& mesh, const Skeleton& skeleton,
                            const std::uint8_t* moved, const std::vector<std::int32_t>& moved_list);
-  void regroup_bone(const MeshView& mesh, const Skeleton& skeleton, int b,
-                    const std::uint8_t* moved);
+  void regroup_bone(const MeshView& mesh, int b, const std::uint8_t* moved);
   void repack_bone(const MeshView& mesh, int b);
   void move_buckets();
   std::vector<Index> next_bucket_offset_;  // scratch of rebuild_moved_bones
