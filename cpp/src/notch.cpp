@@ -107,7 +107,12 @@ constexpr double kMinTurn = 45.0 * kPi / 180.0;
 // Fillet points grouped in angular sectors around the axis: axial position a, distance t from
 // the axis and the normal's axial component n_a of each point (mm, unit), and the lengths of
 // their mesh edges in the meridian plane (mm).
-constexpr int kSectors = 8;
+// Meridian profiles (fillet_points): kHalfPlanes half-planes evenly around the axis; sector s
+// holds the points of half-planes s .. s + kSectorSpan - 1 (90 degrees: two profiles, so that a
+// sharp edge's ring gives a sector two points), every half-plane in kSectorSpan sectors.
+constexpr int kHalfPlanes = 8;
+constexpr int kSectorSpan = 2;
+constexpr int kSectors = kHalfPlanes;
 struct SectorSums {
   std::size_t n = 0;                          // points
   double ma = 0, mt = 0, mn = 0;              // sums, then means, of a, t and n_a
@@ -168,7 +173,6 @@ bool sector_radius(const SectorSums& sums, double scale, double& rho, double& ax
 // (axial position a, distance t from the axis) whose segments' normals are exact for the mesh.
 // The cost scales with the faces the planes cross (about the square root of the faces in the
 // searched volume), not with the faces in that volume.
-constexpr int kHalfPlanes = 16;
 // Where the half-planes lie in their spacing, from the start direction (plane_start): off the
 // start itself, so that a revolved mesh's columns (the start's ties) are not cut along an edge.
 // Judgement (any fixed fraction keeps the planes turning with the model).
@@ -191,17 +195,129 @@ struct FilletPoints {
   std::vector<double> edges;
 };
 
+// The grid's blocks that may hold a face of the searched window (the slab lo <= a <= hi, a from
+// the thin plane along u, within 2.5 r_thin of the axis: the ball around it), found once per
+// search: each plane's cut visits only these (a face lies in a cell whose box holds it).
+std::vector<Index> window_blocks(const FaceGrid& grid, const Vec3& origin, const Vec3& u,
+                                 double r_thin, double lo, double hi) {
+  CutRegion ball;
+  ball.point = origin + 0.5 * (lo + hi) * u;
+  ball.radius = std::hypot(2.5 * r_thin, 0.5 * (hi - lo));
+  std::vector<Index> blocks;
+  for (Index k = 0; k < grid.num_blocks(); ++k)
+    if (grid.block_near(k, ball)) blocks.push_back(k);
+  return blocks;
+}
+
+inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  const auto lo = static_cast<std::uint32_t>(std::min(a, b));
+  const auto hi = static_cast<std::uint32_t>(std::max(a, b));
+  return (static_cast<std::uint64_t>(lo) << 32) | hi;
+}
+
+// Scratch of the cuts (per search).
+struct Scratch {
+  std::vector<double> heights;
+  std::vector<unsigned char> above;
+};
+
+// Cell c's faces that the plane (normal n, offset n . origin) crosses, as segments (cut_cells).
+// With the grid's tight bounds on (FaceGrid::enable_tight_bounds), a cell or a run of its faces
+// whose tight box the plane misses is skipped (none of its faces crosses it). `heights`,
+// `above`: scratch.
+void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFrame& plane,
+              double offset, std::vector<CutSegment>& out, std::vector<double>& heights,
+              std::vector<unsigned char>& above) {
+  const Vec3& n = plane.normal;
+  const double nx = n.x(), ny = n.y(), nz = n.z();
+  const double ax = std::abs(nx), ay = std::abs(ny), az = std::abs(nz);
+  auto misses = [&](const Vec3& center, const Vec3& half) {
+    const double mid = nx * center.x() + ny * center.y() + nz * center.z();
+    const double r = ax * half.x() + ay * half.y() + az * half.z();
+    return mid + r < offset || mid - r > offset;
+  };
+  FaceGrid::TightBoxes boxes;
+  bool tight = false;
+  if (grid.tight_bounds()) {
+    const FaceGrid::Tight state = grid.tight_boxes(c, boxes);
+    if (state == FaceGrid::Tight::kMine) grid.bound_cell(c, mesh, boxes);
+    tight = state != FaceGrid::Tight::kBusy;
+    if (tight && misses(boxes.cell[0], boxes.cell[1])) return;
+  }
+  const double *gx = grid.entry_x(), *gy = grid.entry_y(), *gz = grid.entry_z();
+  const Index vb = grid.vertex_begin(c), nv = grid.vertex_end(c) - vb;
+  const double *__restrict x = gx + vb, *__restrict y = gy + vb, *__restrict z = gz + vb;
+  const double* h = nullptr;  // the entries' heights, once a run of faces may cross
+  const unsigned char* up = nullptr;
+  const std::int32_t* entries = grid.face_entries();
+  const Index begin = grid.begin(c), end = grid.end(c);
+  for (Index f0 = begin, g = 0; f0 < end; f0 += FaceGrid::kGroup, ++g) {
+    if (tight && misses(boxes.group_center[g], boxes.group_half[g])) continue;
+    if (h == nullptr) {
+      if (static_cast<Index>(heights.size()) < nv) {
+        heights.resize(nv);
+        above.resize(nv);
+      }
+      double* __restrict hw = heights.data();
+      unsigned char* __restrict uw = above.data();
+      for (Index v = 0; v < nv; ++v) hw[v] = x[v] * nx + y[v] * ny + z[v] * nz - offset;
+      for (Index v = 0; v < nv; ++v) uw[v] = hw[v] >= 0.0;
+      h = hw;
+      up = uw;
+    }
+    for (Index f = f0, stop = std::min(end, f0 + FaceGrid::kGroup); f < stop; ++f) {
+      const std::int32_t* e = entries + 3 * f;
+      const int i0 = e[0] - vb, i1 = e[1] - vb, i2 = e[2] - vb;
+      const int count = up[i0] + up[i1] + up[i2];
+      if (count == 0 || count == 3) continue;
+      const int idx[3] = {i0, i1, i2};
+      const std::int32_t* fv = grid.faces() + 3 * f;
+      CutSegment seg;
+      for (int k = 0; k < 3; ++k) {
+        const int i = idx[k], j = idx[(k + 1) % 3];
+        if (up[i] == up[j]) continue;
+        const int side = up[i] ? 0 : 1;
+        const double denom = h[j] - h[i];
+        const double lambda = std::clamp(denom != 0.0 ? -h[i] / denom : 0.5, 0.0, 1.0);
+        const Vec3 pi(x[i], y[i], z[i]), pj(x[j], y[j], z[j]);
+        seg.edge[side] = edge_key(fv[k], fv[(k + 1) % 3]);
+        seg.point[side] = plane.to_plane(pi + lambda * (pj - pi));
+      }
+      out.push_back(seg);
+    }
+  }
+}
+
+// The segments of the faces that the plane crosses in the cells of `blocks` whose box may reach
+// `region` (a ball), as cut_mesh makes them (each endpoint on a mesh edge, the face's
+// orientation kept: an outward-facing surface gives counter-clockwise loops in (u, v)), from the
+// grid's vertex entries (bit-exact copies of the mesh's). `heights`: scratch.
+void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Index>& blocks,
+               const PlaneFrame& plane, const CutRegion& region, std::vector<CutSegment>& out,
+               Scratch& scratch) {
+  const Vec3& n = plane.normal;
+  const double offset = n.dot(plane.origin);
+  for (Index k : blocks) {
+    if (!grid.block_meets(k, n, offset, offset, &region)) continue;
+    for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
+      if (grid.meets(c, n, offset, offset, &region))
+        cut_cell(mesh, grid, c, plane, offset, out, scratch.heights, scratch.above);
+  }
+}
+
 // The unit direction, normal to u, from which the half-planes are placed: the point of the thin
-// plane's cut within 2.5 r of the axis farthest from it (ties: the smaller mesh edge), so that
-// the planes turn with the model (a turned model cuts the same profiles). e1 if the cut is empty.
-Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const Vec3& origin, const Vec3& u,
-                 double r_thin, const Vec3& e1) {
+// plane's cut within 1.5 r of the axis (the thin section's outline) farthest from it (ties: the
+// smaller mesh edge), so that the planes turn with the model (a turned model cuts the same
+// profiles). e1 if the cut is empty.
+Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const std::vector<Index>& blocks,
+                 const Vec3& origin, const Vec3& u, double r_thin, const Vec3& e1,
+                 Scratch& scratch) {
   PlaneFrame frame = PlaneFrame::make(origin, u);
   CutRegion ball;
   ball.point = origin;
-  ball.radius = 2.5 * r_thin;
+  ball.radius = 1.5 * r_thin;
   std::vector<CutSegment> segments;
-  cut_mesh(mesh, frame, segments, &grid, &ball);
+  cut_cells(mesh, grid, blocks, frame, ball, segments, scratch);
   double best = -1;
   std::uint64_t best_edge = 0;
   Vec2 at(0, 0);
@@ -268,30 +384,30 @@ std::vector<std::vector<int>> chains_of(const std::vector<CutSegment>& seg, doub
 // narrower window are exactly those of this list inside it.
 FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec3& origin,
                            const Vec3& u, double r_thin, double lo, double hi) {
-  const Vec3 e1 = plane_start(mesh, grid, origin, u, r_thin, u.unitOrthogonal());
+  const std::vector<Index> blocks = window_blocks(grid, origin, u, r_thin, lo, hi);
+  Scratch scratch;
+  const Vec3 e1 = plane_start(mesh, grid, blocks, origin, u, r_thin, u.unitOrthogonal(), scratch);
   const Vec3 e2 = u.cross(e1);
   const double t_lo = 0.5 * r_thin, t_hi = 2.5 * r_thin, margin = 1e-9 * r_thin;
   const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
-  CutRegion ball;  // the window on both sides of the axis
-  ball.point = origin + 0.5 * (lo + hi) * u;
-  ball.radius = std::hypot(t_hi, 0.5 * (hi - lo));
   FilletPoints out;
   std::vector<CutSegment> seg, kept;
-  constexpr int kPlanes = kHalfPlanes / 2, kPerSector = kHalfPlanes / 8;
-  for (int j = 0; j < kPlanes; ++j) {
-    const double phi = 2.0 * kPi * (j + kPlanePhase) / kHalfPlanes;
+  for (int half = 0; half < kHalfPlanes; ++half) {
+    const double phi = 2.0 * kPi * (half + kPlanePhase) / kHalfPlanes;
     PlaneFrame frame;  // (a, y): a along u, y along w; the plane holds the axis
     frame.origin = origin;
     frame.u = u;
     frame.v = std::cos(phi) * e1 + std::sin(phi) * e2;
     frame.normal = frame.u.cross(frame.v);
+    CutRegion ball;  // the window's rectangle on this half-plane
+    ball.point = origin + 0.5 * (lo + hi) * u + 0.5 * (t_lo + t_hi) * frame.v;
+    ball.radius = std::hypot(0.5 * (t_hi - t_lo), 0.5 * (hi - lo)) + margin;
     seg.clear();
-    cut_mesh(mesh, frame, seg, &grid, &ball);
+    cut_cells(mesh, grid, blocks, frame, ball, seg, scratch);
     kept.clear();
     auto in_window = [&](const Vec2& p) {
-      const double t = std::abs(p.y());
-      return p.x() >= lo - margin && p.x() <= hi + margin && t >= t_lo - margin &&
-             t <= t_hi + margin;
+      return p.x() >= lo - margin && p.x() <= hi + margin && p.y() >= t_lo - margin &&
+             p.y() <= t_hi + margin;
     };
     for (const CutSegment& s : seg)
       if (in_window(s.point[0]) || in_window(s.point[1])) kept.push_back(s);
@@ -299,7 +415,7 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
       for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
         const CutSegment &s0 = kept[chain[k]], &s1 = kept[chain[k + 1]];
         const Vec2 p = s0.point[1];
-        const double t = std::abs(p.y());
+        const double t = p.y();
         if (p.x() < lo || p.x() > hi || t < t_lo || t > t_hi) continue;
         const Vec2 d0 = s0.point[1] - s0.point[0], d1 = s1.point[1] - s1.point[0];
         const double l0 = d0.norm(), l1 = d1.norm();
@@ -309,16 +425,14 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
         Vec2 n = Vec2(d0.y(), -d0.x()) / l0 + Vec2(d1.y(), -d1.x()) / l1;
         if (!(n.norm() > 0)) continue;
         n.normalize();
-        const double side = p.y() > 0 ? 1.0 : -1.0;
-        const double na = n.x(), nr = side * n.y();
+        const double na = n.x(), nr = n.y();
         if (!(nr > 0) || !(-na >= lo_sin && -na <= hi_sin)) continue;
         FilletPoint q;
         q.a = p.x();
         q.na = na;
         q.turn = std::atan2(-na, nr);
         q.t = t;
-        const int half = p.y() > 0 ? j : j + kPlanes;
-        q.sector = half / kPerSector;
+        q.sector = half;
         q.edge_begin = out.edges.size();
         out.edges.push_back(l0 * l0);
         out.edges.push_back(l1 * l1);
@@ -331,7 +445,7 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
 }
 
 // The corner's radius from the fillet points within axial [lo, hi]: fitted per 45-degree
-// sector around the axis (kHalfPlanes / 8 neighbouring half-planes each), the sharpest sector
+// sector around the axis (kSectorSpan neighbouring half-planes each), the sharpest sector
 // governs.
 Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi) {
   std::vector<const FilletPoint*> inside;
@@ -339,21 +453,20 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
     if (p.a >= lo && p.a <= hi) inside.push_back(&p);
   // Each sector's sums over its points in their order (the order a sequential sum needs), and
   // its edges' lengths grouped in one buffer: no per-sector copies of the points.
-  std::vector<int> sector_of(inside.size());
+  auto sector_of = [](const FilletPoint* p, int j) { return (p->sector - j + kSectors) % kSectors; };
   std::array<SectorSums, kSectors> sums{};
   std::array<std::size_t, kSectors + 1> edge_at{};
-  for (std::size_t i = 0; i < inside.size(); ++i) {
-    const FilletPoint* p = inside[i];
-    const int sector = p->sector;
-    sector_of[i] = sector;
-    SectorSums& q = sums[sector];
-    ++q.n;
-    q.ma += p->a;
-    q.mn += p->na;
-    q.mt += p->t;
-    q.turn = std::max(q.turn, p->turn);
-    edge_at[sector + 1] += p->edge_end - p->edge_begin;
-  }
+  for (const FilletPoint* p : inside)
+    for (int j = 0; j < kSectorSpan; ++j) {
+      const int sector = sector_of(p, j);
+      SectorSums& q = sums[sector];
+      ++q.n;
+      q.ma += p->a;
+      q.mn += p->na;
+      q.mt += p->t;
+      q.turn = std::max(q.turn, p->turn);
+      edge_at[sector + 1] += p->edge_end - p->edge_begin;
+    }
   for (int s = 0; s < kSectors; ++s) {
     edge_at[s + 1] += edge_at[s];
     SectorSums& q = sums[s];
@@ -362,25 +475,26 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
     q.mn /= q.n;
     q.mt /= q.n;
   }
-  const std::unique_ptr<double[]> lengths(new double[edge_at[kSectors]]);
+  std::vector<double> lengths(edge_at[kSectors]);
   std::array<std::size_t, kSectors> edge_next{};
   for (int s = 0; s < kSectors; ++s) {
     edge_next[s] = edge_at[s];
-    sums[s].lengths = lengths.get() + edge_at[s];
+    sums[s].lengths = lengths.data() + edge_at[s];
     sums[s].num_lengths = edge_at[s + 1] - edge_at[s];
   }
-  for (std::size_t i = 0; i < inside.size(); ++i) {
-    const FilletPoint* p = inside[i];
-    SectorSums& q = sums[sector_of[i]];
-    const double da = p->a - q.ma, dt = p->t - q.mt, dn = p->na - q.mn;
-    q.saa += da * da;
-    q.stt += dt * dt;
-    q.snn += dn * dn;
-    q.san += da * dn;
-    std::copy(fillet.edges.data() + p->edge_begin, fillet.edges.data() + p->edge_end,
-              lengths.get() + edge_next[sector_of[i]]);
-    edge_next[sector_of[i]] += p->edge_end - p->edge_begin;
-  }
+  for (const FilletPoint* p : inside)
+    for (int j = 0; j < kSectorSpan; ++j) {
+      const int sector = sector_of(p, j);
+      SectorSums& q = sums[sector];
+      const double da = p->a - q.ma, dt = p->t - q.mt, dn = p->na - q.mn;
+      q.saa += da * da;
+      q.stt += dt * dt;
+      q.snn += dn * dn;
+      q.san += da * dn;
+      std::copy(fillet.edges.data() + p->edge_begin, fillet.edges.data() + p->edge_end,
+                lengths.data() + edge_next[sector]);
+      edge_next[sector] += p->edge_end - p->edge_begin;
+    }
   Corner c;
   for (int s = 0; s < kSectors; ++s) {
     double rho = 0, axial = 0;
