@@ -246,7 +246,7 @@ void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFr
   }
   const double *gx = grid.entry_x(), *gy = grid.entry_y(), *gz = grid.entry_z();
   const Index vb = grid.vertex_begin(c), nv = grid.vertex_end(c) - vb;
-  const double *__restrict x = gx + vb, *__restrict y = gy + vb, *__restrict z = gz + vb;
+  const double* __restrict x = gx + vb, * __restrict y = gy + vb, * __restrict z = gz + vb;
   const double* h = nullptr;  // the entries' heights, once a run of faces may cross
   const unsigned char* up = nullptr;
   const std::int32_t* entries = grid.face_entries();
@@ -292,15 +292,31 @@ void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFr
 // `region` (a ball), as cut_mesh makes them (each endpoint on a mesh edge, the face's
 // orientation kept: an outward-facing surface gives counter-clockwise loops in (u, v)), from the
 // grid's vertex entries (bit-exact copies of the mesh's). `heights`: scratch.
+// With `window` (plane coordinates: lo <= x <= hi, t_lo <= y <= t_hi) only the cells whose box
+// reaches it in both coordinates: a face with a segment end in the window lies in such a cell
+// (its cell's box holds it), so the segments that end in the window are all there.
+struct Window {
+  double lo, hi, t_lo, t_hi;
+};
 void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Index>& blocks,
                const PlaneFrame& plane, const CutRegion& region, std::vector<CutSegment>& out,
-               Scratch& scratch) {
+               Scratch& scratch, const Window* window = nullptr) {
   const Vec3& n = plane.normal;
   const double offset = n.dot(plane.origin);
+  const Vec3 au = plane.u.cwiseAbs(), av = plane.v.cwiseAbs();
+  auto outside = [&](Index c) {
+    if (window == nullptr) return false;
+    const Vec3 d = grid.cell_center(c) - plane.origin;
+    const Vec3& half = grid.cell_half(c);
+    const double x = plane.u.dot(d), rx = au.dot(half);
+    const double y = plane.v.dot(d), ry = av.dot(half);
+    return x + rx < window->lo || x - rx > window->hi || y + ry < window->t_lo ||
+           y - ry > window->t_hi;
+  };
   for (Index k : blocks) {
     if (!grid.block_meets(k, n, offset, offset, &region)) continue;
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
-      if (grid.meets(c, n, offset, offset, &region))
+      if (grid.meets(c, n, offset, offset, &region) && !outside(c))
         cut_cell(mesh, grid, c, plane, offset, out, scratch.heights, scratch.above);
   }
 }
@@ -350,9 +366,9 @@ std::vector<std::vector<int>> chains_of(const std::vector<CutSegment>& seg, doub
   std::vector<int> next(n, -1);
   std::vector<char> led(n, 0);
   for (int i = 0; i < n; ++i) {
-    const auto it = std::lower_bound(
-        by_start.begin(), by_start.end(), seg[i].edge[1],
-        [&](int x, std::uint64_t key) { return seg[x].edge[0] < key; });
+    const auto it =
+        std::lower_bound(by_start.begin(), by_start.end(), seg[i].edge[1],
+                         [&](int x, std::uint64_t key) { return seg[x].edge[0] < key; });
     if (it != by_start.end() && seg[*it].edge[0] == seg[i].edge[1] && *it != i && !led[*it]) {
       next[i] = *it;
       led[*it] = 1;
@@ -403,7 +419,8 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
     ball.point = origin + 0.5 * (lo + hi) * u + 0.5 * (t_lo + t_hi) * frame.v;
     ball.radius = std::hypot(0.5 * (t_hi - t_lo), 0.5 * (hi - lo)) + margin;
     seg.clear();
-    cut_cells(mesh, grid, blocks, frame, ball, seg, scratch);
+    const Window window{lo - margin, hi + margin, t_lo - margin, t_hi + margin};
+    cut_cells(mesh, grid, blocks, frame, ball, seg, scratch, &window);
     kept.clear();
     auto in_window = [&](const Vec2& p) {
       return p.x() >= lo - margin && p.x() <= hi + margin && p.y() >= t_lo - margin &&
@@ -453,7 +470,9 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
     if (p.a >= lo && p.a <= hi) inside.push_back(&p);
   // Each sector's sums over its points in their order (the order a sequential sum needs), and
   // its edges' lengths grouped in one buffer: no per-sector copies of the points.
-  auto sector_of = [](const FilletPoint* p, int j) { return (p->sector - j + kSectors) % kSectors; };
+  auto sector_of = [](const FilletPoint* p, int j) {
+    return (p->sector - j + kSectors) % kSectors;
+  };
   std::array<SectorSums, kSectors> sums{};
   std::array<std::size_t, kSectors + 1> edge_at{};
   for (const FilletPoint* p : inside)
@@ -644,8 +663,8 @@ std::vector<Corner> measure_corners(const MeshView& mesh,
     for (std::size_t t = s; t < steps.size(); ++t)
       if (same_side(s, t)) reach = std::max(reach, steps[t].reach);
     const Step& st = steps[s];
-    const FilletPoints points = fillet_points(mesh, grid, st.point, st.u, st.r_thin,
-                                              -0.25 * reach, 1.25 * reach);
+    const FilletPoints points =
+        fillet_points(mesh, grid, st.point, st.u, st.r_thin, -0.25 * reach, 1.25 * reach);
     for (std::size_t t = s; t < steps.size(); ++t)
       if (same_side(s, t))
         corners[t] = corner_in(points, st.r_thin, -0.25 * steps[t].reach, 1.25 * steps[t].reach);
@@ -685,9 +704,8 @@ namespace {
 
 // The corners of `steps` in a live update (notch_reuse.hpp): a gathering (the steps of one thin
 // section towards one side) whose inputs are bitwise the last run's and whose searched region no
-// moved triangle reaches is copied from `memo`, the others are searched in the canonical face
-// order (whole gatherings: a gathering's window is its widest step's); `memo` then holds this
-// run's.
+// moved triangle reaches is copied from `memo`, the others are searched (whole gatherings: a
+// gathering's window is its widest step's); `memo` then holds this run's.
 std::vector<Corner> recall_or_measure(const MeshView& mesh,
                                       const std::function<const FaceGrid&()>& face_grid,
                                       const std::vector<Step>& steps, int threads, CornerMemo& memo,
@@ -744,9 +762,9 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
   out.arm_ratio.assign(ns, 1.0);
   std::vector<double> peak(ns, 1.0);  // Kt x modulus ratio x arm ratio of the corner taken
   const std::vector<Step> steps = find_steps(r);
-  // Live updates (what moved is known, after a full run or another live update): the canonical
-  // order, and the memo. Other runs (one-off, the first of a session, the correction's) search in
-  // the grid's order, as they always did; a full one arms the memo for the next run.
+  // Live updates (what moved is known, after a full run or another live update): the memo. Other
+  // runs (one-off, the first of a session, the correction's) search every corner; a full one
+  // arms the memo for the next run.
   const bool live = memo != nullptr && change.known && memo->armed;
   if (memo != nullptr && !live) {
     memo->forget();
