@@ -304,19 +304,22 @@ void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Ind
   const Vec3& n = plane.normal;
   const double offset = n.dot(plane.origin);
   const Vec3 au = plane.u.cwiseAbs(), av = plane.v.cwiseAbs();
-  auto outside = [&](Index c) {
+  auto outside = [&](const Vec3& center, const Vec3& half) {
     if (window == nullptr) return false;
-    const Vec3 d = grid.cell_center(c) - plane.origin;
-    const Vec3& half = grid.cell_half(c);
+    const Vec3 d = center - plane.origin;
     const double x = plane.u.dot(d), rx = au.dot(half);
     const double y = plane.v.dot(d), ry = av.dot(half);
     return x + rx < window->lo || x - rx > window->hi || y + ry < window->t_lo ||
            y - ry > window->t_hi;
   };
   for (Index k : blocks) {
-    if (!grid.block_meets(k, n, offset, offset, &region)) continue;
+    // (A block's box holds its cells' boxes: the window test first, it needs no square root.)
+    if (outside(grid.block_center(k), grid.block_half(k)) ||
+        !grid.block_meets(k, n, offset, offset, &region))
+      continue;
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
-      if (grid.meets(c, n, offset, offset, &region) && !outside(c))
+      if (!outside(grid.cell_center(c), grid.cell_half(c)) &&
+          grid.meets(c, n, offset, offset, &region))
         cut_cell(mesh, grid, c, plane, offset, out, scratch.heights, scratch.above);
   }
 }
