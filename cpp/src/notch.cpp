@@ -221,13 +221,30 @@ struct Scratch {
   std::vector<unsigned char> above;
 };
 
+// A window in a plane's coordinates (lo <= x <= hi, t_lo <= y <= t_hi, mm): a cut keeps the
+// segments with an end in it (fillet_points). A face with such an end lies in any box that holds
+// the face, so a box wholly outside the window in either coordinate holds none of them.
+struct Window {
+  double lo, hi, t_lo, t_hi;
+};
+bool outside_window(const PlaneFrame& plane, const Window* window, const Vec3& center,
+                    const Vec3& half) {
+  if (window == nullptr) return false;
+  const Vec3 d = center - plane.origin;
+  const double x = plane.u.dot(d), rx = plane.u.cwiseAbs().dot(half);
+  const double y = plane.v.dot(d), ry = plane.v.cwiseAbs().dot(half);
+  return x + rx < window->lo || x - rx > window->hi || y + ry < window->t_lo ||
+         y - ry > window->t_hi;
+}
+
 // Cell c's faces that the plane (normal n, offset n . origin) crosses, as segments (cut_cells).
 // With the grid's tight bounds on (FaceGrid::enable_tight_bounds), a cell or a run of its faces
-// whose tight box the plane misses is skipped (none of its faces crosses it). `heights`,
+// whose tight box the plane or the window misses is skipped (none of its faces gives a kept
+// segment). `heights`,
 // `above`: scratch.
 void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFrame& plane,
-              double offset, std::vector<CutSegment>& out, std::vector<double>& heights,
-              std::vector<unsigned char>& above) {
+              double offset, const Window* window, std::vector<CutSegment>& out,
+              std::vector<double>& heights, std::vector<unsigned char>& above) {
   const Vec3& n = plane.normal;
   const double nx = n.x(), ny = n.y(), nz = n.z();
   const double ax = std::abs(nx), ay = std::abs(ny), az = std::abs(nz);
@@ -242,7 +259,9 @@ void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFr
     const FaceGrid::Tight state = grid.tight_boxes(c, boxes);
     if (state == FaceGrid::Tight::kMine) grid.bound_cell(c, mesh, boxes);
     tight = state != FaceGrid::Tight::kBusy;
-    if (tight && misses(boxes.cell[0], boxes.cell[1])) return;
+    if (tight && (misses(boxes.cell[0], boxes.cell[1]) ||
+                  outside_window(plane, window, boxes.cell[0], boxes.cell[1])))
+      return;
   }
   const double *gx = grid.entry_x(), *gy = grid.entry_y(), *gz = grid.entry_z();
   const Index vb = grid.vertex_begin(c), nv = grid.vertex_end(c) - vb;
@@ -252,7 +271,9 @@ void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFr
   const std::int32_t* entries = grid.face_entries();
   const Index begin = grid.begin(c), end = grid.end(c);
   for (Index f0 = begin, g = 0; f0 < end; f0 += FaceGrid::kGroup, ++g) {
-    if (tight && misses(boxes.group_center[g], boxes.group_half[g])) continue;
+    if (tight && (misses(boxes.group_center[g], boxes.group_half[g]) ||
+                  outside_window(plane, window, boxes.group_center[g], boxes.group_half[g])))
+      continue;
     if (h == nullptr) {
       if (static_cast<Index>(heights.size()) < nv) {
         heights.resize(nv);
@@ -292,25 +313,13 @@ void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFr
 // `region` (a ball), as cut_mesh makes them (each endpoint on a mesh edge, the face's
 // orientation kept: an outward-facing surface gives counter-clockwise loops in (u, v)), from the
 // grid's vertex entries (bit-exact copies of the mesh's). `heights`: scratch.
-// With `window` (plane coordinates: lo <= x <= hi, t_lo <= y <= t_hi) only the cells whose box
-// reaches it in both coordinates: a face with a segment end in the window lies in such a cell
-// (its cell's box holds it), so the segments that end in the window are all there.
-struct Window {
-  double lo, hi, t_lo, t_hi;
-};
 void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Index>& blocks,
                const PlaneFrame& plane, const CutRegion& region, std::vector<CutSegment>& out,
                Scratch& scratch, const Window* window = nullptr) {
   const Vec3& n = plane.normal;
   const double offset = n.dot(plane.origin);
-  const Vec3 au = plane.u.cwiseAbs(), av = plane.v.cwiseAbs();
   auto outside = [&](const Vec3& center, const Vec3& half) {
-    if (window == nullptr) return false;
-    const Vec3 d = center - plane.origin;
-    const double x = plane.u.dot(d), rx = au.dot(half);
-    const double y = plane.v.dot(d), ry = av.dot(half);
-    return x + rx < window->lo || x - rx > window->hi || y + ry < window->t_lo ||
-           y - ry > window->t_hi;
+    return outside_window(plane, window, center, half);
   };
   for (Index k : blocks) {
     // (A block's box holds its cells' boxes: the window test first, it needs no square root.)
@@ -320,7 +329,7 @@ void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Ind
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
       if (!outside(grid.cell_center(c), grid.cell_half(c)) &&
           grid.meets(c, n, offset, offset, &region))
-        cut_cell(mesh, grid, c, plane, offset, out, scratch.heights, scratch.above);
+        cut_cell(mesh, grid, c, plane, offset, window, out, scratch.heights, scratch.above);
   }
 }
 
