@@ -345,9 +345,7 @@ Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const std::vector<I
   ball.point = origin;
   ball.radius = 1.5 * r_thin;
   std::vector<CutSegment> segments;
-  // (Only points within ball.radius of the origin are read: the square around that disk.)
-  const Window square{-ball.radius, ball.radius, -ball.radius, ball.radius};
-  cut_cells(mesh, grid, blocks, frame, ball, segments, scratch, &square);
+  cut_cells(mesh, grid, blocks, frame, ball, segments, scratch);
   double best = -1;
   std::uint64_t best_edge = 0;
   Vec2 at(0, 0);
