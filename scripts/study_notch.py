@@ -53,6 +53,20 @@ FEM, osteon side and acceptance:
                                              (1.8, 0.1) (2.4, 0.2)
     ((2.4, 0.2) puts the 2 mm interval's plane at z = 0.4 in its r = 1.2 mm fillet)
 
+Round 5 (shapes registered 2026-11-28 in the commit that adds this paragraph, before the rule
+under test was written and before any osteon run on them; the rule is committed, in a commit
+whose message says "pre-registration", before the ``osteon`` step runs on round 5; none of these
+shapes was used before). The rule under test: the corner measured on meridian profiles (the
+surface cut by half-planes through the thin section's axis) instead of the vertex normals in a
+volume (docs/notch.md "Round 5"); the Kt fit, the plane-in-fillet rule and the clamps unchanged.
+Six new bars, same bars, FEM, osteon side and acceptance (round bars only: the study's bars,
+FEM and peak pick are built for a round thin side; a non-round one is not in this round):
+
+    sharp (r/d <= 0.05):                     (1.3, 0.04) (1.65, 0.03) (2.25, 0.05)
+    blunter:                                 (2.8, 0.15) (2.45, 0.3)
+    a plane of the 2 mm interval cuts the fillet:
+                                             (1.55, 0.22) z = 0.05 in r = 1.32
+
 Round 1 (pre-registered with f030df8; NO LONGER HELD OUT: its shapes were used to fix the
 sharp-edge tolerance in cpp/src/notch.cpp, docs/notch.md). Its FEM values are the ones that
 round's run printed (docs/notch.md), stored in the cache as they were, not re-run.
@@ -105,6 +119,7 @@ CACHE = Path(__file__).with_name("study_notch_fem.json")
 SCRIPT_VERSION = 2  # the FEM side's settings below; a change of them is a new version
 
 ROUNDS = {  # (D/d, r/d)
+    "5": [(1.3, 0.04), (1.65, 0.03), (2.25, 0.05), (2.8, 0.15), (2.45, 0.3), (1.55, 0.22)],
     "4": [(1.4, 0.02), (2.0, 0.02), (2.7, 0.025), (1.6, 0.04), (1.8, 0.1), (2.4, 0.2)],
     "3": [(1.25, 0.025), (1.7, 0.02), (2.9, 0.03), (1.9, 0.28), (2.6, 0.22), (1.3, 0.12),
           (1.45, 0.15), (2.1, 0.07)],

@@ -24,7 +24,8 @@ struct NotchField {
 
 /// Finds, along each bone's sections, the steps of the equivalent radius sqrt(A / pi) between
 /// neighbours (ratio >= kStepRatio), measures the fillet radius of the concave corner between
-/// them on the mesh (the meridian circle fitted through the vertex normals, docs/notch.md), and
+/// them on the mesh (the meridian circle fitted through the normals of meridian profiles: the
+/// surface cut by half-planes through the thin section's axis, docs/notch.md), and
 /// sets Kt on the section at the thin side. Reads from `r`: section_bone, section_param,
 /// section_point, section_normal, section_center, load_point, section_area, section_cut_area,
 /// moment_arm. `min_radius` (mm): a corner is never sharper than the printer makes it;
@@ -32,10 +33,10 @@ struct NotchField {
 /// `face_grid` returns the run's face grid over `mesh` (built on first call): a corner is
 /// measured from the faces near it only. `threads`: workers for the corners' searches (each
 /// thin section's search is one job; the result does not depend on it). `memo` (a reused
-/// Analyzer's): in a live update (`change.known`: what moved since the last run) the corners are
-/// searched in the canonical face order and the last update's are reused where `change` proves
-/// them unchanged, bit for bit the corners of that search (notch_reuse.hpp); other runs search in
-/// the grid's order (a one-off analysis as before) and clear the memo.
+/// Analyzer's): in a live update (`change.known`: what moved since the last run) the last
+/// update's corners are reused where `change` proves them unchanged (notch_reuse.hpp); other runs
+/// search every corner and clear the memo. (The profiles are chained and summed in an order of
+/// their own, not the grid's, so a corner reads the same bits in either mode.)
 NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid&()>& face_grid,
                         const AnalysisResult& r, double min_radius, double sensitivity,
                         int threads = 1, CornerMemo* memo = nullptr,

@@ -17,16 +17,6 @@ struct CornerFit {
   double axial = 0.0;   ///< where the fillet meets the thin side, along the axis, mm
 };
 
-/// Orders a corner's local faces (3 mesh vertex indices each) by their vertex indices and lists
-/// their distinct vertices in first-appearance order (`slot`: each listed vertex's entry, -1
-/// elsewhere, as before the call). The face grid hands the faces out cell by cell, and its cells
-/// follow the mesh's box: without this order a pose that moves the box (a hand at the model's
-/// edge) reorders the sums of a corner far away, and its Kt moves in the last bits; with it the
-/// measurement depends on the faces alone, which is what makes its reuse exact. Live updates
-/// only: it costs ~2 M instructions per corner of the figurine (~7 % of a one-off analysis).
-void canonical_face_order(std::vector<std::int32_t>& faces, std::vector<std::int32_t>& vertices,
-                          std::vector<int>& slot);
-
 /// What changed in the mesh since the last run: the box of every triangle with a moved vertex,
 /// old and new positions (mm); `known` false: not known (every corner is searched again).
 struct MeshChange {
