@@ -89,21 +89,28 @@ def test_fbx_dog_joint_segments_match_the_cli(addon, engine):
     stress falls from 34 to 14 MPa within 2 mm; the FBX's tail joint sits 1.07 mm behind the
     rig file's, so sections every 2 mm land at different places on that peak (2 mm: FBX
     33.98, rig file 25.20 MPa, its max then on a leg).  At 0.5 mm both resolve the peak (39.24
-    and 38.63 MPa, unchanged at 0.25 mm), so the comparison is made there."""
+    and 38.63 MPa, unchanged at 0.25 mm), so the comparison is made there.  It compares the beam
+    (nominal) stress: the tail's root is also a step, and whether a section there carries a
+    corner's Kt depends on where the sections fall on it (the step test compares neighbouring
+    sections; docs/notch.md "Steps"): with the corner measured on meridian profiles (issue 33,
+    round 5) the FBX's section at 5.5 mm reads Kt 1.45 at a 1.7 mm fillet, the rig file's
+    sections 1.07 mm away none (before round 5 neither did)."""
     _obj, _arm, last = _analyze_dog(0.5)
     sk = last["inputs"].skeleton
     assert sk.segment_changed is not None and sk.segment_changed.sum() >= 10  # a joint rig
-    blender_max = last["report"]["max_stress_mpa"]
-    m, a = _cli_dog(engine, 120.0, 20.0, interval=0.5)
-    print(f"[issue13] dog FBX max {blender_max:.2f} MPa, CLI {a.max_stress:.2f} MPa (0.5 mm)")
-    assert blender_max == pytest.approx(a.max_stress, rel=0.10)
-    # the same place: the tail's root (the rig file's joint_13 is the FBX's joint_9)
-    # (by stress: the panel's weakest section is by stress ratio, which the print direction's
-    # layer strength changes)
     an = last["analysis"]
-    worst = sk.names[an.section_bone[int(np.nanargmax(an.stress))]]
-    assert worst == "joint_9" and m.names[a.section_bone[int(np.nanargmax(a.stress))]] == \
-        "joint_13"
+    blender_max = float(np.nanmax(an.nominal_stress))
+    m, a = _cli_dog(engine, 120.0, 20.0, interval=0.5)
+    cli_max = float(np.nanmax(a.nominal_stress))
+    print(f"[issue13] dog FBX max beam stress {blender_max:.2f} MPa, CLI {cli_max:.2f} MPa "
+          "(0.5 mm)")
+    assert blender_max == pytest.approx(cli_max, rel=0.10)
+    # the same place: the tail's root (the rig file's joint_13 is the FBX's joint_9)
+    # (by beam stress: the panel's weakest section is by stress ratio, which the print
+    # direction's layer strength changes)
+    worst = sk.names[an.section_bone[int(np.nanargmax(an.nominal_stress))]]
+    assert worst == "joint_9" and \
+        m.names[a.section_bone[int(np.nanargmax(a.nominal_stress))]] == "joint_13"
 
 
 def test_live_mode_reads_the_joint_segments(addon, engine):

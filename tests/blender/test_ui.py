@@ -163,12 +163,18 @@ def test_result_row_columns_and_tooltip(sample):
     ul = bpy.types.OSTEON_UL_weak_bones
     ul.draw_item(None, bpy.context, Recorder(root, "row"), s, row, 0, s, "weak_bones_index", 0)
     texts = [i.text for i in _items(root, [])]
-    assert texts == ["op:osteon.select_bone", row.name, f"{row.ratio:.2f}"]  # no scale yet
+    # "K " marks a ratio that includes a corner's Kt (the sample's worst, the tail's root)
+    corner = "K " if row.stress_concentration > 1.0 else ""
+    assert texts == ["op:osteon.select_bone", corner + row.name, f"{row.ratio:.2f}"]  # no scale
     assert row.ratio > 1.0
-    # PLA's layers are weaker across (0.55): the ratio is the governing section's stress over
-    # ITS allowable, and the tooltip shows both numbers and which allowable it is
-    assert row.ratio == pytest.approx(row.stress_mpa / row.allowable_mpa, rel=1e-5)
-    assert row.allowable_mpa < s.allowable_mpa and row.limit == "across layers"
+    # PLA's layers are weaker across (0.55): a row's ratio is its governing section's stress
+    # over ITS allowable, and the tooltip shows both numbers and which allowable it is
+    for r in s.weak_bones:
+        assert r.ratio == pytest.approx(r.stress_mpa / r.allowable_mpa, rel=1e-5)
+    across = [r for r in s.weak_bones if r.limit == "across layers"]
+    assert across, "the sample's antenna is governed by its across-layers allowable"
+    row = across[0]
+    assert row.allowable_mpa < s.allowable_mpa
     tip = sb.OSTEON_OT_select_bone.description(bpy.context, type("P", (), {"bone": row.name}))
     assert tip.startswith(f"{row.name}: stress / allowable {row.ratio:.2f} at its weakest "
                           f"section: {row.stress_mpa:.1f} MPa of {row.allowable_mpa:.1f} MPa "
