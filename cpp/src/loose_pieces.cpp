@@ -51,7 +51,9 @@ bool inside_piece(const MeshView& mesh, const FaceGrid& grid,
   const Vec3 dir = inside_ray();
   int hits = 0;
   grid.for_faces_near(CutRegion{p, dir, 0.0}, [&](const std::int32_t* t) {
-    hits += piece_of_shell[shell_of[t[0]]] == piece && ray_crosses(mesh, t, p, dir);
+    // a face of one vertex thrice, in no other face, is in no shell (-1): no triangle to cross
+    const std::int32_t k = shell_of[t[0]];
+    hits += k >= 0 && piece_of_shell[k] == piece && ray_crosses(mesh, t, p, dir);
   });
   return hits % 2 == 1;
 }
