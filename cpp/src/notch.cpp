@@ -10,6 +10,7 @@
 #include <numeric>
 #include <utility>
 
+#include "cell_cut.hpp"
 #include "notch_reuse.hpp"
 #include "parallel.hpp"
 
@@ -209,16 +210,9 @@ std::vector<Index> window_blocks(const FaceGrid& grid, const Vec3& origin, const
   return blocks;
 }
 
-inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  const auto lo = static_cast<std::uint32_t>(std::min(a, b));
-  const auto hi = static_cast<std::uint32_t>(std::max(a, b));
-  return (static_cast<std::uint64_t>(lo) << 32) | hi;
-}
-
 // Scratch of the cuts (per search).
 struct Scratch {
   std::vector<double> heights;
-  std::vector<unsigned char> above;
 };
 
 // A window in a plane's coordinates (lo <= x <= hi, t_lo <= y <= t_hi, mm): a cut keeps the
@@ -237,76 +231,25 @@ bool outside_window(const PlaneFrame& plane, const Window* window, const Vec3& c
          y - ry > window->t_hi;
 }
 
-// Cell c's faces that the plane (normal n, offset n . origin) crosses, as segments (cut_cells).
-// With the grid's tight bounds on (FaceGrid::enable_tight_bounds), a cell or a run of its faces
-// whose tight box the plane or the window misses is skipped (none of its faces gives a kept
-// segment). `heights`,
-// `above`: scratch.
+// Cell c's faces that the plane (normal n, offset n . origin) crosses, as segments (cut_cells),
+// by the section cuts' own cell cut (cell_cut.hpp): a cell or a run of its faces whose tight box
+// misses the plane or the window is skipped (none of its faces gives a kept segment).
 void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFrame& plane,
               double offset, const Window* window, std::vector<CutSegment>& out,
-              std::vector<double>& heights, std::vector<unsigned char>& above) {
-  const Vec3& n = plane.normal;
-  const double nx = n.x(), ny = n.y(), nz = n.z();
-  const double ax = std::abs(nx), ay = std::abs(ny), az = std::abs(nz);
-  auto misses = [&](const Vec3& center, const Vec3& half) {
-    const double mid = nx * center.x() + ny * center.y() + nz * center.z();
-    const double r = ax * half.x() + ay * half.y() + az * half.z();
-    return mid + r < offset || mid - r > offset;
+              std::vector<double>& heights) {
+  auto outside = [&](const Vec3& center, const Vec3& half) {
+    return outside_window(plane, window, center, half);
   };
-  FaceGrid::TightBoxes boxes;
-  bool tight = false;
-  if (grid.tight_bounds()) {
-    const FaceGrid::Tight state = grid.tight_boxes(c, boxes);
-    if (state == FaceGrid::Tight::kMine) grid.bound_cell(c, mesh, boxes);
-    tight = state != FaceGrid::Tight::kBusy;
-    if (tight && (misses(boxes.cell[0], boxes.cell[1]) ||
-                  outside_window(plane, window, boxes.cell[0], boxes.cell[1])))
-      return;
-  }
-  const double *gx = grid.entry_x(), *gy = grid.entry_y(), *gz = grid.entry_z();
-  const Index vb = grid.vertex_begin(c), nv = grid.vertex_end(c) - vb;
-  const double* __restrict x = gx + vb, * __restrict y = gy + vb, * __restrict z = gz + vb;
-  const double* h = nullptr;  // the entries' heights, once a run of faces may cross
-  const unsigned char* up = nullptr;
-  const std::int32_t* entries = grid.face_entries();
-  const Index begin = grid.begin(c), end = grid.end(c);
-  for (Index f0 = begin, g = 0; f0 < end; f0 += FaceGrid::kGroup, ++g) {
-    if (tight && (misses(boxes.group_center[g], boxes.group_half[g]) ||
-                  outside_window(plane, window, boxes.group_center[g], boxes.group_half[g])))
-      continue;
-    if (h == nullptr) {
-      if (static_cast<Index>(heights.size()) < nv) {
-        heights.resize(nv);
-        above.resize(nv);
-      }
-      double* __restrict hw = heights.data();
-      unsigned char* __restrict uw = above.data();
-      for (Index v = 0; v < nv; ++v) hw[v] = x[v] * nx + y[v] * ny + z[v] * nz - offset;
-      for (Index v = 0; v < nv; ++v) uw[v] = hw[v] >= 0.0;
-      h = hw;
-      up = uw;
-    }
-    for (Index f = f0, stop = std::min(end, f0 + FaceGrid::kGroup); f < stop; ++f) {
-      const std::int32_t* e = entries + 3 * f;
-      const int i0 = e[0] - vb, i1 = e[1] - vb, i2 = e[2] - vb;
-      const int count = up[i0] + up[i1] + up[i2];
-      if (count == 0 || count == 3) continue;
-      const int idx[3] = {i0, i1, i2};
-      const std::int32_t* fv = grid.faces() + 3 * f;
-      CutSegment seg;
-      for (int k = 0; k < 3; ++k) {
-        const int i = idx[k], j = idx[(k + 1) % 3];
-        if (up[i] == up[j]) continue;
-        const int side = up[i] ? 0 : 1;
-        const double denom = h[j] - h[i];
-        const double lambda = std::clamp(denom != 0.0 ? -h[i] / denom : 0.5, 0.0, 1.0);
-        const Vec3 pi(x[i], y[i], z[i]), pj(x[j], y[j], z[j]);
-        seg.edge[side] = edge_key(fv[k], fv[(k + 1) % 3]);
-        seg.point[side] = plane.to_plane(pi + lambda * (pj - pi));
-      }
-      out.push_back(seg);
-    }
-  }
+  detail::cut_cell_faces(
+      mesh, grid, c, plane.normal, offset, outside, heights,
+      [&](const std::int32_t* f, const double height[3]) {
+        const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
+        if (above[0] == above[1] && above[1] == above[2]) return;
+        CutSegment seg;
+        Vec3 world[2];
+        detail::emit_segment(mesh, plane, f, above, height, seg, world);
+        out.push_back(seg);
+      });
 }
 
 // The segments of the faces that the plane crosses in the cells of `blocks` whose box may reach
@@ -329,7 +272,7 @@ void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Ind
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
       if (!outside(grid.cell_center(c), grid.cell_half(c)) &&
           grid.meets(c, n, offset, offset, &region))
-        cut_cell(mesh, grid, c, plane, offset, window, out, scratch.heights, scratch.above);
+        cut_cell(mesh, grid, c, plane, offset, window, out, scratch.heights);
   }
 }
 

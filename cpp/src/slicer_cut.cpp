@@ -6,42 +6,13 @@
 #include <type_traits>
 #include <vector>
 
+#include "cell_cut.hpp"
 #include "osteon/slicer.hpp"
 
 namespace osteon {
 namespace {
 
-inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  const std::uint32_t lo = static_cast<std::uint32_t>(std::min(a, b));
-  const std::uint32_t hi = static_cast<std::uint32_t>(std::max(a, b));
-  return (static_cast<std::uint64_t>(lo) << 32) | hi;
-}
-
-// Cut of triangle (a, b, c) given per-vertex "above" flags and signed heights (height 0 = plane).
-// Exactly two edges change side; each gives an endpoint at linear interpolation of the heights.
-// The segment keeps the face's orientation: it runs from the edge that goes down (above to below
-// in the face's winding) to the edge that goes up, so that a closed outward-facing surface gives
-// counter-clockwise loops in (u, v) and an inward-facing one clockwise loops.
-// `world` receives the endpoints in mesh coordinates (mm), for the region test.
-inline void emit_segment(const MeshView& mesh, const PlaneFrame& plane, const std::int32_t* f,
-                         const bool above[3], const double height[3], CutSegment& seg,
-                         Vec3 world[2]) {
-  for (int e = 0; e < 3; ++e) {
-    const int i = e, j = (e + 1) % 3;
-    if (above[i] == above[j]) continue;
-    const int n = above[i] ? 0 : 1;
-    const double denom = height[j] - height[i];
-    double lambda = denom != 0.0 ? -height[i] / denom : 0.5;
-    lambda = std::clamp(lambda, 0.0, 1.0);
-    const double* pi = mesh.vertices + 3 * static_cast<Index>(f[i]);
-    const double* pj = mesh.vertices + 3 * static_cast<Index>(f[j]);
-    const Vec3 p(pi[0] + lambda * (pj[0] - pi[0]), pi[1] + lambda * (pj[1] - pi[1]),
-                 pi[2] + lambda * (pj[2] - pi[2]));
-    seg.edge[n] = edge_key(f[i], f[j]);
-    seg.point[n] = plane.to_plane(p);
-    world[n] = p;
-  }
-}
+using detail::emit_segment;
 
 // True when the segment a-b (mm) comes within the region's radius of its axis line (a ball: of
 // its point). One formula for every cut, so whether a triangle's segment counts depends on the
@@ -210,50 +181,14 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
   }
   // The same cells, but a cell or a run of its faces whose tight box the plane misses is skipped
   // with one test: none of its faces would give a segment (FaceGrid::enable_tight_bounds).
-  const double ax = std::abs(nx), ay = std::abs(ny), az = std::abs(nz);
-  auto misses = [&](const Vec3& center, const Vec3& half) {
-    const double mid = nx * center.x() + ny * center.y() + nz * center.z();
-    const double r = ax * half.x() + ay * half.y() + az * half.z();
-    return mid + r < offset || mid - r > offset;
-  };
-  const std::int32_t* faces = grid->faces();
-  constexpr Index kGroup = FaceGrid::kGroup;
-  // The heights of a cell's vertices (entries), computed in one vectorized pass when the plane
-  // meets one of its runs of faces (the same formula as cut_face, so the same bits).
-  const double *gx = grid->entry_x(), *gy = grid->entry_y(), *gz = grid->entry_z();
-  const std::int32_t* entries = grid->face_entries();
   thread_local std::vector<double> cell_heights;
   std::vector<double>& heights = cell_heights;
-  for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, per_segment, [&](Index c) {
-    FaceGrid::TightBoxes boxes;
-    const Index begin = grid->begin(c), end = grid->end(c);
-    const FaceGrid::Tight state = grid->tight_boxes(c, boxes);
-    if (state == FaceGrid::Tight::kBusy) {
-      for (Index f = begin; f < end; ++f) cut_face(faces + 3 * f);
-      return;
-    }
-    if (state == FaceGrid::Tight::kMine) grid->bound_cell(c, mesh, boxes);
-    if (misses(boxes.cell[0], boxes.cell[1])) return;
-    const Index vb = grid->vertex_begin(c), nv = grid->vertex_end(c) - vb;
-    // Heights of the cell's entries (hv[e - vb]); a plain pointer, because each use of the
-    // thread_local vector would re-derive its address (a __tls_get_addr call in a shared library).
-    const double* hv = nullptr;
-    for (Index f = begin, g = 0; f < end; f += kGroup, ++g) {
-      if (misses(boxes.group_center[g], boxes.group_half[g])) continue;
-      if (hv == nullptr) {
-        if (static_cast<Index>(heights.size()) < nv) heights.resize(nv);
-        double* __restrict h = heights.data();
-        const double* __restrict x = gx + vb, * __restrict y = gy + vb, * __restrict z = gz + vb;
-        for (Index v = 0; v < nv; ++v) h[v] = x[v] * nx + y[v] * ny + z[v] * nz - offset;
-        hv = h;
-      }
-      for (Index k = 3 * f, stop = 3 * std::min(end, f + kGroup); k < stop; k += 3) {
-        const std::int32_t* e = entries + k;
-        double height[3] = {hv[e[0] - vb], hv[e[1] - vb], hv[e[2] - vb]};
-        cut_face_at(faces + k, height);
-      }
-    }
-  });
+  auto no_window = [](const Vec3&, const Vec3&) { return false; };
+  for_cells_in_slab(*grid, plane.normal, offset, offset, region, exclude, per_segment,
+                    [&](Index c) {
+                      detail::cut_cell_faces(mesh, *grid, c, plane.normal, offset, no_window,
+                                             heights, cut_face_at);
+                    });
 }
 
 void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spacing, int count,
