@@ -176,9 +176,10 @@ def _joined_units(v: np.ndarray, f: np.ndarray, pieces: Pieces) -> list[_Unit]:
 
 
 def rig_pieces(v: np.ndarray, f: np.ndarray, pieces: Pieces, root: str, rig: RigOne,
-               spur: float = 1.0, min_t: float = 0.8) -> tuple[Skeleton, np.ndarray]:
+               spur: float, min_t: float) -> tuple[Skeleton, np.ndarray]:
     """Skeleton and (V,B) dense weights of the welded mesh ``v``, ``f`` in several pieces
-    (``spur``, ``min_t`` mm: as for thin branches, for the small pieces that are limb ends)."""
+    (``spur``, ``min_t`` mm: auto_skeleton's, as for thin branches, for the small pieces that
+    are limb ends)."""
     model_size = float(np.ptp(v[pieces.labels >= 0], axis=0).max())
     limb = LIMB_SIZE * model_size
     main_verts = pieces.vertices_of([pieces.main])
