@@ -15,8 +15,9 @@ joint on to the limb's end, for rigs that stop at a wrist or an ankle: ``limb_ra
 independent of any rig's choices and of osteon's own rules, for each extremity of the mesh the
 distance from its tip to the nearest auto bone end in its limb's radii (``extremities.py``:
 the maxima of the geodesic distance inside the solid from the main body's centre of mass that
-stick out more than their own width; limb radius: the depth near the tip). Reads
-../shared/data (or OSTEON_DATA).
+stick out more than their own width; limb radius: the depth near the tip), and beside it the
+same count over the printable extremities only (at least 0.8 mm thick near the tip, on the
+mesh: ``extremities.tip_thickness``). Reads ../shared/data (or OSTEON_DATA).
 
     python bench/bench_autoskeleton.py [--repeat 3] [--models arm cow ...] [--skip-big]
     python bench/bench_autoskeleton.py --pieces [--data ../shared/data]
@@ -156,17 +157,17 @@ def pieces_table(data: str) -> None:
     import warnings
     from pathlib import Path
 
-    from extremities import extremities
+    from extremities import extremities, tip_thickness
     from osteon.autoskeleton import split_pieces
     from osteon.autoskeleton.mesh import check_mesh
     from osteon.io import load_model
 
     print("| model | faces | pieces: joined / loose | auto bones | CPU s | real leaf tips within "
           "1.5 limb radii | tip distance median / max (limb radii) | tips or beyond, to the "
-          "limb's end | extremities within 1.5 limb radii | extremity distance median / max "
-          "(limb radii) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    totals = np.zeros(6)
+          "limb's end | extremities within 1.5 limb radii | printable (>= 0.8 mm thick at the tip) "
+          "extremities within 1.5 limb radii | extremity distance median / max (limb radii) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    totals = np.zeros(8)
     misses = []
     for obj in sorted(Path(data, "RigNet").glob("*_ori.obj")):
         m = load_model(obj, skeleton=obj.with_name(obj.stem + "_rig.txt"), height_mm=120)
@@ -190,26 +191,30 @@ def pieces_table(data: str) -> None:
         d, e = limb_radii(v, real, ends)
         ex = extremities(wv, wf, p)
         x = np.linalg.norm(ex.tips[:, None] - ends[None], axis=2).min(1) / ex.radius
-        totals += [(d <= 1.5).sum(), (e <= 1.5).sum(), len(d), cpu, (x <= 1.5).sum(), len(x)]
+        fdm = tip_thickness(wv, wf, p, ex) >= 0.8  # (auto_skeleton's default min_thickness)
+        totals += [(d <= 1.5).sum(), (e <= 1.5).sum(), len(d), cpu, (x <= 1.5).sum(), len(x),
+                   ((x <= 1.5) & fdm).sum(), fdm.sum()]
         misses += [f"{obj.stem.split('_')[0]} tip {np.round(t, 1).tolist()} r {r:.1f} mm: {q:.1f}"
                    for t, r, q in zip(ex.tips, ex.radius, x, strict=True) if q > 1.5]
         print(f"| {obj.stem} | {len(f)} | {len(p.joined)} / {len(p.loose)} | {sk.num_bones} | "
               f"{cpu:.2f} | {(d <= 1.5).sum()}/{len(d)} | {np.median(d):.1f} / {d.max():.1f} | "
               f"{(e <= 1.5).sum()}/{len(e)} | {(x <= 1.5).sum()}/{len(x)} | "
-              f"{np.median(x):.1f} / {x.max():.1f} |", flush=True)
-    hand_x = hand_row()
-    totals[4:] += [(hand_x <= 1.5).sum(), len(hand_x)]
+              f"{((x <= 1.5) & fdm).sum()}/{fdm.sum()} | {np.median(x):.1f} / {x.max():.1f} |",
+              flush=True)
+    hand_x, hand_fdm = hand_row()
+    totals[4:] += [(hand_x <= 1.5).sum(), len(hand_x), ((hand_x <= 1.5) & hand_fdm).sum(),
+                   hand_fdm.sum()]
     n, m = int(totals[2]), int(totals[5])
     print(f"| all (CPU: RigNet) | | | | {totals[3]:.2f} | {int(totals[0])}/{n} | | {int(totals[1])}/{n} | "
-          f"{int(totals[4])}/{m} | |")
+          f"{int(totals[4])}/{m} | {int(totals[6])}/{int(totals[7])} | |")
     print("\nextremities missed (tip mm, limb radius, distance in radii):", *misses, sep="\n  ")
 
 
-def hand_row() -> np.ndarray:
+def hand_row() -> tuple[np.ndarray, np.ndarray]:
     """The test hand (``tests/python/test_autoskeleton.py``: five 8 mm capsule fingers on an
     ellipsoid palm, one closed mesh, no rig) as a row of the pieces table: its extremities'
-    distances to the nearest auto bone end (limb radii)."""
-    from extremities import extremities
+    distances to the nearest auto bone end (limb radii), and which are printable (FDM)."""
+    from extremities import extremities, tip_thickness
     from osteon.autoskeleton import split_pieces
     from osteon.autoskeleton.mesh import check_mesh
     from test_autoskeleton import hand
@@ -219,12 +224,15 @@ def hand_row() -> np.ndarray:
     sk, _w = osteon.auto_skeleton(v, f)
     cpu = time.process_time() - c
     wv, wf, _ = check_mesh(v, f)
-    ex = extremities(wv, wf, split_pieces(wv, wf))
+    p = split_pieces(wv, wf)
+    ex = extremities(wv, wf, p)
     ends = np.concatenate([sk.heads, sk.tails])
     x = np.linalg.norm(ex.tips[:, None] - ends[None], axis=2).min(1) / ex.radius
+    fdm = tip_thickness(wv, wf, p, ex) >= 0.8
     print(f"| hand (test) | {len(f)} | 0 / 0 | {sk.num_bones} | {cpu:.2f} | (no rig) | | | "
-          f"{(x <= 1.5).sum()}/{len(x)} | {np.median(x):.1f} / {x.max():.1f} |", flush=True)
-    return x
+          f"{(x <= 1.5).sum()}/{len(x)} | {((x <= 1.5) & fdm).sum()}/{fdm.sum()} | "
+          f"{np.median(x):.1f} / {x.max():.1f} |", flush=True)
+    return x, fdm
 
 
 def big(repeat: int) -> None:

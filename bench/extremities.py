@@ -239,3 +239,45 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
         return Extremities(np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0), h)
     tips, radius, pers, width = (np.array(c) for c in zip(*out, strict=True))
     return Extremities(tips, radius, pers, width, h)
+
+
+def tip_thickness(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities) -> np.ndarray:
+    """(E,) mm: each extremity's thickness where it is measured, 2 x the largest distance to
+    the surface of the main and joined pieces (the mesh itself, not the voxels: the grid's
+    h is 0.75 mm on a 120 mm model, coarser than a 0.3-0.8 mm printable wall) over the points
+    of a 9 x 9 x 9 grid filling the cube of half-side 3 r round its tip (its last 3 limb
+    radii: where r is measured). Inside a closed (or capped) piece: the distance to its
+    surface; a piece whose holes are not simple loops has no inside of its own, so there
+    the distance to its triangles counts at the points inside the voxel solid (step 1). An
+    extremity thinner than a material's minimum thickness cannot be printed with it: the
+    second column of the bench, beside the first, never instead of it (issue 35)."""
+    from osteon.autoskeleton.assemble import submesh
+    from osteon.autoskeleton.curve import _mesh_distance
+    from osteon.autoskeleton.pieces import cap_holes
+
+    closed, open_ = [], []
+    for k in [pieces.main, *pieces.joined]:
+        pv, pf = submesh(v, f, pieces.vertices_of([k]))
+        mesh = (pv, pf) if pieces.closed[k] else cap_holes(pv, pf)
+        (closed if mesh is not None else open_).append(_mesh_distance(*(mesh or (pv, pf))))
+    union = origin = None
+    if open_:
+        union, _main, origin = _solid(v, f, pieces, ex.h)
+    axis = np.linspace(-1.0, 1.0, 9)
+    grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), -1).reshape(-1, 3)
+    out = np.zeros(len(ex.tips))
+    for i, (tip, r) in enumerate(zip(ex.tips, ex.radius, strict=True)):
+        pts = tip + 3.0 * r * grid
+        inner = np.zeros(len(pts))
+        for d in closed:
+            inner = np.maximum(inner, -np.asarray(d.signed_distance(pts), np.float64))
+        if open_:
+            cell = np.floor((pts - origin) / ex.h).astype(np.int64)
+            ok = ((cell >= 0) & (cell < union.shape)).all(1)
+            ok[ok] = union[tuple(cell[ok].T)]
+            if ok.any():
+                near = np.min([np.abs(np.asarray(d.signed_distance(pts[ok]), np.float64))
+                               for d in open_], axis=0)
+                inner[ok] = np.maximum(inner[ok], near)
+        out[i] = 2.0 * float(inner.max())
+    return out
