@@ -313,9 +313,10 @@ void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Ind
     if (outside(grid.block_center(k), grid.block_half(k)) ||
         !grid.block_meets(k, n, offset, offset, &region))
       continue;
+    // (In a block the plane test first: it rejects most of its cells, the window few.)
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
-      if (!outside(grid.cell_center(c), grid.cell_half(c)) &&
-          grid.meets(c, n, offset, offset, &region))
+      if (grid.meets(c, n, offset, offset) && !outside(grid.cell_center(c), grid.cell_half(c)) &&
+          region.meets_box(grid.cell_center(c), grid.cell_half(c)))
         cut_cell(mesh, grid, c, plane, offset, window, out, scratch.heights);
   }
 }
