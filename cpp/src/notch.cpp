@@ -210,35 +210,78 @@ std::vector<Index> window_blocks(const FaceGrid& grid, const Vec3& origin, const
   return blocks;
 }
 
-// Scratch of the cuts (per search).
+// The chains of one plane's cut (chains_of): chain j is items[starts[j]] .. items[starts[j + 1]]
+// - 1; the other buffers are chains_of's own.
+struct Chains {
+  std::vector<int> by_start, next, items;
+  std::vector<char> led, used;
+  std::vector<std::size_t> starts;
+  std::size_t size() const { return starts.size() - 1; }
+};
+
+// Scratch of the cuts, one per worker thread, reused from search to search (no allocation once
+// its buffers have grown).
 struct Scratch {
   std::vector<double> heights;
+  std::vector<CutSegment> segments;
+  Chains chains;
 };
 
 // A window in a plane's coordinates (lo <= x <= hi, t_lo <= y <= t_hi, mm): a cut keeps the
 // segments with an end in it (fillet_points). A face with such an end lies in any box that holds
-// the face, so a box wholly outside the window in either coordinate holds none of them.
+// the face, so a box wholly outside the window in either coordinate holds none of them. The
+// plane's axes and their absolute values are held as scalars, so that the test (called for
+// every block, cell and run of faces a half-plane meets) is inlined with no vector loads; it
+// computes what (center - origin) . u and |u| . half give, in the same order.
 struct Window {
   double lo, hi, t_lo, t_hi;
+  double ox, oy, oz, ux, uy, uz, vx, vy, vz, aux, auy, auz, avx, avy, avz;
+  Window(const PlaneFrame& plane, double lo_, double hi_, double t_lo_, double t_hi_)
+      : lo(lo_),
+        hi(hi_),
+        t_lo(t_lo_),
+        t_hi(t_hi_),
+        ox(plane.origin.x()),
+        oy(plane.origin.y()),
+        oz(plane.origin.z()),
+        ux(plane.u.x()),
+        uy(plane.u.y()),
+        uz(plane.u.z()),
+        vx(plane.v.x()),
+        vy(plane.v.y()),
+        vz(plane.v.z()),
+        aux(std::abs(ux)),
+        auy(std::abs(uy)),
+        auz(std::abs(uz)),
+        avx(std::abs(vx)),
+        avy(std::abs(vy)),
+        avz(std::abs(vz)) {}
+  bool outside(const Vec3& center, const Vec3& half) const {
+    const double dx = center.x() - ox, dy = center.y() - oy, dz = center.z() - oz;
+    const double hx = half.x(), hy = half.y(), hz = half.z();
+    const double x = ux * dx + uy * dy + uz * dz, rx = aux * hx + auy * hy + auz * hz;
+    if (x + rx < lo || x - rx > hi) return true;
+    const double y = vx * dx + vy * dy + vz * dz, ry = avx * hx + avy * hy + avz * hz;
+    return y + ry < t_lo || y - ry > t_hi;
+  }
+  bool contains(const Vec2& p) const {
+    return p.x() >= lo && p.x() <= hi && p.y() >= t_lo && p.y() <= t_hi;
+  }
 };
-bool outside_window(const PlaneFrame& plane, const Window* window, const Vec3& center,
-                    const Vec3& half) {
-  if (window == nullptr) return false;
-  const Vec3 d = center - plane.origin;
-  const double x = plane.u.dot(d), rx = plane.u.cwiseAbs().dot(half);
-  const double y = plane.v.dot(d), ry = plane.v.cwiseAbs().dot(half);
-  return x + rx < window->lo || x - rx > window->hi || y + ry < window->t_lo ||
-         y - ry > window->t_hi;
+inline bool outside_window(const Window* window, const Vec3& center, const Vec3& half) {
+  return window != nullptr && window->outside(center, half);
 }
 
 // Cell c's faces that the plane (normal n, offset n . origin) crosses, as segments (cut_cells),
 // by the section cuts' own cell cut (cell_cut.hpp): a cell or a run of its faces whose tight box
-// misses the plane or the window is skipped (none of its faces gives a kept segment).
+// misses the plane or the window is skipped (none of its faces gives a kept segment). With a
+// window, only the segments with an end in it are kept (in the grid's order, as a later filter
+// would leave them).
 void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFrame& plane,
               double offset, const Window* window, std::vector<CutSegment>& out,
               std::vector<double>& heights) {
   auto outside = [&](const Vec3& center, const Vec3& half) {
-    return outside_window(plane, window, center, half);
+    return outside_window(window, center, half);
   };
   detail::cut_cell_faces(
       mesh, grid, c, plane.normal, offset, outside, heights,
@@ -248,7 +291,8 @@ void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFr
         CutSegment seg;
         Vec3 world[2];
         detail::emit_segment(mesh, plane, f, above, height, seg, world);
-        out.push_back(seg);
+        if (window == nullptr || window->contains(seg.point[0]) || window->contains(seg.point[1]))
+          out.push_back(seg);
       });
 }
 
@@ -262,16 +306,17 @@ void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Ind
   const Vec3& n = plane.normal;
   const double offset = n.dot(plane.origin);
   auto outside = [&](const Vec3& center, const Vec3& half) {
-    return outside_window(plane, window, center, half);
+    return outside_window(window, center, half);
   };
   for (Index k : blocks) {
     // (A block's box holds its cells' boxes: the window test first, it needs no square root.)
     if (outside(grid.block_center(k), grid.block_half(k)) ||
         !grid.block_meets(k, n, offset, offset, &region))
       continue;
+    // (In a block the plane test first: it rejects most of its cells, the window few.)
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
-      if (!outside(grid.cell_center(c), grid.cell_half(c)) &&
-          grid.meets(c, n, offset, offset, &region))
+      if (grid.meets(c, n, offset, offset) && !outside(grid.cell_center(c), grid.cell_half(c)) &&
+          region.meets_box(grid.cell_center(c), grid.cell_half(c)))
         cut_cell(mesh, grid, c, plane, offset, window, out, scratch.heights);
   }
 }
@@ -287,8 +332,13 @@ Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const std::vector<I
   CutRegion ball;
   ball.point = origin;
   ball.radius = 1.5 * r_thin;
-  std::vector<CutSegment> segments;
-  cut_cells(mesh, grid, blocks, frame, ball, segments, scratch);
+  std::vector<CutSegment>& segments = scratch.segments;
+  segments.clear();
+  // Only points within the disk count, so only segments with an end in its square (widened far
+  // beyond rounding: |x| and |y| exceed the norm by an ulp at most).
+  const double square = ball.radius + 1e-9 * r_thin;
+  const Window window(frame, -square, square, -square, square);
+  cut_cells(mesh, grid, blocks, frame, ball, segments, scratch, &window);
   double best = -1;
   std::uint64_t best_edge = 0;
   Vec2 at(0, 0);
@@ -307,19 +357,29 @@ Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const std::vector<I
   return (d - d.dot(u) * u).normalized();
 }
 
+// This thread's scratch. Not inlined: GCC re-derives a thread_local's address (a __tls_get_addr
+// call in a shared library) at each use, even through a reference bound once.
+__attribute__((noinline)) Scratch& worker_scratch() {
+  thread_local Scratch scratch;
+  return scratch;
+}
+
 // The chains of one plane's segments (linked by the mesh edge they share: point[1] of one on
 // the edge of point[0] of the next), each in order, in a canonical order (a chain's first
 // segment: the one no other leads to, or in a loop the smallest edge; chains by that edge), so
 // that the sums over them do not depend on the grid's layout. Segments shorter than `tiny` are
 // left out (a plane through a vertex).
-std::vector<std::vector<int>> chains_of(const std::vector<CutSegment>& seg, double tiny) {
+void chains_of(const std::vector<CutSegment>& seg, double tiny, Chains& out) {
   const int n = static_cast<int>(seg.size());
-  std::vector<int> by_start(n);
+  std::vector<int>& by_start = out.by_start;
+  by_start.resize(n);
   std::iota(by_start.begin(), by_start.end(), 0);
   std::sort(by_start.begin(), by_start.end(),
             [&](int x, int y) { return seg[x].edge[0] < seg[y].edge[0]; });
-  std::vector<int> next(n, -1);
-  std::vector<char> led(n, 0);
+  std::vector<int>& next = out.next;
+  std::vector<char>& led = out.led;
+  next.assign(n, -1);
+  led.assign(n, 0);
   for (int i = 0; i < n; ++i) {
     const auto it =
         std::lower_bound(by_start.begin(), by_start.end(), seg[i].edge[1],
@@ -329,21 +389,24 @@ std::vector<std::vector<int>> chains_of(const std::vector<CutSegment>& seg, doub
       led[*it] = 1;
     }
   }
-  std::vector<std::vector<int>> chains;
-  std::vector<char> used(n, 0);
+  std::vector<char>& used = out.used;
+  used.assign(n, 0);
+  out.items.clear();
+  out.starts.assign(1, 0);
   auto walk = [&](int first) {
-    std::vector<int> chain;
     for (int i = first; i >= 0 && !used[i]; i = next[i]) {
       used[i] = 1;
-      if ((seg[i].point[1] - seg[i].point[0]).norm() >= tiny) chain.push_back(i);
+      if ((seg[i].point[1] - seg[i].point[0]).norm() >= tiny) out.items.push_back(i);
     }
-    if (chain.size() >= 2) chains.push_back(std::move(chain));
+    if (out.items.size() - out.starts.back() >= 2)
+      out.starts.push_back(out.items.size());
+    else
+      out.items.resize(out.starts.back());
   };
   for (int i : by_start)
     if (!led[i]) walk(i);
   for (int i : by_start)
     if (!used[i]) walk(i);  // loops
-  return chains;
 }
 
 // The fillet points of the concave corner between a thin section (bone point `origin`,
@@ -356,13 +419,14 @@ std::vector<std::vector<int>> chains_of(const std::vector<CutSegment>& seg, doub
 FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec3& origin,
                            const Vec3& u, double r_thin, double lo, double hi) {
   const std::vector<Index> blocks = window_blocks(grid, origin, u, r_thin, lo, hi);
-  Scratch scratch;
+  Scratch& scratch = worker_scratch();
   const Vec3 e1 = plane_start(mesh, grid, blocks, origin, u, r_thin, u.unitOrthogonal(), scratch);
   const Vec3 e2 = u.cross(e1);
   const double t_lo = 0.5 * r_thin, t_hi = 2.5 * r_thin, margin = 1e-9 * r_thin;
   const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
   FilletPoints out;
-  std::vector<CutSegment> seg, kept;
+  std::vector<CutSegment>& seg = scratch.segments;
+  Chains& chains = scratch.chains;
   for (int half = 0; half < kHalfPlanes; ++half) {
     const double phi = 2.0 * kPi * (half + kPlanePhase) / kHalfPlanes;
     PlaneFrame frame;  // (a, y): a along u, y along w; the plane holds the axis
@@ -374,18 +438,12 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
     ball.point = origin + 0.5 * (lo + hi) * u + 0.5 * (t_lo + t_hi) * frame.v;
     ball.radius = std::hypot(0.5 * (t_hi - t_lo), 0.5 * (hi - lo)) + margin;
     seg.clear();
-    const Window window{lo - margin, hi + margin, t_lo - margin, t_hi + margin};
+    const Window window(frame, lo - margin, hi + margin, t_lo - margin, t_hi + margin);
     cut_cells(mesh, grid, blocks, frame, ball, seg, scratch, &window);
-    kept.clear();
-    auto in_window = [&](const Vec2& p) {
-      return p.x() >= lo - margin && p.x() <= hi + margin && p.y() >= t_lo - margin &&
-             p.y() <= t_hi + margin;
-    };
-    for (const CutSegment& s : seg)
-      if (in_window(s.point[0]) || in_window(s.point[1])) kept.push_back(s);
-    for (const std::vector<int>& chain : chains_of(kept, margin)) {
-      for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
-        const CutSegment &s0 = kept[chain[k]], &s1 = kept[chain[k + 1]];
+    chains_of(seg, margin, chains);
+    for (std::size_t j = 0; j < chains.size(); ++j) {
+      for (std::size_t k = chains.starts[j]; k + 1 < chains.starts[j + 1]; ++k) {
+        const CutSegment &s0 = seg[chains.items[k]], &s1 = seg[chains.items[k + 1]];
         const Vec2 p = s0.point[1];
         const double t = p.y();
         if (p.x() < lo || p.x() > hi || t < t_lo || t > t_hi) continue;
