@@ -216,7 +216,8 @@ class PyAnalyzer {
     }
     num_vertices_ = num_vertices;
   }
-  py::dict run(const DoubleArray& vertices, const Skeleton& s, Progress* progress) {
+  py::dict run(const DoubleArray& vertices, const Skeleton& s, Progress* progress,
+               bool keep_for_next_run) {
     require_rows3(vertices, "vertices");
     if (vertices.shape(0) != num_vertices_)
       throw std::invalid_argument("vertices has " + std::to_string(vertices.shape(0)) +
@@ -227,7 +228,7 @@ class PyAnalyzer {
       py::gil_scoped_release release;
       // One analyzer keeps per-run state: concurrent calls on the same object take turns.
       std::lock_guard<std::mutex> lock(mutex_);
-      r = analyzer_->run(vertices.data(), s, progress);
+      r = analyzer_->run(vertices.data(), s, progress, keep_for_next_run);
     }
     return result_to_dict(std::move(r));
   }
@@ -460,8 +461,9 @@ PYBIND11_MODULE(_core, m) {
            py::arg("faces"), py::arg("num_vertices"), py::arg("num_bones"), py::arg("dense"),
            py::arg("csr"), py::arg("options"))
       .def("run", &PyAnalyzer::run, py::arg("vertices"), py::arg("skeleton"),
-           py::arg("progress") = nullptr,
-           "Analyse vertices (V,3 mm) with a posed Skeleton; progress: a Progress or None.");
+           py::arg("progress") = nullptr, py::arg("keep_for_next_run") = true,
+           "Analyse vertices (V,3 mm) with a posed Skeleton; progress: a Progress or None; "
+           "keep_for_next_run=False: a one-off run that keeps no inputs for a partial re-run.");
 
   m.def(
       "correct",

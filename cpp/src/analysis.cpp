@@ -124,12 +124,13 @@ Analyzer::~Analyzer() = default;
 
 const AnalysisOptions& Analyzer::options() const { return impl_->options; }
 
-AnalysisResult Analyzer::run(const double* vertices, const Skeleton& skeleton, Progress* progress) {
-  return impl_->run(vertices, skeleton, nullptr, progress);
+AnalysisResult Analyzer::run(const double* vertices, const Skeleton& skeleton, Progress* progress,
+                             bool keep_for_next_run) {
+  return impl_->run(vertices, skeleton, nullptr, progress, keep_for_next_run);
 }
 
 AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, const Box3* dirty,
-                                   Progress* progress) {
+                                   Progress* progress, bool keep_for_next_run) {
   RunState run(vertices, sk, dirty, progress, grid);
   run.grid_holds_last_run = grid_holds_last_run;
   grid_holds_last_run = false;  // until this run ends
@@ -169,8 +170,12 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     run.check_cancel();
     compute_vertex_stress(run, result);
     run.timer.lap("vertex stress");
-    remember_inputs(run);
-    grid_holds_last_run = run.grid_built;
+    if (keep_for_next_run) {
+      remember_inputs(run);
+      grid_holds_last_run = run.grid_built;
+    } else {
+      forget_last_run();  // a one-off analysis: nothing to compare the next run with
+    }
     if (progress != nullptr) progress->runs_done.fetch_add(1);
     return result;
   } catch (...) {
@@ -284,7 +289,7 @@ AnalysisResult analyze(const MeshView& mesh, const Skeleton& skeleton, const Bon
   validate_skeleton(skeleton);
   Analyzer analyzer(mesh.faces, mesh.num_faces, mesh.num_vertices, weights, skeleton.num_bones(),
                     options);
-  return analyzer.run(mesh.vertices, skeleton, progress);
+  return analyzer.run(mesh.vertices, skeleton, progress, /*keep_for_next_run=*/false);
 }
 
 }  // namespace osteon

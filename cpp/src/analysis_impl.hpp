@@ -336,7 +336,7 @@ struct Analyzer::Impl {
   /// `progress`, reports sections and stops with Cancelled when asked; any exception (a cancel,
   /// bad input) makes the Impl forget its last run, so that no half-made plan is reused.
   AnalysisResult run(const double* vertices, const Skeleton& skeleton, const Box3* dirty,
-                     Progress* progress = nullptr);
+                     Progress* progress = nullptr, bool keep_for_next_run = true);
   /// Forgets the last run (plan, sections, inputs): the next run is a full one.
   void forget_last_run();
 

@@ -578,25 +578,29 @@ FaceGrid::Tight FaceGrid::tight_boxes(Index c, TightBoxes& boxes) const {
                                                                            : Tight::kBusy;
 }
 
-void FaceGrid::bound_cell(Index c, const MeshView& mesh, const TightBoxes& boxes) const {
+void FaceGrid::bound_cell(Index c, const MeshView& /*mesh*/, const TightBoxes& boxes) const {
+  // The corners' coordinates from the cell's entries (bit-exact copies of the mesh's vertices,
+  // a few contiguous cache lines per cell) instead of gathered from the mesh's vertex array (on
+  // cow x64, 18 MB: a miss per vertex); the same values in the same order, so the same boxes.
   // x and y as a pair (one SIMD min and max per vertex where Eigen vectorizes), z alone.
   using Pair = Eigen::Array2d;
+  const std::int32_t* corner = face_entries_.get();
+  const double *ex = entry_x_.get(), *ey = entry_y_.get(), *ez = entry_z_.get();
   const double inf = std::numeric_limits<double>::infinity();
   Pair cell_lo = Pair::Constant(inf), cell_hi = Pair::Constant(-inf);
   double cell_zlo = inf, cell_zhi = -inf;
   const Pair slack = Pair::Constant(slack_);
-  const double* x = mesh.vertices;
   Index g = 0;
   for (Index f = begin(c), e = end(c); f < e; f += kGroup, ++g) {
     Pair lo = Pair::Constant(inf), hi = Pair::Constant(-inf);
     double zlo = inf, zhi = -inf;
     for (Index k = 3 * f, stop = 3 * std::min(e, f + kGroup); k < stop; ++k) {
-      const double* p = x + 3 * static_cast<Index>(faces_[k]);
-      const Pair xy = Eigen::Map<const Pair>(p);
+      const Index entry = corner[k];
+      const Pair xy(ex[entry], ey[entry]);
       lo = lo.min(xy);
       hi = hi.max(xy);
-      zlo = std::min(zlo, p[2]);
-      zhi = std::max(zhi, p[2]);
+      zlo = std::min(zlo, ez[entry]);
+      zhi = std::max(zhi, ez[entry]);
     }
     const Pair mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo) + slack;
     boxes.group_center[g] = Vec3(mid.x(), mid.y(), 0.5 * (zlo + zhi));

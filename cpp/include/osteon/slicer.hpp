@@ -211,8 +211,8 @@ class FaceGrid {
   /// one by one).
   enum class Tight { kReady, kMine, kBusy };
   Tight tight_boxes(Index c, TightBoxes& boxes) const;
-  /// Writes cell c's boxes (from `mesh`, the grid's mesh) and makes them visible to every cut;
-  /// only the thread that got kMine for c.
+  /// Writes cell c's boxes (from its entries: copies of `mesh`, the grid's mesh) and makes them
+  /// visible to every cut; only the thread that got kMine for c.
   void bound_cell(Index c, const MeshView& mesh, const TightBoxes& boxes) const;
 
  private:
