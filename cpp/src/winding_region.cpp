@@ -244,9 +244,12 @@ bool find_crossings(Arrangement& a, Filled<EdgeBox>& boxes, EdgeGrid& grid) {
   const std::size_t n = a.pts.size();
   boxes.resize(n);
   EdgeBox all{INT64_MAX, INT64_MAX, INT64_MIN, INT64_MIN};
+  double extent = 0.0;
   for (std::size_t g = 0; g < n; ++g) {
     const Point64 &p = a.pts[g], &q = a.pt(a.nxt[g]);
-    boxes[g] = {std::min(p.x, q.x), std::min(p.y, q.y), std::max(p.x, q.x), std::max(p.y, q.y)};
+    const EdgeBox& b =
+        boxes[g] = {std::min(p.x, q.x), std::min(p.y, q.y), std::max(p.x, q.x), std::max(p.y, q.y)};
+    extent += static_cast<double>(std::max(b.x1 - b.x0, b.y1 - b.y0));
     all.x0 = std::min(all.x0, p.x), all.y0 = std::min(all.y0, p.y);
     all.x1 = std::max(all.x1, p.x), all.y1 = std::max(all.y1, p.y);
   }
@@ -255,8 +258,6 @@ bool find_crossings(Arrangement& a, Filled<EdgeBox>& boxes, EdgeGrid& grid) {
   const double w = static_cast<double>(all.x1 - all.x0) + 1.0;
   const double h = static_cast<double>(all.y1 - all.y0) + 1.0;
   const double cells = static_cast<double>(n);
-  double extent = 0.0;
-  for (const EdgeBox& b : boxes) extent += static_cast<double>(std::max(b.x1 - b.x0, b.y1 - b.y0));
   const std::int64_t most = 64 * static_cast<std::int64_t>(n) + 4096;
   if (!grid.build(boxes, all, std::max(4.0 * extent / cells, std::sqrt(w * h / (16.0 * cells)))) ||
       grid.pairs() > most)
@@ -283,15 +284,16 @@ bool find_crossings(Arrangement& a, Filled<EdgeBox>& boxes, EdgeGrid& grid) {
 }
 
 // The winding numbers just below path p's lowest vertex v, from the other paths' edges (ray
-// straight down, half-open in x); false where an edge passes through v.
-bool winding_below(const Arrangement& a, int p, int v, Windings& w) {
+// straight down, half-open in x: an edge counts where its box's x0 <= v.x < x1, i.e. where one
+// end point has x <= v.x and the other not); false where an edge passes through v.
+bool winding_below(const Arrangement& a, const Filled<EdgeBox>& boxes, int p, int v, Windings& w) {
   w = {0, 0, 0};
   const Point64& o = a.pt(v);
   const int n = static_cast<int>(a.pts.size());
   for (int g = 0; g < n; ++g) {
-    if (a.path_of[static_cast<std::size_t>(g)] == p) continue;
+    const EdgeBox& b = boxes[static_cast<std::size_t>(g)];
+    if (o.x < b.x0 || b.x1 <= o.x || a.path_of[static_cast<std::size_t>(g)] == p) continue;
     const Point64 &r = a.pt(g), &s = a.pt(a.next(g));
-    if ((r.x <= o.x) == (s.x <= o.x)) continue;
     const bool right = r.x < s.x;
     const Wide side = right ? orient(r, s, o) : orient(s, r, o);
     if (side == 0) return false;
@@ -304,8 +306,8 @@ bool winding_below(const Arrangement& a, int p, int v, Windings& w) {
 
 // The winding numbers right of each chain (chain k of a path starts at its k-th occurrence;
 // a path without crossings is one chain, index -1 - path). False on an inconsistency.
-bool chain_windings(const Arrangement& a, std::vector<Windings>& right,
-                    std::vector<Windings>& lone) {
+bool chain_windings(const Arrangement& a, const Filled<EdgeBox>& boxes,
+                    std::vector<Windings>& right, std::vector<Windings>& lone) {
   const int paths = static_cast<int>(a.set_of.size());
   right.assign(a.occ.size(), Windings{0, 0, 0});
   lone.assign(static_cast<std::size_t>(paths), Windings{0, 0, 0});
@@ -336,7 +338,7 @@ bool chain_windings(const Arrangement& a, std::vector<Windings>& right,
     for (int g = first + 1; g < last; ++g)
       if (a.pt(g).y < a.pt(v).y || (a.pt(g).y == a.pt(v).y && a.pt(g).x < a.pt(v).x)) v = g;
     Windings below;
-    if (!winding_below(a, p, v, below)) return false;
+    if (!winding_below(a, boxes, p, v, below)) return false;
     const Wide turn = orient(a.pt(a.prev(v)), a.pt(v), a.pt(a.next(v)));
     if (turn == 0) return false;
     const std::size_t own = static_cast<std::size_t>(a.set_of[static_cast<std::size_t>(p)]);
@@ -521,7 +523,7 @@ __attribute__((noinline)) bool winding_region_in(Work& work,
     s.end[p] = static_cast<int>(o);
   }
   std::vector<Windings>&right = work.right, &lone = work.lone;
-  if (!chain_windings(a, right, lone) || !assemble(s, lone, right, inside, out)) {
+  if (!chain_windings(a, work.boxes, right, lone) || !assemble(s, lone, right, inside, out)) {
     out.clear();
     return false;
   }
