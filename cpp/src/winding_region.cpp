@@ -154,18 +154,23 @@ int cross_edges(Arrangement& a, int i, int j) {
 }
 
 // a.occ by edge (counting sort: most edges have none or one), then along each edge.
-void sort_occurrences(Arrangement& a, std::vector<int>& first, std::vector<int>& fill,
-                      Filled<Occurrence>& sorted) {
-  first.assign(a.pts.size() + 1, 0);
-  for (const Occurrence& o : a.occ) ++first[static_cast<std::size_t>(o.seg) + 1];
-  for (std::size_t k = 1; k < first.size(); ++k) first[k] += first[k - 1];
+// (Placed from each edge's end backwards, which keeps their order; then each run of two or more
+// on one edge sorted, found along the occurrences rather than the edges.)
+void sort_occurrences(Arrangement& a, std::vector<int>& end, Filled<Occurrence>& sorted) {
+  end.assign(a.pts.size(), 0);
+  for (const Occurrence& o : a.occ) ++end[static_cast<std::size_t>(o.seg)];
+  for (std::size_t k = 1; k < end.size(); ++k) end[k] += end[k - 1];
   sorted.resize(a.occ.size());
-  fill.assign(first.begin(), first.end() - 1);
-  for (const Occurrence& o : a.occ)
-    sorted[static_cast<std::size_t>(fill[static_cast<std::size_t>(o.seg)]++)] = o;
-  for (std::size_t k = 0; k + 1 < first.size(); ++k)
-    if (first[k + 1] - first[k] > 1)
-      std::sort(sorted.begin() + first[k], sorted.begin() + first[k + 1]);
+  for (std::size_t k = a.occ.size(); k-- > 0;)
+    sorted[static_cast<std::size_t>(--end[static_cast<std::size_t>(a.occ[k].seg)])] = a.occ[k];
+  for (std::size_t k = 0; k < sorted.size();) {
+    std::size_t r = k + 1;
+    while (r < sorted.size() && sorted[r].seg == sorted[k].seg) ++r;
+    if (r - k > 1)
+      std::sort(sorted.begin() + static_cast<std::ptrdiff_t>(k),
+                sorted.begin() + static_cast<std::ptrdiff_t>(r));
+    k = r;
+  }
   a.occ.swap(sorted);
 }
 
@@ -474,8 +479,8 @@ namespace {
 struct Work {
   Arrangement a;
   Filled<EdgeBox> boxes;
-  EdgeGrid grid;  // build() sets every field
-  std::vector<int> first, fill;
+  EdgeGrid grid;             // build() sets every field
+  std::vector<int> occ_end;  // sort_occurrences' per edge
   Filled<Occurrence> sorted;
   std::vector<Windings> right, lone;
 };
@@ -510,7 +515,7 @@ __attribute__((noinline)) bool winding_region_in(Work& work,
     }
   }
   if (!find_crossings(a, work.boxes, work.grid)) return false;
-  sort_occurrences(a, work.first, work.fill, work.sorted);
+  sort_occurrences(a, work.occ_end, work.sorted);
   for (std::size_t k = 1; k < a.occ.size(); ++k)  // two crossings too close to order on an edge
     if (a.occ[k].seg == a.occ[k - 1].seg && !(a.occ[k].t - a.occ[k - 1].t > 1e-12)) return false;
   Assembly s{a, {}, {}, {}, {}};
