@@ -106,13 +106,12 @@ struct Arrangement {
   std::vector<int> set_of;  // per path
   std::vector<Crossing> crossings;
   Filled<Occurrence> occ;  // sorted by edge, then along it
-  Filled<int> nxt, prv;    // per point: the next and previous point of its path
+  Filled<int> nxt;         // per point: the next point of its path
   int next(int g) const { return nxt[static_cast<std::size_t>(g)]; }
-  int prev(int g) const { return prv[static_cast<std::size_t>(g)]; }
   const Point64& pt(int g) const { return pts[static_cast<std::size_t>(g)]; }
   void clear() {
     pts.clear(), path_of.clear(), start.clear(), set_of.clear();
-    crossings.clear(), occ.clear(), nxt.clear(), prv.clear();
+    crossings.clear(), occ.clear(), nxt.clear();
   }
 };
 
@@ -344,7 +343,7 @@ bool chain_windings(const Arrangement& a, const Filled<EdgeBox>& boxes,
       if (a.pt(g).y < a.pt(v).y || (a.pt(g).y == a.pt(v).y && a.pt(g).x < a.pt(v).x)) v = g;
     Windings below;
     if (!winding_below(a, boxes, p, v, below)) return false;
-    const Wide turn = orient(a.pt(a.prev(v)), a.pt(v), a.pt(a.next(v)));
+    const Wide turn = orient(a.pt(v == first ? last - 1 : v - 1), a.pt(v), a.pt(a.next(v)));
     if (turn == 0) return false;
     const std::size_t own = static_cast<std::size_t>(a.set_of[static_cast<std::size_t>(p)]);
     if (turn < 0) below[own] -= 1;  // below lies left of the edge leaving v
@@ -505,14 +504,10 @@ __attribute__((noinline)) bool winding_region_in(Work& work,
   if (a.pts.empty()) return true;
   a.path_of.resize(a.pts.size());
   a.nxt.resize(a.pts.size());
-  a.prv.resize(a.pts.size());
   for (std::size_t p = 0; p + 1 < a.start.size(); ++p) {
     const int b = a.start[p], e = a.start[p + 1];
     std::fill(a.path_of.begin() + b, a.path_of.begin() + e, static_cast<int>(p));
-    for (int g = b; g < e; ++g) {
-      a.nxt[static_cast<std::size_t>(g)] = g + 1 == e ? b : g + 1;
-      a.prv[static_cast<std::size_t>(g)] = g == b ? e - 1 : g - 1;
-    }
+    for (int g = b; g < e; ++g) a.nxt[static_cast<std::size_t>(g)] = g + 1 == e ? b : g + 1;
   }
   if (!find_crossings(a, work.boxes, work.grid)) return false;
   sort_occurrences(a, work.occ_end, work.sorted);
