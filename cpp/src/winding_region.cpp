@@ -310,11 +310,12 @@ bool winding_below(const Arrangement& a, const Filled<EdgeBox>& boxes, int p, in
 
 // The winding numbers right of each chain (chain k of a path starts at its k-th occurrence;
 // a path without crossings is one chain, index -1 - path). False on an inconsistency.
-bool chain_windings(const Arrangement& a, const Filled<EdgeBox>& boxes,
-                    std::vector<Windings>& right, std::vector<Windings>& lone) {
+bool chain_windings(const Arrangement& a, const Filled<EdgeBox>& boxes, Filled<Windings>& right,
+                    Filled<Windings>& lone) {
   const int paths = static_cast<int>(a.set_of.size());
-  right.assign(a.occ.size(), Windings{0, 0, 0});
-  lone.assign(static_cast<std::size_t>(paths), Windings{0, 0, 0});
+  // Every chain's windings are written below, and each path's own where it has no chain.
+  right.resize(a.occ.size());
+  lone.resize(static_cast<std::size_t>(paths));
   std::size_t o = 0;
   for (int p = 0; p < paths; ++p) {
     const int first = a.start[static_cast<std::size_t>(p)];
@@ -415,7 +416,7 @@ void add_loop(Path64& loop, Paths64& out) {
 }
 
 // Joins the kept chains into loops; false where a crossing has more than one way on.
-bool assemble(Assembly& s, const std::vector<Windings>& lone, const std::vector<Windings>& right,
+bool assemble(Assembly& s, const Filled<Windings>& lone, const Filled<Windings>& right,
               bool (*inside)(const Windings&), Paths64& out) {
   const Arrangement& a = s.a;
   const int paths = static_cast<int>(a.set_of.size());
@@ -481,7 +482,7 @@ struct Work {
   EdgeGrid grid;             // build() sets every field
   std::vector<int> occ_end;  // sort_occurrences' per edge
   Filled<Occurrence> sorted;
-  std::vector<Windings> right, lone;
+  Filled<Windings> right, lone;
 };
 
 __attribute__((noinline)) bool winding_region_in(Work& work,
@@ -522,7 +523,7 @@ __attribute__((noinline)) bool winding_region_in(Work& work,
     while (o < a.occ.size() && a.occ[o].seg < a.start[p + 1]) ++o;
     s.end[p] = static_cast<int>(o);
   }
-  std::vector<Windings>&right = work.right, &lone = work.lone;
+  Filled<Windings>&right = work.right, &lone = work.lone;
   if (!chain_windings(a, work.boxes, right, lone) || !assemble(s, lone, right, inside, out)) {
     out.clear();
     return false;
