@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "clipper2/clipper.h"
@@ -20,8 +21,10 @@ Clipper2Lib::Path<T> simplify_closed(const Clipper2Lib::Path<T>& path, double ep
   if (len < 4) return path;
   const std::size_t high = len - 1;
   const double eps2 = epsilon * epsilon;
-  std::vector<std::uint32_t> next_of(len), prior_of(len);
-  std::vector<double> dist2(len);
+  // Written in full before they are read: no zeroing (new T[] leaves them uninitialised).
+  const std::unique_ptr<std::uint32_t[]> next_of(new std::uint32_t[len]),
+      prior_of(new std::uint32_t[len]);
+  const std::unique_ptr<double[]> dist2(new double[len]);
   std::vector<char> gone(len, 0);
   for (std::size_t i = 0; i < len; ++i) {
     next_of[i] = static_cast<std::uint32_t>(i == high ? 0 : i + 1);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <utility>
 
 namespace osteon::detail {
@@ -91,7 +92,9 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   }
   for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
   for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
-  std::vector<double> t(static_cast<std::size_t>(count.back()));
+  // Every crossing's slot is written once below: no zeroing (new double[] leaves it as is).
+  const std::size_t crossings = static_cast<std::size_t>(count.back());
+  const std::unique_ptr<double[]> t(new double[crossings]);
   std::vector<int> fill(count.begin(), count.end() - 1);
   for (const Crossing& e : edges) {
     const Vec2& a = *e.a;
@@ -104,18 +107,18 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   }
   RowIntervals out;
   out.start.assign(static_cast<std::size_t>(rows) + 1, 0);
-  out.intervals.resize(t.size() / 2);  // at most one interval per two crossings
+  out.intervals.resize(crossings / 2);  // at most one interval per two crossings
   Interval* next = out.intervals.data();
   for (int k = 0; k < rows; ++k) {
-    const auto first = t.begin() + count[static_cast<std::size_t>(k)];
-    const auto last = t.begin() + count[static_cast<std::size_t>(k) + 1];
+    double* const first = t.get() + count[static_cast<std::size_t>(k)];
+    double* const last = t.get() + count[static_cast<std::size_t>(k) + 1];
     if (last - first > 16) {
       std::sort(first, last);
     } else {  // a row crosses a region a few times: std::sort's set-up would cost more
-      for (auto c = first + 1; c < last; ++c)
-        for (auto d = c; d != first && *(d - 1) > *d; --d) std::swap(*(d - 1), *d);
+      for (double* c = first + 1; c < last; ++c)
+        for (double* d = c; d != first && *(d - 1) > *d; --d) std::swap(*(d - 1), *d);
     }
-    for (auto c = first; c + 1 < last; c += 2)
+    for (const double* c = first; c + 1 < last; c += 2)
       if (*(c + 1) > *c) *next++ = Interval(*c, *(c + 1));
     out.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(next - out.intervals.data());
   }

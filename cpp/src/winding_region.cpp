@@ -106,13 +106,12 @@ struct Arrangement {
   std::vector<int> set_of;  // per path
   std::vector<Crossing> crossings;
   Filled<Occurrence> occ;  // sorted by edge, then along it
-  Filled<int> nxt, prv;    // per point: the next and previous point of its path
+  Filled<int> nxt;         // per point: the next point of its path
   int next(int g) const { return nxt[static_cast<std::size_t>(g)]; }
-  int prev(int g) const { return prv[static_cast<std::size_t>(g)]; }
   const Point64& pt(int g) const { return pts[static_cast<std::size_t>(g)]; }
   void clear() {
     pts.clear(), path_of.clear(), start.clear(), set_of.clear();
-    crossings.clear(), occ.clear(), nxt.clear(), prv.clear();
+    crossings.clear(), occ.clear(), nxt.clear();
   }
 };
 
@@ -154,18 +153,23 @@ int cross_edges(Arrangement& a, int i, int j) {
 }
 
 // a.occ by edge (counting sort: most edges have none or one), then along each edge.
-void sort_occurrences(Arrangement& a, std::vector<int>& first, std::vector<int>& fill,
-                      Filled<Occurrence>& sorted) {
-  first.assign(a.pts.size() + 1, 0);
-  for (const Occurrence& o : a.occ) ++first[static_cast<std::size_t>(o.seg) + 1];
-  for (std::size_t k = 1; k < first.size(); ++k) first[k] += first[k - 1];
+// (Placed from each edge's end backwards, which keeps their order; then each run of two or more
+// on one edge sorted, found along the occurrences rather than the edges.)
+void sort_occurrences(Arrangement& a, std::vector<int>& end, Filled<Occurrence>& sorted) {
+  end.assign(a.pts.size(), 0);
+  for (const Occurrence& o : a.occ) ++end[static_cast<std::size_t>(o.seg)];
+  for (std::size_t k = 1; k < end.size(); ++k) end[k] += end[k - 1];
   sorted.resize(a.occ.size());
-  fill.assign(first.begin(), first.end() - 1);
-  for (const Occurrence& o : a.occ)
-    sorted[static_cast<std::size_t>(fill[static_cast<std::size_t>(o.seg)]++)] = o;
-  for (std::size_t k = 0; k + 1 < first.size(); ++k)
-    if (first[k + 1] - first[k] > 1)
-      std::sort(sorted.begin() + first[k], sorted.begin() + first[k + 1]);
+  for (std::size_t k = a.occ.size(); k-- > 0;)
+    sorted[static_cast<std::size_t>(--end[static_cast<std::size_t>(a.occ[k].seg)])] = a.occ[k];
+  for (std::size_t k = 0; k < sorted.size();) {
+    std::size_t r = k + 1;
+    while (r < sorted.size() && sorted[r].seg == sorted[k].seg) ++r;
+    if (r - k > 1)
+      std::sort(sorted.begin() + static_cast<std::ptrdiff_t>(k),
+                sorted.begin() + static_cast<std::ptrdiff_t>(r));
+    k = r;
+  }
   a.occ.swap(sorted);
 }
 
@@ -244,9 +248,12 @@ bool find_crossings(Arrangement& a, Filled<EdgeBox>& boxes, EdgeGrid& grid) {
   const std::size_t n = a.pts.size();
   boxes.resize(n);
   EdgeBox all{INT64_MAX, INT64_MAX, INT64_MIN, INT64_MIN};
+  double extent = 0.0;
   for (std::size_t g = 0; g < n; ++g) {
     const Point64 &p = a.pts[g], &q = a.pt(a.nxt[g]);
-    boxes[g] = {std::min(p.x, q.x), std::min(p.y, q.y), std::max(p.x, q.x), std::max(p.y, q.y)};
+    const EdgeBox& b =
+        boxes[g] = {std::min(p.x, q.x), std::min(p.y, q.y), std::max(p.x, q.x), std::max(p.y, q.y)};
+    extent += static_cast<double>(std::max(b.x1 - b.x0, b.y1 - b.y0));
     all.x0 = std::min(all.x0, p.x), all.y0 = std::min(all.y0, p.y);
     all.x1 = std::max(all.x1, p.x), all.y1 = std::max(all.y1, p.y);
   }
@@ -255,8 +262,6 @@ bool find_crossings(Arrangement& a, Filled<EdgeBox>& boxes, EdgeGrid& grid) {
   const double w = static_cast<double>(all.x1 - all.x0) + 1.0;
   const double h = static_cast<double>(all.y1 - all.y0) + 1.0;
   const double cells = static_cast<double>(n);
-  double extent = 0.0;
-  for (const EdgeBox& b : boxes) extent += static_cast<double>(std::max(b.x1 - b.x0, b.y1 - b.y0));
   const std::int64_t most = 64 * static_cast<std::int64_t>(n) + 4096;
   if (!grid.build(boxes, all, std::max(4.0 * extent / cells, std::sqrt(w * h / (16.0 * cells)))) ||
       grid.pairs() > most)
@@ -283,15 +288,16 @@ bool find_crossings(Arrangement& a, Filled<EdgeBox>& boxes, EdgeGrid& grid) {
 }
 
 // The winding numbers just below path p's lowest vertex v, from the other paths' edges (ray
-// straight down, half-open in x); false where an edge passes through v.
-bool winding_below(const Arrangement& a, int p, int v, Windings& w) {
+// straight down, half-open in x: an edge counts where its box's x0 <= v.x < x1, i.e. where one
+// end point has x <= v.x and the other not); false where an edge passes through v.
+bool winding_below(const Arrangement& a, const Filled<EdgeBox>& boxes, int p, int v, Windings& w) {
   w = {0, 0, 0};
   const Point64& o = a.pt(v);
   const int n = static_cast<int>(a.pts.size());
   for (int g = 0; g < n; ++g) {
-    if (a.path_of[static_cast<std::size_t>(g)] == p) continue;
+    const EdgeBox& b = boxes[static_cast<std::size_t>(g)];
+    if (o.x < b.x0 || b.x1 <= o.x || a.path_of[static_cast<std::size_t>(g)] == p) continue;
     const Point64 &r = a.pt(g), &s = a.pt(a.next(g));
-    if ((r.x <= o.x) == (s.x <= o.x)) continue;
     const bool right = r.x < s.x;
     const Wide side = right ? orient(r, s, o) : orient(s, r, o);
     if (side == 0) return false;
@@ -304,11 +310,12 @@ bool winding_below(const Arrangement& a, int p, int v, Windings& w) {
 
 // The winding numbers right of each chain (chain k of a path starts at its k-th occurrence;
 // a path without crossings is one chain, index -1 - path). False on an inconsistency.
-bool chain_windings(const Arrangement& a, std::vector<Windings>& right,
-                    std::vector<Windings>& lone) {
+bool chain_windings(const Arrangement& a, const Filled<EdgeBox>& boxes, Filled<Windings>& right,
+                    Filled<Windings>& lone) {
   const int paths = static_cast<int>(a.set_of.size());
-  right.assign(a.occ.size(), Windings{0, 0, 0});
-  lone.assign(static_cast<std::size_t>(paths), Windings{0, 0, 0});
+  // Every chain's windings are written below, and each path's own where it has no chain.
+  right.resize(a.occ.size());
+  lone.resize(static_cast<std::size_t>(paths));
   std::size_t o = 0;
   for (int p = 0; p < paths; ++p) {
     const int first = a.start[static_cast<std::size_t>(p)];
@@ -336,8 +343,8 @@ bool chain_windings(const Arrangement& a, std::vector<Windings>& right,
     for (int g = first + 1; g < last; ++g)
       if (a.pt(g).y < a.pt(v).y || (a.pt(g).y == a.pt(v).y && a.pt(g).x < a.pt(v).x)) v = g;
     Windings below;
-    if (!winding_below(a, p, v, below)) return false;
-    const Wide turn = orient(a.pt(a.prev(v)), a.pt(v), a.pt(a.next(v)));
+    if (!winding_below(a, boxes, p, v, below)) return false;
+    const Wide turn = orient(a.pt(v == first ? last - 1 : v - 1), a.pt(v), a.pt(a.next(v)));
     if (turn == 0) return false;
     const std::size_t own = static_cast<std::size_t>(a.set_of[static_cast<std::size_t>(p)]);
     if (turn < 0) below[own] -= 1;  // below lies left of the edge leaving v
@@ -409,7 +416,7 @@ void add_loop(Path64& loop, Paths64& out) {
 }
 
 // Joins the kept chains into loops; false where a crossing has more than one way on.
-bool assemble(Assembly& s, const std::vector<Windings>& lone, const std::vector<Windings>& right,
+bool assemble(Assembly& s, const Filled<Windings>& lone, const Filled<Windings>& right,
               bool (*inside)(const Windings&), Paths64& out) {
   const Arrangement& a = s.a;
   const int paths = static_cast<int>(a.set_of.size());
@@ -472,10 +479,10 @@ namespace {
 struct Work {
   Arrangement a;
   Filled<EdgeBox> boxes;
-  EdgeGrid grid;  // build() sets every field
-  std::vector<int> first, fill;
+  EdgeGrid grid;             // build() sets every field
+  std::vector<int> occ_end;  // sort_occurrences' per edge
   Filled<Occurrence> sorted;
-  std::vector<Windings> right, lone;
+  Filled<Windings> right, lone;
 };
 
 __attribute__((noinline)) bool winding_region_in(Work& work,
@@ -498,17 +505,13 @@ __attribute__((noinline)) bool winding_region_in(Work& work,
   if (a.pts.empty()) return true;
   a.path_of.resize(a.pts.size());
   a.nxt.resize(a.pts.size());
-  a.prv.resize(a.pts.size());
   for (std::size_t p = 0; p + 1 < a.start.size(); ++p) {
     const int b = a.start[p], e = a.start[p + 1];
     std::fill(a.path_of.begin() + b, a.path_of.begin() + e, static_cast<int>(p));
-    for (int g = b; g < e; ++g) {
-      a.nxt[static_cast<std::size_t>(g)] = g + 1 == e ? b : g + 1;
-      a.prv[static_cast<std::size_t>(g)] = g == b ? e - 1 : g - 1;
-    }
+    for (int g = b; g < e; ++g) a.nxt[static_cast<std::size_t>(g)] = g + 1 == e ? b : g + 1;
   }
   if (!find_crossings(a, work.boxes, work.grid)) return false;
-  sort_occurrences(a, work.first, work.fill, work.sorted);
+  sort_occurrences(a, work.occ_end, work.sorted);
   for (std::size_t k = 1; k < a.occ.size(); ++k)  // two crossings too close to order on an edge
     if (a.occ[k].seg == a.occ[k - 1].seg && !(a.occ[k].t - a.occ[k - 1].t > 1e-12)) return false;
   Assembly s{a, {}, {}, {}, {}};
@@ -520,8 +523,8 @@ __attribute__((noinline)) bool winding_region_in(Work& work,
     while (o < a.occ.size() && a.occ[o].seg < a.start[p + 1]) ++o;
     s.end[p] = static_cast<int>(o);
   }
-  std::vector<Windings>&right = work.right, &lone = work.lone;
-  if (!chain_windings(a, right, lone) || !assemble(s, lone, right, inside, out)) {
+  Filled<Windings>&right = work.right, &lone = work.lone;
+  if (!chain_windings(a, work.boxes, right, lone) || !assemble(s, lone, right, inside, out)) {
     out.clear();
     return false;
   }
