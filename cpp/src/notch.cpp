@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "cell_cut.hpp"
+#include "noinline.hpp"
 #include "notch_reuse.hpp"
 #include "parallel.hpp"
 
@@ -359,7 +360,7 @@ Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const std::vector<I
 
 // This thread's scratch. Not inlined: GCC re-derives a thread_local's address (a __tls_get_addr
 // call in a shared library) at each use, even through a reference bound once.
-__attribute__((noinline)) Scratch& worker_scratch() {
+OSTEON_NOINLINE Scratch& worker_scratch() {
   thread_local Scratch scratch;
   return scratch;
 }

@@ -14,6 +14,7 @@
 #include <new>
 #include <utility>
 
+#include "noinline.hpp"
 #include "round_to_unit.hpp"
 
 namespace osteon::detail {
@@ -485,9 +486,8 @@ struct Work {
   Filled<Windings> right, lone;
 };
 
-__attribute__((noinline)) bool winding_region_in(Work& work,
-                                                 const std::vector<const Paths64*>& sets,
-                                                 bool (*inside)(const Windings&), Paths64& out) {
+OSTEON_NOINLINE bool winding_region_in(Work& work, const std::vector<const Paths64*>& sets,
+                                       bool (*inside)(const Windings&), Paths64& out) {
   Arrangement& a = work.a;
   a.clear();
   a.start.push_back(0);
