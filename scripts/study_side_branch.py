@@ -73,7 +73,8 @@ def junction_z(tilt_deg):
 
 def build(gmsh, radius, tilt_deg=0.0):
     """The filleted T (the body tilted by tilt_deg about y) in gmsh's OCC kernel; returns
-    (volume tag, fillet surface tags)."""
+    (volume tag, fillet surface tags). Written beside stepped_bars.build, not through it: the
+    pre-registered bar study records that file's SHA-1 with its FEM cache (study_notch.py)."""
     occ = gmsh.model.occ
     body = occ.addCylinder(-HALF_LENGTH, 0, 0, 2 * HALF_LENGTH, 0, 0, BODY_D / 2)
     if tilt_deg:
