@@ -810,3 +810,83 @@ def test_a_limb_end_modelled_as_a_small_piece_gets_a_bone_but_a_plate_does_not()
     in_box = ends[(ends[:, 0] > 90) & (np.abs(ends[:, 1:]) < 3).all(1)]
     assert len(in_box) == 1 and 100 - in_box[0, 0] < 1.5 * 3.0
     assert ends[:, 2].max() < 10.0  # no bone into the fin
+
+
+def hooked_limb(r=1.2, bend=6.0, sweep=150.0, n=16):
+    """One closed tube (mm): a body of radius 10 along x in [-60, 0] with a rounded back end,
+    tapering over x in [0, 8] to a claw of radius ``r`` that runs on to x = 12 and then bends
+    ``sweep`` degrees round a circle of radius ``bend`` in the x-z plane, with a rounded tip.
+    Returns (v, f, the claw's tip (3,), r)."""
+    cs, rs = [], []
+    for a in np.linspace(np.pi / 2, 0, 9)[:-1]:  # the back end
+        cs.append([-60 - 10 * np.sin(a), 0, 0])
+        rs.append(10 * np.cos(a))
+    for x in np.linspace(-60, 0, 40, endpoint=False):
+        cs.append([x, 0, 0])
+        rs.append(10.0)
+    for x in np.linspace(0, 8, 16, endpoint=False):
+        cs.append([x, 0, 0])
+        rs.append(10 + (r - 10) * 0.5 * (1 - np.cos(np.pi * x / 8)))
+    for x in np.linspace(8, 12, 8, endpoint=False):
+        cs.append([x, 0, 0])
+        rs.append(r)
+    for t in np.linspace(0, np.radians(sweep), 40):
+        cs.append([12 + bend * np.sin(t), 0, bend - bend * np.cos(t)])
+        rs.append(r)
+    cs, rs = np.array(cs), np.array(rs)
+    tang = np.gradient(cs, axis=0)
+    tang /= np.linalg.norm(tang, axis=1)[:, None]
+    end, t_end = cs[-1], tang[-1]
+    for a in np.linspace(0, np.pi / 2, 7)[1:]:  # the tip
+        cs = np.vstack([cs, end + r * np.sin(a) * t_end])
+        rs = np.r_[rs, r * np.cos(a)]
+        tang = np.vstack([tang, t_end])
+    rs[0] = rs[-1] = 0.05 * r
+    th = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    y = np.array([0, 1.0, 0])
+    rings = []
+    for c, t, rr in zip(cs, tang, rs, strict=True):
+        n1 = np.cross(y, t)
+        n1 /= np.linalg.norm(n1)
+        rings.append(c + rr * (np.cos(th)[:, None] * n1 + np.sin(th)[:, None] * y))
+    v = np.vstack(rings + [cs[[0, -1]]])
+    m, faces = len(cs), []
+    for k in range(m - 1):
+        for i in range(n):
+            j = (i + 1) % n
+            faces += [[k * n + i, k * n + j, (k + 1) * n + j], [k * n + i, (k + 1) * n + j,
+                                                                 (k + 1) * n + i]]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [[m * n, j, i], [m * n + 1, (m - 1) * n + i, (m - 1) * n + j]]
+    f = np.array(faces, np.int64)
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    if np.einsum("ij,ij->i", a, np.cross(b, c)).sum() < 0:
+        f = f[:, [0, 2, 1]]
+    return v, f, cs[-1], r
+
+
+@pytest.mark.parametrize("sweep", [90.0])
+def test_a_hooked_claw_the_curve_skeleton_missed_gets_a_chain_along_it_to_its_tip(sweep):
+    """The thin step on a body whose only bone runs along the body (as when the simplified copy
+    loses a claw): the claw, 2.4 mm thick, bends 90 degrees, so the straight line from its
+    tip to the bone leaves the mesh and the straight rule gives it nothing. Its
+    axis traced by section centroids (``autoskeleton.sections``) gives a chain of bones that
+    stays inside the claw and ends within 1.5 radii of its tip (END_RATIO = 1.25 radii in)."""
+    from osteon.autoskeleton.curve import curve_skeleton
+    from osteon.autoskeleton.thin import add_thin_branches
+    from osteon.autoskeleton.tree import make_body
+
+    v, f, tip, r = hooked_limb(sweep=sweep)
+    body = make_body(v, f, np.array([0, 0, 1.0]), curve_skeleton(v, f, 1500), 0.8)
+    sk = osteon.Skeleton(np.array([[-55.0, 0, 0]]), np.array([[0.0, 0, 0]]), np.array([-1]),
+                         ["body"])
+    sk2, w = add_thin_branches(body, sk, np.ones((len(v), 1)), 2.0)
+    assert sk2.num_bones >= 3  # a chain, not one straight bone
+    ends = np.concatenate([sk2.heads, sk2.tails])
+    assert np.linalg.norm(ends - tip, axis=1).min() < 1.5 * r
+    s = np.linspace(0, 1, 21)[:, None]
+    for h, t in zip(sk2.heads[1:], sk2.tails[1:], strict=True):
+        assert (body.inner_radius(h + s * (t - h)) > 0).all()  # inside the mesh
+    claw = (v[:, 0] > 14) & (v[:, 2] > 3)  # the hook's vertices go to the chain
+    assert (np.asarray(w.argmax(1)).ravel()[claw] > 0).all()
