@@ -31,13 +31,10 @@ from scipy.spatial import cKDTree
 
 from .._api import Skeleton
 from .ends import END_RATIO
-from .sections import STEPS_PER_CHORD, resample, simplify, trace_axis
 from .tree import Body
 
 #: samples along the line from a tip to its bone
 SAMPLES = 32
-#: samples along a traced (curved) branch's axis where its bone's end is sought
-TAIL_SAMPLES = 128
 
 
 def _segment_points(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -131,40 +128,10 @@ def _finger_like(body: Body, near: _Neighbourhood, c: int, out: np.ndarray, half
     return 2.0 * half > spur * 2.0 * float(lateral.max())
 
 
-def _finger_like_along(body: Body, near: _Neighbourhood, c: int, path: np.ndarray,
-                       half: float, spur: float) -> bool:
-    """:func:`_finger_like` along a traced axis ``path`` (K,3, from the tip ``c``): the mesh
-    round the path's first ``half`` mm (the vertices within 2 ``half`` of the tip whose
-    nearest point on the path lies before that, connected to ``c``) must lie within
-    ``half`` / ``spur`` of the path."""
-    cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))]
-    outer = np.vstack([path[cum < half], resample(path, np.array([half]))])
-    tip = body.v[c]
-    sel = np.asarray(near.kd.query_ball_point(tip, 2.0 * half + 1e-9, return_sorted=True),
-                     np.int64)
-    pts = body.v[sel]
-    dist = np.full(len(sel), np.inf)
-    arc = np.zeros(len(sel))
-    for k in range(len(outer) - 1):
-        a, b = outer[k], outer[k + 1]
-        ab = b - a
-        t = np.clip((pts - a) @ ab / max(float(ab @ ab), 1e-300), 0.0, 1.0)
-        dk = np.linalg.norm(pts - (a + t[:, None] * ab), axis=1)
-        better = dk < dist
-        dist[better] = dk[better]
-        arc[better] = cum[k] + t[better] * float(np.linalg.norm(ab))
-    sel, dist = sel[arc < half - 1e-9 * body.size], dist[arc < half - 1e-9 * body.size]
-    if c not in sel:
-        return False
-    part = near.component(sel, c)
-    lateral = dist[np.searchsorted(sel, part)]
-    return 2.0 * half > spur * 2.0 * float(lateral.max())
-
-
 def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
-          ) -> tuple[list[tuple[int, np.ndarray, float]], np.ndarray]:
-    """([(bone, joints (K,3): head q ... tail, width mm)] of the thin branches found, longest
-    first; (V,) each vertex's distance to its bone ``owner``, mm)."""
+          ) -> tuple[list[tuple[int, np.ndarray, np.ndarray, float]], np.ndarray]:
+    """([(bone, head q (3,), tail (3,), width mm)] of the thin branches found, longest first;
+    (V,) each vertex's distance to its bone ``owner``, mm)."""
     v = body.v
     q_all = _segment_points(v, sk.heads[owner], sk.tails[owner])
     d = np.linalg.norm(v - q_all, axis=1)
@@ -179,7 +146,7 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
     cand, q, stick, big_r = (x[keep][order] for x in (cand, q, stick, big_r))  # longer one's
     ends = np.concatenate([sk.heads, sk.tails])  # is the same feature
     near = _Neighbourhood(body)
-    kept: list[tuple[int, np.ndarray, float]] = []
+    kept: list[tuple[int, np.ndarray, np.ndarray, float]] = []
     dist = np.linalg.norm(q - v[cand], axis=1)
     frac = (np.arange(SAMPLES) + 0.5) / SAMPLES
     seen_tip = np.zeros((len(cand), 3))  # the tips tested so far and their widths
@@ -198,16 +165,8 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
         out = s <= length + 1e-6 * body.size
         rho = np.full(SAMPLES, np.nan)
         rho[out] = body.inner_radius(tip + s[out, None] * u)
-        path = None
-        if not (rho[out] > 0).all():  # the line leaves the mesh: a curved branch?
-            b = int(owner[c])
-            path = trace_axis(body, near, int(c), sk.heads[b], sk.tails[b],
-                              dc / STEPS_PER_CHORD)
-            if path is None:
-                continue  # neither a straight nor a traced branch off this bone
-            length, s, rho, out = _along(body, path, frac)
-            if rho is None:
-                continue
+        if not (rho[out] > 0).all():
+            continue  # the line leaves the mesh: not a straight branch off this bone
         width = 2.0 * float(rho[s <= length].max()) if (s <= length).any() else 0.0
         if width < body.min_t or length <= spur * width:
             continue  # thinner than printable, or a bump: not longer than wide
@@ -215,47 +174,11 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
         n_seen += 1
         if np.linalg.norm(ends - tip, axis=1).min() <= width:
             continue  # a bone already ends there
-        if path is None and not _finger_like(body, near, int(c), -u, 0.5 * length, spur):
+        if not _finger_like(body, near, int(c), -u, 0.5 * length, spur):
             continue  # a ridge or a rim (a flat part's edge), not a branch
-        if path is not None and not _finger_like_along(body, near, int(c), path,
-                                                       0.5 * length, spur):
-            continue
-        if path is None:
-            kept.append((int(owner[c]), np.array([qc, _tail(body, tip, u, s, rho, length)]),
-                         width))
-        else:
-            kept.append((int(owner[c]), _chain(body, path, length, width), width))
+        tail = _tail(body, tip, u, s, rho, length)
+        kept.append((int(owner[c]), qc, tail, width))
     return kept, d
-
-
-def _along(body: Body, path: np.ndarray, frac: np.ndarray
-           ) -> tuple[float, np.ndarray, np.ndarray | None, np.ndarray]:
-    """A traced axis ``path`` (K,3: tip ... the bone's point) measured as a straight line is:
-    (the length L beyond the limb's surface, mm; arc lengths ``frac`` x the path's length
-    (SAMPLES,); inner radii there (NaN inside the limb; None if the path leaves the mesh);
-    the samples beyond the limb's surface)."""
-    total = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
-    length = total - float(body.inner_radius(path[-1][None])[0])
-    s = frac * total
-    out = s <= length + 1e-6 * body.size
-    rho = np.full(len(s), np.nan)
-    rho[out] = body.inner_radius(resample(path, s[out]))
-    return length, s, (rho if (rho[out] > 0).all() else None), out
-
-
-def _chain(body: Body, path: np.ndarray, length: float, width: float) -> np.ndarray:
-    """The joints (K,3) of a traced branch's bones, from the bone's point to the tail: the
-    tail as in :func:`_tail` but along the path, measured at ``TAIL_SAMPLES`` points of it
-    (failing that, half the branch's ``length`` in), the path between them simplified to
-    within a quarter of the branch's ``width`` (Douglas-Peucker)."""
-    cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))]
-    fine = (np.arange(TAIL_SAMPLES) + 0.5) / TAIL_SAMPLES * cum[-1]
-    rho = body.inner_radius(resample(path, fine))
-    stop = np.flatnonzero((fine >= END_RATIO * rho) & (rho >= 0.5 * body.min_t))
-    st = float(fine[stop[0]]) if len(stop) else 0.5 * length
-    inner = path[cum > st][::-1]  # the bone's point ... the first point in from the tail
-    pts = np.vstack([inner, resample(path, np.array([st]))])
-    return pts[simplify(pts, 0.25 * width)]
 
 
 def _tail(body: Body, tip: np.ndarray, u: np.ndarray, s: np.ndarray, rho: np.ndarray,
@@ -276,32 +199,6 @@ def _tail(body: Body, tip: np.ndarray, u: np.ndarray, s: np.ndarray, rho: np.nda
     return tip + s[stop[0]] * u if len(stop) else tip + 0.5 * length * u
 
 
-def _add_chain(body: Body, b: int, joints: np.ndarray, owner: np.ndarray, own_d: np.ndarray,
-               new_owner: np.ndarray, heads: list, tails: list, parents: list, names: list
-               ) -> None:
-    """Append the bones of a traced branch (``joints`` (K,3), from the point on bone ``b``
-    to the tail), each the child of the one before, and move to the nearest of them the
-    vertices of ``b`` beyond the limb's surface (farther from ``b`` than the limb's radius
-    at the first joint) that lie nearer it than ``b``."""
-    first = len(heads)
-    for k in range(len(joints) - 1):
-        heads.append(joints[k])
-        tails.append(joints[k + 1])
-        parents.append(b if k == 0 else len(heads) - 2)
-        names.append(f"auto_{len(heads) - 1:02d}")
-    idx = np.flatnonzero(owner == b)
-    idx = idx[own_d[idx] > float(body.inner_radius(joints[0][None])[0])]
-    if not len(idx):
-        return
-    v = body.v[idx]
-    dist = np.stack([np.linalg.norm(v - _segment_points(
-        v, np.broadcast_to(joints[k], v.shape), np.broadcast_to(joints[k + 1], v.shape)),
-        axis=1) for k in range(len(joints) - 1)], 1)
-    best = np.argmin(dist, axis=1)
-    near = dist[np.arange(len(idx)), best] < own_d[idx]
-    new_owner[idx[near]] = first + best[near]
-
-
 def add_thin_branches(body: Body, sk: Skeleton, full: np.ndarray, spur: float
                       ) -> tuple[Skeleton, np.ndarray]:
     """(Skeleton, (V,B') weights) with a bone for every thin branch of ``body`` that ``sk``
@@ -315,12 +212,7 @@ def add_thin_branches(body: Body, sk: Skeleton, full: np.ndarray, spur: float
     heads, tails = list(sk.heads), list(sk.tails)
     parents, names = list(sk.parents), list(sk.names)
     new_owner = owner.copy()
-    for b, joints, _width in tips:
-        qc = joints[0]
-        if len(joints) > 2:
-            _add_chain(body, b, joints, owner, own_d, new_owner, heads, tails, parents, names)
-            continue
-        tail = joints[1]
+    for b, qc, tail, _width in tips:
         nb = len(heads)
         heads.append(qc)
         tails.append(tail)
