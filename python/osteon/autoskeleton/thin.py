@@ -12,8 +12,7 @@ This step looks for such features on the full-resolution mesh, after the bones a
   (length L = d - R, R: the distance from q to the surface) is longer than ``spur`` x its
   width (2 x the largest distance to the surface along that part), as for a leaf branch in
   ``prune``; it must be at least as thick as printable (``min_t``) and no bone may already
-  end within its width of c; the mesh round its outer half must lie within L / (2 ``spur``)
-  of the line through that part's centroid (:func:`_finger_like`);
+  end within its width of c;
 * candidates are taken longest first, and one within the width of a longer one already
   tested (kept or not) is the same feature (neighbouring maxima of d on one toe's end or
   along one rim).
@@ -115,10 +114,9 @@ def _finger_like(body: Body, near: _Neighbourhood, c: int, out: np.ndarray, half
     """Whether the mesh around tip vertex ``c`` less than ``half`` mm in from it along the unit
     ``out`` (3,) (pointing from the bone out to the tip: the outer half of the branch) makes
     a branch longer than ``spur`` x its width: the branch's length (2 ``half``) against twice
-    the largest distance of the vertices there connected to ``c`` from the line along ``out``
-    through their centroid (not through ``c``, which on a low-poly or boxy end is a corner:
-    measured from it, the spread is the end's diagonal, twice its half-width).  A finger
-    passes; the rim of a flat part (a palm's edge) is a wide cap there and does not."""
+    the largest distance from the line through ``c`` along ``out`` of the vertices there
+    connected to ``c``.  A finger passes; the rim of a flat part (a palm's edge) is a wide cap
+    there and does not."""
     tip = body.v[c]
     sel = np.asarray(near.kd.query_ball_point(tip, 2.0 * half + 1e-9, return_sorted=True),
                      np.int64)
@@ -126,7 +124,6 @@ def _finger_like(body: Body, near: _Neighbourhood, c: int, out: np.ndarray, half
     if c not in sel:
         return False
     rel = body.v[near.component(sel, c)] - tip
-    rel = rel - rel.mean(axis=0)  # (from the line through their centroid: c may be a corner)
     lateral = np.linalg.norm(rel - np.outer(rel @ out, out), axis=1)
     return 2.0 * half > spur * 2.0 * float(lateral.max())
 
