@@ -13,8 +13,9 @@ This step looks for such features on the full-resolution mesh, after the bones a
   width (2 x the largest distance to the surface along that part), as for a leaf branch in
   ``prune``; it must be at least as thick as printable (``min_t``) and no bone may already
   end within its width of c; unless c lies beyond the end of a leaf bone (its nearest point
-  on its bone is that bone's tail), the mesh round its outer half must be no wider than
-  L / ``spur`` (:func:`_finger_like`: not a rim or a ridge along the limb);
+  on its bone is that bone's tail) and farther from that bone's axis (extended) than the
+  limb's radius R there, the mesh round its outer half must be no wider than L / ``spur``
+  (:func:`_finger_like`: not a rim or a ridge along the limb);
 * candidates are taken longest first, and one within the width of a longer one already
   tested (kept or not) is the same feature (neighbouring maxima of d on one toe's end or
   along one rim).
@@ -149,8 +150,13 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
     ends = np.concatenate([sk.heads, sk.tails])  # is the same feature
     leaf = np.ones(sk.num_bones, bool)
     leaf[sk.parents[sk.parents >= 0]] = False
-    past_end = leaf[owner[cand]] & (np.linalg.norm(q - sk.tails[owner[cand]], axis=1)
-                                    <= 1e-9 * body.size)  # beyond a leaf bone's end
+    b = owner[cand]
+    axis = sk.tails[b] - sk.heads[b]
+    axis = axis / np.maximum(np.linalg.norm(axis, axis=1), 1e-300)[:, None]
+    rel = v[cand] - sk.tails[b]
+    off = np.linalg.norm(rel - (rel * axis).sum(1)[:, None] * axis, axis=1)
+    past_end = leaf[b] & (np.linalg.norm(q - sk.tails[b], axis=1) <= 1e-9 * body.size) \
+        & (off > big_r)  # beyond a leaf bone's end, beside its limb's extended axis
     near = _Neighbourhood(body)
     kept: list[tuple[int, np.ndarray, np.ndarray, float]] = []
     dist = np.linalg.norm(q - v[cand], axis=1)
