@@ -12,10 +12,7 @@ This step looks for such features on the full-resolution mesh, after the bones a
   (length L = d - R, R: the distance from q to the surface) is longer than ``spur`` x its
   width (2 x the largest distance to the surface along that part), as for a leaf branch in
   ``prune``; it must be at least as thick as printable (``min_t``) and no bone may already
-  end within its width of c; unless c lies beyond the end of a leaf bone (its nearest point
-  on its bone is that bone's tail) and farther from that bone's axis (extended) than the
-  limb's radius R there, the mesh round its outer half must be no wider than L / ``spur``
-  (:func:`_finger_like`: not a rim or a ridge along the limb);
+  end within its width of c;
 * candidates are taken longest first, and one within the width of a longer one already
   tested (kept or not) is the same feature (neighbouring maxima of d on one toe's end or
   along one rim).
@@ -148,15 +145,6 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
     order = np.argsort(-stick[keep], kind="stable")  # longest first: a shorter tip near a
     cand, q, stick, big_r = (x[keep][order] for x in (cand, q, stick, big_r))  # longer one's
     ends = np.concatenate([sk.heads, sk.tails])  # is the same feature
-    leaf = np.ones(sk.num_bones, bool)
-    leaf[sk.parents[sk.parents >= 0]] = False
-    b = owner[cand]
-    axis = sk.tails[b] - sk.heads[b]
-    axis = axis / np.maximum(np.linalg.norm(axis, axis=1), 1e-300)[:, None]
-    rel = v[cand] - sk.tails[b]
-    off = np.linalg.norm(rel - (rel * axis).sum(1)[:, None] * axis, axis=1)
-    past_end = leaf[b] & (np.linalg.norm(q - sk.tails[b], axis=1) <= 1e-9 * body.size) \
-        & (off > big_r)  # beyond a leaf bone's end, beside its limb's extended axis
     near = _Neighbourhood(body)
     kept: list[tuple[int, np.ndarray, np.ndarray, float]] = []
     dist = np.linalg.norm(q - v[cand], axis=1)
@@ -164,8 +152,7 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
     seen_tip = np.zeros((len(cand), 3))  # the tips tested so far and their widths
     seen_width = np.zeros(len(cand))
     n_seen = 0
-    for c, qc, length, dc, r_q, beyond in zip(cand, q, stick, dist, big_r, past_end,
-                                              strict=True):
+    for c, qc, length, dc, r_q in zip(cand, q, stick, dist, big_r, strict=True):
         length = float(length)
         tip = v[c]
         if n_seen and (np.linalg.norm(seen_tip[:n_seen] - tip, axis=1)
@@ -187,8 +174,8 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
         n_seen += 1
         if np.linalg.norm(ends - tip, axis=1).min() <= width:
             continue  # a bone already ends there
-        if not beyond and not _finger_like(body, near, int(c), -u, 0.5 * length, spur):
-            continue  # a ridge or a rim (a flat part's edge) along a limb, not a branch
+        if not _finger_like(body, near, int(c), -u, 0.5 * length, spur):
+            continue  # a ridge or a rim (a flat part's edge), not a branch
         tail = _tail(body, tip, u, s, rho, length)
         kept.append((int(owner[c]), qc, tail, width))
     return kept, d
