@@ -128,13 +128,27 @@ def diff(base_path: str, new_path: str) -> None:
 
 
 def misses(path: str) -> None:
-    """Every extremity no bone end reaches: model, tip mm, r mm, width mm, distance (r)."""
+    """Every extremity no bone end reaches: model, tip mm, r mm, width mm, distance (r), and
+    where the tip lies from the nearest bone end along its bone's axis (mm past the end,
+    mm off the axis: an end bone that reaches its limb's end with the extremity beside it, a
+    corner of a wide flat end, reads small along and large off)."""
     for m, d in _load(path).items():
         ends = np.concatenate([d["heads"], d["tails"]])
         x = np.linalg.norm(d["tips"][:, None] - ends[None], axis=2).min(1) / d["radius"]
+        nb = len(d["heads"])
         for i in np.flatnonzero(x > 1.5):
-            print(f"{m} #{i} tip {np.round(d['tips'][i], 1).tolist()} r {d['radius'][i]:.2f} "
-                  f"width {d['width'][i]:.2f}: {x[i]:.1f} r")
+            tip = d["tips"][i]
+            k = int(np.argmin(np.linalg.norm(ends - tip, axis=1)))
+            b, at_tail = k % nb, k >= nb
+            ax = d["tails"][b] - d["heads"][b] if at_tail else d["heads"][b] - d["tails"][b]
+            ax = ax / max(float(np.linalg.norm(ax)), 1e-12)
+            rel = tip - ends[k]
+            along = float(rel @ ax)
+            off = float(np.linalg.norm(rel - along * ax))
+            print(f"{m} #{i} tip {np.round(tip, 1).tolist()} r {d['radius'][i]:.2f} "
+                  f"width {d['width'][i]:.2f} printable {bool(d['printable'][i])}: {x[i]:.1f} r; "
+                  f"from bone {b}'s {'tail' if at_tail else 'head'} {along:.1f} mm along, "
+                  f"{off:.1f} mm off its axis")
 
 
 def printable(paths: list[str], min_t: float, data: str) -> None:
