@@ -259,6 +259,8 @@ struct Scratch {
   std::vector<double> heights;
   std::vector<double> run_flank;  // a chain's concave runs' largest segment turn (chain_runs)
   std::vector<int> run_of;        // each segment's run (chain_runs)
+  std::vector<std::size_t> run_best;  // each run's segment of largest turn (chain_runs)
+  std::vector<std::size_t> point_at;  // a chain's fillet points' vertices (fillet_points)
   std::vector<CutSegment> segments;
   Chains chains;
 };
@@ -445,11 +447,13 @@ void chains_of(const std::vector<CutSegment>& seg, double tiny, Chains& out) {
     if (!used[i]) walk(i);  // loops
 }
 
-// The signed turn at a chain's vertex between segments s0 and s1, radians: > 0 convex, < 0
-// concave (the loops of an outward-facing surface run counter-clockwise).
+// The signed turn at a chain's vertex between segments s0 and s1, radians: >= 0 convex (or
+// straight), -1 concave (the loops of an outward-facing surface run counter-clockwise).
 double vertex_turn(const CutSegment& s0, const CutSegment& s1) {
   const Vec2 d0 = s0.point[1] - s0.point[0], d1 = s1.point[1] - s1.point[0];
-  return std::atan2(d0.x() * d1.y() - d0.y() * d1.x(), d0.dot(d1));
+  const double cross = d0.x() * d1.y() - d0.y() * d1.x();
+  // (A concave vertex only resets the run's convex sum: its angle is not needed.)
+  return cross < 0 ? -1.0 : std::atan2(cross, d0.dot(d1));
 }
 
 // The concave runs of chain j, in order: a run ends where the profile has turned convex by more
@@ -459,8 +463,16 @@ double vertex_turn(const CutSegment& s0, const CutSegment& s1) {
 // largest segment turn from radial towards the thin side (radians; a segment's outward normal
 // (d_t, -d_a) / |d|, its turn atan2(-n_a, n_t)).
 void chain_runs(const std::vector<CutSegment>& seg, const Chains& chains, std::size_t j,
-                std::vector<int>& run_of, std::vector<double>& run_flank) {
-  run_flank.assign(1, -kPi);
+                std::vector<int>& run_of, std::vector<double>& run_flank,
+                std::vector<std::size_t>& run_best) {
+  // A segment's turn orders as its pseudo-angle (monotone in atan2(y, x), no trigonometry):
+  // each run keeps its largest's segment, whose atan2 is taken once at the end.
+  auto pseudo = [](const Vec2& d) {
+    const double y = -d.y(), x = -d.x(), m = std::abs(x) + std::abs(y);
+    return m > 0 ? std::copysign(1.0 - x / m, y) : -2.0;
+  };
+  run_flank.assign(1, -3.0);  // (first the pseudo-angles, below every one)
+  run_best.assign(1, chains.starts[j]);
   run_of.clear();
   double convex = 0;  // the convex turn since the last concave vertex
   for (std::size_t k = chains.starts[j]; k < chains.starts[j + 1]; ++k) {
@@ -470,12 +482,21 @@ void chain_runs(const std::vector<CutSegment>& seg, const Chains& chains, std::s
       if (turn < 0) {
         convex = 0;
       } else if (convex <= kRunBreak && (convex += turn) > kRunBreak) {
-        run_flank.push_back(-kPi);
+        run_flank.push_back(-3.0);
+        run_best.push_back(k);
       }
     }
-    const Vec2 d = s.point[1] - s.point[0];
-    run_flank.back() = std::max(run_flank.back(), std::atan2(-d.y(), -d.x()));
+    const double p = pseudo(s.point[1] - s.point[0]);
+    if (p > run_flank.back()) {
+      run_flank.back() = p;
+      run_best.back() = k;
+    }
     run_of.push_back(static_cast<int>(run_flank.size()) - 1);
+  }
+  for (std::size_t r = 0; r < run_flank.size(); ++r) {
+    const CutSegment& s = seg[chains.items[run_best[r]]];
+    const Vec2 d = s.point[1] - s.point[0];
+    run_flank[r] = std::atan2(-d.y(), -d.x());
   }
 }
 
@@ -512,7 +533,8 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
     cut_cells(mesh, grid, blocks, frame, ball, seg, scratch, &window);
     chains_of(seg, margin, chains);
     for (std::size_t j = 0; j < chains.size(); ++j) {
-      chain_runs(seg, chains, j, scratch.run_of, scratch.run_flank);
+      const std::size_t first = out.points.size();
+      scratch.point_at.clear();
       for (std::size_t k = chains.starts[j]; k + 1 < chains.starts[j + 1]; ++k) {
         const CutSegment &s0 = seg[chains.items[k]], &s1 = seg[chains.items[k + 1]];
         const Vec2 p = s0.point[1];
@@ -533,14 +555,19 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
         q.na = na;
         q.turn = std::atan2(-na, nr);
         q.t = t;
-        q.flank = scratch.run_flank[scratch.run_of[k - chains.starts[j]]];
         q.sector = half;
         q.edge_begin = out.edges.size();
         out.edges.push_back(l0 * l0);
         out.edges.push_back(l1 * l1);
         q.edge_end = out.edges.size();
         out.points.push_back(q);
+        scratch.point_at.push_back(k - chains.starts[j]);
       }
+      // The runs only of a chain with fillet points (most chains in the window have none).
+      if (out.points.size() == first) continue;
+      chain_runs(seg, chains, j, scratch.run_of, scratch.run_flank, scratch.run_best);
+      for (std::size_t m = first; m < out.points.size(); ++m)
+        out.points[m].flank = scratch.run_flank[scratch.run_of[scratch.point_at[m - first]]];
     }
   }
   return out;
