@@ -169,7 +169,12 @@ def fem_solution(rel_r, fine_div, tilt_deg=0.0):
 
     t0 = time.time()
     nodes, tets = mesh_shape(rel_r, 3, fine_div, tilt_deg=tilt_deg)
-    held = np.flatnonzero(nodes @ body_axis(tilt_deg) < -HALF_LENGTH + 1e-4)
+    # the body's end cap: its nodes past -HALF_LENGTH along the body's axis *and* within the
+    # body's radius of it (past 45 degrees of tilt the branch's tip also lies past that plane)
+    u = body_axis(tilt_deg)
+    along = nodes @ u
+    off_axis = np.linalg.norm(nodes - np.outer(along, u), axis=1)
+    held = np.flatnonzero((along < -HALF_LENGTH + 1e-4) & (off_axis < BODY_D / 2 + 1e-3))
     tip = np.flatnonzero(nodes[:, 2] > TIP_Z - 1e-6)
     cases = [(tip, np.tile(np.array(load) * FORCE / len(tip), (len(tip), 1))) for load in LOADS]
     with tempfile.TemporaryDirectory() as work:

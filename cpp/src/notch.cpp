@@ -80,6 +80,7 @@ struct Corner {
   bool found = false;
   double radius = 0.0;  // fillet radius of the sharpest sector, mm (0: a sharp edge)
   double axial = 0.0;   // where the fillet meets the thin side, along the axis from the plane, mm
+  double opening = kPi / 2;  // the most acute sector's opening, radians (acute_factor)
 };
 
 // Smallest moment arm / equivalent radius of a thin side the fit is applied to.
@@ -106,6 +107,36 @@ constexpr double kSharpEdge = 0.1;
 // Smallest turn of the surface at a corner that counts as a shoulder (docs/notch.md).
 constexpr double kMinTurn = 45.0 * kPi / 180.0;
 
+// An acute corner (docs/notch.md "Round 6"): the opening angle between the thin side's
+// generatrix and the thick side's surface beyond the fillet, in a meridian half-plane, is pi
+// less the largest turn of the profile's segments from radial over the concave run the fillet
+// lies in (chain_runs: a run ends where the profile has turned convex by more than kRunBreak in
+// total, the thick side's outer edge or a convex surface beyond). A 90-degree shoulder opens 90.
+constexpr double kRunBreak = 5.0 * kPi / 180.0;
+// Openings under 85 degrees raise Kt - 1 by a factor interpolated linearly in the opening
+// between kAcuteTable's points (degrees, factor), continued below the last with the slope of
+// the last two, down to kAcuteMin. Fitted on FEM, not taken from a source (no published law
+// was found for it: docs/notch.md "Round 6"): CalculiX's peak in the acute corner of a junction
+// tilted 30 and 45 degrees (round 6's training tilts, r/d 0.1) over the nominal stress there is
+// a Kt whose excess over the stepped-bar fit's (the same D/d and true radius) is 2.29 x at 60
+// degrees and 2.52 x at 45. At 85 degrees and over: 1 (judgement: a shoulder meshed with facets
+// within 5 degrees of 90 keeps the stepped bar's Kt; the T's 90-degree junction, 1.43 x in FEM,
+// reads on the safe side through its measured radius, docs/notch.md). kAcuteMin: judgement (a
+// slot, not a corner, below it).
+constexpr std::array<std::array<double, 2>, 3> kAcuteTable = {
+    {{85.0, 1.0}, {60.0, 2.29}, {45.0, 2.52}}};
+constexpr double kAcuteMin = 30.0;
+
+// The factor on Kt - 1 of a corner opening `opening` radians (1 at and above 85 degrees).
+double acute_factor(double opening) {
+  const double deg = std::max(opening * 180.0 / kPi, kAcuteMin);
+  if (!(deg < kAcuteTable[0][0])) return 1.0;
+  std::size_t k = 1;
+  while (k + 1 < kAcuteTable.size() && deg < kAcuteTable[k][0]) ++k;
+  const auto &p0 = kAcuteTable[k - 1], &p1 = kAcuteTable[k];
+  return p0[1] + (p1[1] - p0[1]) * (deg - p0[0]) / (p1[0] - p0[0]);
+}
+
 // Fillet points grouped in angular sectors around the axis: axial position a, distance t from
 // the axis and the normal's axial component n_a of each point (mm, unit), and the lengths of
 // their mesh edges in the meridian plane (mm).
@@ -122,6 +153,7 @@ struct SectorSums {
   double* lengths = nullptr;                  // their mesh edges' squared lengths (a buffer's run)
   std::size_t num_lengths = 0;
   double turn = 0;  // the largest normal turn from radial, radians
+  double flank = 0;  // the largest turn of the points' concave runs (the opening's complement)
 };
 
 // A sector's verdict "sharp edge" at axial position `at` (always true).
@@ -186,6 +218,7 @@ constexpr double kPlanePhase = 0.2874;
 // (mm), and the sector (a group of neighbouring half-planes) its half-plane belongs to.
 struct FilletPoint {
   double a = 0, na = 0, turn = 0, t = 0;
+  double flank = 0;  // the largest segment turn of its concave run (chain_runs), radians
   int sector = 0;
   std::size_t edge_begin = 0, edge_end = 0;  // its segments' squared lengths in FilletPoints::edges
 };
@@ -224,6 +257,10 @@ struct Chains {
 // its buffers have grown).
 struct Scratch {
   std::vector<double> heights;
+  std::vector<double> run_flank;  // a chain's concave runs' largest segment turn (chain_runs)
+  std::vector<int> run_of;        // each segment's run (chain_runs)
+  std::vector<std::size_t> run_best;  // each run's segment of largest turn (chain_runs)
+  std::vector<std::size_t> point_at;  // a chain's fillet points' vertices (fillet_points)
   std::vector<CutSegment> segments;
   Chains chains;
 };
@@ -410,6 +447,59 @@ void chains_of(const std::vector<CutSegment>& seg, double tiny, Chains& out) {
     if (!used[i]) walk(i);  // loops
 }
 
+// The signed turn at a chain's vertex between segments s0 and s1, radians: >= 0 convex (or
+// straight), -1 concave (the loops of an outward-facing surface run counter-clockwise).
+double vertex_turn(const CutSegment& s0, const CutSegment& s1) {
+  const Vec2 d0 = s0.point[1] - s0.point[0], d1 = s1.point[1] - s1.point[0];
+  const double cross = d0.x() * d1.y() - d0.y() * d1.x();
+  // (A concave vertex only resets the run's convex sum: its angle is not needed.)
+  return cross < 0 ? -1.0 : std::atan2(cross, d0.dot(d1));
+}
+
+// The concave runs of chain j, in order: a run ends where the profile has turned convex by more
+// than kRunBreak in total since its last concave vertex (the thick side's outer edge, or a
+// convex surface beyond the corner: a fine mesh turns it a little at each vertex; the facets'
+// noise inside a fillet turns less). `run_of`: each segment's run; `run_flank`: each run's
+// largest segment turn from radial towards the thin side (radians; a segment's outward normal
+// (d_t, -d_a) / |d|, its turn atan2(-n_a, n_t)).
+void chain_runs(const std::vector<CutSegment>& seg, const Chains& chains, std::size_t j,
+                std::vector<int>& run_of, std::vector<double>& run_flank,
+                std::vector<std::size_t>& run_best) {
+  // A segment's turn orders as its pseudo-angle (monotone in atan2(y, x), no trigonometry):
+  // each run keeps its largest's segment, whose atan2 is taken once at the end.
+  auto pseudo = [](const Vec2& d) {
+    const double y = -d.y(), x = -d.x(), m = std::abs(x) + std::abs(y);
+    return m > 0 ? std::copysign(1.0 - x / m, y) : -2.0;
+  };
+  run_flank.assign(1, -3.0);  // (first the pseudo-angles, below every one)
+  run_best.assign(1, chains.starts[j]);
+  run_of.clear();
+  double convex = 0;  // the convex turn since the last concave vertex
+  for (std::size_t k = chains.starts[j]; k < chains.starts[j + 1]; ++k) {
+    const CutSegment& s = seg[chains.items[k]];
+    if (k > chains.starts[j]) {
+      const double turn = vertex_turn(seg[chains.items[k - 1]], s);
+      if (turn < 0) {
+        convex = 0;
+      } else if (convex <= kRunBreak && (convex += turn) > kRunBreak) {
+        run_flank.push_back(-3.0);
+        run_best.push_back(k);
+      }
+    }
+    const double p = pseudo(s.point[1] - s.point[0]);
+    if (p > run_flank.back()) {
+      run_flank.back() = p;
+      run_best.back() = k;
+    }
+    run_of.push_back(static_cast<int>(run_flank.size()) - 1);
+  }
+  for (std::size_t r = 0; r < run_flank.size(); ++r) {
+    const CutSegment& s = seg[chains.items[run_best[r]]];
+    const Vec2 d = s.point[1] - s.point[0];
+    run_flank[r] = std::atan2(-d.y(), -d.x());
+  }
+}
+
 // The fillet points of the concave corner between a thin section (bone point `origin`,
 // equivalent radius r_thin) and the thick side along unit axis `u` (thin -> thick), within
 // axial [lo, hi] of the thin section's plane and 0.5 .. 2.5 r_thin of the axis, on the
@@ -443,6 +533,8 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
     cut_cells(mesh, grid, blocks, frame, ball, seg, scratch, &window);
     chains_of(seg, margin, chains);
     for (std::size_t j = 0; j < chains.size(); ++j) {
+      const std::size_t first = out.points.size();
+      scratch.point_at.clear();
       for (std::size_t k = chains.starts[j]; k + 1 < chains.starts[j + 1]; ++k) {
         const CutSegment &s0 = seg[chains.items[k]], &s1 = seg[chains.items[k + 1]];
         const Vec2 p = s0.point[1];
@@ -469,10 +561,73 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
         out.edges.push_back(l1 * l1);
         q.edge_end = out.edges.size();
         out.points.push_back(q);
+        scratch.point_at.push_back(k - chains.starts[j]);
       }
+      // The runs only of a chain with fillet points (most chains in the window have none).
+      if (out.points.size() == first) continue;
+      chain_runs(seg, chains, j, scratch.run_of, scratch.run_flank, scratch.run_best);
+      for (std::size_t m = first; m < out.points.size(); ++m)
+        out.points[m].flank = scratch.run_flank[scratch.run_of[scratch.point_at[m - first]]];
     }
   }
   return out;
+}
+
+// The sums of the fillet points of half-plane h alone (corner_in's fallback); `lengths`: the
+// buffer its edges' squared lengths are copied to.
+SectorSums half_plane_sums(const std::vector<const FilletPoint*>& inside,
+                           const FilletPoints& fillet, int h, std::vector<double>& lengths) {
+  SectorSums q;
+  lengths.clear();
+  for (const FilletPoint* p : inside) {
+    if (p->sector != h) continue;
+    ++q.n;
+    q.ma += p->a;
+    q.mn += p->na;
+    q.mt += p->t;
+    q.turn = std::max(q.turn, p->turn);
+    q.flank = std::max(q.flank, p->flank);
+    lengths.insert(lengths.end(), fillet.edges.data() + p->edge_begin,
+                   fillet.edges.data() + p->edge_end);
+  }
+  if (q.n == 0) return q;
+  q.ma /= q.n;
+  q.mn /= q.n;
+  q.mt /= q.n;
+  for (const FilletPoint* p : inside) {
+    if (p->sector != h) continue;
+    const double da = p->a - q.ma, dt = p->t - q.mt, dn = p->na - q.mn;
+    q.saa += da * da;
+    q.stt += dt * dt;
+    q.snn += dn * dn;
+    q.san += da * dn;
+  }
+  q.lengths = lengths.data();
+  q.num_lengths = lengths.size();
+  return q;
+}
+
+// One sector's verdict folded into the corner `c`: the sharpest sector's radius governs, the
+// most acute sector's opening is kept. Returns whether the sector's fit said anything.
+bool judge_sector(const SectorSums& sums, double r_thin, Corner& c) {
+  double rho = 0, axial = 0;
+  if (!sector_radius(sums, r_thin, rho, axial)) return false;
+  // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
+  // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
+  // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:
+  // their singularity is weaker (Williams 1952: stress ~ dist^-0.33 at a 45-degree turn
+  // against dist^-0.46 at 90), and turns of 45..90 degrees take the shoulder's Kt (safe side).
+  const double turn = rho == 0.0 ? 2.0 * sums.turn : sums.turn + 8.0 * kPi / 180.0;
+  if (turn < kMinTurn) return true;
+  // The most acute sector's opening (the safe side, with the sharpest sector's radius).
+  const double opening = kPi - sums.flank;
+  if (!c.found || opening < c.opening) c.opening = opening;
+  if (!c.found || rho < c.radius) {  // the sharpest sector governs
+    c.found = true;
+    c.radius = rho;
+    c.axial = axial;
+  }
+  return true;
 }
 
 // The corner's radius from the fillet points within axial [lo, hi]: fitted per 45-degree
@@ -498,6 +653,7 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
       q.mn += p->na;
       q.mt += p->t;
       q.turn = std::max(q.turn, p->turn);
+      q.flank = std::max(q.flank, p->flank);
       edge_at[sector + 1] += p->edge_end - p->edge_begin;
     }
   for (int s = 0; s < kSectors; ++s) {
@@ -529,21 +685,16 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
       edge_next[sector] += p->edge_end - p->edge_begin;
     }
   Corner c;
-  for (int s = 0; s < kSectors; ++s) {
-    double rho = 0, axial = 0;
-    if (!sector_radius(sums[s], r_thin, rho, axial)) continue;
-    // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
-    // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
-    // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:
-    // their singularity is weaker (Williams 1952: stress ~ dist^-0.33 at a 45-degree turn
-    // against dist^-0.46 at 90), and turns of 45..90 degrees take the shoulder's Kt (safe side).
-    const double turn = rho == 0.0 ? 2.0 * sums[s].turn : sums[s].turn + 8.0 * kPi / 180.0;
-    if (turn < kMinTurn) continue;
-    if (!c.found || rho < c.radius) {  // the sharpest sector governs
-      c.found = true;
-      c.radius = rho;
-      c.axial = axial;
-    }
+  std::array<char, kSectors> said{};  // the sector's fit gave a verdict (sector_radius)
+  for (int s = 0; s < kSectors; ++s) said[s] = judge_sector(sums[s], r_thin, c);
+  // A half-plane whose two sectors both say nothing (their two profiles disagree: a corner
+  // whose axial position changes around the axis, a junction's acute side against its sides)
+  // is fitted alone when it has 3 points or more (round 6).
+  std::vector<double> own_lengths;
+  for (int h = 0; h < kHalfPlanes; ++h) {
+    if (said[h] || said[(h + kSectors - 1) % kSectors]) continue;
+    SectorSums one = half_plane_sums(inside, fillet, h, own_lengths);
+    if (one.n >= 3) judge_sector(one, r_thin, c);
   }
   return c;
 }
@@ -751,10 +902,11 @@ std::vector<Corner> recall_or_measure(const MeshView& mesh,
     CornerGroup& g = groups[group_of[s]];
     if (recalled[group_of[s]]) {
       const CornerFit& f = g.corners[taken[group_of[s]]++];
-      corners[s] = Corner{f.found, f.radius, f.axial};
+      corners[s] = Corner{f.found, f.radius, f.axial, f.opening};
     } else {
       corners[s] = measured[next++];
-      g.corners.push_back(CornerFit{corners[s].found, corners[s].radius, corners[s].axial});
+      g.corners.push_back(CornerFit{corners[s].found, corners[s].radius, corners[s].axial,
+                                     corners[s].opening});
     }
   }
   memo.groups = std::move(groups);
@@ -793,7 +945,9 @@ NotchField find_notches(const MeshView& mesh, const std::function<const FaceGrid
     if (!c.found) continue;
     const int i = st.section;
     const double rho = std::max(c.radius, min_radius);
-    const double kt = shoulder_fillet_kt(2 * st.r_big, 2 * st.r_thin, rho);
+    // The stepped bar's Kt, its excess raised at an acute corner (acute_factor).
+    const double kt = 1.0 + (shoulder_fillet_kt(2 * st.r_big, 2 * st.r_thin, rho) - 1.0) *
+                                acute_factor(c.opening);
     // Nominal stress at the corner: the same load point, the centroid moved to the corner.
     const double shift = std::clamp(c.axial, 0.0, st.reach);
     const double arm_c = (r.load_point[i] - (r.section_center[i] + shift * st.u)).norm();

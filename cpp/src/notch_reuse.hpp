@@ -15,6 +15,7 @@ struct CornerFit {
   bool found = false;
   double radius = 0.0;  ///< fillet radius of the sharpest sector, mm (0: a sharp edge)
   double axial = 0.0;   ///< where the fillet meets the thin side, along the axis, mm
+  double opening = 0.0;  ///< the most acute sector's opening angle, radians
 };
 
 /// What changed in the mesh since the last run: the box of every triangle with a moved vertex,
