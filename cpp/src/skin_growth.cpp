@@ -53,6 +53,9 @@ struct Crossing {
 void crossing_edges(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
                     int k_hi, std::vector<Crossing>& out) {
   out.clear();
+  std::size_t vertices = 0;  // at most one crossing edge per vertex: one allocation
+  for (const auto& loop : loops) vertices += loop.size();
+  out.reserve(vertices);
   auto slot_of = [&](double x, int r) {
     while (r < rows && s_first + r * pitch < x) ++r;
     while (r > 0 && !(s_first + (r - 1) * pitch < x)) --r;
@@ -77,29 +80,38 @@ void crossing_edges(const StLoops& loops, double s_first, double pitch, int rows
   }
 }
 
-// Rows outside k_lo <= k < k_hi are left empty.
-RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
-                           int k_hi) {
-  k_lo = std::max(k_lo, 0), k_hi = std::min(k_hi, rows);
-  std::vector<Crossing> edges;
-  crossing_edges(loops, s_first, pitch, rows, k_lo, k_hi, edges);
-  // count[k + 1]: row k's crossings (+1 at an edge's first row, -1 past its last, summed), then
-  // count[k]: where row k's start.
-  std::vector<int> count(static_cast<std::size_t>(rows) + 1, 0);
+// Each row's number of crossings of the edges (count[k], k < rows) and where row k's start
+// (start[k]: the prefix sums of the counts of the rows `take` keeps, 0 for the others).
+void row_counts(const std::vector<Crossing>& edges, int rows, std::vector<int>& count) {
+  // count[k + 1]: +1 at an edge's first row, -1 past its last, summed: row k's crossings.
+  count.assign(static_cast<std::size_t>(rows) + 1, 0);
   for (const Crossing& e : edges) {
     ++count[static_cast<std::size_t>(e.first) + 1];
     if (e.last < rows) --count[static_cast<std::size_t>(e.last) + 1];
   }
   for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
-  for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
+  count.erase(count.begin());
+}
+
+// The intervals of the rows k with take(k) (the others left empty), from the edges and their
+// rows' counts: each row's crossings in the edges' order, sorted and paired (even-odd).
+template <class Take>
+RowIntervals fill_rows(const std::vector<Crossing>& edges, const std::vector<int>& count,
+                       double s_first, double pitch, Take take) {
+  const int rows = static_cast<int>(count.size());
+  std::vector<int> at(static_cast<std::size_t>(rows) + 1, 0);  // where row k's crossings start
+  for (int k = 0; k < rows; ++k)
+    at[static_cast<std::size_t>(k) + 1] =
+        at[static_cast<std::size_t>(k)] + (take(k) ? count[static_cast<std::size_t>(k)] : 0);
   // Every crossing's slot is written once below: no zeroing (new double[] leaves it as is).
-  const std::size_t crossings = static_cast<std::size_t>(count.back());
+  const std::size_t crossings = static_cast<std::size_t>(at.back());
   const std::unique_ptr<double[]> t(new double[crossings]);
-  std::vector<int> fill(count.begin(), count.end() - 1);
+  std::vector<int> fill(at.begin(), at.end() - 1);
   for (const Crossing& e : edges) {
     const Vec2& a = *e.a;
     const Vec2& b = *e.b;
     for (int k = e.first; k < e.last; ++k) {
+      if (!take(k)) continue;
       const double s = s_first + k * pitch;
       t[static_cast<std::size_t>(fill[static_cast<std::size_t>(k)]++)] =
           a.y() + (s - a.x()) / (b.x() - a.x()) * (b.y() - a.y());
@@ -110,8 +122,8 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   out.intervals.resize(crossings / 2);  // at most one interval per two crossings
   Interval* next = out.intervals.data();
   for (int k = 0; k < rows; ++k) {
-    double* const first = t.get() + count[static_cast<std::size_t>(k)];
-    double* const last = t.get() + count[static_cast<std::size_t>(k) + 1];
+    double* const first = t.get() + at[static_cast<std::size_t>(k)];
+    double* const last = t.get() + at[static_cast<std::size_t>(k) + 1];
     if (last - first > 16) {
       std::sort(first, last);
     } else {  // a row crosses a region a few times: std::sort's set-up would cost more
@@ -124,6 +136,17 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   }
   out.intervals.resize(static_cast<std::size_t>(next - out.intervals.data()));
   return out;
+}
+
+// Rows outside k_lo <= k < k_hi are left empty.
+RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
+                           int k_hi) {
+  k_lo = std::max(k_lo, 0), k_hi = std::min(k_hi, rows);
+  std::vector<Crossing> edges;
+  crossing_edges(loops, s_first, pitch, rows, k_lo, k_hi, edges);
+  std::vector<int> count;
+  row_counts(edges, rows, count);
+  return fill_rows(edges, count, s_first, pitch, [](int) { return true; });
 }
 
 // Interval lists as spans of sorted, disjoint intervals; results go into reused buffers.
@@ -148,11 +171,6 @@ void for_each_overlap(Span a, Span b, Overlap overlap) {
   }
 }
 
-void intersect(Span a, Span b, Intervals& out) {
-  out.clear();
-  for_each_overlap(a, b, [&](double lo, double hi) { out.emplace_back(lo, hi); });
-}
-
 // a less b, appended to `out`.
 void subtract_into(Span a, Span b, Intervals& out) {
   for (; a.first != a.last; ++a.first) {
@@ -167,13 +185,13 @@ void subtract_into(Span a, Span b, Intervals& out) {
   }
 }
 
-void subtract(Span a, Span b, Intervals& out) {
-  out.clear();
-  subtract_into(a, b, out);
-}
-
 void merge_in_place(Intervals& a) {
-  std::sort(a.begin(), a.end());
+  if (a.size() > 16) {
+    std::sort(a.begin(), a.end());
+  } else {  // a row's few sources: by insertion (the same order: std::pair's)
+    for (std::size_t c = 1; c < a.size(); ++c)
+      for (std::size_t d = c; d > 0 && a[d] < a[d - 1]; --d) std::swap(a[d - 1], a[d]);
+  }
   std::size_t n = 0;
   for (const Interval& x : a) {
     if (n > 0 && x.first <= a[n - 1].second)
@@ -198,6 +216,9 @@ void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int la
   const int rows = static_cast<int>(hull.size());
   top.start.assign(static_cast<std::size_t>(rows) + 1, 0);
   bottom.start = top.start;
+  // a row's a - b has at most |a| + |b| intervals: at most twice the cut's in all
+  top.intervals.reserve(2 * cut.intervals.size());
+  bottom.intervals.reserve(2 * cut.intervals.size());
   auto reach = [&](int n0, int n1) {  // the hull of rows n0 .. n1
     Interval h(INFINITY, -INFINITY);
     for (int n = std::max(n0, 0); n <= std::min(n1, rows - 1); ++n) {
@@ -263,28 +284,41 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   const int rows = static_cast<int>(rows_needed);
   layers = std::min(layers, rows);  // sources farther than the section's rows do not exist
   const double s_first = s_lo + 0.5 * pitch;  // each row stands for the layer around it
-  const RowIntervals kept = row_intervals(sparse, s_first, pitch, rows, 0, rows);
-  if (kept.intervals.empty()) return strips;
-  // Only rows holding sparse infill get strips (n_lo <= n < n_hi): their room, and the surfaces
-  // of the rows within `layers` of them (each from its own row and the next one).
+  // The sparse region's crossings per row; its intervals only for the rows that widen a skin
+  // (below): a row without crossings has none, and only those rows' strips need them.
+  std::vector<Crossing> sparse_edges;
+  crossing_edges(sparse, s_first, pitch, rows, 0, rows, sparse_edges);
+  if (sparse_edges.empty()) return strips;
+  std::vector<int> sparse_count;
+  row_counts(sparse_edges, rows, sparse_count);
+  auto has_sparse = [&sparse_count](int n) {
+    return sparse_count[static_cast<std::size_t>(n)] > 0;
+  };
+  // Only rows crossing sparse infill get strips (n_lo <= n < n_hi): their room, and the
+  // surfaces of the rows within `layers` of them (each from its own row and the next one).
   int n_lo = 0, n_hi = rows;
-  while (kept.start[static_cast<std::size_t>(n_lo) + 1] == 0) ++n_lo;
-  while (kept.start[static_cast<std::size_t>(n_hi) - 1] == kept.start.back()) --n_hi;
+  while (!has_sparse(n_lo)) ++n_lo;
+  while (!has_sparse(n_hi - 1)) --n_hi;
   const int k_lo = std::max(n_lo - layers + 1, 0), k_hi = std::min(n_hi + layers - 1, rows);
   const RowIntervals cut = row_intervals(section, s_first, pitch, rows, k_lo - 1, k_hi + 1);
   const RowIntervals fill = row_intervals(inner, s_first, pitch, rows, n_lo, n_hi);
   std::vector<Interval> hull(static_cast<std::size_t>(rows), Interval(INFINITY, -INFINITY));
   for (int n = n_lo; n < n_hi; ++n) {
     const Span room = fill.at(n);
-    if (!room.empty() && !Span(kept.at(n)).empty())
+    if (!room.empty() && has_sparse(n))
       hull[static_cast<std::size_t>(n)] = Interval(room.first->first, (room.last - 1)->second);
   }
   RowIntervals top, bottom;
   surfaces(cut, hull, layers, k_lo, k_hi, top, bottom);
+  // Each row's widened skin less its solid (`extra`), for the rows where a skin grows.
+  std::vector<int> grown_row;       // ascending
+  std::vector<int> extra_start{0};  // grown_row[i]'s extra: extra[extra_start[i] ..]
+  Intervals extra;
+  std::vector<char> grown_mask(static_cast<std::size_t>(rows), 0);
   Scratch w;
   for (int n = n_lo; n < n_hi; ++n) {
-    const Span room = fill.at(n), sparse_row = kept.at(n);
-    if (room.empty() || sparse_row.empty()) continue;
+    const Span room = fill.at(n);
+    if (room.empty() || !has_sparse(n)) continue;
     // Only the other rows' surfaces are widened: none within `layers`, nothing grows.
     const auto& ts = top.start;
     const auto& bs = bottom.start;
@@ -308,11 +342,22 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
     if (!grown) continue;
     merge_in_place(w.widened);
     merge_in_place(w.solid);
-    subtract(Span(w.widened), Span(w.solid), w.extra);
-    intersect(Span(w.extra), sparse_row, w.kept_extra);
+    subtract_into(Span(w.widened), Span(w.solid), extra);
+    if (extra.size() == static_cast<std::size_t>(extra_start.back())) continue;
+    grown_row.push_back(n);
+    extra_start.push_back(static_cast<int>(extra.size()));
+    grown_mask[static_cast<std::size_t>(n)] = 1;
+  }
+  if (grown_row.empty()) return strips;
+  const RowIntervals kept = fill_rows(sparse_edges, sparse_count, s_first, pitch,
+                                      [&grown_mask](int k) { return grown_mask[k] != 0; });
+  for (std::size_t i = 0; i < grown_row.size(); ++i) {
+    const int n = grown_row[i];
+    const Span row_extra(extra.data() + extra_start[i], extra.data() + extra_start[i + 1]);
     const double s = s_first + n * pitch;
-    for (const Interval& x : w.kept_extra)
-      strips.push_back({s - 0.5 * pitch, s + 0.5 * pitch, x.first, x.second});
+    for_each_overlap(row_extra, kept.at(n), [&](double lo, double hi) {
+      strips.push_back({s - 0.5 * pitch, s + 0.5 * pitch, lo, hi});
+    });
   }
   return strips;
 }
