@@ -50,15 +50,18 @@ struct Crossing {
 // edge's rows are its ends' slots' range. Found walking each loop: the first vertex's slot by
 // division, then corrected by the tests; every other one from its predecessor's, one step per
 // row crossed: most edges (shorter than a row's pitch) cost a comparison or two, no division.
-void crossing_edges(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
+void crossing_edges(const StLoops& loops, const std::vector<double>& row_s, double pitch, int k_lo,
                     int k_hi, std::vector<Crossing>& out) {
+  const int rows = static_cast<int>(row_s.size()) - 1;
+  const double s_first = row_s[0];
+  const double* const rs = row_s.data();
   out.clear();
   std::size_t vertices = 0;  // at most one crossing edge per vertex: one allocation
   for (const auto& loop : loops) vertices += loop.size();
   out.reserve(vertices);
   auto slot_of = [&](double x, int r) {
-    while (r < rows && s_first + r * pitch < x) ++r;
-    while (r > 0 && !(s_first + (r - 1) * pitch < x)) --r;
+    while (rs[r] < x) ++r;  // rs[rows] is infinite
+    while (r > 0 && !(rs[r - 1] < x)) --r;
     return r;
   };
   auto add = [&](const Vec2& a, const Vec2& b, int ra, int rb) {
@@ -97,7 +100,7 @@ void row_counts(const std::vector<Crossing>& edges, int rows, std::vector<int>& 
 // rows' counts: each row's crossings in the edges' order, sorted and paired (even-odd).
 template <class Take>
 RowIntervals fill_rows(const std::vector<Crossing>& edges, const std::vector<int>& count,
-                       double s_first, double pitch, Take take) {
+                       const std::vector<double>& row_s, Take take) {
   const int rows = static_cast<int>(count.size());
   std::vector<int> at(static_cast<std::size_t>(rows) + 1, 0);  // where row k's crossings start
   for (int k = 0; k < rows; ++k)
@@ -112,7 +115,7 @@ RowIntervals fill_rows(const std::vector<Crossing>& edges, const std::vector<int
     const Vec2& b = *e.b;
     for (int k = e.first; k < e.last; ++k) {
       if (!take(k)) continue;
-      const double s = s_first + k * pitch;
+      const double s = row_s[static_cast<std::size_t>(k)];
       t[static_cast<std::size_t>(fill[static_cast<std::size_t>(k)]++)] =
           a.y() + (s - a.x()) / (b.x() - a.x()) * (b.y() - a.y());
     }
@@ -139,14 +142,15 @@ RowIntervals fill_rows(const std::vector<Crossing>& edges, const std::vector<int
 }
 
 // Rows outside k_lo <= k < k_hi are left empty.
-RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
-                           int k_hi) {
+RowIntervals row_intervals(const StLoops& loops, const std::vector<double>& row_s, double pitch,
+                           int k_lo, int k_hi) {
+  const int rows = static_cast<int>(row_s.size()) - 1;
   k_lo = std::max(k_lo, 0), k_hi = std::min(k_hi, rows);
   std::vector<Crossing> edges;
-  crossing_edges(loops, s_first, pitch, rows, k_lo, k_hi, edges);
+  crossing_edges(loops, row_s, pitch, k_lo, k_hi, edges);
   std::vector<int> count;
   row_counts(edges, rows, count);
-  return fill_rows(edges, count, s_first, pitch, [](int) { return true; });
+  return fill_rows(edges, count, row_s, [](int) { return true; });
 }
 
 // Interval lists as spans of sorted, disjoint intervals; results go into reused buffers.
@@ -185,6 +189,22 @@ void subtract_into(Span a, Span b, Intervals& out) {
   }
 }
 
+// The parts of a less b that overlap h, appended to `out` (an interval of a that does not
+// overlap h has none).
+void subtract_overlapping(Span a, Span b, const Interval& h, Intervals& out) {
+  for (; a.first != a.last; ++a.first) {
+    double lo = a.first->first;
+    const double hi = a.first->second;
+    if (!(hi > h.first && lo < h.second)) continue;
+    while (b.first != b.last && b.first->second <= lo) ++b.first;
+    for (const Interval* k = b.first; k != b.last && k->first < hi; ++k) {
+      if (k->first > lo && k->first > h.first && lo < h.second) out.emplace_back(lo, k->first);
+      lo = std::max(lo, k->second);
+    }
+    if (hi > lo && hi > h.first && lo < h.second) out.emplace_back(lo, hi);
+  }
+}
+
 void merge_in_place(Intervals& a) {
   if (a.size() > 16) {
     std::sort(a.begin(), a.end());
@@ -219,31 +239,24 @@ void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int la
   // a row's a - b has at most |a| + |b| intervals: at most twice the cut's in all
   top.intervals.reserve(2 * cut.intervals.size());
   bottom.intervals.reserve(2 * cut.intervals.size());
-  auto reach = [&](int n0, int n1) {  // the hull of rows n0 .. n1
+  // reach[k - k_lo]: the hull of rows k - layers + 1 .. k (a top surface of row k is a source
+  // for those rows; a bottom one of row k for rows k .. k + layers - 1: reach[k + layers - 1]).
+  std::vector<Interval> reach(static_cast<std::size_t>(std::max(k_hi + layers - 1 - k_lo, 0)));
+  for (int k = k_lo; k < k_hi + layers - 1; ++k) {
     Interval h(INFINITY, -INFINITY);
-    for (int n = std::max(n0, 0); n <= std::min(n1, rows - 1); ++n) {
+    for (int n = std::max(k - layers + 1, 0); n <= std::min(k, rows - 1); ++n) {
       h.first = std::min(h.first, hull[static_cast<std::size_t>(n)].first);
       h.second = std::max(h.second, hull[static_cast<std::size_t>(n)].second);
     }
-    return h;
-  };
-  // (the hull only where the row has surfaces: a row without any needs none)
-  auto keep_overlapping = [&reach](Intervals& v, std::size_t from, int n0, int n1) {
-    if (from == v.size()) return;
-    const Interval h = reach(n0, n1);
-    std::size_t n = from;
-    for (std::size_t i = from; i < v.size(); ++i)
-      if (v[i].second > h.first && v[i].first < h.second) v[n++] = v[i];
-    v.resize(n);
-  };
+    reach[static_cast<std::size_t>(k - k_lo)] = h;
+  }
   for (int k = 0; k < rows; ++k) {
     if (k >= k_lo && k < k_hi) {
-      std::size_t from = top.intervals.size();
-      subtract_into(cut.at(k), cut.row(k + 1), top.intervals);
-      keep_overlapping(top.intervals, from, k - layers + 1, k);
-      from = bottom.intervals.size();
-      subtract_into(cut.at(k), cut.row(k - 1), bottom.intervals);
-      keep_overlapping(bottom.intervals, from, k, k + layers - 1);
+      subtract_overlapping(cut.at(k), cut.row(k + 1), reach[static_cast<std::size_t>(k - k_lo)],
+                           top.intervals);
+      subtract_overlapping(cut.at(k), cut.row(k - 1),
+                           reach[static_cast<std::size_t>(k + layers - 1 - k_lo)],
+                           bottom.intervals);
     }
     top.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(top.intervals.size());
     bottom.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(bottom.intervals.size());
@@ -284,10 +297,13 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   const int rows = static_cast<int>(rows_needed);
   layers = std::min(layers, rows);  // sources farther than the section's rows do not exist
   const double s_first = s_lo + 0.5 * pitch;  // each row stands for the layer around it
+  // row k's s (the crossings' and the slots' one expression), and an infinite one past the last
+  std::vector<double> row_s(static_cast<std::size_t>(rows) + 1, INFINITY);
+  for (int k = 0; k < rows; ++k) row_s[static_cast<std::size_t>(k)] = s_first + k * pitch;
   // The sparse region's crossings per row; its intervals only for the rows that widen a skin
   // (below): a row without crossings has none, and only those rows' strips need them.
   std::vector<Crossing> sparse_edges;
-  crossing_edges(sparse, s_first, pitch, rows, 0, rows, sparse_edges);
+  crossing_edges(sparse, row_s, pitch, 0, rows, sparse_edges);
   if (sparse_edges.empty()) return strips;
   std::vector<int> sparse_count;
   row_counts(sparse_edges, rows, sparse_count);
@@ -300,8 +316,8 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   while (!has_sparse(n_lo)) ++n_lo;
   while (!has_sparse(n_hi - 1)) --n_hi;
   const int k_lo = std::max(n_lo - layers + 1, 0), k_hi = std::min(n_hi + layers - 1, rows);
-  const RowIntervals cut = row_intervals(section, s_first, pitch, rows, k_lo - 1, k_hi + 1);
-  const RowIntervals fill = row_intervals(inner, s_first, pitch, rows, n_lo, n_hi);
+  const RowIntervals cut = row_intervals(section, row_s, pitch, k_lo - 1, k_hi + 1);
+  const RowIntervals fill = row_intervals(inner, row_s, pitch, n_lo, n_hi);
   std::vector<Interval> hull(static_cast<std::size_t>(rows), Interval(INFINITY, -INFINITY));
   for (int n = n_lo; n < n_hi; ++n) {
     const Span room = fill.at(n);
@@ -349,12 +365,12 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
     grown_mask[static_cast<std::size_t>(n)] = 1;
   }
   if (grown_row.empty()) return strips;
-  const RowIntervals kept = fill_rows(sparse_edges, sparse_count, s_first, pitch,
+  const RowIntervals kept = fill_rows(sparse_edges, sparse_count, row_s,
                                       [&grown_mask](int k) { return grown_mask[k] != 0; });
   for (std::size_t i = 0; i < grown_row.size(); ++i) {
     const int n = grown_row[i];
     const Span row_extra(extra.data() + extra_start[i], extra.data() + extra_start[i + 1]);
-    const double s = s_first + n * pitch;
+    const double s = row_s[static_cast<std::size_t>(n)];
     for_each_overlap(row_extra, kept.at(n), [&](double lo, double hi) {
       strips.push_back({s - 0.5 * pitch, s + 0.5 * pitch, lo, hi});
     });
