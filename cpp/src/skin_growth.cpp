@@ -223,7 +223,7 @@ void merge_in_place(Intervals& a) {
 }
 
 struct Scratch {
-  Intervals solid, widened, extra, kept_extra;
+  Intervals solid, widened;
 };
 
 // Top surfaces of rows k_lo <= k < k_hi (row k less row k + 1 of `cut`) and bottom ones (row k
@@ -330,8 +330,13 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   std::vector<int> grown_row;       // ascending
   std::vector<int> extra_start{0};  // grown_row[i]'s extra: extra[extra_start[i] ..]
   Intervals extra;
+  grown_row.reserve(static_cast<std::size_t>(n_hi - n_lo));  // one allocation each
+  extra_start.reserve(static_cast<std::size_t>(n_hi - n_lo) + 1);
+  extra.reserve(2 * static_cast<std::size_t>(n_hi - n_lo));
   std::vector<char> grown_mask(static_cast<std::size_t>(rows), 0);
   Scratch w;
+  w.solid.reserve(8 * static_cast<std::size_t>(layers));
+  w.widened.reserve(8 * static_cast<std::size_t>(layers));
   for (int n = n_lo; n < n_hi; ++n) {
     const Span room = fill.at(n);
     if (room.empty() || !has_sparse(n)) continue;
@@ -365,6 +370,7 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
     grown_mask[static_cast<std::size_t>(n)] = 1;
   }
   if (grown_row.empty()) return strips;
+  strips.reserve(extra.size());
   const RowIntervals kept = fill_rows(sparse_edges, sparse_count, row_s,
                                       [&grown_mask](int k) { return grown_mask[k] != 0; });
   for (std::size_t i = 0; i < grown_row.size(); ++i) {
