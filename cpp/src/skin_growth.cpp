@@ -43,8 +43,9 @@ struct Crossing {
   int first, last;
 };
 
-// The edges that cross rows k_lo <= k < k_hi (s = s_first + k pitch, k counted from the first
-// row whatever the range, so a row's crossings do not depend on the range asked), each with
+// The edges that cross rows k_lo <= k < k_hi (s = row_s[k] = s_first + k pitch, k counted from
+// the first row whatever the range, so a row's crossings do not depend on the range asked;
+// row_s[rows] is infinite), each with
 // its rows lo <= s < hi (a vertex on a row counts once). A vertex's slot is the number of rows
 // 0 <= k < rows with s_first + k pitch < x (the crossings' own expression, monotone in k), so an
 // edge's rows are its ends' slots' range. Found walking each loop: the first vertex's slot by
@@ -83,8 +84,7 @@ void crossing_edges(const StLoops& loops, const std::vector<double>& row_s, doub
   }
 }
 
-// Each row's number of crossings of the edges (count[k], k < rows) and where row k's start
-// (start[k]: the prefix sums of the counts of the rows `take` keeps, 0 for the others).
+// Each row's number of crossings of the edges: count[k], 0 <= k < rows.
 void row_counts(const std::vector<Crossing>& edges, int rows, std::vector<int>& count) {
   // count[k + 1]: +1 at an edge's first row, -1 past its last, summed: row k's crossings.
   count.assign(static_cast<std::size_t>(rows) + 1, 0);
