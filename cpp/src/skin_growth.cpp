@@ -252,9 +252,10 @@ void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int la
   }
   for (int k = 0; k < rows; ++k) {
     if (k >= k_lo && k < k_hi) {
-      subtract_overlapping(cut.at(k), cut.row(k + 1), reach[static_cast<std::size_t>(k - k_lo)],
+      const Span row = cut.at(k);
+      subtract_overlapping(row, cut.row(k + 1), reach[static_cast<std::size_t>(k - k_lo)],
                            top.intervals);
-      subtract_overlapping(cut.at(k), cut.row(k - 1),
+      subtract_overlapping(row, cut.row(k - 1),
                            reach[static_cast<std::size_t>(k + layers - 1 - k_lo)],
                            bottom.intervals);
     }
@@ -354,10 +355,14 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
     for (int d = 0; d < layers; ++d) {
       // The row's own surfaces are printed as top / bottom fill and are not widened.
       const double g = d == 0 ? 0.0 : growth;
-      const Span up = n + d < rows ? Span(top.at(n + d)) : Span();
-      const Span down = n - d >= 0 ? Span(bottom.at(n - d)) : Span();
-      if (!up.empty()) grown |= add_source(up, room, g, w);
-      if (!down.empty()) grown |= add_source(down, room, g, w);
+      if (n + d < rows) {
+        const Span up = top.at(n + d);
+        if (!up.empty()) grown |= add_source(up, room, g, w);
+      }
+      if (n - d >= 0) {
+        const Span down = bottom.at(n - d);
+        if (!down.empty()) grown |= add_source(down, room, g, w);
+      }
     }
     // Nothing widened: `widened` holds what `solid` does, and adds nothing.
     if (!grown) continue;
