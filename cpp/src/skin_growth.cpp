@@ -43,19 +43,26 @@ struct Crossing {
   int first, last;
 };
 
-// The edges that cross rows k_lo <= k < k_hi (s = s_first + k pitch, k counted from the first
-// row whatever the range, so a row's crossings do not depend on the range asked), each with
+// The edges that cross rows k_lo <= k < k_hi (s = row_s[k] = s_first + k pitch, k counted from
+// the first row whatever the range, so a row's crossings do not depend on the range asked;
+// row_s[rows] is infinite), each with
 // its rows lo <= s < hi (a vertex on a row counts once). A vertex's slot is the number of rows
 // 0 <= k < rows with s_first + k pitch < x (the crossings' own expression, monotone in k), so an
 // edge's rows are its ends' slots' range. Found walking each loop: the first vertex's slot by
 // division, then corrected by the tests; every other one from its predecessor's, one step per
 // row crossed: most edges (shorter than a row's pitch) cost a comparison or two, no division.
-void crossing_edges(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
+void crossing_edges(const StLoops& loops, const std::vector<double>& row_s, double pitch, int k_lo,
                     int k_hi, std::vector<Crossing>& out) {
+  const int rows = static_cast<int>(row_s.size()) - 1;
+  const double s_first = row_s[0];
+  const double* const rs = row_s.data();
   out.clear();
+  std::size_t vertices = 0;  // at most one crossing edge per vertex: one allocation
+  for (const auto& loop : loops) vertices += loop.size();
+  out.reserve(vertices);
   auto slot_of = [&](double x, int r) {
-    while (r < rows && s_first + r * pitch < x) ++r;
-    while (r > 0 && !(s_first + (r - 1) * pitch < x)) --r;
+    while (rs[r] < x) ++r;  // rs[rows] is infinite
+    while (r > 0 && !(rs[r - 1] < x)) --r;
     return r;
   };
   auto add = [&](const Vec2& a, const Vec2& b, int ra, int rb) {
@@ -77,30 +84,38 @@ void crossing_edges(const StLoops& loops, double s_first, double pitch, int rows
   }
 }
 
-// Rows outside k_lo <= k < k_hi are left empty.
-RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, int rows, int k_lo,
-                           int k_hi) {
-  k_lo = std::max(k_lo, 0), k_hi = std::min(k_hi, rows);
-  std::vector<Crossing> edges;
-  crossing_edges(loops, s_first, pitch, rows, k_lo, k_hi, edges);
-  // count[k + 1]: row k's crossings (+1 at an edge's first row, -1 past its last, summed), then
-  // count[k]: where row k's start.
-  std::vector<int> count(static_cast<std::size_t>(rows) + 1, 0);
+// Each row's number of crossings of the edges: count[k], 0 <= k < rows.
+void row_counts(const std::vector<Crossing>& edges, int rows, std::vector<int>& count) {
+  // count[k + 1]: +1 at an edge's first row, -1 past its last, summed: row k's crossings.
+  count.assign(static_cast<std::size_t>(rows) + 1, 0);
   for (const Crossing& e : edges) {
     ++count[static_cast<std::size_t>(e.first) + 1];
     if (e.last < rows) --count[static_cast<std::size_t>(e.last) + 1];
   }
   for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
-  for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
+  count.erase(count.begin());
+}
+
+// The intervals of the rows k with take(k) (the others left empty), from the edges and their
+// rows' counts: each row's crossings in the edges' order, sorted and paired (even-odd).
+template <class Take>
+RowIntervals fill_rows(const std::vector<Crossing>& edges, const std::vector<int>& count,
+                       const std::vector<double>& row_s, Take take) {
+  const int rows = static_cast<int>(count.size());
+  std::vector<int> at(static_cast<std::size_t>(rows) + 1, 0);  // where row k's crossings start
+  for (int k = 0; k < rows; ++k)
+    at[static_cast<std::size_t>(k) + 1] =
+        at[static_cast<std::size_t>(k)] + (take(k) ? count[static_cast<std::size_t>(k)] : 0);
   // Every crossing's slot is written once below: no zeroing (new double[] leaves it as is).
-  const std::size_t crossings = static_cast<std::size_t>(count.back());
+  const std::size_t crossings = static_cast<std::size_t>(at.back());
   const std::unique_ptr<double[]> t(new double[crossings]);
-  std::vector<int> fill(count.begin(), count.end() - 1);
+  std::vector<int> fill(at.begin(), at.end() - 1);
   for (const Crossing& e : edges) {
     const Vec2& a = *e.a;
     const Vec2& b = *e.b;
     for (int k = e.first; k < e.last; ++k) {
-      const double s = s_first + k * pitch;
+      if (!take(k)) continue;
+      const double s = row_s[static_cast<std::size_t>(k)];
       t[static_cast<std::size_t>(fill[static_cast<std::size_t>(k)]++)] =
           a.y() + (s - a.x()) / (b.x() - a.x()) * (b.y() - a.y());
     }
@@ -110,8 +125,8 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   out.intervals.resize(crossings / 2);  // at most one interval per two crossings
   Interval* next = out.intervals.data();
   for (int k = 0; k < rows; ++k) {
-    double* const first = t.get() + count[static_cast<std::size_t>(k)];
-    double* const last = t.get() + count[static_cast<std::size_t>(k) + 1];
+    double* const first = t.get() + at[static_cast<std::size_t>(k)];
+    double* const last = t.get() + at[static_cast<std::size_t>(k) + 1];
     if (last - first > 16) {
       std::sort(first, last);
     } else {  // a row crosses a region a few times: std::sort's set-up would cost more
@@ -124,6 +139,18 @@ RowIntervals row_intervals(const StLoops& loops, double s_first, double pitch, i
   }
   out.intervals.resize(static_cast<std::size_t>(next - out.intervals.data()));
   return out;
+}
+
+// Rows outside k_lo <= k < k_hi are left empty.
+RowIntervals row_intervals(const StLoops& loops, const std::vector<double>& row_s, double pitch,
+                           int k_lo, int k_hi) {
+  const int rows = static_cast<int>(row_s.size()) - 1;
+  k_lo = std::max(k_lo, 0), k_hi = std::min(k_hi, rows);
+  std::vector<Crossing> edges;
+  crossing_edges(loops, row_s, pitch, k_lo, k_hi, edges);
+  std::vector<int> count;
+  row_counts(edges, rows, count);
+  return fill_rows(edges, count, row_s, [](int) { return true; });
 }
 
 // Interval lists as spans of sorted, disjoint intervals; results go into reused buffers.
@@ -148,11 +175,6 @@ void for_each_overlap(Span a, Span b, Overlap overlap) {
   }
 }
 
-void intersect(Span a, Span b, Intervals& out) {
-  out.clear();
-  for_each_overlap(a, b, [&](double lo, double hi) { out.emplace_back(lo, hi); });
-}
-
 // a less b, appended to `out`.
 void subtract_into(Span a, Span b, Intervals& out) {
   for (; a.first != a.last; ++a.first) {
@@ -167,13 +189,29 @@ void subtract_into(Span a, Span b, Intervals& out) {
   }
 }
 
-void subtract(Span a, Span b, Intervals& out) {
-  out.clear();
-  subtract_into(a, b, out);
+// The parts of a less b that overlap h, appended to `out` (an interval of a that does not
+// overlap h has none).
+void subtract_overlapping(Span a, Span b, const Interval& h, Intervals& out) {
+  for (; a.first != a.last; ++a.first) {
+    double lo = a.first->first;
+    const double hi = a.first->second;
+    if (!(hi > h.first && lo < h.second)) continue;
+    while (b.first != b.last && b.first->second <= lo) ++b.first;
+    for (const Interval* k = b.first; k != b.last && k->first < hi; ++k) {
+      if (k->first > lo && k->first > h.first && lo < h.second) out.emplace_back(lo, k->first);
+      lo = std::max(lo, k->second);
+    }
+    if (hi > lo && hi > h.first && lo < h.second) out.emplace_back(lo, hi);
+  }
 }
 
 void merge_in_place(Intervals& a) {
-  std::sort(a.begin(), a.end());
+  if (a.size() > 16) {
+    std::sort(a.begin(), a.end());
+  } else {  // a row's few sources: by insertion (the same order: std::pair's)
+    for (std::size_t c = 1; c < a.size(); ++c)
+      for (std::size_t d = c; d > 0 && a[d] < a[d - 1]; --d) std::swap(a[d - 1], a[d]);
+  }
   std::size_t n = 0;
   for (const Interval& x : a) {
     if (n > 0 && x.first <= a[n - 1].second)
@@ -185,7 +223,7 @@ void merge_in_place(Intervals& a) {
 }
 
 struct Scratch {
-  Intervals solid, widened, extra, kept_extra;
+  Intervals solid, widened;
 };
 
 // Top surfaces of rows k_lo <= k < k_hi (row k less row k + 1 of `cut`) and bottom ones (row k
@@ -198,31 +236,28 @@ void surfaces(const RowIntervals& cut, const std::vector<Interval>& hull, int la
   const int rows = static_cast<int>(hull.size());
   top.start.assign(static_cast<std::size_t>(rows) + 1, 0);
   bottom.start = top.start;
-  auto reach = [&](int n0, int n1) {  // the hull of rows n0 .. n1
+  // a row's a - b has at most |a| + |b| intervals: at most twice the cut's in all
+  top.intervals.reserve(2 * cut.intervals.size());
+  bottom.intervals.reserve(2 * cut.intervals.size());
+  // reach[k - k_lo]: the hull of rows k - layers + 1 .. k (a top surface of row k is a source
+  // for those rows; a bottom one of row k for rows k .. k + layers - 1: reach[k + layers - 1]).
+  std::vector<Interval> reach(static_cast<std::size_t>(std::max(k_hi + layers - 1 - k_lo, 0)));
+  for (int k = k_lo; k < k_hi + layers - 1; ++k) {
     Interval h(INFINITY, -INFINITY);
-    for (int n = std::max(n0, 0); n <= std::min(n1, rows - 1); ++n) {
+    for (int n = std::max(k - layers + 1, 0); n <= std::min(k, rows - 1); ++n) {
       h.first = std::min(h.first, hull[static_cast<std::size_t>(n)].first);
       h.second = std::max(h.second, hull[static_cast<std::size_t>(n)].second);
     }
-    return h;
-  };
-  // (the hull only where the row has surfaces: a row without any needs none)
-  auto keep_overlapping = [&reach](Intervals& v, std::size_t from, int n0, int n1) {
-    if (from == v.size()) return;
-    const Interval h = reach(n0, n1);
-    std::size_t n = from;
-    for (std::size_t i = from; i < v.size(); ++i)
-      if (v[i].second > h.first && v[i].first < h.second) v[n++] = v[i];
-    v.resize(n);
-  };
+    reach[static_cast<std::size_t>(k - k_lo)] = h;
+  }
   for (int k = 0; k < rows; ++k) {
     if (k >= k_lo && k < k_hi) {
-      std::size_t from = top.intervals.size();
-      subtract_into(cut.at(k), cut.row(k + 1), top.intervals);
-      keep_overlapping(top.intervals, from, k - layers + 1, k);
-      from = bottom.intervals.size();
-      subtract_into(cut.at(k), cut.row(k - 1), bottom.intervals);
-      keep_overlapping(bottom.intervals, from, k, k + layers - 1);
+      const Span row = cut.at(k);
+      subtract_overlapping(row, cut.row(k + 1), reach[static_cast<std::size_t>(k - k_lo)],
+                           top.intervals);
+      subtract_overlapping(row, cut.row(k - 1),
+                           reach[static_cast<std::size_t>(k + layers - 1 - k_lo)],
+                           bottom.intervals);
     }
     top.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(top.intervals.size());
     bottom.start[static_cast<std::size_t>(k) + 1] = static_cast<int>(bottom.intervals.size());
@@ -263,28 +298,49 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
   const int rows = static_cast<int>(rows_needed);
   layers = std::min(layers, rows);  // sources farther than the section's rows do not exist
   const double s_first = s_lo + 0.5 * pitch;  // each row stands for the layer around it
-  const RowIntervals kept = row_intervals(sparse, s_first, pitch, rows, 0, rows);
-  if (kept.intervals.empty()) return strips;
-  // Only rows holding sparse infill get strips (n_lo <= n < n_hi): their room, and the surfaces
-  // of the rows within `layers` of them (each from its own row and the next one).
+  // row k's s (the crossings' and the slots' one expression), and an infinite one past the last
+  std::vector<double> row_s(static_cast<std::size_t>(rows) + 1, INFINITY);
+  for (int k = 0; k < rows; ++k) row_s[static_cast<std::size_t>(k)] = s_first + k * pitch;
+  // The sparse region's crossings per row; its intervals only for the rows that widen a skin
+  // (below): a row without crossings has none, and only those rows' strips need them.
+  std::vector<Crossing> sparse_edges;
+  crossing_edges(sparse, row_s, pitch, 0, rows, sparse_edges);
+  if (sparse_edges.empty()) return strips;
+  std::vector<int> sparse_count;
+  row_counts(sparse_edges, rows, sparse_count);
+  auto has_sparse = [&sparse_count](int n) {
+    return sparse_count[static_cast<std::size_t>(n)] > 0;
+  };
+  // Only rows crossing sparse infill get strips (n_lo <= n < n_hi): their room, and the
+  // surfaces of the rows within `layers` of them (each from its own row and the next one).
   int n_lo = 0, n_hi = rows;
-  while (kept.start[static_cast<std::size_t>(n_lo) + 1] == 0) ++n_lo;
-  while (kept.start[static_cast<std::size_t>(n_hi) - 1] == kept.start.back()) --n_hi;
+  while (!has_sparse(n_lo)) ++n_lo;
+  while (!has_sparse(n_hi - 1)) --n_hi;
   const int k_lo = std::max(n_lo - layers + 1, 0), k_hi = std::min(n_hi + layers - 1, rows);
-  const RowIntervals cut = row_intervals(section, s_first, pitch, rows, k_lo - 1, k_hi + 1);
-  const RowIntervals fill = row_intervals(inner, s_first, pitch, rows, n_lo, n_hi);
+  const RowIntervals cut = row_intervals(section, row_s, pitch, k_lo - 1, k_hi + 1);
+  const RowIntervals fill = row_intervals(inner, row_s, pitch, n_lo, n_hi);
   std::vector<Interval> hull(static_cast<std::size_t>(rows), Interval(INFINITY, -INFINITY));
   for (int n = n_lo; n < n_hi; ++n) {
     const Span room = fill.at(n);
-    if (!room.empty() && !Span(kept.at(n)).empty())
+    if (!room.empty() && has_sparse(n))
       hull[static_cast<std::size_t>(n)] = Interval(room.first->first, (room.last - 1)->second);
   }
   RowIntervals top, bottom;
   surfaces(cut, hull, layers, k_lo, k_hi, top, bottom);
+  // Each row's widened skin less its solid (`extra`), for the rows where a skin grows.
+  std::vector<int> grown_row;       // ascending
+  std::vector<int> extra_start{0};  // grown_row[i]'s extra: extra[extra_start[i] ..]
+  Intervals extra;
+  grown_row.reserve(static_cast<std::size_t>(n_hi - n_lo));  // one allocation each
+  extra_start.reserve(static_cast<std::size_t>(n_hi - n_lo) + 1);
+  extra.reserve(2 * static_cast<std::size_t>(n_hi - n_lo));
+  std::vector<char> grown_mask(static_cast<std::size_t>(rows), 0);
   Scratch w;
+  w.solid.reserve(8 * static_cast<std::size_t>(layers));
+  w.widened.reserve(8 * static_cast<std::size_t>(layers));
   for (int n = n_lo; n < n_hi; ++n) {
-    const Span room = fill.at(n), sparse_row = kept.at(n);
-    if (room.empty() || sparse_row.empty()) continue;
+    const Span room = fill.at(n);
+    if (room.empty() || !has_sparse(n)) continue;
     // Only the other rows' surfaces are widened: none within `layers`, nothing grows.
     const auto& ts = top.start;
     const auto& bs = bottom.start;
@@ -299,20 +355,36 @@ std::vector<SkinStrip> widened_skin_strips(const StLoops& section, const StLoops
     for (int d = 0; d < layers; ++d) {
       // The row's own surfaces are printed as top / bottom fill and are not widened.
       const double g = d == 0 ? 0.0 : growth;
-      const Span up = n + d < rows ? Span(top.at(n + d)) : Span();
-      const Span down = n - d >= 0 ? Span(bottom.at(n - d)) : Span();
-      if (!up.empty()) grown |= add_source(up, room, g, w);
-      if (!down.empty()) grown |= add_source(down, room, g, w);
+      if (n + d < rows) {
+        const Span up = top.at(n + d);
+        if (!up.empty()) grown |= add_source(up, room, g, w);
+      }
+      if (n - d >= 0) {
+        const Span down = bottom.at(n - d);
+        if (!down.empty()) grown |= add_source(down, room, g, w);
+      }
     }
     // Nothing widened: `widened` holds what `solid` does, and adds nothing.
     if (!grown) continue;
     merge_in_place(w.widened);
     merge_in_place(w.solid);
-    subtract(Span(w.widened), Span(w.solid), w.extra);
-    intersect(Span(w.extra), sparse_row, w.kept_extra);
-    const double s = s_first + n * pitch;
-    for (const Interval& x : w.kept_extra)
-      strips.push_back({s - 0.5 * pitch, s + 0.5 * pitch, x.first, x.second});
+    subtract_into(Span(w.widened), Span(w.solid), extra);
+    if (extra.size() == static_cast<std::size_t>(extra_start.back())) continue;
+    grown_row.push_back(n);
+    extra_start.push_back(static_cast<int>(extra.size()));
+    grown_mask[static_cast<std::size_t>(n)] = 1;
+  }
+  if (grown_row.empty()) return strips;
+  strips.reserve(extra.size());
+  const RowIntervals kept = fill_rows(sparse_edges, sparse_count, row_s,
+                                      [&grown_mask](int k) { return grown_mask[k] != 0; });
+  for (std::size_t i = 0; i < grown_row.size(); ++i) {
+    const int n = grown_row[i];
+    const Span row_extra(extra.data() + extra_start[i], extra.data() + extra_start[i + 1]);
+    const double s = row_s[static_cast<std::size_t>(n)];
+    for_each_overlap(row_extra, kept.at(n), [&](double lo, double hi) {
+      strips.push_back({s - 0.5 * pitch, s + 0.5 * pitch, lo, hi});
+    });
   }
   return strips;
 }

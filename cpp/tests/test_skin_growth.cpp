@@ -56,3 +56,34 @@ TEST(SkinGrowth, VertexOnARowCountsOnce) {
   EXPECT_NEAR(a[0].t0, b[0].t0, 1e-9);
   EXPECT_NEAR(a[0].t1, b[0].t1, 1e-6);
 }
+
+// The rule in closed form on the section above (top t = 20 - 5 s, rows s_k = 0.1 + 0.2 k, so
+// row k's top surface is [19.5 - (k + 1), 19.5 - k], 1 mm wide) with two sparse islands: row n's
+// solid skin is the tops of rows n .. n + 3, [15.5 - n, 19.5 - n]; the narrow tops of rows
+// n + 1 .. n + 3 widened by the growth g reach down to (15.5 - n) - g, so the rule adds
+// [14.15 - n, 15.5 - n] to the solid fill, within the sparse islands. Rows 0 .. 3 hold the whole
+// bottom row's surface (row 0, as wide as the section) among their sources: solid throughout,
+// nothing added though island B is there. Rows 11 .. 14 likewise hold row 14's (the last). So
+// island A (t in [2, 9], every row) gets rows 6 .. 10's bands, island B (t in [10, 12], rows
+// 0 .. 4) only row 4's; rows 0 .. 3 and 5 cross sparse infill but get no strip.
+TEST(SkinGrowth, WidenedBandUnderASlopeInTwoIslands) {
+  const double pitch = 0.2, growth = 1.35;
+  const StLoops section{{{0.0, 0.0}, {3.0, 0.0}, {3.0, 5.0}, {0.0, 20.0}}};
+  const StLoops sparse{{{0.05, 2.0}, {2.95, 2.0}, {2.95, 9.0}, {0.05, 9.0}},
+                       {{0.05, 10.0}, {0.95, 10.0}, {0.95, 12.0}, {0.05, 12.0}}};
+  const auto strips = widened_skin_strips(section, section, sparse, pitch, 4, growth);
+  struct Expected {
+    int row;
+    double t0, t1;
+  };
+  const std::vector<Expected> expected{{4, 10.15, 11.5}, {6, 8.15, 9.0}, {7, 7.15, 8.5},
+                                       {8, 6.15, 7.5},   {9, 5.15, 6.5}, {10, 4.15, 5.5}};
+  ASSERT_EQ(strips.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const double s = 0.1 + 0.2 * expected[i].row;
+    EXPECT_NEAR(strips[i].s0, s - 0.5 * pitch, 1e-12) << i;
+    EXPECT_NEAR(strips[i].s1, s + 0.5 * pitch, 1e-12) << i;
+    EXPECT_NEAR(strips[i].t0, expected[i].t0, 1e-9) << i;
+    EXPECT_NEAR(strips[i].t1, expected[i].t1, 1e-9) << i;
+  }
+}
