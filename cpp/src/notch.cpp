@@ -152,7 +152,7 @@ struct SectorSums {
   double saa = 0, stt = 0, snn = 0, san = 0;  // sums of the deviations' products
   double* lengths = nullptr;                  // their mesh edges' squared lengths (a buffer's run)
   std::size_t num_lengths = 0;
-  double turn = 0;  // the largest normal turn from radial, radians
+  double turn = 0;   // the largest normal turn from radial, radians
   double flank = 0;  // the largest turn of the points' concave runs (the opening's complement)
 };
 
@@ -257,8 +257,8 @@ struct Chains {
 // its buffers have grown).
 struct Scratch {
   std::vector<double> heights;
-  std::vector<double> run_flank;  // a chain's concave runs' largest segment turn (chain_runs)
-  std::vector<int> run_of;        // each segment's run (chain_runs)
+  std::vector<double> run_flank;      // a chain's concave runs' largest segment turn (chain_runs)
+  std::vector<int> run_of;            // each segment's run (chain_runs)
   std::vector<std::size_t> run_best;  // each run's segment of largest turn (chain_runs)
   std::vector<std::size_t> point_at;  // a chain's fillet points' vertices (fillet_points)
   std::vector<CutSegment> segments;
@@ -905,8 +905,8 @@ std::vector<Corner> recall_or_measure(const MeshView& mesh,
       corners[s] = Corner{f.found, f.radius, f.axial, f.opening};
     } else {
       corners[s] = measured[next++];
-      g.corners.push_back(CornerFit{corners[s].found, corners[s].radius, corners[s].axial,
-                                     corners[s].opening});
+      g.corners.push_back(
+          CornerFit{corners[s].found, corners[s].radius, corners[s].axial, corners[s].opening});
     }
   }
   memo.groups = std::move(groups);

@@ -13,8 +13,8 @@ namespace osteon {
 /// The measurement of one corner on the mesh (notch.cpp's Corner, kept between runs).
 struct CornerFit {
   bool found = false;
-  double radius = 0.0;  ///< fillet radius of the sharpest sector, mm (0: a sharp edge)
-  double axial = 0.0;   ///< where the fillet meets the thin side, along the axis, mm
+  double radius = 0.0;   ///< fillet radius of the sharpest sector, mm (0: a sharp edge)
+  double axial = 0.0;    ///< where the fillet meets the thin side, along the axis, mm
   double opening = 0.0;  ///< the most acute sector's opening angle, radians
 };
 
