@@ -136,7 +136,7 @@ def test_live_mode_reads_the_joint_segments(addon, engine):
         live.stop()
 
 
-def test_fbx_dog_correct_converges_and_leaves_stay_modest(addon, engine):
+def test_fbx_dog_correct_fixes_all_but_a_joint_corner_and_leaves_stay_modest(addon, engine):
     obj, arm = import_rignet("2982")
     activate(obj)
     s = bpy.context.scene.osteon
@@ -146,7 +146,13 @@ def test_fbx_dog_correct_converges_and_leaves_stay_modest(addon, engine):
     last = common.LAST[bpy.context.scene.name]
     fix, inp = last["correction"], last["inputs"]
     print(f"[issue13] dog correct: converged {fix.converged} ({fix.reason})")
-    assert fix.converged
+    if not fix.converged:
+        # Since round 6's acute-corner Kt (docs/notch.md) a corner at joint_9's root (Kt 2.1 at a
+        # 0.78 mm fillet) stops the loop with its documented reason: scaling the bone does not
+        # thicken a corner at a joint, a larger fillet lowers the peak; every other section is
+        # within the allowable.
+        assert "does not thicken it" in fix.reason and "a corner at a joint" in fix.reason
+        assert int(np.count_nonzero(fix.after.weak)) == 1
     m, _ = _cli_dog(engine, 120.0, 40.0)
     cli = engine.correct(m.vertices, m.faces, m.skeleton, m.weights, force=40.0,
                          allowable_stress=30.0, interval=2.0)
