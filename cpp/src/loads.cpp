@@ -539,7 +539,7 @@ void MomentArmIndex::build_box_trees(const LoadTree& tree, int chunks) {
   const double* const xyz = vertices_;
   const std::int32_t* const index = packed_index_.get();
   const Index last = nbuckets > 0 ? std::max<Index>(0, buckets_[nbuckets - 1].end - 1) : 0;
-  const bool ahead = chunks > 1;  // a mesh of kVerticesPerPass vertices or more
+  const bool ahead = last + 1 >= detail::kVerticesPerPass;  // a large mesh (prefetch pays)
   auto group_at = [&](Index k) {  // the first group whose buckets start at or after bucket k
     return std::lower_bound(bucket_offset_.begin(), bucket_offset_.end(), k) -
            bucket_offset_.begin();
