@@ -264,12 +264,13 @@ void Analyzer::Impl::check_vertices(RunState& run) {
     hi = hi.cwiseMax(block_hi[k]);
   }
   run.diag = (hi - lo).norm();
-  // The moved vertices (ascending) and their flags (all 0 but theirs between runs).
-  moved_scratch.resize(num_vertices, 0);
+  // The moved vertices (ascending) and their flags (all 0 but theirs between runs; sized by the
+  // first run that compares, so a one-off analysis writes no flags: 1 byte per vertex).
   for (std::int32_t v : moved_vertices) moved_scratch[v] = 0;
   moved_vertices.clear();
   run.vertices_compared = have_last;
   if (!have_last) return;
+  moved_scratch.resize(num_vertices, 0);
   for (const Index k : changed_blocks) {
     const Index end = std::min(num_vertices, (k + 1) * kVertexBlock);
     for (Index v = k * kVertexBlock; v < end; ++v) {

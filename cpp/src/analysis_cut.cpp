@@ -333,7 +333,10 @@ void Analyzer::Impl::find_loose_pieces_and_arms(RunState& run) {
                 : loose_finder.find(mesh, run.vertex_bone, tree.held_bone,
                                     0.5 * options.min_thickness, &face_shells,
                                     /*same_faces=*/true, run.grid_built ? &run.grid : nullptr);
-    loose_vertex.assign(num_vertices, 0);
+    // Per vertex, loose or not: read only where a piece is loose (no pass over the vertices
+    // otherwise).
+    loose_vertex.clear();
+    if (!loose.empty()) loose_vertex.assign(num_vertices, 0);
     for (const auto& piece : loose)
       for (std::int32_t v : piece) loose_vertex[v] = 1;
   }

@@ -45,6 +45,7 @@ void Analyzer::Impl::reuse_last_run(RunState& run) {
   // bitwise the same and no moved triangle reaches the region its cut was proven in.
   // (check_vertices compared the vertices: may_reuse needs the last run's.)
   Box3 moved_box;
+  moved_scratch.resize(num_vertices, 0);  // (check_vertices sized it: the last run's are known)
   run.moved = &moved_scratch;
   const bool any_moved = !moved_vertices.empty();
   std::vector<std::int32_t>& moved_faces = moved_faces_scratch;

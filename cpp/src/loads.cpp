@@ -10,6 +10,7 @@
 #include <string>
 
 #include "parallel.hpp"
+#include "prefetch.hpp"
 #include "sorted_index.hpp"
 
 namespace osteon {
@@ -152,6 +153,7 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
                            const std::vector<std::uint8_t>* moved,
                            const std::vector<std::int32_t>* moved_list, int threads) {
   tree_ = &tree;
+  vertices_ = mesh.vertices;
   last_slab_params_.swap(slab_params_);
   slab_params_ = slab_params;
   const int nb = s.num_bones();
@@ -164,7 +166,7 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
   const bool reuse = moved != nullptr && slabs_known_ &&
                      static_cast<Index>(moved->size()) == mesh.num_vertices &&
                      static_cast<Index>(last_bone_.size()) == mesh.num_vertices &&
-                     vertex_capacity_ >= mesh.num_vertices;
+                     vertex_capacity_ >= mesh.num_vertices && slab_capacity_ >= mesh.num_vertices;
   const bool same_skip = reuse && compare_with_last_build(s, skip);
   // The same vertices per bone, slabs per bone and tree: only the moved bones are built again.
   const bool same_layout =
@@ -179,7 +181,8 @@ void MomentArmIndex::build(const MeshView& mesh, const Skeleton& s, const LoadTr
     const int chunks = mesh.num_vertices >= detail::kVerticesPerPass
                            ? detail::worker_count(threads, mesh.num_vertices)
                            : 1;
-    group_vertices(mesh, s, vertex_bone, skip, reuse ? moved->data() : nullptr, chunks);
+    group_vertices(mesh, s, vertex_bone, skip, reuse ? moved->data() : nullptr,
+                   /*keep_slabs=*/moved != nullptr, chunks);
     pack_buckets(mesh, skip, chunks);
     build_box_trees(tree, chunks);
   }
@@ -283,17 +286,18 @@ inline Index slab_of(const Frame& f, double t) {
 }
 }  // namespace
 
-// Bone b's vertex v: its slab within the bone (vertex_slab_) and its pseudo-angle in [0, 4]
-// around the bone axis (vertex_angle_: a monotone function of the angle in the bone's frame
-// u, v: no atan).
-inline void MomentArmIndex::place_vertex(const MeshView& mesh, Index v, int b) {
+// Bone b's vertex v: its slab within the bone (returned) and its pseudo-angle in [0, 4] around
+// the bone axis (vertex_angle_: a monotone function of the angle in the bone's frame u, v: no
+// atan; a float, as it only picks the vertex's bucket, and any bucket gives the same answers).
+inline Index MomentArmIndex::place_vertex(const MeshView& mesh, Index v, int b) {
   const BoneFrame& f = frames_[b];
   const Vec3 d = mesh.vertex(v) - f.head;
-  vertex_slab_[v] = static_cast<std::int32_t>(slab_of(f, d.dot(f.axis)));
+  const Index slab = slab_of(f, d.dot(f.axis));
   const double du = d.dot(f.u), dv = d.dot(f.v);
   const double sum = std::abs(du) + std::abs(dv);
   const double r = sum > 0 ? du / sum : 1.0;
-  vertex_angle_[v] = dv >= 0 ? 1.0 - r : 3.0 + r;
+  vertex_angle_[v] = static_cast<float>(dv >= 0 ? 1.0 - r : 3.0 + r);
+  return slab;
 }
 
 // Live builds: the bones with a moved vertex or another head, axis or slabs grouped, packed and
@@ -357,14 +361,14 @@ void MomentArmIndex::regroup_bone(const MeshView& mesh, int b, const std::uint8_
   const bool same = bone_same_[b] != 0;
   for (Index k = bone_vertex_start_[b]; k < bone_vertex_start_[b + 1]; ++k) {
     const Index v = bone_vertices_[k];
-    if (!same || moved[v]) place_vertex(mesh, v, b);
+    if (!same || moved[v]) vertex_slab_[v] = static_cast<std::int32_t>(place_vertex(mesh, v, b));
     const Index g = g0 + vertex_slab_[v];
     vertex_group_[v] = static_cast<std::int32_t>(g);
     ++group_count_[g];
   }
 }
 
-// Bone b's vertices into its buckets, packed in its part of packed_xyz_ (the same place: the
+// Bone b's vertices into its buckets, packed in its part of packed_index_ (the same place: the
 // same vertices before it), and its boxes: as pack_buckets and build_box_trees for this bone.
 void MomentArmIndex::repack_bone(const MeshView& mesh, int b) {
   const Index g0 = group_offset_[b], g1 = group_offset_[b + 1];
@@ -403,16 +407,21 @@ void MomentArmIndex::repack_bone(const MeshView& mesh, int b) {
 void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
                                     const std::vector<int>& vertex_bone,
                                     const std::vector<std::uint8_t>* skip,
-                                    const std::uint8_t* moved, int chunks) {
+                                    const std::uint8_t* moved, bool keep_slabs, int chunks) {
   const int nb = s.num_bones();
   const Index ngroups = group_offset_[nb];
   // (Scratch arrays left uninitialised: every kept vertex's entry is written before it is read.)
   if (vertex_capacity_ < mesh.num_vertices) {
     vertex_group_.reset(new std::int32_t[mesh.num_vertices]);
-    vertex_angle_.reset(new double[mesh.num_vertices]);
-    vertex_slab_.reset(new std::int32_t[mesh.num_vertices]);
+    vertex_angle_.reset(new float[mesh.num_vertices]);
     vertex_capacity_ = mesh.num_vertices;
     moved = nullptr;  // nothing kept
+  }
+  // The slabs are kept for the next build in live mode only (a one-off build writes none).
+  if (keep_slabs && slab_capacity_ < mesh.num_vertices) {
+    vertex_slab_.reset(new std::int32_t[mesh.num_vertices]);
+    slab_capacity_ = mesh.num_vertices;
+    moved = nullptr;
   }
   std::int32_t* const vertex_group = vertex_group_.get();
   std::int32_t* const vertex_slab = vertex_slab_.get();  // the slab within its bone (kept)
@@ -428,9 +437,14 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
       if (skip != nullptr && (*skip)[v] != 0) continue;
       const int b = vertex_bone[v];
       // An unmoved vertex on the same bone keeps the last build's slab and angle.
-      if (moved == nullptr || moved[v] || last_bone[v] != b || !bone_same[b])
-        place_vertex(mesh, v, b);
-      const Index g = group_offset_[b] + vertex_slab[v];
+      Index slab;
+      if (moved == nullptr || moved[v] || last_bone[v] != b || !bone_same[b]) {
+        slab = place_vertex(mesh, v, b);
+        if (keep_slabs) vertex_slab[v] = static_cast<std::int32_t>(slab);
+      } else {
+        slab = vertex_slab[v];
+      }
+      const Index g = group_offset_[b] + slab;
       vertex_group[v] = static_cast<std::int32_t>(g);
       ++group_count[g];
     }
@@ -441,13 +455,13 @@ void MomentArmIndex::group_vertices(const MeshView& mesh, const Skeleton& s,
 }
 
 // The vertices in buckets of ~16 per group (sectors around the bone axis), packed by bucket
-// (packed_xyz_, packed_index_) in vertex order within each bucket (so the same index whatever
+// (packed_index_) in vertex order within each bucket (so the same index whatever
 // the chunks: chunk c's vertices of a bucket come after chunk c - 1's). One job per chunk.
 void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip,
                                   int chunks) {
   const Index ngroups = group_offset_.back();
   std::int32_t* const vertex_group = vertex_group_.get();
-  const double* const vertex_angle = vertex_angle_.get();
+  const float* const vertex_angle = vertex_angle_.get();
   const Index nv = mesh.num_vertices;
   auto skipped = [&](Index v) { return skip != nullptr && (*skip)[v] != 0; };
   bucket_offset_.assign(ngroups + 1, 0);
@@ -485,33 +499,23 @@ void MomentArmIndex::pack_buckets(const MeshView& mesh, const std::vector<std::u
     bucket.hi = Vec3::Constant(-inf);
   }
   if (packed_capacity_ < at) {
-    packed_xyz_.reset(new double[3 * at]);
     packed_index_.reset(new std::int32_t[at]);
     packed_capacity_ = at;
   }
-  double* const xyz = packed_xyz_.get();
   std::int32_t* const index = packed_index_.get();
   detail::parallel_for(chunks, chunks, [&](long c, int) {
     Index* const fill = chunk_count_[c].data();
     const Index v1 = chunk_end(nv, c + 1, chunks);
     for (Index v = chunk_end(nv, c, chunks); v < v1; ++v) {
       if (skipped(v)) continue;
-      const Index k = fill[vertex_group[v]]++;
-      const Vec3 p = mesh.vertex(v);
-      xyz[3 * k] = p.x();
-      xyz[3 * k + 1] = p.y();
-      xyz[3 * k + 2] = p.z();
-      index[k] = static_cast<std::int32_t>(v);
+      index[fill[vertex_group[v]]++] = static_cast<std::int32_t>(v);
     }
   });
 }
 
-// Vertex v at place k of packed_xyz_, in `bucket` (its box grown).
+// Vertex v at place k of packed_index_, in `bucket` (its box grown).
 void MomentArmIndex::pack_vertex(const MeshView& mesh, Index v, Group& bucket, Index k) {
   const Vec3 p = mesh.vertex(v);
-  packed_xyz_[3 * k] = p.x();
-  packed_xyz_[3 * k + 1] = p.y();
-  packed_xyz_[3 * k + 2] = p.z();
   packed_index_[k] = static_cast<std::int32_t>(v);
   bucket.lo = bucket.lo.cwiseMin(p);
   bucket.hi = bucket.hi.cwiseMax(p);
@@ -527,9 +531,15 @@ void MomentArmIndex::build_box_trees(const LoadTree& tree, int chunks) {
   const Index nbuckets = bucket_offset_[ngroups];
   const double inf = std::numeric_limits<double>::infinity();
   groups_.resize(ngroups);
-  bucket_lo_.assign(2 * nbuckets, Vec3::Constant(inf));
-  bucket_hi_.assign(2 * nbuckets, Vec3::Constant(-inf));
-  const double* const xyz = packed_xyz_.get();
+  // Each group's tree writes its nodes [1, 2k) (node 0 is never read): no fill first (a serial
+  // pass that touched 4.5 MB of fresh pages on a 1.5M-face mesh), the pages are touched by the
+  // workers that write them.
+  bucket_lo_.resize(2 * nbuckets);
+  bucket_hi_.resize(2 * nbuckets);
+  const double* const xyz = vertices_;
+  const std::int32_t* const index = packed_index_.get();
+  const Index last = nbuckets > 0 ? std::max<Index>(0, buckets_[nbuckets - 1].end - 1) : 0;
+  const bool ahead = last + 1 >= detail::kVerticesPerPass;  // a large mesh (prefetch pays)
   auto group_at = [&](Index k) {  // the first group whose buckets start at or after bucket k
     return std::lower_bound(bucket_offset_.begin(), bucket_offset_.end(), k) -
            bucket_offset_.begin();
@@ -540,7 +550,10 @@ void MomentArmIndex::build_box_trees(const LoadTree& tree, int chunks) {
       for (Index k = bucket_offset_[g]; k < bucket_offset_[g + 1]; ++k) {
         Group& bucket = buckets_[k];
         for (Index i = bucket.begin; i < bucket.end; ++i) {
-          const Vec3 p(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+          // A gather from the mesh (on a large one, the vertex 8 places on fetched ahead).
+          if (ahead) detail::prefetch(xyz + 3 * static_cast<Index>(index[std::min(i + 8, last)]));
+          const double* q = xyz + 3 * static_cast<Index>(index[i]);
+          const Vec3 p(q[0], q[1], q[2]);
           bucket.lo = bucket.lo.cwiseMin(p);
           bucket.hi = bucket.hi.cwiseMax(p);
         }
@@ -678,8 +691,8 @@ std::pair<double, Index> MomentArmIndex::farthest(int bone, int boundary, bool p
       i = near;
     }
     const Group& bucket = buckets_[first + i - k];
-    const double* p = packed_xyz_.get() + 3 * bucket.begin;
-    for (Index v = bucket.begin; v < bucket.end; ++v, p += 3) {
+    for (Index v = bucket.begin; v < bucket.end; ++v) {
+      const double* p = vertices_ + 3 * static_cast<Index>(packed_index_[v]);
       const double dx = p[0] - c.x(), dy = p[1] - c.y(), dz = p[2] - c.z();
       const double d2 = dx * dx + dy * dy + dz * dz;
       if (d2 > best || (d2 == best && packed_index_[v] < best_vertex)) {

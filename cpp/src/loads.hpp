@@ -44,8 +44,8 @@ class MomentArmIndex {
   /// An empty index (build() before farthest()).
   MomentArmIndex() = default;
   /// (Re)builds the index, as the constructor; the storage of an earlier build is reused (an
-  /// index kept across live runs allocates nothing once the mesh size is steady). `tree` must
-  /// outlive the index's use.
+  /// index kept across live runs allocates nothing once the mesh size is steady). `tree` and
+  /// the mesh's vertices must outlive the index's use (farthest() reads them).
   /// `moved` (optional, #V): which vertices moved since the last build (live mode); a vertex
   /// that did not, on the same bone, whose bone's head, axis and slabs are bitwise the same,
   /// keeps its slab and angle from then (the same numbers: the index is the same).
@@ -99,15 +99,17 @@ class MomentArmIndex {
   std::vector<Index> bucket_offset_;  // G+1: first bucket of each group
   std::vector<Group> buckets_;        // packed vertex ranges [begin, end) and boxes
   std::vector<Vec3> bucket_lo_, bucket_hi_;
-  // Written in full by the constructor, so left uninitialized on allocation (a zero-fill pass
-  // would cost as much as the scatter that fills them).
-  std::unique_ptr<double[]> packed_xyz_;  // vertices grouped by (bone, slab), xyz interleaved, mm
-  std::unique_ptr<std::int32_t[]> packed_index_;  // original vertex index of each packed vertex
-  Index packed_capacity_ = 0;  // vertices packed_xyz_ and packed_index_ have room for
+  // The vertices grouped by (bone, slab) and bucket: each one's index into the mesh of the last
+  // build, whose coordinates (vertices_, xyz interleaved, mm) the queries read. (No packed copy
+  // of the coordinates: on a 1.5M-face mesh that was 18 MB of fresh pages per one-off analysis
+  // for a few hundred queries.) Written in full by build(), so left uninitialized on allocation.
+  const double* vertices_ = nullptr;
+  std::unique_ptr<std::int32_t[]> packed_index_;
+  Index packed_capacity_ = 0;  // vertices packed_index_ has room for
   // The steps of build(): vertices into groups (slabs), groups into buckets, the box trees.
   void group_vertices(const MeshView& mesh, const Skeleton& skeleton,
                       const std::vector<int>& vertex_bone, const std::vector<std::uint8_t>* skip,
-                      const std::uint8_t* moved, int chunks);
+                      const std::uint8_t* moved, bool keep_slabs, int chunks);
   void pack_buckets(const MeshView& mesh, const std::vector<std::uint8_t>* skip, int chunks);
   void build_box_trees(const LoadTree& tree, int chunks);
   // A bone's frame for placing its vertices, computed once per build: its head and axis, two
@@ -120,19 +122,21 @@ class MomentArmIndex {
     double scale = 0;                // (count - 1) / (last - first): the search's first guess
   };
   void set_frames(const Skeleton& skeleton);
-  void place_vertex(const MeshView& mesh, Index v, int b);
+  Index place_vertex(const MeshView& mesh, Index v, int b);
   void pack_vertex(const MeshView& mesh, Index v, Group& bucket, Index k);
   void bucket_tree(Index g);
   void bone_tree(int b);
   // Scratch of build(), kept for its storage.
   std::unique_ptr<std::int32_t[]> vertex_group_;  // (32 bits: less memory to stream)
-  std::unique_ptr<double[]> vertex_angle_;
-  Index vertex_capacity_ = 0;
+  std::unique_ptr<float[]> vertex_angle_;
+  Index vertex_capacity_ = 0;  // vertices vertex_group_ and vertex_angle_ have room for
   std::vector<Index> group_count_, bucket_fill_;
   std::vector<std::vector<Index>> chunk_count_;  // per chunk of vertices: group or bucket counts
   std::vector<BoneFrame> frames_;
-  // Each kept vertex's slab (group) and what it was computed from, kept for the next build.
+  // Each kept vertex's slab (group) and what it was computed from, kept for the next build
+  // (builds with `moved`, live mode: a one-off build neither allocates nor writes the slabs).
   std::unique_ptr<std::int32_t[]> vertex_slab_;
+  Index slab_capacity_ = 0;
   bool slabs_known_ = false;
   std::vector<int> last_bone_;
   std::vector<Vec3> last_head_, last_axis_;

@@ -346,3 +346,57 @@ TEST(MomentArmIndex, BuildSplitOverWorkersAnswersAsAScan) {
   }
   EXPECT_GT(checked, 100);
 }
+
+TEST(MomentArmIndex, LiveRebuildReadsTheNewVertexArray) {
+  // The index keeps no copy of the coordinates: its queries read the vertex array of its last
+  // build. A live rebuild (`moved` given) on a new array in which one bone's vertices moved keeps
+  // the other bones' part of the index (region_kept) and must answer from the new array: the old
+  // one is overwritten with NaN before the queries. Every answer equals a scan and a fresh index.
+  const Skeleton s = tee();
+  const LoadTree tree = build_load_tree(s, -1, {});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> xyz;
+  std::vector<int> vertex_bone;
+  for (int b = 0; b < s.num_bones(); ++b)
+    for (int k = 0; k < 600; ++k) {
+      const double t = (0.5 * (u(rng) + 1.0)) * s.length(b);
+      const Vec3 p = s.heads[b] + t * s.direction(b) + Vec3(u(rng), u(rng), u(rng)) * 4.0;
+      xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+      vertex_bone.push_back(b);
+    }
+  const Index nv = static_cast<Index>(vertex_bone.size());
+  std::vector<std::vector<double>> params(s.num_bones());
+  for (int b = 0; b < s.num_bones(); ++b)
+    for (int k = 0; k <= 8 + b; ++k) params[b].push_back(k * s.length(b) / (9 + b));
+  MomentArmIndex kept;
+  std::vector<std::uint8_t> moved(nv, 0);
+  std::vector<std::int32_t> moved_list;
+  kept.build(MeshView{xyz.data(), nv, nullptr, 0}, s, tree, vertex_bone, params, nullptr, &moved,
+             &moved_list);
+  // Bone 1's vertices move (1 mm away from its axis) in a copy of the array.
+  std::vector<double> next = xyz;
+  for (Index v = 0; v < nv; ++v)
+    if (vertex_bone[v] == 1) {
+      next[3 * v + 2] += 1.0;
+      moved[v] = 1;
+      moved_list.push_back(static_cast<std::int32_t>(v));
+    }
+  const MeshView mesh{next.data(), nv, nullptr, 0};
+  kept.build(mesh, s, tree, vertex_bone, params, nullptr, &moved, &moved_list);
+  EXPECT_TRUE(kept.region_kept(2));   // bone 2 (a leaf, unmoved): its part kept
+  EXPECT_FALSE(kept.region_kept(1));  // bone 1 moved
+  std::fill(xyz.begin(), xyz.end(), std::numeric_limits<double>::quiet_NaN());
+  const MomentArmIndex fresh(mesh, s, tree, vertex_bone, params);
+  int checked = 0;
+  for (int b = 0; b < s.num_bones(); ++b)
+    for (int i = 0; i < static_cast<int>(params[b].size()); ++i)
+      for (const bool plus : {true, false}) {
+        const Vec3 c = s.heads[b] + params[b][i] * s.direction(b) + Vec3(0.3, -0.1, 0.2);
+        EXPECT_EQ(kept.farthest(b, i, plus, c), fresh.farthest(b, i, plus, c))
+            << "bone " << b << " boundary " << i;
+        checked += expect_farthest_as_scan(kept, mesh, s, tree, vertex_bone, params, b, i, plus, c,
+                                           nullptr, "bone " + std::to_string(b));
+      }
+  EXPECT_GT(checked, 30);
+}
