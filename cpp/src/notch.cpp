@@ -345,9 +345,11 @@ void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Ind
         !grid.block_meets(k, n, offset, offset, &region))
       continue;
     // (In a block the plane test first: it rejects most of its cells, the window few.)
+    // (With a window, a cell that meets the plane and the window's extent along both axes is
+    // cut without the ball's test: it rejects few such cells, and only visits are saved by it.)
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
       if (grid.meets(c, n, offset, offset) && !outside(grid.cell_center(c), grid.cell_half(c)) &&
-          region.meets_box(grid.cell_center(c), grid.cell_half(c)))
+          (window != nullptr || region.meets_box(grid.cell_center(c), grid.cell_half(c))))
         cut_cell(mesh, grid, c, plane, offset, window, out, scratch.heights);
   }
 }
