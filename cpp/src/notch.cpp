@@ -262,6 +262,7 @@ struct Scratch {
   std::vector<std::size_t> run_best;  // each run's segment of largest turn (chain_runs)
   std::vector<std::size_t> point_at;  // a chain's fillet points' vertices (fillet_points)
   std::vector<CutSegment> segments;
+  std::vector<std::pair<double, Index>> start_cells;  // plane_start's cells and their bounds
   Chains chains;
 };
 
@@ -302,6 +303,32 @@ struct Window {
     const double y = vx * dx + vy * dy + vz * dz, ry = avx * hx + avy * hy + avz * hz;
     return y + ry < t_lo || y - ry > t_hi;
   }
+  // The square of an upper bound on the norm of the plane coordinates of the box's points: the
+  // farthest corner of the box's extent along each axis (the same products as outside()).
+  double reach2(const Vec3& center, const Vec3& half) const {
+    const double dx = center.x() - ox, dy = center.y() - oy, dz = center.z() - oz;
+    const double hx = half.x(), hy = half.y(), hz = half.z();
+    const double x = std::abs(ux * dx + uy * dy + uz * dz) + (aux * hx + auy * hy + auz * hz);
+    const double y = std::abs(vx * dx + vy * dy + vz * dz) + (avx * hx + avy * hy + avz * hz);
+    return x * x + y * y;
+  }
+  // outside() for a box inside a box already tested (a run of a cell's faces), skipping the
+  // coordinates in which that box lay wholly inside the window; `in_x`, `in_y` set for this box.
+  bool outside(const Vec3& center, const Vec3& half, bool& in_x, bool& in_y) const {
+    const double dx = center.x() - ox, dy = center.y() - oy, dz = center.z() - oz;
+    const double hx = half.x(), hy = half.y(), hz = half.z();
+    if (!in_x) {
+      const double x = ux * dx + uy * dy + uz * dz, rx = aux * hx + auy * hy + auz * hz;
+      if (x + rx < lo || x - rx > hi) return true;
+      in_x = x - rx >= lo && x + rx <= hi;
+    }
+    if (!in_y) {
+      const double y = vx * dx + vy * dy + vz * dz, ry = avx * hx + avy * hy + avz * hz;
+      if (y + ry < t_lo || y - ry > t_hi) return true;
+      in_y = y - ry >= t_lo && y + ry <= t_hi;
+    }
+    return false;
+  }
   bool contains(const Vec2& p) const {
     return p.x() >= lo && p.x() <= hi && p.y() >= t_lo && p.y() <= t_hi;
   }
@@ -318,8 +345,11 @@ inline bool outside_window(const Window* window, const Vec3& center, const Vec3&
 void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFrame& plane,
               double offset, const Window* window, std::vector<CutSegment>& out,
               std::vector<double>& heights) {
+  // cut_cell_faces tests the cell's tight box first, then its runs' (each inside the cell's): a
+  // run is not tested in a coordinate in which the cell's box lies wholly inside the window.
+  bool in_x = window == nullptr, in_y = in_x;
   auto outside = [&](const Vec3& center, const Vec3& half) {
-    return outside_window(window, center, half);
+    return !(in_x && in_y) && window->outside(center, half, in_x, in_y);
   };
   detail::cut_cell_faces(
       mesh, grid, c, plane.normal, offset, outside, heights,
@@ -352,9 +382,11 @@ void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Ind
         !grid.block_meets(k, n, offset, offset, &region))
       continue;
     // (In a block the plane test first: it rejects most of its cells, the window few.)
+    // (With a window, a cell that meets the plane and the window's extent along both axes is
+    // cut without the ball's test: it rejects few such cells, and only visits are saved by it.)
     for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c)
       if (grid.meets(c, n, offset, offset) && !outside(grid.cell_center(c), grid.cell_half(c)) &&
-          region.meets_box(grid.cell_center(c), grid.cell_half(c)))
+          (window != nullptr || region.meets_box(grid.cell_center(c), grid.cell_half(c))))
         cut_cell(mesh, grid, c, plane, offset, window, out, scratch.heights);
   }
 }
@@ -362,7 +394,9 @@ void cut_cells(const MeshView& mesh, const FaceGrid& grid, const std::vector<Ind
 // The unit direction, normal to u, from which the half-planes are placed: the point of the thin
 // plane's cut within 1.5 r of the axis (the thin section's outline) farthest from it (ties: the
 // smaller mesh edge), so that the planes turn with the model (a turned model cuts the same
-// profiles). e1 if the cut is empty.
+// profiles). e1 if the cut is empty. The cells are cut farthest first (by a bound on the distance
+// of their box from the origin), skipping the cells and runs of faces whose bound is below the
+// best point so far: every point they hold lies nearer (the same point as a cut of them all).
 Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const std::vector<Index>& blocks,
                  const Vec3& origin, const Vec3& u, double r_thin, const Vec3& e1,
                  Scratch& scratch) {
@@ -370,26 +404,75 @@ Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const std::vector<I
   CutRegion ball;
   ball.point = origin;
   ball.radius = 1.5 * r_thin;
-  std::vector<CutSegment>& segments = scratch.segments;
-  segments.clear();
   // Only points within the disk count, so only segments with an end in its square (widened far
   // beyond rounding: |x| and |y| exceed the norm by an ulp at most).
   const double square = ball.radius + 1e-9 * r_thin;
   const Window window(frame, -square, square, -square, square);
-  cut_cells(mesh, grid, blocks, frame, ball, segments, scratch, &window);
-  double best = -1;
-  std::uint64_t best_edge = 0;
-  Vec2 at(0, 0);
-  for (const CutSegment& s : segments)
-    for (int k = 0; k < 2; ++k) {
-      const double t = s.point[k].norm();
-      if (t > ball.radius) continue;
-      if (t > best || (t == best && s.edge[k] < best_edge)) {
-        best = t;
-        best_edge = s.edge[k];
-        at = s.point[k];
-      }
+  const Vec3& n = frame.normal;
+  const double offset = n.dot(frame.origin);
+  // The cells the cut visits (cut_cells' tests), farthest first by a bound on their points' plane
+  // coordinates (Window::reach2): a segment's end lies on a face edge inside the box (to a few
+  // ulps, far below the margin). A cell, or a run of its faces (by its tight box), whose bound is
+  // below the best point so far can hold neither a farther point nor a tie.
+  const double margin = 1e-9 * r_thin;
+  auto reach2 = [&](const Vec3& center, const Vec3& half) { return window.reach2(center, half); };
+  std::vector<std::pair<double, Index>>& cells = scratch.start_cells;
+  cells.clear();
+  for (Index k : blocks) {
+    if (window.outside(grid.block_center(k), grid.block_half(k)) ||
+        !grid.block_meets(k, n, offset, offset, &ball))
+      continue;
+    for (Index c = grid.block_begin(k); c < grid.block_end(k); ++c) {
+      const Vec3 &center = grid.cell_center(c), &half = grid.cell_half(c);
+      if (grid.meets(c, n, offset, offset) && !window.outside(center, half) &&
+          ball.meets_box(center, half))
+        cells.emplace_back(reach2(center, half), c);
     }
+  }
+  std::sort(cells.begin(), cells.end(),
+            [](const auto& x, const auto& y) { return x.first > y.first; });
+  std::vector<CutSegment>& segments = scratch.segments;
+  double best = -1, below = -1;  // below: (best - margin)^2 once best > margin
+  std::uint64_t best_edge = 0;
+  Index best_cell = 0;
+  Vec2 at(0, 0);
+  bool in_x = false, in_y = false;  // as in cut_cell
+  auto skip = [&](const Vec3& center, const Vec3& half) {
+    return (!(in_x && in_y) && window.outside(center, half, in_x, in_y)) ||
+           reach2(center, half) < below;
+  };
+  for (const auto& [bound, c] : cells) {
+    if (bound < below) break;
+    segments.clear();
+    in_x = in_y = false;
+    detail::cut_cell_faces(
+        mesh, grid, c, n, offset, skip, scratch.heights,
+        [&](const std::int32_t* f, const double height[3]) {
+          const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
+          if (above[0] == above[1] && above[1] == above[2]) return;
+          CutSegment seg;
+          Vec3 world[2];
+          detail::emit_segment(mesh, frame, f, above, height, seg, world);
+          if (window.contains(seg.point[0]) || window.contains(seg.point[1]))
+            segments.push_back(seg);
+        });
+    // (Two faces give one edge's point with different roundings; at equal t and edge the first
+    // in the grid's order wins, as in a cut of the cells in order: the smaller cell, and in a
+    // cell the earlier face.)
+    for (const CutSegment& s : segments)
+      for (int k = 0; k < 2; ++k) {
+        const double t = s.point[k].norm();
+        if (t > ball.radius) continue;
+        if (t > best ||
+            (t == best && (s.edge[k] < best_edge || (s.edge[k] == best_edge && c < best_cell)))) {
+          best = t;
+          best_edge = s.edge[k];
+          best_cell = c;
+          at = s.point[k];
+        }
+      }
+    if (best > margin) below = (best - margin) * (best - margin);
+  }
   if (!(best > 0)) return e1;
   const Vec3 d = at.x() * frame.u + at.y() * frame.v;
   return (d - d.dot(u) * u).normalized();

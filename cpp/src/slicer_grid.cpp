@@ -566,18 +566,6 @@ void FaceGrid::enable_tight_bounds() {
   tight_on_ = true;
 }
 
-FaceGrid::Tight FaceGrid::tight_boxes(Index c, TightBoxes& boxes) const {
-  TightData& t = tight_;
-  boxes.cell = &t.cell_box[2 * c];
-  boxes.group_center = t.group_center.data() + t.group_start[c];
-  boxes.group_half = t.group_half.data() + t.group_start[c];
-  std::atomic<std::uint8_t>& state = tight_state_[c];
-  if (state.load(std::memory_order_acquire) == 2) return Tight::kReady;
-  std::uint8_t none = 0;
-  return state.compare_exchange_strong(none, 1, std::memory_order_acq_rel) ? Tight::kMine
-                                                                           : Tight::kBusy;
-}
-
 void FaceGrid::bound_cell(Index c, const MeshView& /*mesh*/, const TightBoxes& boxes) const {
   // The corners' coordinates from the cell's entries (bit-exact copies of the mesh's vertices,
   // a few contiguous cache lines per cell) instead of gathered from the mesh's vertex array (on

@@ -210,7 +210,18 @@ class FaceGrid {
   /// must compute them (bound_cell); kBusy: another thread is computing them (visit the faces
   /// one by one).
   enum class Tight { kReady, kMine, kBusy };
-  Tight tight_boxes(Index c, TightBoxes& boxes) const;
+  /// (Inline: every cell a cut visits calls it.)
+  Tight tight_boxes(Index c, TightBoxes& boxes) const {
+    TightData& t = tight_;
+    boxes.cell = &t.cell_box[2 * c];
+    boxes.group_center = t.group_center.data() + t.group_start[c];
+    boxes.group_half = t.group_half.data() + t.group_start[c];
+    std::atomic<std::uint8_t>& state = tight_state_[c];
+    if (state.load(std::memory_order_acquire) == 2) return Tight::kReady;
+    std::uint8_t none = 0;
+    return state.compare_exchange_strong(none, 1, std::memory_order_acq_rel) ? Tight::kMine
+                                                                             : Tight::kBusy;
+  }
   /// Writes cell c's boxes (from its entries: copies of `mesh`, the grid's mesh) and makes them
   /// visible to every cut; only the thread that got kMine for c.
   void bound_cell(Index c, const MeshView& mesh, const TightBoxes& boxes) const;
