@@ -108,7 +108,7 @@ def build(gmsh, radius, tilt_deg=0.0):
         disk = occ.addDisk(0, 0, 0, max(a, b), min(a, b))
         if a < b:
             occ.rotate([(2, disk)], 0, 0, 0, 0, 0, 1, math.pi / 2)
-        branch = [t for d, t in occ.extrude([(2, disk)], 0, 0, TIP_Z) if d == 3][0]
+        branch = next(t for d, t in occ.extrude([(2, disk)], 0, 0, TIP_Z) if d == 3)
     fused, _ = occ.fuse([(3, body)], [(3, branch)])
     occ.synchronize()
     vol = fused[0][1]
