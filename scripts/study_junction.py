@@ -69,12 +69,14 @@ ROUNDS = {  # (tilt deg, r/d)
     # measurement, not a rule change (docs/notch.md "Round 6 on an elliptic branch"): an elliptic
     # branch, semi-axes 3.6 mm along x (the tilt plane) x 2.4 mm along y (area 0.96 of d = 6's)
     "6-ellipse": [(0.0, 0.1), (45.0, 0.1)],
+    # the same, the long axis across the tilt plane (2.4 mm along x, 3.6 mm along y)
+    "6-ellipse-y": [(0.0, 0.1), (45.0, 0.1)],
 }
 #: the branch per round: None round (d = 6 mm), (a along x, b along y) mm elliptic
-ROUND_BRANCH = {"6-ellipse": (3.6, 2.4)}
+ROUND_BRANCH = {"6-ellipse": (3.6, 2.4), "6-ellipse-y": (2.4, 3.6)}
 #: FEM element sizes on the fillet (r/div): the held-out shapes at r/4 and r/6 (convergence); the
 #: training shapes at r/6 only (0 and 45 deg converged within 1.4 % from r/4, docs/notch.md)
-ROUND_DIVS = {"6-train": (6,), "6": (4, 6), "6-ellipse": (4,)}
+ROUND_DIVS = {"6-train": (6,), "6": (4, 6), "6-ellipse": (4, 6), "6-ellipse-y": (4, 6)}
 PROFILE_STEP = 0.05  # mm between the per-plane reference's planes
 FLOOR = 0.85  # acceptance: every reading >= FLOOR x FEM's peak
 
