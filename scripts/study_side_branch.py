@@ -50,6 +50,26 @@ ANGLES = (0.0, 11.25, 22.5, 33.75)  # degrees about z: one period of the 8 half-
 #: the branch bone's head on the body's axis: sections every 2 mm from it, so these put the
 #: plane nearest the junction at z = 6 (tangent to the body's top), 6.5 (in the fillet), 7, 7.5
 HEAD_ZS = (0.0, 0.5, 1.0, 1.5)
+#: None: the round branch (d = BRANCH_D); (a, b): an elliptic branch, semi-axes a along x (the
+#: tilt plane) and b along y, mm (scripts/study_junction.py's round "6-ellipse"; set_branch)
+BRANCH_SEMI = None
+
+
+def set_branch(semi=None):
+    """Use an elliptic branch of semi-axes (a along x, b along y) mm, or the round one (None)."""
+    global BRANCH_SEMI
+    BRANCH_SEMI = None if semi is None else (float(semi[0]), float(semi[1]))
+
+
+def branch_semi():
+    return BRANCH_SEMI or (BRANCH_D / 2, BRANCH_D / 2)
+
+
+def branch_radius_at(x, y):
+    """The branch's outline's distance from its axis in the direction (x, y)."""
+    a, b = branch_semi()
+    phi = np.arctan2(y, x)
+    return a * b / np.sqrt((b * np.cos(phi)) ** 2 + (a * np.sin(phi)) ** 2)
 
 
 def body_axis(tilt_deg):
@@ -63,10 +83,12 @@ def junction_z(tilt_deg):
     """(lowest, highest) z where the branch's side meets the body's, mm."""
     u = body_axis(tilt_deg)
     zs = []
+    sa, sb = branch_semi()
     for phi in np.linspace(0, 2 * math.pi, 721):
-        cx = BRANCH_D / 2 * math.cos(phi) * u[0]
-        # |p|^2 - (p.u)^2 = (D/2)^2 with p = (d/2 cos, d/2 sin, z): a quadratic in z
-        a, b, c = 1 - u[2] ** 2, -2 * cx * u[2], (BRANCH_D / 2) ** 2 - cx**2 - (BODY_D / 2) ** 2
+        cx = sa * math.cos(phi) * u[0]
+        # |p|^2 - (p.u)^2 = (D/2)^2 with p = (a cos, b sin, z): a quadratic in z
+        rr = (sa * math.cos(phi)) ** 2 + (sb * math.sin(phi)) ** 2 if BRANCH_SEMI else (BRANCH_D / 2) ** 2
+        a, b, c = 1 - u[2] ** 2, -2 * cx * u[2], rr - cx**2 - (BODY_D / 2) ** 2
         zs.append((-b + math.sqrt(b * b - 4 * a * c)) / (2 * a))
     return min(zs), max(zs)
 
@@ -79,7 +101,14 @@ def build(gmsh, radius, tilt_deg=0.0):
     body = occ.addCylinder(-HALF_LENGTH, 0, 0, 2 * HALF_LENGTH, 0, 0, BODY_D / 2)
     if tilt_deg:
         occ.rotate([(3, body)], 0, 0, 0, 0, 1, 0, math.radians(tilt_deg))
-    branch = occ.addCylinder(0, 0, 0, 0, 0, TIP_Z, BRANCH_D / 2)
+    if BRANCH_SEMI is None:
+        branch = occ.addCylinder(0, 0, 0, 0, 0, TIP_Z, BRANCH_D / 2)
+    else:  # OCC's ellipse wants its major axis along x: turned a quarter about z if a < b
+        a, b = BRANCH_SEMI
+        disk = occ.addDisk(0, 0, 0, max(a, b), min(a, b))
+        if a < b:
+            occ.rotate([(2, disk)], 0, 0, 0, 0, 0, 1, math.pi / 2)
+        branch = next(t for d, t in occ.extrude([(2, disk)], 0, 0, TIP_Z) if d == 3)
     fused, _ = occ.fuse([(3, body)], [(3, branch)])
     occ.synchronize()
     vol = fused[0][1]
@@ -87,7 +116,8 @@ def build(gmsh, radius, tilt_deg=0.0):
     edges = []
     for _, e in gmsh.model.getEntities(1):
         b = gmsh.model.getBoundingBox(1, e)
-        if b[2] > 1.0 and b[5] < TIP_Z - 1 and max(map(abs, (b[0], b[1], b[3], b[4]))) < 3.2:
+        if b[2] > 1.0 and b[5] < TIP_Z - 1 and max(map(abs, (b[0], b[1], b[3], b[4]))) < max(
+                branch_semi()) + 0.2:
             edges.append(e)
     if not edges:
         raise RuntimeError("the junction's edge was not found")
@@ -189,6 +219,8 @@ def fem_peak(nodes, stresses, rel_r, tilt_deg=0.0, z_lo=None, z_hi=None):
     # r on the T (90 deg), 2.4 r in the tilted body's acute corner (90 - tilt)
     reach = 1.1 * rel_r * BRANCH_D / math.tan(math.radians(90 - abs(tilt_deg)) / 2)
     rad = np.hypot(nodes[:, 0], nodes[:, 1])
+    if BRANCH_SEMI is not None:  # the distance from the elliptic outline, plus d/2 (as a round's)
+        rad = rad - branch_radius_at(nodes[:, 0], nodes[:, 1]) + BRANCH_D / 2
     if z_lo is None:
         low, high = junction_z(tilt_deg)
         z_lo, z_hi = low - 2 * rel_r * BRANCH_D, high + reach
