@@ -337,6 +337,21 @@ inline bool outside_window(const Window* window, const Vec3& center, const Vec3&
   return window != nullptr && window->outside(center, half);
 }
 
+// A face of a cell cut (heights of its corners above the plane, mm): its segment appended to
+// `out` when the plane crosses it and one end lies in the window (every end when none) — the
+// step cut_cell and plane_start's start cut share.
+inline void keep_crossing(const MeshView& mesh, const PlaneFrame& plane, const std::int32_t* f,
+                          const double height[3], const Window* window,
+                          std::vector<CutSegment>& out) {
+  const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
+  if (above[0] == above[1] && above[1] == above[2]) return;
+  CutSegment seg;
+  Vec3 world[2];
+  detail::emit_segment(mesh, plane, f, above, height, seg, world);
+  if (window == nullptr || window->contains(seg.point[0]) || window->contains(seg.point[1]))
+    out.push_back(seg);
+}
+
 // Cell c's faces that the plane (normal n, offset n . origin) crosses, as segments (cut_cells),
 // by the section cuts' own cell cut (cell_cut.hpp): a cell or a run of its faces whose tight box
 // misses the plane or the window is skipped (none of its faces gives a kept segment). With a
@@ -351,17 +366,10 @@ void cut_cell(const MeshView& mesh, const FaceGrid& grid, Index c, const PlaneFr
   auto outside = [&](const Vec3& center, const Vec3& half) {
     return !(in_x && in_y) && window->outside(center, half, in_x, in_y);
   };
-  detail::cut_cell_faces(
-      mesh, grid, c, plane.normal, offset, outside, heights,
-      [&](const std::int32_t* f, const double height[3]) {
-        const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
-        if (above[0] == above[1] && above[1] == above[2]) return;
-        CutSegment seg;
-        Vec3 world[2];
-        detail::emit_segment(mesh, plane, f, above, height, seg, world);
-        if (window == nullptr || window->contains(seg.point[0]) || window->contains(seg.point[1]))
-          out.push_back(seg);
-      });
+  detail::cut_cell_faces(mesh, grid, c, plane.normal, offset, outside, heights,
+                         [&](const std::int32_t* f, const double height[3]) {
+                           keep_crossing(mesh, plane, f, height, window, out);
+                         });
 }
 
 // The segments of the faces that the plane crosses in the cells of `blocks` whose box may reach
@@ -445,17 +453,10 @@ Vec3 plane_start(const MeshView& mesh, const FaceGrid& grid, const std::vector<I
     if (bound < below) break;
     segments.clear();
     in_x = in_y = false;
-    detail::cut_cell_faces(
-        mesh, grid, c, n, offset, skip, scratch.heights,
-        [&](const std::int32_t* f, const double height[3]) {
-          const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
-          if (above[0] == above[1] && above[1] == above[2]) return;
-          CutSegment seg;
-          Vec3 world[2];
-          detail::emit_segment(mesh, frame, f, above, height, seg, world);
-          if (window.contains(seg.point[0]) || window.contains(seg.point[1]))
-            segments.push_back(seg);
-        });
+    detail::cut_cell_faces(mesh, grid, c, n, offset, skip, scratch.heights,
+                           [&](const std::int32_t* f, const double height[3]) {
+                             keep_crossing(mesh, frame, f, height, &window, segments);
+                           });
     // (Two faces give one edge's point with different roundings; at equal t and edge the first
     // in the grid's order wins, as in a cut of the cells in order: the smaller cell, and in a
     // cell the earlier face.)
