@@ -125,11 +125,29 @@ print(osteon.__file__)
 """
 
 
+def child_arrays(code: str, other: str | None, out: str) -> dict:
+    """The arrays a child process saves to `out` (.npz) running `code` (which starts with
+    OTHER_BUILD_IMPORT and prints osteon's file last), with the other build imported when
+    `other` is given (checked: exits if that build was not the one imported). Shared by
+    compare_corners.py and identity_x64.py."""
+    import numpy as np
+
+    env = dict(os.environ)
+    if other:
+        env["OSTEON_OTHER_BUILD"] = other
+    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True)
+    file = res.stdout.strip().splitlines()[-1]
+    if other and not file.startswith(other):
+        raise SystemExit(f"the other build was not imported: {file}")
+    with np.load(out) as data:
+        return {k: data[k] for k in data.files}
+
+
 def identity(other: str, keep: str | None) -> int:
     """Both builds' identity dumps compared byte for byte: 0 when every array is equal."""
     import tempfile
 
-    import numpy as np
     from identity_dump import compare, largest_relative
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -137,18 +155,8 @@ def identity(other: str, keep: str | None) -> int:
         folder.mkdir(parents=True, exist_ok=True)
         dumps = {}
         for name, path in (("this", None), ("other", other)):
-            env = dict(os.environ)
-            if path:
-                env["OSTEON_OTHER_BUILD"] = path
             out = str(folder / f"identity_{name}.npz")
-            res = subprocess.run([sys.executable, "-c", IDENTITY_CHILD.format(here=str(HERE),
-                                                                           out=out)],
-                                 env=env, capture_output=True, text=True, check=True)
-            file = res.stdout.strip().splitlines()[-1]
-            if path and not file.startswith(path):
-                raise SystemExit(f"the other build was not imported: {file}")
-            with np.load(out) as data:
-                dumps[name] = {k: data[k] for k in data.files}
+            dumps[name] = child_arrays(IDENTITY_CHILD.format(here=str(HERE), out=out), path, out)
     bad = compare(dumps["this"], dumps["other"])
     values = sum(a.size for a in dumps["this"].values())
     print(f"{len(dumps['this'])} arrays ({values} numbers) in this build, "

@@ -16,8 +16,6 @@ radius, D/d before and after). Exits 1 on any difference.
 from __future__ import annotations
 
 import argparse
-import os
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -26,7 +24,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from compare_builds import OTHER_BUILD_IMPORT
+from compare_builds import OTHER_BUILD_IMPORT, child_arrays
 
 CHILD = OTHER_BUILD_IMPORT + """sys.path.insert(0, {tests!r})
 import numpy as np, osteon, compare_corners
@@ -88,18 +86,9 @@ def _same(x, y) -> bool:
 
 
 def _run(path: str | None, folder: Path, name: str) -> dict:
-    env = dict(os.environ)
-    if path:
-        env["OSTEON_OTHER_BUILD"] = path
     out = str(folder / f"corners_{name}.npz")
     code = CHILD.format(here=str(HERE), tests=str(HERE.parent / "tests" / "python"), out=out)
-    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                         check=True)
-    file = res.stdout.strip().splitlines()[-1]
-    if path and not file.startswith(path):
-        raise SystemExit(f"the other build was not imported: {file}")
-    with np.load(out) as data:
-        return {k: data[k] for k in data.files}
+    return child_arrays(code, path, out)
 
 
 def main(argv=None) -> int:

@@ -13,22 +13,16 @@ between 1 and 2 threads of this build; exits 1 on any difference. ~3 minutes per
 from __future__ import annotations
 
 import argparse
-import os
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
 HERE = Path(__file__).resolve().parent
 
-CHILD = """import os, sys
-if os.environ.get("OSTEON_OTHER_BUILD"):
-    sys.meta_path = [f for f in sys.meta_path if "Redirecting" not in type(f).__name__]
-    sys.path.insert(0, os.environ["OSTEON_OTHER_BUILD"])
-sys.path.insert(0, {here!r})
-import numpy as np, osteon
+sys.path.insert(0, str(HERE))
+from compare_builds import OTHER_BUILD_IMPORT, child_arrays
+
+CHILD = OTHER_BUILD_IMPORT + """import numpy as np, osteon
 from identity_dump import _flatten
 from models import load
 v, f, sk, w = load("cow", subdivisions=3)
@@ -51,16 +45,7 @@ print(osteon.__file__)
 
 
 def dump(other: str | None, out: str) -> dict:
-    env = dict(os.environ)
-    if other:
-        env["OSTEON_OTHER_BUILD"] = other
-    res = subprocess.run([sys.executable, "-c", CHILD.format(here=str(HERE), out=out)], env=env,
-                         capture_output=True, text=True, check=True)
-    file = res.stdout.strip().splitlines()[-1]
-    if other and not file.startswith(other):
-        raise SystemExit(f"the other build was not imported: {file}")
-    with np.load(out) as data:
-        return {k: data[k] for k in data.files}
+    return child_arrays(CHILD.format(here=str(HERE), out=out), other, out)
 
 
 def main(argv=None) -> int:
