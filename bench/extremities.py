@@ -30,7 +30,38 @@ Definition (fixed before any model was scored with it):
    last 3 radii: on a round end of radius r, r), s at most half of P.
 
 The bench then scores the distance from each tip to the nearest auto bone end in units of r
-(within 1.5 r: the issue's bar; the auto bones stop 1.25 r inside a round end)."""
+(within 1.5 r: the issue's bar; the auto bones stop 1.25 r inside a round end).
+
+The issue's definition (issue 35's Build: "branches as thin as fingers get bones when they
+are longer than they are wide"; fixed and committed before any model was scored with it,
+session 11): step 5 measures a branch's width by its thickness (twice its largest depth),
+so the corner of a wide flat end (a paddle hand, a wing's tip, a flat foot's outer toe),
+thin but not narrow, counts as a branch longer than it is wide. Here "wide" is what the word
+says, the largest extent across the branch:
+
+5'. A node's width is the larger of twice its largest depth and its extent across g: the
+   largest distance between two of its voxels after projecting them on the plane
+   perpendicular to g's direction there (the least-squares gradient of g over the node's
+   voxels), found by a double sweep (the voxel farthest from the centroid, then the one
+   farthest from it), centre to centre (h less than the part's extent: for a round limb
+   twice the depth, which is h/2 more than the limb's radius, is the larger, so a round
+   limb's width and radius stay those of step 5; across a flat limb the extent is the
+   limb's breadth). A maximum is an extremity under the issue's definition when some stretch
+   from its tip is longer than it is wide: for some level l between its peak and its death
+   (step 4), the part of the solid joined to the tip above l (its superlevel component: the
+   branch cut off where g = l) is more than its own width long, top - l > the largest width
+   of its nodes, and at least ``MIN_VOXELS`` voxels long. Where the branch leaves a wider
+   part the component takes in that part's width and the test stops passing; a finger
+   passes above its base, a corner of a wide flat end (a paddle hand) never does (cut off
+   where it is as long as the end is wide, the component is as wide as the end), and a limb
+   ending in a paddle passes once the cut reaches the limb (its tip: the paddle's farthest
+   point). Its limb radius is measured as in step 5 with each voxel's depth replaced by the
+   larger of its depth and half its node's extent across (a round end: r as before; a flat
+   end: half its breadth, the radius the issue's "limb radii" means for a flat limb: a bone
+   at the middle of a paddle's end is within 1.5 r of its corners).
+
+``Extremities.issue`` holds the extremities by 5' (width: the largest node width of the
+region at its death); ``tips``/``radius`` step 5's (the old count, kept beside it)."""
 
 from __future__ import annotations
 
@@ -51,13 +82,16 @@ MIN_VOXELS = 4
 @dataclass
 class Extremities:
     """tips (E,3) mm, radius (E,) mm, persistence (E,) mm, width (E,) mm (2 x its region's
-    largest radius); h mm: the voxel size."""
+    largest radius); h mm: the voxel size; issue: the extremities by the issue's definition
+    (step 5'), their radius by 5', their width the largest width across (5') of the stretch
+    that passed."""
 
     tips: np.ndarray
     radius: np.ndarray
     persistence: np.ndarray
     width: np.ndarray
     h: float
+    issue: Extremities | None = None
 
 
 def voxelise(pv: np.ndarray, pf: np.ndarray, origin: np.ndarray, h: float,
@@ -144,6 +178,47 @@ def _voxel_graph(inside: np.ndarray, h: float) -> tuple[sparse.csr_matrix, np.nd
     return adj, index
 
 
+def _node_widths(pos: np.ndarray, g: np.ndarray, nid: np.ndarray, nn: int, h: float
+                 ) -> np.ndarray:
+    """(nn,) mm: each node's extent across g (step 5'): its voxels ``pos`` (n,3) with node
+    ids ``nid`` (n,) (-1: none) projected on the plane perpendicular to the least-squares
+    gradient of ``g`` over the node, the largest distance between two of them by a double
+    sweep (centre to centre)."""
+    ok = nid >= 0
+    p, gv, k = pos[ok], g[ok], nid[ok]
+    cnt = np.bincount(k, minlength=nn).astype(np.float64)
+    cen = np.stack([np.bincount(k, p[:, i], nn) for i in range(3)], 1) / np.maximum(cnt, 1)[:, None]
+    rel = p - cen[k]
+    gm = np.bincount(k, gv, nn) / np.maximum(cnt, 1)
+    dg = gv - gm[k]
+    cov = np.zeros((nn, 3, 3))
+    for i in range(3):
+        for j in range(i, 3):
+            cov[:, i, j] = cov[:, j, i] = np.bincount(k, rel[:, i] * rel[:, j], nn)
+    rhs = np.stack([np.bincount(k, rel[:, i] * dg, nn) for i in range(3)], 1)
+    # ridge of h^2/4 per voxel: a node one voxel thick along g has no spread to fit there
+    grad = np.linalg.solve(cov + (0.25 * h * h) * cnt[:, None, None] * np.eye(3)
+                           + 1e-12 * np.eye(3), rhs[:, :, None])[:, :, 0]
+    norm = np.linalg.norm(grad, axis=1)
+    unit = np.where(norm[:, None] > 0, grad / np.maximum(norm, 1e-300)[:, None], 0.0)
+    u = unit[k]
+    proj = rel - np.einsum("ij,ij->i", rel, u)[:, None] * u
+
+    def farthest(dist: np.ndarray) -> np.ndarray:
+        """(nn,) index into the voxels of each node's farthest one by ``dist`` (-1: none)."""
+        order = np.lexsort((dist, k))
+        last = np.r_[k[order][1:] != k[order][:-1], True]
+        out = np.full(nn, -1, np.int64)
+        out[k[order][last]] = order[last]
+        return out
+
+    a = farthest(np.linalg.norm(proj, axis=1))
+    far = np.linalg.norm(proj - proj[a[k]], axis=1)
+    out = np.zeros(nn)
+    np.maximum.at(out, k, far)
+    return out
+
+
 def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
     """The extremities of the welded mesh ``v`` (V,3) mm, ``f`` (F,3) split into ``pieces``
     (see the module's docstring)."""
@@ -152,7 +227,7 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
     union, main, origin = _solid(v, f, pieces, h)
     depth = ndimage.distance_transform_edt(union) * h  # mm to the nearest outside voxel
     if not union.any():
-        return Extremities(np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0), h)
+        return _pack([], h, _pack([], h, None))
     cells = np.argwhere(main if main is not None and main.any() else union)
     core = tuple(cells[np.argmin(((cells - cells.mean(0)) ** 2).sum(1))])
     adj, index = _voxel_graph(union, h)
@@ -182,6 +257,9 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
     peak[nid[at_top]] = at_top
     nrad = np.zeros(nn)
     np.maximum.at(nrad, nid[reached], rad[reached])
+    across = _node_widths(pos, g, nid, nn, h)
+    nwid = np.maximum(2.0 * nrad, across)  # step 5'
+    half_w = np.maximum(rad, np.where(nid >= 0, 0.5 * across[np.maximum(nid, 0)], 0.0))
     cross = (nid[a] >= 0) & (nid[b] >= 0) & (nid[a] != nid[b])
     nbrs: list[list[int]] = [[] for _ in range(nn)]
     for key in np.unique(nid[a[cross]] * nn + nid[b[cross]]).tolist():
@@ -199,20 +277,27 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
             x = parent[x]
         return x
 
+    wmax = nwid.copy()  # each component's largest node width so far (at its root)
+    passed = np.zeros(nn, bool)  # step 5': some stretch from the tip longer than its width
+    out_w = []
+
     def record(root: int, death: float) -> None:
         region = members[root]
         width = 2.0 * float(nrad[region].max())
         pers = float(birth[root]) - death
+        tip = int(peak[root])
         if pers > width and pers >= MIN_VOXELS * h:
-            tip = int(peak[root])
             out.append((pos[tip], end_radius(tip, pers / 2), pers, width))
+        if passed[root]:
+            out_w.append((pos[tip], end_radius(tip, pers / 2, half_w), pers,
+                          float(wmax[root])))
 
-    def end_radius(x: int, longest: float) -> float:
-        """The largest depth of the voxels within s of voxel ``x``, for the smallest s that
-        is 3 x that depth (s at most ``longest`` mm)."""
+    def end_radius(x: int, longest: float, depth: np.ndarray = rad) -> float:
+        """The largest ``depth`` (default: distance to the outside) of the voxels within s of
+        voxel ``x``, for the smallest s that is 3 x that depth (s at most ``longest`` mm)."""
         d = np.linalg.norm(pos - pos[x], axis=1)
         order = np.argsort(d[d <= longest], kind="stable")
-        dist, deepest = d[d <= longest][order], np.maximum.accumulate(rad[d <= longest][order])
+        dist, deepest = d[d <= longest][order], np.maximum.accumulate(depth[d <= longest][order])
         stop = np.flatnonzero(dist >= 3.0 * deepest)
         return float(deepest[stop[0]] if len(stop) else deepest[-1])
 
@@ -231,15 +316,24 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
             parent[r] = elder
             if r != elder:
                 members[elder] += members.pop(r)
+                wmax[elder] = max(wmax[elder], wmax[r])
         parent[x] = elder
         members[elder] += members.pop(x)
+        wmax[elder] = max(wmax[elder], nwid[x])
+        stretch = float(birth[elder] - top[x])  # the tip's component down to this level
+        if stretch > wmax[elder] and stretch >= MIN_VOXELS * h:
+            passed[elder] = True
     for r in {find(x) for x in range(nn)}:  # the highest maximum: down to the core
         record(r, float(top.min()))
-    if not out:
-        return Extremities(np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0), h)
-    tips, radius, pers, width = (np.array(c) for c in zip(*out, strict=True))
-    return Extremities(tips, radius, pers, width, h)
+    issue = _pack(out_w, h, None)
+    return _pack(out, h, issue)
 
+
+def _pack(out: list, h: float, issue: Extremities | None) -> Extremities:
+    if not out:
+        return Extremities(np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0), h, issue)
+    tips, radius, pers, width = (np.array(c) for c in zip(*out, strict=True))
+    return Extremities(tips, radius, pers, width, h, issue)
 
 def tip_thickness(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities) -> np.ndarray:
     """(E,) mm: each extremity's thickness where it is measured, 2 x the largest distance to

@@ -765,6 +765,56 @@ def test_the_bench_extremity_measure_finds_the_five_fingertips_of_a_hand():
         k = int(np.argmin(np.linalg.norm(ex.tips - tip, axis=1)))
         assert np.linalg.norm(ex.tips[k] - tip) < 2 * np.sqrt(3) * ex.h, (tip, ex.tips[k])
         assert abs(ex.radius[k] - r) < ex.h * np.sqrt(3), ex.radius[k]
+    # the issue's definition (step 5': longer than its width across): the same five tips;
+    # its radius (half the width across near the tip) is the finger's to within a voxel
+    # and a half (the level sets cut the round end obliquely)
+    iex = ex.issue
+    assert len(iex.tips) == 5
+    assert np.abs(iex.tips[:, None] - ex.tips[None]).sum(2).min(1).max() == 0.0
+    assert (np.abs(iex.radius - r) < 1.5 * ex.h).all(), iex.radius
+
+
+def paddle_arms(h=1.0):
+    """A body (ellipsoid 60 x 40 x 30 mm) with two arms (capsules of radius 4 mm, 35 mm long)
+    each ending in a flat paddle 16 mm long, 24 mm wide and 4 mm thick; voxelised at h mm.
+    Returns (v, f, the arms' (base, end) along x)."""
+    xs, ys, zs = (np.arange(lo, hi, h) + h / 2 for lo, hi in ((-80, 80), (-30, 30), (-20, 20)))
+    X, Y, Z = np.meshgrid(xs, ys, zs, indexing="ij")
+    occ = (X / 30) ** 2 + (Y / 20) ** 2 + (Z / 15) ** 2 <= 1
+    arms = []
+    for s in (-1, 1):
+        occ |= segment_distance(np.stack([X, Y, Z], -1), (s * 20, 0, 0), (s * 55, 0, 0)) <= 4
+        occ |= (np.abs(X - s * 63) <= 8) & (np.abs(Y) <= 12) & (np.abs(Z) <= 2)
+        arms.append(((s * 20.0, 0.0, 0.0), (s * 71.0, 0.0, 0.0)))
+    v, f = voxel_mesh(occ, h, (xs[0] - h / 2, ys[0] - h / 2, zs[0] - h / 2))
+    return v, f, arms
+
+
+def test_the_issue_extremities_of_paddle_arms_are_the_arms_not_the_paddles_corners():
+    """Issue 35 asks for bones on branches "longer than they are wide". A flat paddle (24 mm
+    wide, 4 mm thick) at an arm's end has two far corners; step 5 of bench/extremities.py
+    (width = twice the depth, 4 mm) counts both as extremities, the issue's definition
+    (step 5': width across, 24 mm) only the arm: one extremity per arm, at a far corner of
+    its paddle, with the limb radius half the paddle's breadth (12 mm, to within 2 voxels),
+    so that a bone ending at the middle of the paddle's end reaches it."""
+    import sys
+    from pathlib import Path
+
+    from osteon.autoskeleton.mesh import check_mesh
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from extremities import extremities
+
+    v, f, _arms = paddle_arms()
+    wv, wf, _ = check_mesh(v, f)
+    ex = extremities(wv, wf, split_pieces(wv, wf))
+    assert len(ex.tips) == 3  # step 5: both corners of one paddle, one of the other
+    iex = ex.issue
+    assert len(iex.tips) == 2
+    assert sorted(np.sign(iex.tips[:, 0]).tolist()) == [-1.0, 1.0]
+    assert (np.abs(np.abs(iex.tips[:, 0]) - 71) < 2).all()  # the paddle's end
+    assert (np.abs(np.abs(iex.tips[:, 1]) - 12) < 2).all()  # a corner of it
+    assert (np.abs(iex.radius - 12) < 2 * ex.h).all(), iex.radius
 
 
 def test_cli_skeleton_takes_the_minimum_printable_thickness_from_the_material(tmp_path, capsys):
