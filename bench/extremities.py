@@ -335,16 +335,12 @@ def _pack(out: list, h: float, issue: Extremities | None) -> Extremities:
     tips, radius, pers, width = (np.array(c) for c in zip(*out, strict=True))
     return Extremities(tips, radius, pers, width, h, issue)
 
-def tip_thickness(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities) -> np.ndarray:
-    """(E,) mm: each extremity's thickness where it is measured, 2 x the largest distance to
-    the surface of the main and joined pieces (the mesh itself, not the voxels: the grid's
-    h is 0.75 mm on a 120 mm model, coarser than a 0.3-0.8 mm printable wall) over the points
-    of a 9 x 9 x 9 grid filling the cube of half-side 3 r round its tip (its last 3 limb
-    radii: where r is measured). Inside a closed (or capped) piece: the distance to its
-    surface; a piece whose holes are not simple loops has no inside of its own, so there
-    the distance to its triangles counts at the points inside the voxel solid (step 1). An
-    extremity thinner than a material's minimum thickness cannot be printed with it: the
-    second column of the bench, beside the first, never instead of it (issue 35)."""
+def inner_radius_of(v: np.ndarray, f: np.ndarray, pieces, h: float):
+    """pts (K,3) -> (K,) mm: the inner radius of the main and joined pieces' union at the
+    points (0 outside): inside a closed (or capped) piece its distance to the piece's surface,
+    the largest over the pieces; a piece whose holes are not simple loops has no inside of its
+    own, so there the distance to its triangles counts at the points inside the voxel solid of
+    step 1 (voxel size ``h``)."""
     from osteon.autoskeleton.assemble import submesh
     from osteon.autoskeleton.curve import _mesh_distance
     from osteon.autoskeleton.pieces import cap_holes
@@ -356,22 +352,54 @@ def tip_thickness(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities) -> np.n
         (closed if mesh is not None else open_).append(_mesh_distance(*(mesh or (pv, pf))))
     union = origin = None
     if open_:
-        union, _main, origin = _solid(v, f, pieces, ex.h)
-    axis = np.linspace(-1.0, 1.0, 9)
-    grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), -1).reshape(-1, 3)
-    out = np.zeros(len(ex.tips))
-    for i, (tip, r) in enumerate(zip(ex.tips, ex.radius, strict=True)):
-        pts = tip + 3.0 * r * grid
-        inner = np.zeros(len(pts))
+        union, _main, origin = _solid(v, f, pieces, h)
+
+    def inner(pts: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(pts))
         for d in closed:
-            inner = np.maximum(inner, -np.asarray(d.signed_distance(pts), np.float64))
+            out = np.maximum(out, -np.asarray(d.signed_distance(pts), np.float64))
         if open_:
-            cell = np.floor((pts - origin) / ex.h).astype(np.int64)
+            cell = np.floor((pts - origin) / h).astype(np.int64)
             ok = ((cell >= 0) & (cell < union.shape)).all(1)
             ok[ok] = union[tuple(cell[ok].T)]
             if ok.any():
                 near = np.min([np.abs(np.asarray(d.signed_distance(pts[ok]), np.float64))
                                for d in open_], axis=0)
-                inner[ok] = np.maximum(inner[ok], near)
-        out[i] = 2.0 * float(inner.max())
-    return out
+                out[ok] = np.maximum(out[ok], near)
+        return out
+
+    return inner
+
+
+def tip_printable(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities, min_t: float
+                  ) -> np.ndarray:
+    """(E,) bool: some point within 1.5 r of each extremity's tip (where a bone end reaches
+    it, the issue's bar) is printable by the auto skeleton's own measure
+    (``osteon.autoskeleton.thickness.printable_within``: the local thickness at the point,
+    twice its inner radius, at least ``min_t``; on the points of a 9 x 9 x 9 grid in the ball
+    of radius 1.5 r) -- the test the thin step and the tip bones apply where a bone ends. An
+    extremity no printable bone end can reach is counted apart, beside the full count."""
+    from osteon.autoskeleton.thickness import printable_within
+
+    inner = inner_radius_of(v, f, pieces, ex.h)
+    return np.array([printable_within(inner, tip, 1.5 * r, min_t)
+                     for tip, r in zip(ex.tips, ex.radius, strict=True)], bool)
+
+
+def tip_thickness(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities) -> np.ndarray:
+    """(E,) mm: each extremity's thickness where it is measured, 2 x the largest distance to
+    the surface of the main and joined pieces (the mesh itself, not the voxels: the grid's
+    h is 0.75 mm on a 120 mm model, coarser than a 0.3-0.8 mm printable wall) over the points
+    of a 9 x 9 x 9 grid filling the cube of half-side 3 r round its tip (its last 3 limb
+    radii: where r is measured). Inside a closed (or capped) piece: the distance to its
+    surface; a piece whose holes are not simple loops has no inside of its own, so there
+    the distance to its triangles counts at the points inside the voxel solid (step 1). An
+    extremity thinner than a material's minimum thickness cannot be printed with it: the
+    second column of the bench, beside the first, never instead of it (issue 35). Replaced
+    in the bench's columns by :func:`tip_printable` (session 11: one measure with the auto
+    skeleton's); kept to reproduce the earlier figures."""
+    inner = inner_radius_of(v, f, pieces, ex.h)
+    axis = np.linspace(-1.0, 1.0, 9)
+    grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), -1).reshape(-1, 3)
+    return np.array([2.0 * float(inner(tip + 3.0 * r * grid).max())
+                     for tip, r in zip(ex.tips, ex.radius, strict=True)])

@@ -6,8 +6,10 @@ compare two runs bone by bone (units: mm; 120 mm prints).
     python bench/skeleton_score.py diff BASE.npz NEW.npz
 
 ``run`` saves every model's bones and extremities (tips, limb radius r, width) and prints, per
-model, bones, extremities within 1.5 r of a bone end, and printable extremities (width at least
-the material's min thickness) reached. ``diff`` lists, per model, the bone count of each run
+model, bones, extremities within 1.5 r of a bone end, and printable extremities (a point within
+1.5 r of the tip at least the material's min thickness thick: ``extremities.tip_printable``, the
+auto skeleton's own measure) reached; the same for the extremities by the issue's definition
+(``extremities.py`` step 5', scored in their radius r_w). ``diff`` lists, per model, the bone count of each run
 and every leaf bone of NEW whose tail is no leaf tail of BASE, with its distance to the nearest
 extremity tip in that extremity's limb radii (> 3 r: a bone at no extremity), and the
 extremities reached by one run and not the other."""
@@ -24,7 +26,7 @@ import numpy as np
 import osteon
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from extremities import extremities, tip_thickness
+from extremities import extremities, tip_printable, tip_thickness
 from models import load
 
 
@@ -73,8 +75,9 @@ def run(out: str, min_t: float, data: str) -> None:
         ex = extremities(wv, wf, split_pieces(wv, wf))
         ends = np.concatenate([sk.heads, sk.tails])
         x = np.linalg.norm(ex.tips[:, None] - ends[None], axis=2).min(1) / ex.radius
-        thin_tip = tip_thickness(wv, wf, split_pieces(wv, wf), ex) >= min_t
+        thin_tip = tip_printable(wv, wf, split_pieces(wv, wf), ex, min_t)
         printable = thin_tip
+        old_flag = tip_thickness(wv, wf, split_pieces(wv, wf), ex) >= min_t  # (before session 11)
         rig = ""
         if real is not None and name not in ("cow", "arm"):
             d, _e = limb_radii(v, real, ends)
@@ -84,7 +87,7 @@ def run(out: str, min_t: float, data: str) -> None:
         tot[:4] += [ok.sum(), len(x), (ok & thin_tip).sum(), thin_tip.sum()]
         iex = ex.issue  # the issue's definition (extremities.py step 5'), radius r_w
         xi = np.linalg.norm(iex.tips[:, None] - ends[None], axis=2).min(1) / iex.radius
-        ip = tip_thickness(wv, wf, split_pieces(wv, wf), iex) >= min_t
+        ip = tip_printable(wv, wf, split_pieces(wv, wf), iex, min_t)
         oki = xi <= 1.5
         tot[6:] += [oki.sum(), len(xi), (oki & ip).sum(), ip.sum()]
         print(f"| {name} | {sk.num_bones} | {cpu:.2f} | {ok.sum()}/{len(x)} | "
@@ -93,7 +96,7 @@ def run(out: str, min_t: float, data: str) -> None:
         saved[name] = {"heads": sk.heads, "tails": sk.tails, "parents": sk.parents, "tips": ex.tips,
                        "radius": ex.radius, "width": ex.width, "printable": printable,
                        "itips": iex.tips, "iradius": iex.radius, "iwidth": iex.width,
-                       "iprintable": ip}
+                       "iprintable": ip, "printable_old": old_flag}
     print(f"| all | | | {tot[0]}/{tot[1]} | {tot[2]}/{tot[3]} | {tot[6]}/{tot[7]} | "
           f"{tot[8]}/{tot[9]} | {tot[4]}/{tot[5]} |")
     np.savez(out, **{f"{m}:{k}": a for m, d in saved.items() for k, a in d.items()})
