@@ -860,3 +860,35 @@ def test_a_limb_end_modelled_as_a_small_piece_gets_a_bone_but_a_plate_does_not()
     in_box = ends[(ends[:, 0] > 90) & (np.abs(ends[:, 1:]) < 3).all(1)]
     assert len(in_box) == 1 and 100 - in_box[0, 0] < 1.5 * 3.0
     assert ends[:, 2].max() < 10.0  # no bone into the fin
+
+
+@pytest.mark.parametrize("radius,min_t,ok", [(0.35, 0.8, False), (0.35, 0.3, True),
+                                             (0.45, 0.8, True)])
+def test_the_bones_and_the_bench_share_one_printability_measure(radius, min_t, ok):
+    """``autoskeleton.thickness``: a point prints when the local thickness there, twice its
+    distance to the surface, is at least the material's minimum (FDM 0.8 mm, resin 0.3 mm).
+    On a capsule of radius a that is 2a on its axis (closed form), so a 0.7 mm rod does not
+    print at FDM and does in resin, a 0.9 mm one does at FDM; the bench's extremity flag
+    (``extremities.tip_printable``: a printable point within 1.5 r of the tip, r = a) answers
+    the same through the same function, and a point 0.1 a from the surface never prints."""
+    import sys
+    from pathlib import Path
+
+    from osteon.autoskeleton.curve import _mesh_distance
+    from osteon.autoskeleton.mesh import check_mesh
+    from osteon.autoskeleton.thickness import printable
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from extremities import Extremities, tip_printable
+
+    v, f = capsule(length=20 * radius, radius=radius, n=48, stations=40, cap=16)
+    wv, wf, _ = check_mesh(v, f)
+    dist = _mesh_distance(wv, wf)
+    axis = np.stack([np.linspace(0, 20 * radius, 11), np.zeros(11), np.zeros(11)], 1)
+    inner = -np.asarray(dist.signed_distance(axis), float)
+    assert np.allclose(inner, radius, rtol=0.01)
+    assert (printable(inner, min_t) == ok).all()
+    assert not printable(inner * 0.1, min_t).any()
+    tip = np.array([[20 * radius + radius, 0.0, 0.0]])
+    ex = Extremities(tip, np.array([radius]), np.ones(1), np.ones(1), radius / 10)
+    assert tip_printable(wv, wf, split_pieces(wv, wf), ex, min_t).tolist() == [ok]
