@@ -892,3 +892,21 @@ def test_the_bones_and_the_bench_share_one_printability_measure(radius, min_t, o
     tip = np.array([[20 * radius + radius, 0.0, 0.0]])
     ex = Extremities(tip, np.array([radius]), np.ones(1), np.ones(1), radius / 10)
     assert tip_printable(wv, wf, split_pieces(wv, wf), ex, min_t).tolist() == [ok]
+
+
+def test_an_arm_ending_in_a_paddle_gets_a_bone_to_the_paddle_s_end_not_its_corners():
+    """Issue 35's bar on a flat end: the arms of ``paddle_arms`` (24 mm wide, 4 mm thick
+    paddles) each get one chain whose bone ends at the middle of the paddle's end (x = ±71
+    mm), within 1.5 of the issue's limb radii (half the paddle's breadth, 12 mm) of the
+    paddle's far corners, where the bench's extremity tips lie; no bone goes to a corner (a
+    corner is not a branch longer than it is wide: no bone ends within 4 mm of one)."""
+    v, f, _arms = paddle_arms()
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    ends = np.concatenate([sk.heads, sk.tails])
+    for s in (-1, 1):
+        end = np.array([s * 71.0, 0.0, 0.0])
+        assert np.linalg.norm(ends - end, axis=1).min() < 1.25 * 2.0 + 1.0  # its middle
+        for corner in ([s * 71.0, 12.0, 0.0], [s * 71.0, -12.0, 0.0]):
+            dist = np.linalg.norm(ends - corner, axis=1).min()
+            assert 4.0 < dist < 1.5 * 12.0, (corner, dist)
