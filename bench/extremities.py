@@ -127,6 +127,17 @@ def voxelise(pv: np.ndarray, pf: np.ndarray, origin: np.ndarray, h: float,
     return (np.cumsum(toggle, axis=2, dtype=np.uint8)[:, :, : shape[2]] & 1).astype(bool)
 
 
+def _voted(pv: np.ndarray, pf: np.ndarray, origin: np.ndarray, h: float,
+           shape: tuple[int, int, int]) -> np.ndarray:
+    """The voxels inside an open piece whose holes are not simple loops: inside by the ray
+    parities along x, y and z, 2 of 3 (rays through a hole vote wrong on one axis)."""
+    votes = sum(np.transpose(voxelise(pv[:, axes], pf, origin[axes], h,
+                                      tuple(shape[a] for a in axes)).astype(np.uint8),
+                             np.argsort(axes))
+                for axes in ([1, 2, 0], [2, 0, 1], [0, 1, 2]))
+    return votes >= 2
+
+
 def _solid(v: np.ndarray, f: np.ndarray, pieces, h: float
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(union of the main and joined pieces' voxels, the main piece's voxels, grid origin)."""
@@ -144,11 +155,7 @@ def _solid(v: np.ndarray, f: np.ndarray, pieces, h: float
         if pieces.closed[k] or capped is not None:
             vox = voxelise(*(capped or (pv, pf)), origin, h, shape)
         else:  # holes that are not simple loops: rays through them vote wrong, 1 axis of 3
-            votes = sum(np.transpose(voxelise(pv[:, axes], pf, origin[axes], h,
-                                              tuple(shape[a] for a in axes)).astype(np.uint8),
-                                     np.argsort(axes))
-                        for axes in ([1, 2, 0], [2, 0, 1], [0, 1, 2]))
-            vox = votes >= 2
+            vox = _voted(pv, pf, origin, h, shape)
         union |= vox
         if k == pieces.main:
             main = vox
@@ -337,35 +344,46 @@ def _pack(out: list, h: float, issue: Extremities | None) -> Extremities:
 
 def inner_radius_of(v: np.ndarray, f: np.ndarray, pieces, h: float):
     """pts (K,3) -> (K,) mm: the inner radius of the main and joined pieces' union at the
-    points (0 outside): inside a closed (or capped) piece its distance to the piece's surface,
-    the largest over the pieces; a piece whose holes are not simple loops has no inside of its
-    own, so there the distance to its triangles counts at the points inside the voxel solid of
-    step 1 (voxel size ``h``)."""
+    points (0 outside): the largest over the pieces of the point's distance to the piece's
+    surface where the point is inside it. Inside a closed (or capped) piece: by the sign of
+    pygel3d's signed distance, taken with the sign of the piece's enclosed volume (a piece
+    whose triangles face inwards reads inside everywhere outside it: 8210 has one); a piece
+    whose holes are not simple loops has no inside by orientation, so there the distance to
+    its triangles counts at the points inside its own voxel solid (the vote of step 1, at
+    voxel size ``h``; counted over the union before session 11, which read a horn tip of 9000
+    18 mm deep inside the open body's solid)."""
     from osteon.autoskeleton.assemble import submesh
     from osteon.autoskeleton.curve import _mesh_distance
     from osteon.autoskeleton.pieces import cap_holes
 
+    keep = pieces.vertices_of([pieces.main, *pieces.joined])
+    origin = v[keep].min(0) - 2 * h
+    shape = tuple(int(s) for s in np.ceil((v[keep].max(0) + 2 * h - origin) / h))
     closed, open_ = [], []
     for k in [pieces.main, *pieces.joined]:
         pv, pf = submesh(v, f, pieces.vertices_of([k]))
         mesh = (pv, pf) if pieces.closed[k] else cap_holes(pv, pf)
-        (closed if mesh is not None else open_).append(_mesh_distance(*(mesh or (pv, pf))))
-    union = origin = None
-    if open_:
-        union, _main, origin = _solid(v, f, pieces, h)
+        if mesh is not None:
+            t = mesh[0][mesh[1]]
+            vol = float(np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2])).sum()) / 6.0
+            if vol != 0.0:
+                closed.append((_mesh_distance(*mesh), np.sign(vol)))
+        else:
+            open_.append((_mesh_distance(pv, pf), _voted(pv, pf, origin, h, shape)))
 
     def inner(pts: np.ndarray) -> np.ndarray:
         out = np.zeros(len(pts))
-        for d in closed:
-            out = np.maximum(out, -np.asarray(d.signed_distance(pts), np.float64))
+        for d, sign in closed:
+            out = np.maximum(out, -sign * np.asarray(d.signed_distance(pts), np.float64))
         if open_:
             cell = np.floor((pts - origin) / h).astype(np.int64)
-            ok = ((cell >= 0) & (cell < union.shape)).all(1)
-            ok[ok] = union[tuple(cell[ok].T)]
-            if ok.any():
-                near = np.min([np.abs(np.asarray(d.signed_distance(pts[ok]), np.float64))
-                               for d in open_], axis=0)
-                out[ok] = np.maximum(out[ok], near)
+            ok = ((cell >= 0) & (cell < shape)).all(1)
+            for d, vox in open_:
+                inside = ok.copy()
+                inside[ok] = vox[tuple(cell[ok].T)]
+                if inside.any():
+                    near = np.abs(np.asarray(d.signed_distance(pts[inside]), np.float64))
+                    out[inside] = np.maximum(out[inside], near)
         return out
 
     return inner
