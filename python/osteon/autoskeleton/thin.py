@@ -13,9 +13,6 @@ This step looks for such features on the full-resolution mesh, after the bones a
   width (2 x the largest distance to the surface along that part), as for a leaf branch in
   ``prune``; it must be at least as thick as printable (``min_t``) and no bone may already
   end within its width of c;
-* when that straight line leaves the mesh, the branch's root is the nearest of 9 points
-  evenly along the bone that a straight line from c reaches inside the mesh (a toe set at an
-  angle to its foot's bone; :func:`_visible`), with the same tests;
 * candidates are taken longest first, and one within the width of a longer one already
   tested (kept or not) is the same feature (neighbouring maxima of d on one toe's end or
   along one rim).
@@ -169,11 +166,8 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
         out = s <= length + 1e-6 * body.size
         rho = np.full(SAMPLES, np.nan)
         rho[out] = body.inner_radius(tip + s[out, None] * u)
-        if not (rho[out] > 0).all():  # the line leaves the mesh: a branch at an angle to
-            seen = _visible(body, sk, int(owner[c]), tip)  # the bone, or not straight
-            if seen is None:
-                continue
-            qc, length, u, s, out, rho = seen
+        if not (rho[out] > 0).all():
+            continue  # the line leaves the mesh: not a straight branch off this bone
         rho_max = float(rho[s <= length].max()) if (s <= length).any() else 0.0
         width = float(local_thickness(rho_max))
         if not printable(rho_max, body.min_t) or length <= spur * width:
@@ -187,47 +181,6 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
         tail = _tail(body, tip, u, s, rho, length)
         kept.append((int(owner[c]), qc, tail, width))
     return kept, d
-
-
-#: points of a bone tried as a thin branch's root when the line to its nearest one leaves
-#: the mesh (:func:`_visible`)
-STATIONS = 9
-
-
-def _visible(body: Body, sk: Skeleton, b: int, tip: np.ndarray
-             ) -> tuple[np.ndarray, float, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
-    """The branch from ``tip`` (3,) to the nearest of ``STATIONS`` points evenly along bone
-    ``b`` (head to tail) that it reaches by a straight line inside the mesh beyond the limb's
-    surface, and that is more than ``min_t`` beyond it: (that point q (3,), L mm, the unit
-    direction from the tip to q (3,), the sample distances (SAMPLES,), which are beyond the
-    limb's surface, the inner radius there (NaN elsewhere)); None if there is none.
-
-    Issue 35 (session 11): a toe or a finger set at an angle to its limb's bone (a splayed
-    toe off a foot's bone) is a straight branch, but the line from its tip to the bone's
-    nearest point crosses the web beside it; its root on the bone is where a straight line
-    from its tip reaches the bone inside the mesh. The tests after this (width, printable,
-    longer than wide, no bone end near, finger-like) are the straight branch's."""
-    frac = (np.arange(SAMPLES) + 0.5) / SAMPLES
-    st = sk.heads[b] + np.linspace(0.0, 1.0, STATIONS)[:, None] * (sk.tails[b] - sk.heads[b])
-    dc = np.linalg.norm(st - tip, axis=1)
-    order = np.argsort(dc, kind="stable")
-    st, dc = st[order], dc[order]
-    big_r = body.inner_radius(st)
-    length = dc - big_r
-    ok = (length > body.min_t) & (dc > 0)
-    if not ok.any():
-        return None
-    st, dc, length = st[ok], dc[ok], length[ok]
-    u = (st - tip) / dc[:, None]
-    s = frac[None] * dc[:, None]  # (M, SAMPLES)
-    out = s <= length[:, None] + 1e-6 * body.size
-    pts = tip + s[..., None] * u[:, None]
-    rho = np.full(s.shape, np.nan)
-    rho[out] = body.inner_radius(pts[out])
-    for k in range(len(st)):
-        if out[k].any() and (rho[k, out[k]] > 0).all():
-            return st[k], float(length[k]), u[k], s[k], out[k], rho[k]
-    return None
 
 
 def _tail(body: Body, tip: np.ndarray, u: np.ndarray, s: np.ndarray, rho: np.ndarray,
