@@ -16,8 +16,8 @@ independent of any rig's choices and of osteon's own rules, for each extremity o
 distance from its tip to the nearest auto bone end in its limb's radii (``extremities.py``:
 the maxima of the geodesic distance inside the solid from the main body's centre of mass that
 stick out more than their own width; limb radius: the depth near the tip), and beside it the
-same count over the printable extremities only (at least 0.8 mm thick near the tip, on the
-mesh: ``extremities.tip_thickness``). Reads ../shared/data (or OSTEON_DATA).
+same count over the printable extremities only (a point at least 0.8 mm thick within 1.5 r of
+the tip, on the mesh: ``extremities.tip_printable``, the auto skeleton's own measure). Reads ../shared/data (or OSTEON_DATA).
 
     python bench/bench_autoskeleton.py [--repeat 3] [--models arm cow ...] [--skip-big]
     python bench/bench_autoskeleton.py --pieces [--data ../shared/data]
@@ -157,14 +157,15 @@ def pieces_table(data: str) -> None:
     import warnings
     from pathlib import Path
 
-    from extremities import extremities, tip_thickness
+    from extremities import extremities, tip_printable
     from osteon.autoskeleton import split_pieces
     from osteon.autoskeleton.mesh import check_mesh
     from osteon.io import load_model
 
     print("| model | faces | pieces: joined / loose | auto bones | CPU s | real leaf tips within "
           "1.5 limb radii | tip distance median / max (limb radii) | tips or beyond, to the "
-          "limb's end | extremities within 1.5 limb radii | printable (>= 0.8 mm thick at the tip) "
+          "limb's end | extremities within 1.5 limb radii | printable (a point >= 0.8 mm thick within "
+          "1.5 r of the tip) "
           "extremities within 1.5 limb radii | extremity distance median / max (limb radii) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     totals = np.zeros(8)
@@ -191,7 +192,7 @@ def pieces_table(data: str) -> None:
         d, e = limb_radii(v, real, ends)
         ex = extremities(wv, wf, p)
         x = np.linalg.norm(ex.tips[:, None] - ends[None], axis=2).min(1) / ex.radius
-        fdm = tip_thickness(wv, wf, p, ex) >= 0.8  # (auto_skeleton's default min_thickness)
+        fdm = tip_printable(wv, wf, p, ex, 0.8)  # (auto_skeleton's default min_thickness)
         totals += [(d <= 1.5).sum(), (e <= 1.5).sum(), len(d), cpu, (x <= 1.5).sum(), len(x),
                    ((x <= 1.5) & fdm).sum(), fdm.sum()]
         misses += [f"{obj.stem.split('_')[0]} tip {np.round(t, 1).tolist()} r {r:.1f} mm: {q:.1f}"
@@ -214,7 +215,7 @@ def hand_row() -> tuple[np.ndarray, np.ndarray]:
     """The test hand (``tests/python/test_autoskeleton.py``: five 8 mm capsule fingers on an
     ellipsoid palm, one closed mesh, no rig) as a row of the pieces table: its extremities'
     distances to the nearest auto bone end (limb radii), and which are printable (FDM)."""
-    from extremities import extremities, tip_thickness
+    from extremities import extremities, tip_printable
     from osteon.autoskeleton import split_pieces
     from osteon.autoskeleton.mesh import check_mesh
     from test_autoskeleton import hand
@@ -228,7 +229,7 @@ def hand_row() -> tuple[np.ndarray, np.ndarray]:
     ex = extremities(wv, wf, p)
     ends = np.concatenate([sk.heads, sk.tails])
     x = np.linalg.norm(ex.tips[:, None] - ends[None], axis=2).min(1) / ex.radius
-    fdm = tip_thickness(wv, wf, p, ex) >= 0.8
+    fdm = tip_printable(wv, wf, p, ex, 0.8)
     print(f"| hand (test) | {len(f)} | 0 / 0 | {sk.num_bones} | {cpu:.2f} | (no rig) | | | "
           f"{(x <= 1.5).sum()}/{len(x)} | {((x <= 1.5) & fdm).sum()}/{fdm.sum()} | "
           f"{np.median(x):.1f} / {x.max():.1f} |", flush=True)

@@ -30,7 +30,38 @@ Definition (fixed before any model was scored with it):
    last 3 radii: on a round end of radius r, r), s at most half of P.
 
 The bench then scores the distance from each tip to the nearest auto bone end in units of r
-(within 1.5 r: the issue's bar; the auto bones stop 1.25 r inside a round end)."""
+(within 1.5 r: the issue's bar; the auto bones stop 1.25 r inside a round end).
+
+The issue's definition (issue 35's Build: "branches as thin as fingers get bones when they
+are longer than they are wide"; fixed and committed before any model was scored with it,
+session 11): step 5 measures a branch's width by its thickness (twice its largest depth),
+so the corner of a wide flat end (a paddle hand, a wing's tip, a flat foot's outer toe),
+thin but not narrow, counts as a branch longer than it is wide. Here "wide" is what the word
+says, the largest extent across the branch:
+
+5'. A node's width is the larger of twice its largest depth and its extent across g: the
+   largest distance between two of its voxels after projecting them on the plane
+   perpendicular to g's direction there (the least-squares gradient of g over the node's
+   voxels), found by a double sweep (the voxel farthest from the centroid, then the one
+   farthest from it), centre to centre (h less than the part's extent: for a round limb
+   twice the depth, which is h/2 more than the limb's radius, is the larger, so a round
+   limb's width and radius stay those of step 5; across a flat limb the extent is the
+   limb's breadth). A maximum is an extremity under the issue's definition when some stretch
+   from its tip is longer than it is wide: for some level l between its peak and its death
+   (step 4), the part of the solid joined to the tip above l (its superlevel component: the
+   branch cut off where g = l) is more than its own width long, top - l > the largest width
+   of its nodes, and at least ``MIN_VOXELS`` voxels long. Where the branch leaves a wider
+   part the component takes in that part's width and the test stops passing; a finger
+   passes above its base, a corner of a wide flat end (a paddle hand) never does (cut off
+   where it is as long as the end is wide, the component is as wide as the end), and a limb
+   ending in a paddle passes once the cut reaches the limb (its tip: the paddle's farthest
+   point). Its limb radius is measured as in step 5 with each voxel's depth replaced by the
+   larger of its depth and half its node's extent across (a round end: r as before; a flat
+   end: half its breadth, the radius the issue's "limb radii" means for a flat limb: a bone
+   at the middle of a paddle's end is within 1.5 r of its corners).
+
+``Extremities.issue`` holds the extremities by 5' (width: the largest node width of the
+region at its death); ``tips``/``radius`` step 5's (the old count, kept beside it)."""
 
 from __future__ import annotations
 
@@ -51,13 +82,16 @@ MIN_VOXELS = 4
 @dataclass
 class Extremities:
     """tips (E,3) mm, radius (E,) mm, persistence (E,) mm, width (E,) mm (2 x its region's
-    largest radius); h mm: the voxel size."""
+    largest radius); h mm: the voxel size; issue: the extremities by the issue's definition
+    (step 5'), their radius by 5', their width the largest width across (5') of the stretch
+    that passed."""
 
     tips: np.ndarray
     radius: np.ndarray
     persistence: np.ndarray
     width: np.ndarray
     h: float
+    issue: Extremities | None = None
 
 
 def voxelise(pv: np.ndarray, pf: np.ndarray, origin: np.ndarray, h: float,
@@ -93,6 +127,17 @@ def voxelise(pv: np.ndarray, pf: np.ndarray, origin: np.ndarray, h: float,
     return (np.cumsum(toggle, axis=2, dtype=np.uint8)[:, :, : shape[2]] & 1).astype(bool)
 
 
+def _voted(pv: np.ndarray, pf: np.ndarray, origin: np.ndarray, h: float,
+           shape: tuple[int, int, int]) -> np.ndarray:
+    """The voxels inside an open piece whose holes are not simple loops: inside by the ray
+    parities along x, y and z, 2 of 3 (rays through a hole vote wrong on one axis)."""
+    votes = sum(np.transpose(voxelise(pv[:, axes], pf, origin[axes], h,
+                                      tuple(shape[a] for a in axes)).astype(np.uint8),
+                             np.argsort(axes))
+                for axes in ([1, 2, 0], [2, 0, 1], [0, 1, 2]))
+    return votes >= 2
+
+
 def _solid(v: np.ndarray, f: np.ndarray, pieces, h: float
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(union of the main and joined pieces' voxels, the main piece's voxels, grid origin)."""
@@ -110,11 +155,7 @@ def _solid(v: np.ndarray, f: np.ndarray, pieces, h: float
         if pieces.closed[k] or capped is not None:
             vox = voxelise(*(capped or (pv, pf)), origin, h, shape)
         else:  # holes that are not simple loops: rays through them vote wrong, 1 axis of 3
-            votes = sum(np.transpose(voxelise(pv[:, axes], pf, origin[axes], h,
-                                              tuple(shape[a] for a in axes)).astype(np.uint8),
-                                     np.argsort(axes))
-                        for axes in ([1, 2, 0], [2, 0, 1], [0, 1, 2]))
-            vox = votes >= 2
+            vox = _voted(pv, pf, origin, h, shape)
         union |= vox
         if k == pieces.main:
             main = vox
@@ -144,6 +185,47 @@ def _voxel_graph(inside: np.ndarray, h: float) -> tuple[sparse.csr_matrix, np.nd
     return adj, index
 
 
+def _node_widths(pos: np.ndarray, g: np.ndarray, nid: np.ndarray, nn: int, h: float
+                 ) -> np.ndarray:
+    """(nn,) mm: each node's extent across g (step 5'): its voxels ``pos`` (n,3) with node
+    ids ``nid`` (n,) (-1: none) projected on the plane perpendicular to the least-squares
+    gradient of ``g`` over the node, the largest distance between two of them by a double
+    sweep (centre to centre)."""
+    ok = nid >= 0
+    p, gv, k = pos[ok], g[ok], nid[ok]
+    cnt = np.bincount(k, minlength=nn).astype(np.float64)
+    cen = np.stack([np.bincount(k, p[:, i], nn) for i in range(3)], 1) / np.maximum(cnt, 1)[:, None]
+    rel = p - cen[k]
+    gm = np.bincount(k, gv, nn) / np.maximum(cnt, 1)
+    dg = gv - gm[k]
+    cov = np.zeros((nn, 3, 3))
+    for i in range(3):
+        for j in range(i, 3):
+            cov[:, i, j] = cov[:, j, i] = np.bincount(k, rel[:, i] * rel[:, j], nn)
+    rhs = np.stack([np.bincount(k, rel[:, i] * dg, nn) for i in range(3)], 1)
+    # ridge of h^2/4 per voxel: a node one voxel thick along g has no spread to fit there
+    grad = np.linalg.solve(cov + (0.25 * h * h) * cnt[:, None, None] * np.eye(3)
+                           + 1e-12 * np.eye(3), rhs[:, :, None])[:, :, 0]
+    norm = np.linalg.norm(grad, axis=1)
+    unit = np.where(norm[:, None] > 0, grad / np.maximum(norm, 1e-300)[:, None], 0.0)
+    u = unit[k]
+    proj = rel - np.einsum("ij,ij->i", rel, u)[:, None] * u
+
+    def farthest(dist: np.ndarray) -> np.ndarray:
+        """(nn,) index into the voxels of each node's farthest one by ``dist`` (-1: none)."""
+        order = np.lexsort((dist, k))
+        last = np.r_[k[order][1:] != k[order][:-1], True]
+        out = np.full(nn, -1, np.int64)
+        out[k[order][last]] = order[last]
+        return out
+
+    a = farthest(np.linalg.norm(proj, axis=1))
+    far = np.linalg.norm(proj - proj[a[k]], axis=1)
+    out = np.zeros(nn)
+    np.maximum.at(out, k, far)
+    return out
+
+
 def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
     """The extremities of the welded mesh ``v`` (V,3) mm, ``f`` (F,3) split into ``pieces``
     (see the module's docstring)."""
@@ -152,7 +234,7 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
     union, main, origin = _solid(v, f, pieces, h)
     depth = ndimage.distance_transform_edt(union) * h  # mm to the nearest outside voxel
     if not union.any():
-        return Extremities(np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0), h)
+        return _pack([], h, _pack([], h, None))
     cells = np.argwhere(main if main is not None and main.any() else union)
     core = tuple(cells[np.argmin(((cells - cells.mean(0)) ** 2).sum(1))])
     adj, index = _voxel_graph(union, h)
@@ -182,6 +264,9 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
     peak[nid[at_top]] = at_top
     nrad = np.zeros(nn)
     np.maximum.at(nrad, nid[reached], rad[reached])
+    across = _node_widths(pos, g, nid, nn, h)
+    nwid = np.maximum(2.0 * nrad, across)  # step 5'
+    half_w = np.maximum(rad, np.where(nid >= 0, 0.5 * across[np.maximum(nid, 0)], 0.0))
     cross = (nid[a] >= 0) & (nid[b] >= 0) & (nid[a] != nid[b])
     nbrs: list[list[int]] = [[] for _ in range(nn)]
     for key in np.unique(nid[a[cross]] * nn + nid[b[cross]]).tolist():
@@ -199,20 +284,27 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
             x = parent[x]
         return x
 
+    wmax = nwid.copy()  # each component's largest node width so far (at its root)
+    passed = np.zeros(nn, bool)  # step 5': some stretch from the tip longer than its width
+    out_w = []
+
     def record(root: int, death: float) -> None:
         region = members[root]
         width = 2.0 * float(nrad[region].max())
         pers = float(birth[root]) - death
+        tip = int(peak[root])
         if pers > width and pers >= MIN_VOXELS * h:
-            tip = int(peak[root])
             out.append((pos[tip], end_radius(tip, pers / 2), pers, width))
+        if passed[root]:
+            out_w.append((pos[tip], end_radius(tip, pers / 2, half_w), pers,
+                          float(wmax[root])))
 
-    def end_radius(x: int, longest: float) -> float:
-        """The largest depth of the voxels within s of voxel ``x``, for the smallest s that
-        is 3 x that depth (s at most ``longest`` mm)."""
+    def end_radius(x: int, longest: float, depth: np.ndarray = rad) -> float:
+        """The largest ``depth`` (default: distance to the outside) of the voxels within s of
+        voxel ``x``, for the smallest s that is 3 x that depth (s at most ``longest`` mm)."""
         d = np.linalg.norm(pos - pos[x], axis=1)
         order = np.argsort(d[d <= longest], kind="stable")
-        dist, deepest = d[d <= longest][order], np.maximum.accumulate(rad[d <= longest][order])
+        dist, deepest = d[d <= longest][order], np.maximum.accumulate(depth[d <= longest][order])
         stop = np.flatnonzero(dist >= 3.0 * deepest)
         return float(deepest[stop[0]] if len(stop) else deepest[-1])
 
@@ -231,14 +323,85 @@ def extremities(v: np.ndarray, f: np.ndarray, pieces) -> Extremities:
             parent[r] = elder
             if r != elder:
                 members[elder] += members.pop(r)
+                wmax[elder] = max(wmax[elder], wmax[r])
         parent[x] = elder
         members[elder] += members.pop(x)
+        wmax[elder] = max(wmax[elder], nwid[x])
+        stretch = float(birth[elder] - top[x])  # the tip's component down to this level
+        if stretch > wmax[elder] and stretch >= MIN_VOXELS * h:
+            passed[elder] = True
     for r in {find(x) for x in range(nn)}:  # the highest maximum: down to the core
         record(r, float(top.min()))
+    issue = _pack(out_w, h, None)
+    return _pack(out, h, issue)
+
+
+def _pack(out: list, h: float, issue: Extremities | None) -> Extremities:
     if not out:
-        return Extremities(np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0), h)
+        return Extremities(np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0), h, issue)
     tips, radius, pers, width = (np.array(c) for c in zip(*out, strict=True))
-    return Extremities(tips, radius, pers, width, h)
+    return Extremities(tips, radius, pers, width, h, issue)
+
+def inner_radius_of(v: np.ndarray, f: np.ndarray, pieces, h: float):
+    """pts (K,3) -> (K,) mm: the inner radius of the main and joined pieces' union at the
+    points (0 outside): the largest over the pieces of the point's distance to the piece's
+    surface where the point is inside it. Inside a closed (or capped) piece: by the sign of
+    pygel3d's signed distance, taken with the sign of the piece's enclosed volume (a piece
+    whose triangles face inwards reads inside everywhere outside it: 8210 has one); a piece
+    whose holes are not simple loops has no inside by orientation, so there the distance to
+    its triangles counts at the points inside its own voxel solid (the vote of step 1, at
+    voxel size ``h``; counted over the union before session 11, which read a horn tip of 9000
+    18 mm deep inside the open body's solid)."""
+    from osteon.autoskeleton.assemble import submesh
+    from osteon.autoskeleton.curve import _mesh_distance
+    from osteon.autoskeleton.pieces import cap_holes
+
+    keep = pieces.vertices_of([pieces.main, *pieces.joined])
+    origin = v[keep].min(0) - 2 * h
+    shape = tuple(int(s) for s in np.ceil((v[keep].max(0) + 2 * h - origin) / h))
+    closed, open_ = [], []
+    for k in [pieces.main, *pieces.joined]:
+        pv, pf = submesh(v, f, pieces.vertices_of([k]))
+        mesh = (pv, pf) if pieces.closed[k] else cap_holes(pv, pf)
+        if mesh is not None:
+            t = mesh[0][mesh[1]]
+            vol = float(np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2])).sum()) / 6.0
+            if vol != 0.0:
+                closed.append((_mesh_distance(*mesh), np.sign(vol)))
+        else:
+            open_.append((_mesh_distance(pv, pf), _voted(pv, pf, origin, h, shape)))
+
+    def inner(pts: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(pts))
+        for d, sign in closed:
+            out = np.maximum(out, -sign * np.asarray(d.signed_distance(pts), np.float64))
+        if open_:
+            cell = np.floor((pts - origin) / h).astype(np.int64)
+            ok = ((cell >= 0) & (cell < shape)).all(1)
+            for d, vox in open_:
+                inside = ok.copy()
+                inside[ok] = vox[tuple(cell[ok].T)]
+                if inside.any():
+                    near = np.abs(np.asarray(d.signed_distance(pts[inside]), np.float64))
+                    out[inside] = np.maximum(out[inside], near)
+        return out
+
+    return inner
+
+
+def tip_printable(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities, min_t: float
+                  ) -> np.ndarray:
+    """(E,) bool: some point within 1.5 r of each extremity's tip (where a bone end reaches
+    it, the issue's bar) is printable by the auto skeleton's own measure
+    (``osteon.autoskeleton.thickness.printable_within``: the local thickness at the point,
+    twice its inner radius, at least ``min_t``; on the points of a 9 x 9 x 9 grid in the ball
+    of radius 1.5 r) -- the test the thin step and the tip bones apply where a bone ends. An
+    extremity no printable bone end can reach is counted apart, beside the full count."""
+    from osteon.autoskeleton.thickness import printable_within
+
+    inner = inner_radius_of(v, f, pieces, ex.h)
+    return np.array([printable_within(inner, tip, 1.5 * r, min_t)
+                     for tip, r in zip(ex.tips, ex.radius, strict=True)], bool)
 
 
 def tip_thickness(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities) -> np.ndarray:
@@ -250,34 +413,11 @@ def tip_thickness(v: np.ndarray, f: np.ndarray, pieces, ex: Extremities) -> np.n
     surface; a piece whose holes are not simple loops has no inside of its own, so there
     the distance to its triangles counts at the points inside the voxel solid (step 1). An
     extremity thinner than a material's minimum thickness cannot be printed with it: the
-    second column of the bench, beside the first, never instead of it (issue 35)."""
-    from osteon.autoskeleton.assemble import submesh
-    from osteon.autoskeleton.curve import _mesh_distance
-    from osteon.autoskeleton.pieces import cap_holes
-
-    closed, open_ = [], []
-    for k in [pieces.main, *pieces.joined]:
-        pv, pf = submesh(v, f, pieces.vertices_of([k]))
-        mesh = (pv, pf) if pieces.closed[k] else cap_holes(pv, pf)
-        (closed if mesh is not None else open_).append(_mesh_distance(*(mesh or (pv, pf))))
-    union = origin = None
-    if open_:
-        union, _main, origin = _solid(v, f, pieces, ex.h)
+    second column of the bench, beside the first, never instead of it (issue 35). Replaced
+    in the bench's columns by :func:`tip_printable` (session 11: one measure with the auto
+    skeleton's); kept to reproduce the earlier figures."""
+    inner = inner_radius_of(v, f, pieces, ex.h)
     axis = np.linspace(-1.0, 1.0, 9)
     grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), -1).reshape(-1, 3)
-    out = np.zeros(len(ex.tips))
-    for i, (tip, r) in enumerate(zip(ex.tips, ex.radius, strict=True)):
-        pts = tip + 3.0 * r * grid
-        inner = np.zeros(len(pts))
-        for d in closed:
-            inner = np.maximum(inner, -np.asarray(d.signed_distance(pts), np.float64))
-        if open_:
-            cell = np.floor((pts - origin) / ex.h).astype(np.int64)
-            ok = ((cell >= 0) & (cell < union.shape)).all(1)
-            ok[ok] = union[tuple(cell[ok].T)]
-            if ok.any():
-                near = np.min([np.abs(np.asarray(d.signed_distance(pts[ok]), np.float64))
-                               for d in open_], axis=0)
-                inner[ok] = np.maximum(inner[ok], near)
-        out[i] = 2.0 * float(inner.max())
-    return out
+    return np.array([2.0 * float(inner(tip + 3.0 * r * grid).max())
+                     for tip, r in zip(ex.tips, ex.radius, strict=True)])

@@ -6,8 +6,10 @@ compare two runs bone by bone (units: mm; 120 mm prints).
     python bench/skeleton_score.py diff BASE.npz NEW.npz
 
 ``run`` saves every model's bones and extremities (tips, limb radius r, width) and prints, per
-model, bones, extremities within 1.5 r of a bone end, and printable extremities (width at least
-the material's min thickness) reached. ``diff`` lists, per model, the bone count of each run
+model, bones, extremities within 1.5 r of a bone end, and printable extremities (a point within
+1.5 r of the tip at least the material's min thickness thick: ``extremities.tip_printable``, the
+auto skeleton's own measure) reached; the same for the extremities by the issue's definition
+(``extremities.py`` step 5', scored in their radius r_w). ``diff`` lists, per model, the bone count of each run
 and every leaf bone of NEW whose tail is no leaf tail of BASE, with its distance to the nearest
 extremity tip in that extremity's limb radii (> 3 r: a bone at no extremity), and the
 extremities reached by one run and not the other."""
@@ -15,6 +17,7 @@ extremities reached by one run and not the other."""
 from __future__ import annotations
 
 import argparse
+import pickle
 import sys
 import time
 import warnings
@@ -24,7 +27,7 @@ import numpy as np
 import osteon
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from extremities import extremities, tip_thickness
+from extremities import extremities, tip_printable, tip_thickness
 from models import load
 
 
@@ -53,16 +56,16 @@ def leaves(parents: np.ndarray) -> np.ndarray:
     return ~has_child
 
 
-def run(out: str, min_t: float, data: str) -> None:
+def run(out: str, min_t: float, data: str, cache: str | None = None) -> None:
     from bench_autoskeleton import limb_radii
     from osteon.autoskeleton import split_pieces
     from osteon.autoskeleton.mesh import check_mesh
 
     saved = {}
-    tot = np.zeros(6, int)
+    tot = np.zeros(10, int)
     print("| model | bones | CPU s | extremities within 1.5 r | printable extremities within 1.5 r "
-          "| rig tips within 1.5 r |")
-    print("|---|---|---|---|---|---|")
+          "| issue's extremities within 1.5 r_w | printable | rig tips within 1.5 r |")
+    print("|---|---|---|---|---|---|---|---|")
     for name, v, f, real in models(data):
         c = time.process_time()
         with warnings.catch_warnings():
@@ -70,37 +73,60 @@ def run(out: str, min_t: float, data: str) -> None:
             sk, _w = osteon.auto_skeleton(v, f, min_thickness=min_t)
         cpu = time.process_time() - c
         wv, wf, _ = check_mesh(v, f)
-        ex = extremities(wv, wf, split_pieces(wv, wf))
+        key = Path(cache, f"{name}_{min_t}.pkl") if cache else None
+        if key is not None and key.exists():  # (the extremities do not depend on the bones)
+            ex, thin_tip, old_flag, ip = pickle.loads(key.read_bytes())
+        else:
+            p = split_pieces(wv, wf)
+            ex = extremities(wv, wf, p)
+            thin_tip = tip_printable(wv, wf, p, ex, min_t)
+            old_flag = tip_thickness(wv, wf, p, ex) >= min_t  # (the flag before session 11)
+            ip = tip_printable(wv, wf, p, ex.issue, min_t)
+            if key is not None:
+                key.write_bytes(pickle.dumps((ex, thin_tip, old_flag, ip)))
         ends = np.concatenate([sk.heads, sk.tails])
         x = np.linalg.norm(ex.tips[:, None] - ends[None], axis=2).min(1) / ex.radius
-        thin_tip = tip_thickness(wv, wf, split_pieces(wv, wf), ex) >= min_t
         printable = thin_tip
         rig = ""
         if real is not None and name not in ("cow", "arm"):
             d, _e = limb_radii(v, real, ends)
             rig = f"{(d <= 1.5).sum()}/{len(d)}"
-            tot[4:] += [(d <= 1.5).sum(), len(d)]
+            tot[4:6] += [(d <= 1.5).sum(), len(d)]
         ok = x <= 1.5
         tot[:4] += [ok.sum(), len(x), (ok & thin_tip).sum(), thin_tip.sum()]
+        iex = ex.issue  # the issue's definition (extremities.py step 5'), radius r_w
+        xi = np.linalg.norm(iex.tips[:, None] - ends[None], axis=2).min(1) / iex.radius
+        oki = xi <= 1.5
+        tot[6:] += [oki.sum(), len(xi), (oki & ip).sum(), ip.sum()]
         print(f"| {name} | {sk.num_bones} | {cpu:.2f} | {ok.sum()}/{len(x)} | "
-              f"{(ok & thin_tip).sum()}/{thin_tip.sum()} | {rig} |", flush=True)
+              f"{(ok & thin_tip).sum()}/{thin_tip.sum()} | {oki.sum()}/{len(xi)} | "
+              f"{(oki & ip).sum()}/{ip.sum()} | {rig} |", flush=True)
         saved[name] = {"heads": sk.heads, "tails": sk.tails, "parents": sk.parents, "tips": ex.tips,
-                           "radius": ex.radius, "width": ex.width, "printable": printable}
-    print(f"| all | | | {tot[0]}/{tot[1]} | {tot[2]}/{tot[3]} | {tot[4]}/{tot[5]} |")
+                       "radius": ex.radius, "width": ex.width, "printable": printable,
+                       "itips": iex.tips, "iradius": iex.radius, "iwidth": iex.width,
+                       "iprintable": ip, "printable_old": old_flag}
+    print(f"| all | | | {tot[0]}/{tot[1]} | {tot[2]}/{tot[3]} | {tot[6]}/{tot[7]} | "
+          f"{tot[8]}/{tot[9]} | {tot[4]}/{tot[5]} |")
     np.savez(out, **{f"{m}:{k}": a for m, d in saved.items() for k, a in d.items()})
 
 
-def _load(path: str) -> dict[str, dict[str, np.ndarray]]:
+def _load(path: str, issue: bool = False) -> dict[str, dict[str, np.ndarray]]:
+    """Per model its saved arrays; with ``issue`` the extremities by the issue's definition
+    (``itips``, ``iradius``, ...) in place of the old ones."""
     z = np.load(path)
     out: dict[str, dict[str, np.ndarray]] = {}
     for key in z.files:
         m, k = key.split(":")
         out.setdefault(m, {})[k] = z[key]
+    if issue:
+        for d in out.values():
+            for k in ("tips", "radius", "width", "printable"):
+                d[k] = d["i" + k]
     return out
 
 
-def diff(base_path: str, new_path: str) -> None:
-    base, new = _load(base_path), _load(new_path)
+def diff(base_path: str, new_path: str, issue: bool = False) -> None:
+    base, new = _load(base_path, issue), _load(new_path, issue)
     total_new, total_far = 0, 0
     for m in new:
         b, n = base[m], new[m]
@@ -127,12 +153,12 @@ def diff(base_path: str, new_path: str) -> None:
     print(f"all: {total_new} new leaf bones, {total_far} of them > 3 r from every extremity")
 
 
-def misses(path: str) -> None:
+def misses(path: str, issue: bool = False) -> None:
     """Every extremity no bone end reaches: model, tip mm, r mm, width mm, distance (r), and
     where the tip lies from the nearest bone end along its bone's axis (mm past the end,
     mm off the axis: an end bone that reaches its limb's end with the extremity beside it, a
     corner of a wide flat end, reads small along and large off)."""
-    for m, d in _load(path).items():
+    for m, d in _load(path, issue).items():
         ends = np.concatenate([d["heads"], d["tails"]])
         x = np.linalg.norm(d["tips"][:, None] - ends[None], axis=2).min(1) / d["radius"]
         nb = len(d["heads"])
@@ -184,11 +210,15 @@ def main() -> None:
     r = sub.add_parser("run")
     r.add_argument("out")
     r.add_argument("--min-t", type=float, default=0.8)
+    r.add_argument("--cache", help="a folder for each model's extremities (reused run to run)")
     r.add_argument("--data", default=str(Path(__file__).resolve().parents[2] / "shared" / "data"))
     d = sub.add_parser("diff")
     d.add_argument("base")
     d.add_argument("new")
-    sub.add_parser("misses").add_argument("path")
+    d.add_argument("--issue", action="store_true", help="the issue's extremities (step 5')")
+    ms = sub.add_parser("misses")
+    ms.add_argument("path")
+    ms.add_argument("--issue", action="store_true", help="the issue's extremities (step 5')")
     pr = sub.add_parser("printable")
     pr.add_argument("paths", nargs="+")
     pr.add_argument("--min-t", type=float, default=0.8)
@@ -197,11 +227,11 @@ def main() -> None:
     if args.cmd == "printable":
         printable(args.paths, args.min_t, args.data)
     elif args.cmd == "misses":
-        misses(args.path)
+        misses(args.path, args.issue)
     elif args.cmd == "run":
-        run(args.out, args.min_t, args.data)
+        run(args.out, args.min_t, args.data, args.cache)
     else:
-        diff(args.base, args.new)
+        diff(args.base, args.new, args.issue)
 
 
 if __name__ == "__main__":

@@ -765,6 +765,56 @@ def test_the_bench_extremity_measure_finds_the_five_fingertips_of_a_hand():
         k = int(np.argmin(np.linalg.norm(ex.tips - tip, axis=1)))
         assert np.linalg.norm(ex.tips[k] - tip) < 2 * np.sqrt(3) * ex.h, (tip, ex.tips[k])
         assert abs(ex.radius[k] - r) < ex.h * np.sqrt(3), ex.radius[k]
+    # the issue's definition (step 5': longer than its width across): the same five tips;
+    # its radius (half the width across near the tip) is the finger's to within a voxel
+    # and a half (the level sets cut the round end obliquely)
+    iex = ex.issue
+    assert len(iex.tips) == 5
+    assert np.abs(iex.tips[:, None] - ex.tips[None]).sum(2).min(1).max() == 0.0
+    assert (np.abs(iex.radius - r) < 1.5 * ex.h).all(), iex.radius
+
+
+def paddle_arms(h=1.0):
+    """A body (ellipsoid 60 x 40 x 30 mm) with two arms (capsules of radius 4 mm, 35 mm long)
+    each ending in a flat paddle 16 mm long, 24 mm wide and 4 mm thick; voxelised at h mm.
+    Returns (v, f, the arms' (base, end) along x)."""
+    xs, ys, zs = (np.arange(lo, hi, h) + h / 2 for lo, hi in ((-80, 80), (-30, 30), (-20, 20)))
+    X, Y, Z = np.meshgrid(xs, ys, zs, indexing="ij")
+    occ = (X / 30) ** 2 + (Y / 20) ** 2 + (Z / 15) ** 2 <= 1
+    arms = []
+    for s in (-1, 1):
+        occ |= segment_distance(np.stack([X, Y, Z], -1), (s * 20, 0, 0), (s * 55, 0, 0)) <= 4
+        occ |= (np.abs(X - s * 63) <= 8) & (np.abs(Y) <= 12) & (np.abs(Z) <= 2)
+        arms.append(((s * 20.0, 0.0, 0.0), (s * 71.0, 0.0, 0.0)))
+    v, f = voxel_mesh(occ, h, (xs[0] - h / 2, ys[0] - h / 2, zs[0] - h / 2))
+    return v, f, arms
+
+
+def test_the_issue_extremities_of_paddle_arms_are_the_arms_not_the_paddles_corners():
+    """Issue 35 asks for bones on branches "longer than they are wide". A flat paddle (24 mm
+    wide, 4 mm thick) at an arm's end has two far corners; step 5 of bench/extremities.py
+    (width = twice the depth, 4 mm) counts both as extremities, the issue's definition
+    (step 5': width across, 24 mm) only the arm: one extremity per arm, at a far corner of
+    its paddle, with the limb radius half the paddle's breadth (12 mm, to within 2 voxels),
+    so that a bone ending at the middle of the paddle's end reaches it."""
+    import sys
+    from pathlib import Path
+
+    from osteon.autoskeleton.mesh import check_mesh
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from extremities import extremities
+
+    v, f, _arms = paddle_arms()
+    wv, wf, _ = check_mesh(v, f)
+    ex = extremities(wv, wf, split_pieces(wv, wf))
+    assert len(ex.tips) == 3  # step 5: both corners of one paddle, one of the other
+    iex = ex.issue
+    assert len(iex.tips) == 2
+    assert sorted(np.sign(iex.tips[:, 0]).tolist()) == [-1.0, 1.0]
+    assert (np.abs(np.abs(iex.tips[:, 0]) - 71) < 2).all()  # the paddle's end
+    assert (np.abs(np.abs(iex.tips[:, 1]) - 12) < 2).all()  # a corner of it
+    assert (np.abs(iex.radius - 12) < 2 * ex.h).all(), iex.radius
 
 
 def test_cli_skeleton_takes_the_minimum_printable_thickness_from_the_material(tmp_path, capsys):
@@ -810,3 +860,53 @@ def test_a_limb_end_modelled_as_a_small_piece_gets_a_bone_but_a_plate_does_not()
     in_box = ends[(ends[:, 0] > 90) & (np.abs(ends[:, 1:]) < 3).all(1)]
     assert len(in_box) == 1 and 100 - in_box[0, 0] < 1.5 * 3.0
     assert ends[:, 2].max() < 10.0  # no bone into the fin
+
+
+@pytest.mark.parametrize("radius,min_t,ok", [(0.35, 0.8, False), (0.35, 0.3, True),
+                                             (0.45, 0.8, True)])
+def test_the_bones_and_the_bench_share_one_printability_measure(radius, min_t, ok):
+    """``autoskeleton.thickness``: a point prints when the local thickness there, twice its
+    distance to the surface, is at least the material's minimum (FDM 0.8 mm, resin 0.3 mm).
+    On a capsule of radius a that is 2a on its axis (closed form), so a 0.7 mm rod does not
+    print at FDM and does in resin, a 0.9 mm one does at FDM; the bench's extremity flag
+    (``extremities.tip_printable``: a printable point within 1.5 r of the tip, r = a) answers
+    the same through the same function, and a point 0.1 a from the surface never prints."""
+    import sys
+    from pathlib import Path
+
+    from osteon.autoskeleton.curve import _mesh_distance
+    from osteon.autoskeleton.mesh import check_mesh
+    from osteon.autoskeleton.thickness import printable
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+    from extremities import Extremities, tip_printable
+
+    v, f = capsule(length=20 * radius, radius=radius, n=48, stations=40, cap=16)
+    wv, wf, _ = check_mesh(v, f)
+    dist = _mesh_distance(wv, wf)
+    axis = np.stack([np.linspace(0, 20 * radius, 11), np.zeros(11), np.zeros(11)], 1)
+    inner = -np.asarray(dist.signed_distance(axis), float)
+    assert np.allclose(inner, radius, rtol=0.01)
+    assert (printable(inner, min_t) == ok).all()
+    assert not printable(inner * 0.1, min_t).any()
+    tip = np.array([[20 * radius + radius, 0.0, 0.0]])
+    ex = Extremities(tip, np.array([radius]), np.ones(1), np.ones(1), radius / 10)
+    assert tip_printable(wv, wf, split_pieces(wv, wf), ex, min_t).tolist() == [ok]
+
+
+def test_an_arm_ending_in_a_paddle_gets_a_bone_to_the_paddle_s_end_not_its_corners():
+    """Issue 35's bar on a flat end: the arms of ``paddle_arms`` (24 mm wide, 4 mm thick
+    paddles) each get one chain whose bone ends at the middle of the paddle's end (x = ±71
+    mm), within 1.5 of the issue's limb radii (half the paddle's breadth, 12 mm) of the
+    paddle's far corners, where the bench's extremity tips lie; no bone goes to a corner (a
+    corner is not a branch longer than it is wide: no bone ends within 4 mm of one)."""
+    v, f, _arms = paddle_arms()
+    sk, w = osteon.auto_skeleton(v, f)
+    check_weights(w, len(v), sk.num_bones)
+    ends = np.concatenate([sk.heads, sk.tails])
+    for s in (-1, 1):
+        end = np.array([s * 71.0, 0.0, 0.0])
+        assert np.linalg.norm(ends - end, axis=1).min() < 1.25 * 2.0 + 1.0  # its middle
+        for corner in ([s * 71.0, 12.0, 0.0], [s * 71.0, -12.0, 0.0]):
+            dist = np.linalg.norm(ends - corner, axis=1).min()
+            assert 4.0 < dist < 1.5 * 12.0, (corner, dist)

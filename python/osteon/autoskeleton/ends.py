@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .thickness import printable
 from .tree import Body, Tree
 
 #: A limb's end bone stops where the distance to the limb's end is END_RATIO x the radius there
@@ -89,7 +90,7 @@ def _tip(body: Body, pts: np.ndarray, radius: np.ndarray, capped: np.ndarray,
     of its taper short of its point, so the end bone left the tip unposed; the stop stays a
     joint (the sections up to it are the limb's; those beyond are thin, flagged by the
     analysis' own too-thin rule)."""
-    ok = np.flatnonzero((radius[:i] >= 0.5 * body.min_t) & capped[:i])
+    ok = np.flatnonzero(printable(radius[:i], body.min_t) & capped[:i])
     if not len(ok):
         return None
     more = pts[ok[0]]

@@ -34,6 +34,7 @@ import numpy as np
 
 from .._api import Skeleton
 from .curve import _mesh_distance
+from .thickness import local_thickness, printable
 from .thin import SAMPLES, _segment_points, _tail
 
 Mesh = tuple[np.ndarray, np.ndarray]  # (vertices (n,3) mm, faces (m,3)) of a closed piece
@@ -87,8 +88,8 @@ def _piece_tip(pts: np.ndarray, head: np.ndarray, tail: np.ndarray, union: _Unio
     part = s <= length
     if length <= union.min_t or not part.any() or not (rho[part] > 0).all():
         return None  # the line leaves the pieces, or no part of it is beyond the limb
-    width = 2.0 * float(rho[part].max())
-    if width < union.min_t or length <= spur * width:
+    width = float(local_thickness(rho[part].max()))
+    if not printable(rho[part].max(), union.min_t) or length <= spur * width:
         return None  # thinner than printable, or a bump
     if np.linalg.norm(ends - c, axis=1).min() <= width or _flat(pts, c, u, length, spur):
         return None  # a bone already ends there, or a plate's rim

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .ends import leaf_direction, tip_extent
+from .thickness import local_thickness, printable
 from .tree import Body, Tree
 
 
@@ -57,8 +58,9 @@ def _prune_round(body: Body, tree: Tree, spur: float, min_t: float) -> bool:
             body, tree, leaf, leaf_direction(body, tree, leaf)
         )
         # The branch's own width: twice the median radius of its nodes (mm).
-        width = 2.0 * float(np.median(tree.nradius[path]))
-        if width < min_t:  # thinner than printable along most of its length
+        r_med = float(np.median(tree.nradius[path]))
+        width = float(local_thickness(r_med))
+        if not printable(r_med, min_t):  # thinner than printable along most of its length
             thin.append((path, junction))
         elif reach - tree.nradius[junction] < spur * width and not thin:
             # a bump: sticks out of the body by less than spur x its own width

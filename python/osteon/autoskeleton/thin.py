@@ -31,6 +31,7 @@ from scipy.spatial import cKDTree
 
 from .._api import Skeleton
 from .ends import END_RATIO
+from .thickness import local_thickness, printable
 from .tree import Body
 
 #: samples along the line from a tip to its bone
@@ -167,8 +168,9 @@ def _tips(body: Body, sk: Skeleton, owner: np.ndarray, spur: float
         rho[out] = body.inner_radius(tip + s[out, None] * u)
         if not (rho[out] > 0).all():
             continue  # the line leaves the mesh: not a straight branch off this bone
-        width = 2.0 * float(rho[s <= length].max()) if (s <= length).any() else 0.0
-        if width < body.min_t or length <= spur * width:
+        rho_max = float(rho[s <= length].max()) if (s <= length).any() else 0.0
+        width = float(local_thickness(rho_max))
+        if not printable(rho_max, body.min_t) or length <= spur * width:
             continue  # thinner than printable, or a bump: not longer than wide
         seen_tip[n_seen], seen_width[n_seen] = tip, width
         n_seen += 1
@@ -191,7 +193,7 @@ def _tail(body: Body, tip: np.ndarray, u: np.ndarray, s: np.ndarray, rho: np.nda
     todo = np.isnan(rho)
     for _ in range(2):
         with np.errstate(invalid="ignore"):  # (NaN compares False)
-            stop = np.flatnonzero((s >= END_RATIO * rho) & (rho >= 0.5 * body.min_t))
+            stop = np.flatnonzero((s >= END_RATIO * rho) & printable(rho, body.min_t))
         if len(stop) or not todo.any():
             break
         rho = rho.copy()
