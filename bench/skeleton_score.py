@@ -27,8 +27,8 @@ import numpy as np
 import osteon
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from models import load  # noqa: I001  (models puts tests/python on the path)
 from extremities import extremities, tip_printable, tip_thickness
-from models import load
 
 
 def models(data: str):

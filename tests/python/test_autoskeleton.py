@@ -279,7 +279,7 @@ def test_rignet_models_in_several_pieces_are_rigged_whole(name, joined, loose):
 def test_a_tapering_toe_gets_a_tip_bone_to_its_point():
     """RigNet 8333's right foot (tests/data/RigNet, 120 mm tall) ends in a toe that tapers to a
     point on the ground: its limb radius near the tip is 1.8 mm (the bench's extremity measure,
-    bench/extremities.py). The end bone stops where the sections fall under a tenth of the
+    tests/python/extremities.py). The end bone stops where the sections fall under a tenth of the
     limb's median area, 5.6 mm from the toe's front vertex (3.1 radii); the tip bone goes on
     to where the toe is END_RATIO radii from its end and still as thick as printable, within
     1.5 radii of the point."""
@@ -298,7 +298,7 @@ def test_a_tapering_toe_gets_a_tip_bone_to_its_point():
 
 def test_a_thin_branch_the_simplified_mesh_lost_gets_a_bone():
     """RigNet 8184 (tests/data/RigNet, 120 mm tall) ends at the top in a thin point,
-    1.1 mm in limb radius (the bench's extremity measure, bench/extremities.py), that the
+    1.1 mm in limb radius (the bench's extremity measure, tests/python/extremities.py), that the
     simplified copy does not keep: the chain through the head stopped 4.7 mm (4.2 radii) from
     its top vertex. The thin-branch step (``autoskeleton.thin``) finds it on the full mesh
     and gives it a bone ending within 1.5 radii of it."""
@@ -741,19 +741,15 @@ def test_graph_edges_and_weld_read_in_bulk_match_the_slow_reading():
 
 
 def test_the_bench_extremity_measure_finds_the_five_fingertips_of_a_hand():
-    """Issue 35's rig-free measure (``bench/extremities.py``: maxima of the geodesic distance
+    """Issue 35's rig-free measure (``tests/python/extremities.py``: maxima of the geodesic distance
     inside the voxelised solid from the body's centre of mass that stick out more than their
     width) on the test hand: exactly five extremities, one at each fingertip (the capsule's
     end, r beyond its axis' end) to within two voxels, each with the finger's radius r (4 mm)
     to within a voxel; the palm's far end (an ellipsoid: it sticks out less than its width) is
     none."""
-    import sys
-    from pathlib import Path
 
-    from osteon.autoskeleton.mesh import check_mesh
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
     from extremities import extremities
+    from osteon.autoskeleton.mesh import check_mesh
 
     v, f, fingers, r = hand()
     wv, wf, _ = check_mesh(v, f)
@@ -792,18 +788,14 @@ def paddle_arms(h=1.0):
 
 def test_the_issue_extremities_of_paddle_arms_are_the_arms_not_the_paddles_corners():
     """Issue 35 asks for bones on branches "longer than they are wide". A flat paddle (24 mm
-    wide, 4 mm thick) at an arm's end has two far corners; step 5 of bench/extremities.py
+    wide, 4 mm thick) at an arm's end has two far corners; step 5 of tests/python/extremities.py
     (width = twice the depth, 4 mm) counts both as extremities, the issue's definition
     (step 5': width across, 24 mm) only the arm: one extremity per arm, at a far corner of
     its paddle, with the limb radius half the paddle's breadth (12 mm, to within 2 voxels),
     so that a bone ending at the middle of the paddle's end reaches it."""
-    import sys
-    from pathlib import Path
 
-    from osteon.autoskeleton.mesh import check_mesh
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
     from extremities import extremities
+    from osteon.autoskeleton.mesh import check_mesh
 
     v, f, _arms = paddle_arms()
     wv, wf, _ = check_mesh(v, f)
@@ -871,15 +863,11 @@ def test_the_bones_and_the_bench_share_one_printability_measure(radius, min_t, o
     print at FDM and does in resin, a 0.9 mm one does at FDM; the bench's extremity flag
     (``extremities.tip_printable``: a printable point within 1.5 r of the tip, r = a) answers
     the same through the same function, and a point 0.1 a from the surface never prints."""
-    import sys
-    from pathlib import Path
 
+    from extremities import Extremities, tip_printable
     from osteon.autoskeleton.curve import _mesh_distance
     from osteon.autoskeleton.mesh import check_mesh
     from osteon.autoskeleton.thickness import printable
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-    from extremities import Extremities, tip_printable
 
     v, f = capsule(length=20 * radius, radius=radius, n=48, stations=40, cap=16)
     wv, wf, _ = check_mesh(v, f)

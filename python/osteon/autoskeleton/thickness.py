@@ -1,7 +1,7 @@
 """Whether a point of a mesh is thick enough to print (issue 35): the one measure the auto
 skeleton's steps (the tip bones of ``ends``, the thin branches of ``thin``, the small pieces'
 tips of ``piece_tips``, the pruning of unprintable branches) and the bench
-(``bench/extremities.py``) share. Units: mm.
+(``tests/python/extremities.py``) share. Units: mm.
 
 A point is printable with a material when the solid's local thickness there is at least the
 material's minimum printable thickness (``min_thickness_mm`` of :mod:`osteon.materials`: FDM
