@@ -73,10 +73,15 @@ region at its death); ``tips``/``radius`` step 5's (the old count, kept beside i
    is measured again on the mesh itself: its tip is the mesh vertex farthest along g near
    the voxel tip (g carried onto the vertices within ``3 r + 2 h`` of it by the shortest
    straight step from an inside voxel: g(u) + |x - u|, the vertex joined to the voxel tip by
-   a straight segment inside the mesh), and its radius is step 5's, with the voxels replaced
-   by the points of a grid of spacing h / ``FINE`` inside the mesh and the depth by the
-   distance to the mesh's surface (``inner_radius_of``; exact, not a distance between voxel
-   centres). The voxel values are kept in ``tips_voxel``/``radius_voxel``."""
+   a straight segment inside the mesh, from the deepest point within h of the voxel tip where
+   that lies outside), and its radius is step 5's, with the voxels replaced by the points of a
+   grid of spacing h / ``FINE`` inside the mesh and the depth by the distance to the mesh's
+   surface (``inner_radius_of``; exact, not a distance between voxel centres), stopping from 3
+   grid steps out. At a point sharper than a cone of half-angle asin(1/3) = 19.5 deg the depth
+   within s of the tip stays under s/3 for every s: step 5's radius has no positive value
+   there and this reads about the depth 3 grid steps in (0.01-0.15 mm on the RigNet models),
+   so no point within 1.5 r of such a tip prints and it leaves the printable count. The voxel
+   values are kept in ``tips_voxel``/``radius_voxel``."""
 
 from __future__ import annotations
 
