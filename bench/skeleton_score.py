@@ -56,7 +56,8 @@ def leaves(parents: np.ndarray) -> np.ndarray:
     return ~has_child
 
 
-def run(out: str, min_t: float, data: str, cache: str | None = None) -> None:
+def run(out: str, min_t: float, data: str, cache: str | None = None,
+        voxel_tips: bool = False) -> None:
     from bench_autoskeleton import limb_radii
     from osteon.autoskeleton import split_pieces
     from osteon.autoskeleton.mesh import check_mesh
@@ -73,12 +74,13 @@ def run(out: str, min_t: float, data: str, cache: str | None = None) -> None:
             sk, _w = osteon.auto_skeleton(v, f, min_thickness=min_t)
         cpu = time.process_time() - c
         wv, wf, _ = check_mesh(v, f)
-        key = Path(cache, f"{name}_{min_t}.pkl") if cache else None
+        tag = "_voxel" if voxel_tips else ""
+        key = Path(cache, f"{name}_{min_t}{tag}.pkl") if cache else None
         if key is not None and key.exists():  # (the extremities do not depend on the bones)
             ex, thin_tip, old_flag, ip = pickle.loads(key.read_bytes())
         else:
             p = split_pieces(wv, wf)
-            ex = extremities(wv, wf, p)
+            ex = extremities(wv, wf, p, mesh_tips=not voxel_tips)
             thin_tip = tip_printable(wv, wf, p, ex, min_t)
             old_flag = tip_thickness(wv, wf, p, ex) >= min_t  # (the flag before session 11)
             ip = tip_printable(wv, wf, p, ex.issue, min_t)
@@ -211,6 +213,8 @@ def main() -> None:
     r.add_argument("out")
     r.add_argument("--min-t", type=float, default=0.8)
     r.add_argument("--cache", help="a folder for each model's extremities (reused run to run)")
+    r.add_argument("--voxel-tips", action="store_true",
+                   help="tips and radii on the voxels only (extremities.py without step 6)")
     r.add_argument("--data", default=str(Path(__file__).resolve().parents[2] / "shared" / "data"))
     d = sub.add_parser("diff")
     d.add_argument("base")
@@ -229,7 +233,7 @@ def main() -> None:
     elif args.cmd == "misses":
         misses(args.path, args.issue)
     elif args.cmd == "run":
-        run(args.out, args.min_t, args.data, args.cache)
+        run(args.out, args.min_t, args.data, args.cache, args.voxel_tips)
     else:
         diff(args.base, args.new, args.issue)
 

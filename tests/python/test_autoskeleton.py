@@ -770,6 +770,47 @@ def test_the_bench_extremity_measure_finds_the_five_fingertips_of_a_hand():
     assert (np.abs(iex.radius - r) < 1.5 * ex.h).all(), iex.radius
 
 
+@pytest.mark.parametrize("a", [0.6, 0.8])
+def test_the_bench_measures_a_thin_fingers_tip_and_radius_on_the_mesh(a):
+    """Step 6 of ``tests/python/extremities.py``: a capsule finger of radius a = 0.6 / 0.8 mm
+    (one voxel of the 0.76 mm grid: the voxel depth reads 0.76 mm for either), 10 mm out of
+    a 120 mm body, is found as an extremity under both definitions; its tip is measured on
+    the mesh (the cap's pole vertex, where a voxel centre lies up to ~h inside or short of
+    it) and its radius from the mesh's distance field on a grid of h/6, not from voxel
+    centres. Tolerances: the tip is a vertex of the cap's top (the finger's farthest point:
+    ``capsule_along`` ends in a flat 64-gon of radius a sin(pi/24) = 0.08-0.10 mm, all of it
+    equally far along the finger), the radius within sqrt(3)/2 h/6 = 0.11 mm (the grid's
+    largest miss of the deepest point, of a 1-Lipschitz distance field) plus the capsule's
+    64-gon chord error (0.1 %)."""
+
+    from extremities import FINE, extremities
+    from osteon.autoskeleton.mesh import check_mesh
+
+    body = capsule_along((-48, 0, 0), (48, 0, 0), 12.0, n=32, cap_stations=8, stations=12)
+    base, end = np.array([0.0, 0.0, 8.0]), np.array([0.0, 0.0, 22.0])
+    finger = capsule_along(base, end, a, n=64, cap_stations=12, stations=24)
+    v, f = merge(body, finger)
+    wv, wf, _ = check_mesh(v, f)
+    p = split_pieces(wv, wf)
+    assert len(p.joined) == 1 and not p.loose
+    ex = extremities(wv, wf, p)
+    tip = end + np.array([0.0, 0.0, a])
+    top = float(wv[:, 2].max())  # the cap's flat top, a sin(pi/24) round the axis
+    tol_r = np.sqrt(3) / 2 * ex.h / FINE + 0.002 * a
+    for e in (ex, ex.issue):
+        k = int(np.argmin(np.linalg.norm(e.tips - tip, axis=1)))
+        assert abs(e.tips[k, 2] - top) < 1e-9, (e.tips[k], top)
+        assert np.linalg.norm(e.tips[k, :2]) <= a * np.sin(np.pi / 24) + 1e-9, e.tips[k]
+        assert abs(e.radius[k] - a) < tol_r, (e.radius[k], a)
+        # the voxel measure it replaces: a voxel centre short of the tip, a radius of one
+        # voxel that does not tell 0.6 from 0.8 mm
+        assert top - e.tips_voxel[k, 2] > 0.2, e.tips_voxel[k]
+        assert abs(e.radius_voxel[k] - ex.h) < 1e-9, (e.radius_voxel[k], ex.h)
+    # without step 6 the figures are the voxel ones
+    ev = extremities(wv, wf, p, mesh_tips=False)
+    assert np.array_equal(ev.tips, ex.tips_voxel) and np.array_equal(ev.radius, ex.radius_voxel)
+
+
 def paddle_arms(h=1.0):
     """A body (ellipsoid 60 x 40 x 30 mm) with two arms (capsules of radius 4 mm, 35 mm long)
     each ending in a flat paddle 16 mm long, 24 mm wide and 4 mm thick; voxelised at h mm.
