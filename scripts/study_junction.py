@@ -71,12 +71,22 @@ ROUNDS = {  # (tilt deg, r/d)
     "6-ellipse": [(0.0, 0.1), (45.0, 0.1)],
     # the same, the long axis across the tilt plane (2.4 mm along x, 3.6 mm along y)
     "6-ellipse-y": [(0.0, 0.1), (45.0, 0.1)],
+    # round 7 (held out; registered 2026-11-28 after the fix 655e8f6 was committed, before any FEM
+    # or osteon run on them; docs/notch.md "Round 7"): the elliptic branch of "6-ellipse" (long
+    # axis 3.6 mm in the tilt plane, the narrow end at the acute corner) at other tilts: a 55-deg
+    # and a 35-deg corner
+    "7": [(35.0, 0.1), (55.0, 0.1)],
+    # and at 45 deg with aspect 1.3 instead of 1.5 (semi-axes 3.35 x 2.58 mm, area 0.96 of d = 6's
+    # as "6-ellipse")
+    "7-aspect": [(45.0, 0.1)],
 }
 #: the branch per round: None round (d = 6 mm), (a along x, b along y) mm elliptic
-ROUND_BRANCH = {"6-ellipse": (3.6, 2.4), "6-ellipse-y": (2.4, 3.6)}
+ROUND_BRANCH = {"6-ellipse": (3.6, 2.4), "6-ellipse-y": (2.4, 3.6), "7": (3.6, 2.4),
+                "7-aspect": (3.35, 2.58)}
 #: FEM element sizes on the fillet (r/div): the held-out shapes at r/4 and r/6 (convergence); the
 #: training shapes at r/6 only (0 and 45 deg converged within 1.4 % from r/4, docs/notch.md)
-ROUND_DIVS = {"6-train": (6,), "6": (4, 6), "6-ellipse": (4, 6), "6-ellipse-y": (4, 6)}
+ROUND_DIVS = {"6-train": (6,), "6": (4, 6), "6-ellipse": (4, 6), "6-ellipse-y": (4, 6), "7": (4, 6),
+              "7-aspect": (4, 6)}
 PROFILE_STEP = 0.05  # mm between the per-plane reference's planes
 FLOOR = 0.85  # acceptance: every reading >= FLOOR x FEM's peak
 
