@@ -571,17 +571,19 @@ void chain_runs(const std::vector<CutSegment>& seg, const Chains& chains, std::s
     const CutSegment& s = seg[chains.items[k]];
     if (k > chains.starts[j]) {
       const CutSegment& before = seg[chains.items[k - 1]];
-      double turn = vertex_turn(before, s);
-      if (turn >= 0 && k + 1 < chains.starts[j + 1]) {
+      const double turn = vertex_turn(before, s);
+      // The zigzag (a convex vertex turned back past by the next one) is tested only where it
+      // would end the run: the next vertex is concave and resets the sum anyway.
+      auto turned_back = [&] {
+        if (k + 1 >= chains.starts[j + 1]) return false;
         const CutSegment& after = seg[chains.items[k + 1]];
-        if (vertex_turn(s, after) < 0) {
-          const Vec2 d0 = before.point[1] - before.point[0], d2 = after.point[1] - after.point[0];
-          if (d0.x() * d2.y() - d0.y() * d2.x() < 0) turn = -1.0;  // the zigzag: net concave
-        }
-      }
+        const Vec2 d0 = before.point[1] - before.point[0], d1 = s.point[1] - s.point[0],
+                   d2 = after.point[1] - after.point[0];
+        return d1.x() * d2.y() - d1.y() * d2.x() < 0 && d0.x() * d2.y() - d0.y() * d2.x() < 0;
+      };
       if (turn < 0) {
         convex = 0;
-      } else if (convex <= kRunBreak && (convex += turn) > kRunBreak) {
+      } else if (convex <= kRunBreak && (convex += turn) > kRunBreak && !turned_back()) {
         run_flank.push_back(-3.0);
         run_best.push_back(k);
       }
