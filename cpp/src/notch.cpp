@@ -14,17 +14,11 @@
 #include "noinline.hpp"
 #include "notch_reuse.hpp"
 #include "parallel.hpp"
-#include <cstdio>
-#include <cstdlib>
-#include <string>
 
 namespace osteon {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-bool dbg_on() { static const bool on = std::getenv("OSTEON_NOTCH_DEBUG") != nullptr; return on; }
-thread_local std::string* g_dbg = nullptr;
-#define DBG(...) do { if (g_dbg) { char b_[600]; std::snprintf(b_, sizeof b_, __VA_ARGS__); *g_dbg += b_; } } while (0)
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Roark 7th ed. Table 17.1, square shoulder with fillet in a circular shaft, bending; C_i = a +
@@ -241,7 +235,6 @@ struct FilletPoint {
 // The fillet points of a corner and the squared lengths of their polyline segments (mm^2), one
 // run per point.
 struct FilletPoints {
-  Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero();
   std::vector<FilletPoint> points;
   std::vector<double> edges;
 };
@@ -633,8 +626,6 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
   const double t_lo = 0.5 * r_thin, t_hi = 2.5 * r_thin, margin = 1e-9 * r_thin;
   const double lo_sin = std::sin(8.0 * kPi / 180.0), hi_sin = std::sin(82.0 * kPi / 180.0);
   FilletPoints out;
-  out.e1 = e1;
-  out.e2 = e2;
   std::vector<CutSegment>& seg = scratch.segments;
   Chains& chains = scratch.chains;
   for (int half = 0; half < kHalfPlanes; ++half) {
@@ -685,15 +676,6 @@ FilletPoints fillet_points(const MeshView& mesh, const FaceGrid& grid, const Vec
       // The runs only of a chain with fillet points (most chains in the window have none).
       if (out.points.size() == first) continue;
       chain_runs(seg, chains, j, scratch.run_of, scratch.run_flank, scratch.run_best);
-      DBG("  chain half=%d j=%zu segs=%zu\n", half, j, chains.starts[j + 1] - chains.starts[j]);
-      for (std::size_t k = chains.starts[j]; k < chains.starts[j + 1]; ++k) {
-        const CutSegment& s = seg[chains.items[k]];
-        const Vec2 d = s.point[1] - s.point[0];
-        const double vt = k > chains.starts[j] ? vertex_turn(seg[chains.items[k - 1]], s) : 0.0;
-        DBG("    seg (%.4f %.4f)->(%.4f %.4f) segturn=%.1f vturn=%.2f run=%d\n", s.point[0].x(), s.point[0].y(),
-            s.point[1].x(), s.point[1].y(), std::atan2(-d.y(), -d.x()) * 180 / kPi, vt < 0 ? -1.0 : vt * 180 / kPi,
-            scratch.run_of[k - chains.starts[j]]);
-      }
       for (std::size_t m = first; m < out.points.size(); ++m)
         out.points[m].flank = scratch.run_flank[scratch.run_of[scratch.point_at[m - first]]];
     }
@@ -739,12 +721,7 @@ SectorSums half_plane_sums(const std::vector<const FilletPoint*>& inside,
 // most acute sector's opening is kept. Returns whether the sector's fit said anything.
 bool judge_sector(const SectorSums& sums, double r_thin, Corner& c) {
   double rho = 0, axial = 0;
-  const bool said_ = sector_radius(sums, r_thin, rho, axial);
-  DBG("    sums n=%zu ma=%.3f mn=%.3f sd_a=%.4f sd_n=%.4f turn=%.1f flank=%.1f -> said=%d rho=%.3f axial=%.3f\n",
-      sums.n, sums.ma, sums.mn, sums.n ? std::sqrt(sums.saa / sums.n) : 0.0,
-      sums.n ? std::sqrt(sums.snn / sums.n) : 0.0, sums.turn * 180 / kPi, sums.flank * 180 / kPi,
-      (int)said_, rho, axial);
-  if (!said_) return false;
+  if (!sector_radius(sums, r_thin, rho, axial)) return false;
   // How far the surface turns at the corner: a sharp edge's normal is the bisector (half the
   // turn), a fillet's points reach the turn. The fit is for a shoulder (a 90-degree turn);
   // creases turning less than kMinTurn (tapers, facets of a low-poly mesh) are not counted:
@@ -819,8 +796,7 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
     }
   Corner c;
   std::array<char, kSectors> said{};  // the sector's fit gave a verdict (sector_radius)
-  DBG("  corner_in lo=%.3f hi=%.3f inside=%zu\n", lo, hi, inside.size());
-  for (int s = 0; s < kSectors; ++s) { DBG("   sector %d:", s); said[s] = judge_sector(sums[s], r_thin, c); }
+  for (int s = 0; s < kSectors; ++s) said[s] = judge_sector(sums[s], r_thin, c);
   // A half-plane whose two sectors both say nothing (their two profiles disagree: a corner
   // whose axial position changes around the axis, a junction's acute side against its sides)
   // is fitted alone when it has 3 points or more (round 6).
@@ -828,8 +804,7 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
   for (int h = 0; h < kHalfPlanes; ++h) {
     if (said[h] || said[(h + kSectors - 1) % kSectors]) continue;
     SectorSums one = half_plane_sums(inside, fillet, h, own_lengths);
-    DBG("   half %d alone n=%zu:", h, one.n);
-    if (one.n >= 3) judge_sector(one, r_thin, c); else DBG("\n");
+    if (one.n >= 3) judge_sector(one, r_thin, c);
   }
   return c;
 }
@@ -963,24 +938,11 @@ std::vector<Corner> measure_corners(const MeshView& mesh,
     for (std::size_t t = s; t < steps.size(); ++t)
       if (same_side(s, t)) reach = std::max(reach, steps[t].reach);
     const Step& st = steps[s];
-    std::string dbg;
-    if (dbg_on()) g_dbg = &dbg;
     const FilletPoints points =
         fillet_points(mesh, grid, st.point, st.u, st.r_thin, -0.25 * reach, 1.25 * reach);
-    DBG("STEP section=%d point=(%.4f %.4f %.4f) u=(%.4f %.4f %.4f) r_thin=%.4f r_big=%.4f reach=%.3f e1=(%.4f %.4f %.4f) e2=(%.4f %.4f %.4f)\n",
-        st.section, st.point.x(), st.point.y(), st.point.z(), st.u.x(), st.u.y(), st.u.z(), st.r_thin, st.r_big, reach,
-        points.e1.x(), points.e1.y(), points.e1.z(), points.e2.x(), points.e2.y(), points.e2.z());
-    for (const FilletPoint& p : points.points)
-      DBG("  pt half=%d a=%.4f t=%.4f na=%.4f turn=%.1f flank=%.1f\n", p.sector, p.a, p.t, p.na,
-          p.turn * 180 / kPi, p.flank * 180 / kPi);
     for (std::size_t t = s; t < steps.size(); ++t)
-      if (same_side(s, t)) {
+      if (same_side(s, t))
         corners[t] = corner_in(points, st.r_thin, -0.25 * steps[t].reach, 1.25 * steps[t].reach);
-        DBG("  RESULT step section=%d reach=%.3f found=%d radius=%.4f axial=%.4f opening=%.1f\n",
-            steps[t].section, steps[t].reach, (int)corners[t].found, corners[t].radius, corners[t].axial,
-            corners[t].opening * 180 / kPi);
-      }
-    if (g_dbg) { std::fputs(dbg.c_str(), stderr); g_dbg = nullptr; }
   });
   return corners;
 }
