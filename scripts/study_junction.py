@@ -12,6 +12,15 @@ The cache is ``scripts/study_junction_fem.json``: per shape the FEM peak per loa
 +y at the branch's tip) at r/4 and r/6 on the fillet, node counts, seconds, and the r/6 worst
 load case's largest stress within 0.25 mm of each plane z = 0.05 k (the per-plane reference).
 The FEM step prints only its cost, never a value: the values are read by the ``osteon`` step.
+The ``osteon`` step records, per shape, a digest of each osteon-side mesh it generates (vertex and
+triangle counts, SHA-256 of the arrays; ``osteon_meshes``, with gmsh's and numpy's versions) the
+first time, and afterwards prints a WARNING line under the table for each mesh that differs: the
+same gmsh wheel in another install has made other meshes, and other readings (docs/notch.md "A
+reproducibility check that did not reproduce"; the digests were recorded 2026-11-28 in the
+environment that reproduces round 6's committed tables).
+
+Round 7 (docs/notch.md "Round 7"; held out after the fix 655e8f6 was committed): the elliptic
+branch 3.6 x 2.4 mm at tilts 35 and 55 deg ("7") and 3.35 x 2.58 at 45 ("7-aspect").
 
 Round 6 (shapes registered 2026-11-28 in the commit that adds this file, before the rule under
 test was written and before any osteon run on them; the rule is committed, in a commit whose
@@ -48,6 +57,7 @@ from __future__ import annotations
 
 import argparse
 import fcntl
+import hashlib
 import json
 import math
 import subprocess
@@ -71,12 +81,22 @@ ROUNDS = {  # (tilt deg, r/d)
     "6-ellipse": [(0.0, 0.1), (45.0, 0.1)],
     # the same, the long axis across the tilt plane (2.4 mm along x, 3.6 mm along y)
     "6-ellipse-y": [(0.0, 0.1), (45.0, 0.1)],
+    # round 7 (held out; registered 2026-11-28 after the fix 655e8f6 was committed, before any FEM
+    # or osteon run on them; docs/notch.md "Round 7"): the elliptic branch of "6-ellipse" (long
+    # axis 3.6 mm in the tilt plane, the narrow end at the acute corner) at other tilts: a 55-deg
+    # and a 35-deg corner
+    "7": [(35.0, 0.1), (55.0, 0.1)],
+    # and at 45 deg with aspect 1.3 instead of 1.5 (semi-axes 3.35 x 2.58 mm, area 0.96 of d = 6's
+    # as "6-ellipse")
+    "7-aspect": [(45.0, 0.1)],
 }
 #: the branch per round: None round (d = 6 mm), (a along x, b along y) mm elliptic
-ROUND_BRANCH = {"6-ellipse": (3.6, 2.4), "6-ellipse-y": (2.4, 3.6)}
+ROUND_BRANCH = {"6-ellipse": (3.6, 2.4), "6-ellipse-y": (2.4, 3.6), "7": (3.6, 2.4),
+                "7-aspect": (3.35, 2.58)}
 #: FEM element sizes on the fillet (r/div): the held-out shapes at r/4 and r/6 (convergence); the
 #: training shapes at r/6 only (0 and 45 deg converged within 1.4 % from r/4, docs/notch.md)
-ROUND_DIVS = {"6-train": (6,), "6": (4, 6), "6-ellipse": (4, 6), "6-ellipse-y": (4, 6)}
+ROUND_DIVS = {"6-train": (6,), "6": (4, 6), "6-ellipse": (4, 6), "6-ellipse-y": (4, 6), "7": (4, 6),
+              "7-aspect": (4, 6)}
 PROFILE_STEP = 0.05  # mm between the per-plane reference's planes
 FLOOR = 0.85  # acceptance: every reading >= FLOOR x FEM's peak
 
@@ -159,10 +179,49 @@ def fem_at(row, z):
     return prof[k] if 0 <= k < len(prof) else float("nan")
 
 
-def readings(tilt, rel_r):
-    """The 44 readings: (variant label, head z, the corner reading's section dict, all sections)."""
+def mesh_digest(vertices, faces):
+    """A mesh's fingerprint: vertex and triangle counts and the SHA-256 (first 16 hex digits) of its
+    float64 vertices and int32 triangles, little-endian (the same bytes from the same mesher)."""
+    h = hashlib.sha256(np.ascontiguousarray(vertices, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(faces, dtype="<i4").tobytes())
+    return f"{len(vertices)}/{len(faces)}/{h.hexdigest()[:16]}"
+
+
+def check_meshes(tilt, rel_r, meshes):
+    """The osteon-side meshes against the ones recorded with the shape's FEM (``osteon_meshes``:
+    the mesher's output differs between installs of the same gmsh wheel, docs/notch.md "A
+    reproducibility check that did not reproduce"): recorded if absent (with gmsh's and numpy's
+    versions), else a warning line per differing mesh. Returns the warning lines."""
+    import gmsh
+
+    digests = {f"{a:g}": mesh_digest(*meshes[a]) for a in sb.ANGLES}
+    with open(Path(tempfile.gettempdir()) / "study_junction_fem.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        cache = load_cache()
+        row = None
+        for rnd in cache["rounds"].values():
+            row = rnd["shapes"].get(key(tilt, rel_r), row)
+        if row is None or "error" in row:
+            return []
+        recorded = row.get("osteon_meshes")
+        if recorded is None:
+            row["osteon_meshes"] = {"meshes": digests, "gmsh": gmsh.__version__,
+                                    "numpy": np.__version__}
+            save_cache(cache)
+            return []
+    return [f"WARNING {key(tilt, rel_r)}: the osteon mesh turned {a} deg is {d} (gmsh "
+            f"{gmsh.__version__}, numpy {np.__version__}); recorded {recorded['meshes'].get(a)} "
+            f"(gmsh {recorded['gmsh']}, numpy {recorded['numpy']}): the readings may differ from "
+            f"the recorded table" for a, d in digests.items() if recorded["meshes"].get(a) != d]
+
+
+def readings(tilt, rel_r, warnings=None):
+    """The 44 readings: (variant label, head z, the corner reading's section dict, all sections).
+    ``warnings``: a list the meshes' check (check_meshes) appends to."""
     vertices, faces = sb.mesh_shape(rel_r, 2, 2, tilt_deg=tilt)
     remeshed = {a: sb.mesh_shape(rel_r, 2, 2, a, tilt) for a in sb.ANGLES[1:]}
+    if warnings is not None:
+        warnings += check_meshes(tilt, rel_r, {sb.ANGLES[0]: (vertices, faces), **remeshed})
     variants = [(f"turned {a:g}", vertices, faces, a, False) for a in sb.ANGLES]
     variants += [(f"mirror {a:g}", vertices, faces, a, True) for a in sb.ANGLES]
     variants += [(f"remeshed {a:g}", *remeshed[a], 0.0, False) for a in sb.ANGLES[1:]]
@@ -186,6 +245,7 @@ def evaluate(args):
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     judged = failed = 0
     detail = []
+    warnings = []
     for tilt, rel_r in ROUNDS[args.round]:
         fem = rnd["shapes"].get(key(tilt, rel_r))
         if fem is None or "error" in fem:
@@ -196,7 +256,7 @@ def evaluate(args):
         worst = int(np.argmax(fine))
         ref = fine[worst]
         coarse = fem.get("fem_r4", [float("nan")] * len(fine))
-        reads = readings(tilt, rel_r)
+        reads = readings(tilt, rel_r, warnings)
         ratios = np.array([w["stress"] / ref for _, _, w, _ in reads])
         k = int(np.argmin(ratios))
         lab, hz, w, _ = reads[k]
@@ -227,6 +287,8 @@ def evaluate(args):
         detail.append((tilt, rel_r, per))
     print(f"\n{judged - failed} of {judged} shapes with FEM pass (every reading >= "
           f"{FLOOR:g} x FEM's peak).\n")
+    for line in warnings:
+        print(line + "\n")
     print("Not judged: sections carrying a corner (Kt > 1) against FEM's largest stress within "
           "0.25 mm of their plane (r/6, worst load)\n")
     print("| tilt | r/d | sections | min | median | max | under 0.85 |")
