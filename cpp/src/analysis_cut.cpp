@@ -133,6 +133,7 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
   st.solid_modulus = props.modulus;
   st.modulus = props.modulus;
   st.print_pending = ro.print != nullptr && ro.defer_print;
+  if (st.print_pending) st.print_props = props;
   st.center = frame.to_world(props.centroid);
   // Principal second moments: the smaller one is across the thinnest direction (a b x t
   // rectangle has b^3 t / 12 and b t^3 / 12, so the aspect is b / t).
@@ -185,7 +186,7 @@ void Analyzer::Impl::print_sections(RunState& run) {
     SectionState& st = states[todo[order[j]]];
     st.print_pending = false;
     const SectionPolygon& polygon = *st.analysed;
-    const PrintedSection printed = printed_in(st.frame, polygon, section_properties(polygon), ro);
+    const PrintedSection printed = printed_in(st.frame, polygon, st.print_props, ro);
     if (!printed.valid) {
       SectionState degenerate;
       degenerate.flags = st.flags | kFlagDegenerate;

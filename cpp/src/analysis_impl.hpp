@@ -116,8 +116,10 @@ struct SectionState {
   double infill_area = 0.0;    // mm^2
   std::vector<std::vector<Vec3>> infill_loops;  // keep_outlines: the sparse region's loops, 3D mm
   // Set by a deferred set_section_region (RegionOptions::defer_print): W and the areas are still
-  // the cut's; Impl::print_sections computes the printed section and clears it.
+  // the cut's; Impl::print_sections computes the printed section from the region's properties
+  // kept here (not computed twice) and clears it.
   bool print_pending = false;
+  SectionProperties print_props;
 };
 
 /// What set_section_region needs of the options: keep the loops, and how the part is printed.
