@@ -9,7 +9,8 @@
 //   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run (list_moved_faces,
 //                               list_bone_vertices), Impl::remember_inputs
 //   analysis_cut.cpp            Impl::prepare_cuts (bone_reach2), Impl::cut_local (phase 1),
-//                               Impl::cut_retries (phase 2)
+//                               Impl::cut_retries (phase 2), Impl::print_sections (the printed
+//                               sections of both phases, one pass on all workers)
 //   analysis_junction.cpp       Impl::find_junction_cores
 //   analysis_loads.cpp          Impl::compute_loads
 //   analysis_vertex_stress.cpp  Impl::compute_vertex_stress
