@@ -161,8 +161,6 @@ AnalysisResult Analyzer::Impl::run(const double* vertices, const Skeleton& sk, c
     run.timer.lap("slicing phase 1");
     cut_retries(run);
     run.timer.lap("slicing");
-    print_sections(run);
-    run.timer.lap("printed sections");
     run.check_cancel();
     find_junction_cores(run);
     run.timer.lap("junctions");

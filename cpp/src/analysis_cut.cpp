@@ -86,37 +86,6 @@ SectionState finish_whole(const PlaneFrame& frame, const std::vector<CutSegment>
   return finish(frame, geom, nullptr, ro);
 }
 
-// The cuts' region options: the printed sections left to Impl::print_sections.
-RegionOptions deferred(const AnalysisOptions& options) {
-  RegionOptions ro(options);
-  ro.defer_print = true;
-  return ro;
-}
-
-// The printed section of `polygon` in `frame`'s plane (ro.print set).
-PrintedSection printed_in(const PlaneFrame& frame, const SectionPolygon& polygon,
-                          const SectionProperties& props, const RegionOptions& ro) {
-  const Vec2 build(ro.build.dot(frame.u), ro.build.dot(frame.v));
-  return printed_section(polygon, props, build, ro.build.dot(frame.normal), *ro.print, ro.keep);
-}
-
-// W and the wall, skin and infill areas of a printed section (default: a solid one, whose W
-// the caller has set), with `keep` its sparse loops in 3D.
-void set_printed(SectionState& st, const PlaneFrame& frame, const PrintedSection& printed,
-                 bool keep) {
-  if (printed.valid) st.modulus = printed.modulus;
-  st.wall_area = printed.wall_area;
-  st.skin_area = printed.skin_area;
-  st.infill_area = printed.infill_area;
-  if (!keep) return;
-  st.infill_loops.clear();
-  for (const auto& loop : printed.sparse) {
-    std::vector<Vec3> out(loop.size());
-    for (std::size_t k = 0; k < loop.size(); ++k) out[k] = frame.to_world(loop[k]);
-    st.infill_loops.push_back(std::move(out));
-  }
-}
-
 }  // namespace
 
 bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
@@ -124,16 +93,18 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
   const SectionProperties props = section_properties(polygon);
   if (!props.valid) return false;
   PrintedSection printed;
-  const bool now = ro.print != nullptr && !ro.defer_print;
-  if (now) {
-    printed = printed_in(frame, polygon, props, ro);
+  if (ro.print != nullptr) {
+    const Vec2 build(ro.build.dot(frame.u), ro.build.dot(frame.v));
+    printed =
+        printed_section(polygon, props, build, ro.build.dot(frame.normal), *ro.print, ro.keep);
     if (!printed.valid) return false;
   }
   st.area = props.area;
   st.solid_modulus = props.modulus;
-  st.modulus = props.modulus;
-  st.print_pending = ro.print != nullptr && ro.defer_print;
-  if (st.print_pending) st.print_props = props;
+  st.modulus = ro.print != nullptr ? printed.modulus : props.modulus;
+  st.wall_area = printed.wall_area;
+  st.skin_area = printed.skin_area;
+  st.infill_area = printed.infill_area;
   st.center = frame.to_world(props.centroid);
   // Principal second moments: the smaller one is across the thinnest direction (a b x t
   // rectangle has b^3 t / 12 and b t^3 / 12, so the aspect is b / t).
@@ -155,49 +126,10 @@ bool set_section_region(SectionState& st, const PlaneFrame& frame, const Section
     };
     st.loops.push_back(to_world(polygon.outer));
     for (const auto& hole : polygon.holes) st.loops.push_back(to_world(hole));
+    st.infill_loops.clear();
+    for (const auto& loop : printed.sparse) st.infill_loops.push_back(to_world(loop));
   }
-  set_printed(st, frame, printed, ro.keep);
   return true;
-}
-
-// The printed sections that the cuts left pending (RegionOptions::defer_print), one job each,
-// the largest outlines first (what a printed section costs grows with its vertices: the longest
-// jobs start first, so the workers end together), each exactly as set_section_region would
-// have computed it in place: the same polygon, properties and frame, so the same bits. A section
-// whose printed W is degenerate becomes what finish() makes of a degenerate region.
-void Analyzer::Impl::print_sections(RunState& run) {
-  std::vector<int> todo;
-  std::vector<std::size_t> size;
-  for (std::size_t i = 0; i < states.size(); ++i) {
-    if (!states[i].print_pending) continue;
-    const SectionPolygon& p = *states[i].analysed;
-    std::size_t n = p.outer.size();
-    for (const auto& hole : p.holes) n += hole.size();
-    todo.push_back(static_cast<int>(i));
-    size.push_back(n);
-  }
-  std::vector<std::size_t> order(todo.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return size[a] > size[b]; });
-  const RegionOptions ro(options);
-  detail::parallel_for(static_cast<long>(order.size()), options.threads, [&](long j, int) {
-    run.check_cancel();
-    SectionState& st = states[todo[order[j]]];
-    st.print_pending = false;
-    const SectionPolygon& polygon = *st.analysed;
-    const PrintedSection printed = printed_in(st.frame, polygon, st.print_props, ro);
-    if (!printed.valid) {
-      SectionState degenerate;
-      degenerate.flags = st.flags | kFlagDegenerate;
-      degenerate.whole_plane = st.whole_plane;
-      degenerate.region = st.region;
-      st = std::move(degenerate);
-      return;
-    }
-    set_printed(st, st.frame, printed, ro.keep);
-    st.cut_modulus = st.modulus;
-  });
 }
 
 double section_thickness_at(SectionState& st) {
@@ -281,7 +213,7 @@ void Analyzer::Impl::cut_local(RunState& run) {
   const Skeleton& sk = run.sk;
   const double h = options.interval;
   const long jobs = static_cast<long>(job_bone.size());
-  const RegionOptions ro = deferred(options);
+  const RegionOptions ro(options);
   // Phase 1 (parallel over bones and joints): one local cut per family of parallel planes.
   // Sections whose local cut is not provably right, and all joints, are queued for phase 2.
   detail::parallel_for(jobs, options.threads, [&](long job, int worker) {
@@ -429,7 +361,7 @@ void Analyzer::Impl::retry_joint(RunState& run, int job, int worker) {
   const double diag = run.diag;
   const std::vector<std::uint8_t>& retry = run.retry;
   const std::vector<double>& reach = run.reach;
-  const RegionOptions ro = deferred(options);
+  const RegionOptions ro(options);
   const int first = job_section[job];
   const SectionSpec& spec = specs[first];
   const int bone = spec.bone;
@@ -470,7 +402,7 @@ void Analyzer::Impl::retry_family(RunState& run, int job, int worker) {
   const double diag = run.diag;
   const std::vector<std::uint8_t>& retry = run.retry;
   const std::vector<double>& reach = run.reach;
-  const RegionOptions ro = deferred(options);
+  const RegionOptions ro(options);
   const int first = job_section[job];
   const int b = job_bone[job];
   const PlaneFrame base = PlaneFrame::make(sk.heads[b], sk.direction(b));

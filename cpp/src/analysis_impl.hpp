@@ -9,8 +9,7 @@
 //   analysis_reuse.cpp          Impl::mark_dirty, Impl::reuse_last_run (list_moved_faces,
 //                               list_bone_vertices), Impl::remember_inputs
 //   analysis_cut.cpp            Impl::prepare_cuts (bone_reach2), Impl::cut_local (phase 1),
-//                               Impl::cut_retries (phase 2), Impl::print_sections (the printed
-//                               sections of both phases, one pass on all workers)
+//                               Impl::cut_retries (phase 2)
 //   analysis_junction.cpp       Impl::find_junction_cores
 //   analysis_loads.cpp          Impl::compute_loads
 //   analysis_vertex_stress.cpp  Impl::compute_vertex_stress
@@ -116,11 +115,6 @@ struct SectionState {
   double skin_area = 0.0;      // mm^2
   double infill_area = 0.0;    // mm^2
   std::vector<std::vector<Vec3>> infill_loops;  // keep_outlines: the sparse region's loops, 3D mm
-  // Set by a deferred set_section_region (RegionOptions::defer_print): W and the areas are still
-  // the cut's; Impl::print_sections computes the printed section from the region's properties
-  // kept here (not computed twice) and clears it.
-  bool print_pending = false;
-  SectionProperties print_props;
 };
 
 /// What set_section_region needs of the options: keep the loops, and how the part is printed.
@@ -132,9 +126,6 @@ struct RegionOptions {
   bool keep = false;
   const PrintOptions* print = nullptr;  // null: solid (the section as cut, no print code runs)
   Vec3 build = Vec3::UnitZ();           // unit build direction
-  // The cuts' stages: the printed section is left to Impl::print_sections (one pass over all
-  // sections on all workers, the costliest first), the rest is set as for a solid print.
-  bool defer_print = false;
 };
 
 /// Sets a found section's properties (area, W, centroid, thin axis, aspect, thickness and, with
@@ -142,7 +133,7 @@ struct RegionOptions {
 /// when the region is degenerate. The thickness is left NaN (the region and a lower bound of
 /// its thickness are kept): section_thickness_at computes it when it is needed.
 /// With a print (`ro.print`), W is the printed section's (printed_section.hpp), solid_modulus
-/// the cut's; with `ro.defer_print` as well, W is the cut's and st.print_pending is set.
+/// the cut's.
 bool set_section_region(SectionState& st, const PlaneFrame& frame, const SectionPolygon& polygon,
                         const RegionOptions& ro);
 
@@ -384,8 +375,6 @@ struct Analyzer::Impl {
   void find_loose_pieces_and_arms(RunState& run);
   void retry_joint(RunState& run, int job, int worker);
   void retry_family(RunState& run, int job, int worker);
-  /// 3c'. The printed sections of the sections cut in 3b and 3c (print_pending), on all workers.
-  void print_sections(RunState& run);
   /// 3d. Junctions (docs/method.md, Sections; docs/junctions.md): sections whose whole cut is
   /// much larger than their bone's typical section are re-cut at +-delta; where only a core
   /// continues through the plane, the section's properties are the core's (flag kFlagJunction).

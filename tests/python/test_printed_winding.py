@@ -47,11 +47,12 @@ def _printed_fields(a):
                                                 "section_solid_modulus") + AREAS]
 
 
-def test_printed_sections_pass_same_on_any_worker_count_and_live():
-    """The printed sections are computed in one pass after the cuts, the costliest first on all
-    workers (analysis_cut.cpp, print_sections): every printed field and the sparse loops are the
-    same bits with one or two workers, and a live Analyzer's re-run after a local edit gives a
-    fresh analysis's bits (its reused sections keep the printed results of the run before)."""
+def test_printed_sections_same_on_any_worker_count_and_live():
+    """The printed sections are computed inside the cuts, on whichever worker cuts their family
+    (docs/performance.md, "The printed section's cost"): every printed field and the sparse loops
+    are the same bits with one or two workers, and a live Analyzer's re-run after a local edit
+    gives a fresh analysis's bits (its reused sections keep the printed results of the run
+    before)."""
     v, f, sk, w = load("arm")
     profile = osteon.PrintProfile.fdm()
     one = osteon.analyze(v, f, sk, w, interval=4.0, threads=1, print_profile=profile,
