@@ -8,7 +8,9 @@ Every rigged model of tests/data (bench/printed_models.py's list) at h = 2 and 8
 thread, with PrintProfile.fdm(), fdm(infill=0) and resin_hollow(2): each section's printed W
 (section_modulus), wall, skin and infill areas. --against prints, per model, profile and h, the
 largest difference relative to the section's solid W (for W) or its solid area (for the areas:
-wall + skin + infill), and exits 1 when one exceeds --tol. --models N takes the first N models.
+wall + skin + infill), and exits 1 when one exceeds --tol, and counts the arrays that are not
+equal bit for bit. --models N takes the first N models; --threads N analyses with N workers
+(default 1: the base and the changed build may use different counts).
 --clipper: the reference is this build with OSTEON_PRINTED_CLIPPER=1 (the walls' inset, skins
 and islands by Clipper2's own passes, as before winding_region), in the same process.
 """
@@ -36,7 +38,8 @@ FIELDS = ("section_modulus", "section_wall_area", "section_skin_area", "section_
 INTERVALS_MM = (2.0, 8.0)
 
 
-def printed_sections(models: int | None, clipper: bool = False) -> dict[str, np.ndarray]:
+def printed_sections(models: int | None, clipper: bool = False,
+                     threads: int = 1) -> dict[str, np.ndarray]:
     """Each model, h and profile's printed sections; `clipper`: by Clipper2's passes only."""
     if clipper:
         os.environ["OSTEON_PRINTED_CLIPPER"] = "1"
@@ -50,7 +53,7 @@ def printed_sections(models: int | None, clipper: bool = False) -> dict[str, np.
             m.heads, m.tails, m.parents, m.bone_names)
         for h in INTERVALS_MM:
             for pname, profile in PROFILES.items():
-                a = osteon.analyze(v, f, sk, m.weights, interval=h, threads=1,
+                a = osteon.analyze(v, f, sk, m.weights, interval=h, threads=threads,
                                    print_profile=profile)
                 key = f"{name}|{pname}|{h:g}"
                 for field in FIELDS + ("section_solid_modulus",):
@@ -90,6 +93,8 @@ def compare(base: dict, new: dict, tol: float) -> bool:
         ok &= over == 0
         print(f"| {key.replace('|', ' | ')} | {len(ws)} | {dw.max(initial=0):.2e} | "
               f"{da.max(initial=0):.2e} | {over} |")
+    same = sum(np.array_equal(base[k], new[k], equal_nan=True) for k in base if k in new)
+    print(f"{len(base) - same} of {len(base)} arrays differ bit for bit")
     return ok
 
 
@@ -100,12 +105,14 @@ def main(argv=None) -> int:
     ap.add_argument("--models", type=int, default=None)
     ap.add_argument("--clipper", action="store_true")
     ap.add_argument("--tol", type=float, default=1e-6)
+    ap.add_argument("--threads", type=int, default=1)
     args = ap.parse_args(argv)
     if (args.write is not None) + (args.against is not None) + args.clipper != 1:
         ap.error("give one of --write FILE, --against FILE, --clipper")
-    data = printed_sections(args.models)
+    data = printed_sections(args.models, threads=args.threads)
     if args.clipper:
-        return 0 if compare(printed_sections(args.models, clipper=True), data, args.tol) else 1
+        reference = printed_sections(args.models, clipper=True, threads=args.threads)
+        return 0 if compare(reference, data, args.tol) else 1
     if args.write:
         np.savez_compressed(args.write, **data)
         print(f"wrote {len(data)} arrays to {args.write}")
