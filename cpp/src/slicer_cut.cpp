@@ -243,7 +243,8 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
   // Face f (mesh vertex indices) whose corners' heights are ht[e[0..2]].
   auto cut_face = [&](const std::int32_t* f, const std::int32_t* e) {
     const std::int32_t b[3] = {bk[e[0]], bk[e[1]], bk[e[2]]};
-    if (b[0] == b[1] && b[1] == b[2]) return;  // most faces: between two planes
+    // Most faces lie between two planes: one test, nothing else computed first.
+    if (((b[0] ^ b[1]) | (b[1] ^ b[2])) == 0) return;
     const std::int32_t lo = std::max(std::min({b[0], b[1], b[2]}), first - 1);
     const std::int32_t hi = std::min(std::max({b[0], b[1], b[2]}), last);
     for (std::int32_t k = lo + 1; k <= hi; ++k) {
