@@ -24,10 +24,10 @@ inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
 // The segment keeps the face's orientation: it runs from the edge that goes down (above to below
 // in the face's winding) to the edge that goes up, so that a closed outward-facing surface gives
 // counter-clockwise loops in (u, v) and an inward-facing one clockwise loops.
-// `world` receives the endpoints in mesh coordinates (mm), for region tests.
+// `world` (when not null) receives the endpoints in mesh coordinates (mm), for region tests.
 inline void emit_segment(const MeshView& mesh, const PlaneFrame& plane, const std::int32_t* f,
                          const bool above[3], const double height[3], CutSegment& seg,
-                         Vec3 world[2]) {
+                         Vec3* world) {
   for (int e = 0; e < 3; ++e) {
     const int i = e, j = (e + 1) % 3;
     if (above[i] == above[j]) continue;
@@ -41,7 +41,7 @@ inline void emit_segment(const MeshView& mesh, const PlaneFrame& plane, const st
                  pi[2] + lambda * (pj[2] - pi[2]));
     seg.edge[n] = edge_key(f[i], f[j]);
     seg.point[n] = plane.to_plane(p);
-    world[n] = p;
+    if (world != nullptr) world[n] = p;
   }
 }
 

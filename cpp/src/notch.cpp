@@ -355,8 +355,7 @@ inline void keep_crossing(const MeshView& mesh, const PlaneFrame& plane, const s
   const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
   if (above[0] == above[1] && above[1] == above[2]) return;
   CutSegment seg;
-  Vec3 world[2];
-  detail::emit_segment(mesh, plane, f, above, height, seg, world);
+  detail::emit_segment(mesh, plane, f, above, height, seg, nullptr);
   if (window == nullptr || window->contains(seg.point[0]) || window->contains(seg.point[1]))
     out.push_back(seg);
 }

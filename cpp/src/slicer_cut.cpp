@@ -161,10 +161,14 @@ void cut_mesh(const MeshView& mesh, const PlaneFrame& plane, std::vector<CutSegm
   auto cut_face_at = [&](const std::int32_t* f, double height[3]) {
     const bool above[3] = {height[0] >= 0.0, height[1] >= 0.0, height[2] >= 0.0};
     if (above[0] == above[1] && above[1] == above[2]) return;
+    if (!filtered) {  // written in place: no copy, no mesh-coordinate endpoints
+      emit_segment(mesh, plane, f, above, height, out.emplace_back(), nullptr);
+      return;
+    }
     CutSegment seg;
     Vec3 world[2];
     emit_segment(mesh, plane, f, above, height, seg, world);
-    if (!filtered || filter.keeps(world)) out.push_back(seg);
+    if (filter.keeps(world)) out.push_back(seg);
   };
   auto cut_face = [&](const std::int32_t* f) {
     double height[3];
@@ -239,7 +243,8 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
   // Face f (mesh vertex indices) whose corners' heights are ht[e[0..2]].
   auto cut_face = [&](const std::int32_t* f, const std::int32_t* e) {
     const std::int32_t b[3] = {bk[e[0]], bk[e[1]], bk[e[2]]};
-    if (b[0] == b[1] && b[1] == b[2]) return;  // most faces: between two planes
+    // Most faces lie between two planes: one test, nothing else computed first.
+    if (((b[0] ^ b[1]) | (b[1] ^ b[2])) == 0) return;
     const std::int32_t lo = std::max(std::min({b[0], b[1], b[2]}), first - 1);
     const std::int32_t hi = std::min(std::max({b[0], b[1], b[2]}), last);
     for (std::int32_t k = lo + 1; k <= hi; ++k) {
@@ -251,10 +256,8 @@ void cut_mesh_parallel(const MeshView& mesh, const PlaneFrame& plane, double spa
         above[j] = b[j] >= k;
         h[j] = ht[e[j]] - c;
       }
-      CutSegment seg;
-      Vec3 world[2];
-      emit_segment(mesh, plane, f, above, h, seg, world);
-      out[k - 1].push_back(seg);
+      // Written in place (no copy); the mesh-coordinate endpoints are not needed here.
+      emit_segment(mesh, plane, f, above, h, out[k - 1].emplace_back(), nullptr);
     }
   };
   if (grid == nullptr) {
