@@ -19,7 +19,9 @@ neighbourhood is ``osteon.fem.peaks``'s docstring):
   the section's two neighbour planes (±h), its connected piece, away from the load point (r) and
   the clamp (2 r).
 * osteon's claim in that slab: the largest governing stress of the same bone's sections whose
-  centres lie within h (+1 µm) of the plane along its normal (the section and its neighbours):
+  centres lie within h (+1 µm) of the plane along its normal (the section and its neighbours;
+  and, a fix made after the first table was printed, within 2 r of its centre across the normal:
+  a bone's sections elsewhere, e.g. the rig's s105 on bone_3, are not neighbours):
   a corner between two planes is claimed by the section on its thin side, which may be the
   neighbour. ratio = claim / FEM by the corner.
 * the corner's radius on the mesh: the radius osteon measures with ``min_notch_radius`` 0.01 mm
@@ -27,6 +29,10 @@ neighbourhood is ``osteon.fem.peaks``'s docstring):
   the mesh is refined); larger = a finite radius. For a section without a corner in its slab:
   none.
 * the verdict (issue 33): a row whose claimed corner has a finite radius fails when ratio < 0.85.
+  (Added after the first four rows were read, and said so in docs/validation.md: a section with
+  a finite corner of its own is judged by its own governing stress against FEM by the corner,
+  not by a neighbour's larger claim, when that neighbour's corner is a crease; the fish's tail
+  stem s62 has its own 2.48 mm corner, its neighbour s63 a crease.)
 """
 
 from __future__ import annotations
@@ -43,6 +49,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 CACHE = Path(__file__).with_name("fem_corners.json")
+#: FEM's corner peak counts as converged when r/3 -> r/6 changes it by at most this (judgement,
+#: set after the first refinements were read: the studies' smooth fillets moved 1-3 %; the
+#: tested creases here 12-49 %)
+CONVERGED = 0.10
 HIS = "Hyperspectral-Inverse-Skinning/"
 MODELS = {  # name: validate's arguments (docs/validation.md's commands)
     "arm": ["libigl-tutorial-data/arm.obj"],
@@ -125,14 +135,14 @@ def commit():
 def run_fem(args):
     from osteon import fem
 
-    if args.model == "rig" or args.model is None:
+    if args.model is None or "rig" in args.model.split(","):
         rig = Path(args.rig)
         if not (rig / "junction_rig.obj").exists():
             subprocess.run([sys.executable, str(ROOT / "bench" / "make_junction_rig.py"),
                             str(rig)], check=True)
     models = {}
     for name, index, _ in ROWS:
-        if args.model is not None and name != args.model:
+        if args.model is not None and name not in args.model.split(","):
             continue
         if args.only is not None and index not in args.only:
             continue
@@ -146,7 +156,7 @@ def run_fem(args):
         t0 = time.time()
         rep = fem.cross_check(model.vertices, model.faces, sec, force=20.0,
                               hold_point=fem.hold_point(a, model.heads), threads=args.threads,
-                              fine_factor=args.fine)
+                              fine_factor=args.fine, mesh_timeout_s=args.timeout)
         row = ({"failed": rep.failed} if not rep.sections else rep.sections[0].as_dict())
         row.update(seconds=round(time.time() - t0, 1), commit=commit(), nodes_total=rep.nodes)
         cache = load_cache()
@@ -165,7 +175,11 @@ def slab_claim(a, i):
     n = np.asarray(a.section_normal[i], float)
     h = float(a.interval)
     same = np.nonzero(bone == bone[i])[0]
-    near = same[np.abs((c[same] - c[i]) @ n) <= h + 1e-3]
+    d = c[same] - c[i]
+    along = d @ n
+    across = np.linalg.norm(d - np.outer(along, n), axis=1)
+    r = np.sqrt(float(a.section_area[i]) / np.pi)
+    near = same[(np.abs(along) <= h + 1e-3) & (across <= 2.0 * r)]
     near = near[np.isfinite(np.asarray(a.stress)[near])]
     j = int(near[np.argmax(np.asarray(a.stress)[near])])
     return float(a.stress[j]), j
@@ -179,8 +193,8 @@ def table(args):
     cache = load_cache()
     analyses = {}
     print("| model | row | section (bone) | nominal MPa | Kt | r mm (raw) | governing MPa | FEM "
-          "plane MPa | governing / plane | claim in slab MPa (section) | slab's corner: Kt, r mm "
-          "(raw) | FEM corner r/3 MPa (offset mm) | r/6 | claim / corner | finite radius |")
+          "plane MPa | governing / plane | FEM corner r/3 MPa (σ_nn; offset mm) | r/6 | governing / "
+          "corner | claim in slab MPa (section: Kt, r mm (raw)) | claim / corner | corner |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     verdict = []
     for name, i, label in ROWS:
@@ -202,35 +216,58 @@ def table(args):
         r_j, r_raw_j = float(a.notch_radius[j]), float(raw.notch_radius[j])
         corner = row["fem_corner_peak_mpa"]
         fine = cache.get(key(name, i, 6))
-        fine_txt = fmt(fine["fem_corner_peak_mpa"]) if fine and "failed" not in fine else "—"
-        ref = fine["fem_corner_peak_mpa"] if fine and "failed" not in fine else corner
-        ratio = claim / ref
-        has_corner = kt_j > 1.0
-        finite = has_corner and r_raw_j > 0.0101
+        fine_ok = fine is not None and "failed" not in fine
+        ref = fine["fem_corner_peak_mpa"] if fine_ok else corner
         gov = float(a.stress[i])
+        own = float(a.stress_concentration[i]) > 1.0
+        own_finite = own and float(raw.notch_radius[i]) > 0.0101
+        slab_finite = kt_j > 1.0 and r_raw_j > 0.0101
+        # judged: a section with a finite corner of its own by its own governing stress; else,
+        # one whose slab holds a neighbour's finite corner by the slab's claim
+        if own_finite:
+            status, ratio = "own, finite", gov / ref
+        elif slab_finite:
+            status, ratio = f"s{j}'s, finite", claim / ref
+        elif own or kt_j > 1.0:
+            status, ratio = "crease", None
+        else:
+            status, ratio = "none", None
+        if fine_ok:
+            grow = ref / corner - 1.0
+            status += f"; FEM r/3 → r/6 {100 * grow:+.0f} %"
+            if grow > CONVERGED and ratio is not None:
+                # FEM's peak does not converge: a crease on the mesh, whatever osteon's fit reads
+                status, ratio = status + ": not converged (a crease on the mesh)", None
+        elif ratio is not None:
+            status += "; not refined"
         print(f"| {name} | {label} | s{i} ({bone}) | {a.nominal_stress[i]:.2f} | "
               f"{a.stress_concentration[i]:.2f} | {fmt(a.notch_radius[i])} "
               f"({fmt(raw.notch_radius[i])}) | {gov:.2f} | {row['fem_stress_mpa']:.2f} | "
-              f"{gov / row['fem_stress_mpa']:.2f} | {claim:.2f} (s{j}) | "
-              + (f"{kt_j:.2f}, {fmt(r_j)} ({fmt(r_raw_j)})" if has_corner else "none")
-              + f" | {corner:.2f} ({row['fem_corner_offset_mm']:+.1f}) | {fine_txt} | "
-              f"{ratio:.2f} | {'yes' if finite else 'crease' if has_corner else 'no corner'} |")
-        if finite:
+              f"{gov / row['fem_stress_mpa']:.2f} | {corner:.2f} "
+              f"({row['fem_corner_sigma_nn_mpa']:.2f}; {row['fem_corner_offset_mm']:+.1f}) | "
+              f"{fmt(fine['fem_corner_peak_mpa']) if fine_ok else '—'} | {gov / ref:.2f} | "
+              f"{claim:.2f} (s{j}" + (f": {kt_j:.2f}, {fmt(r_j)} ({fmt(r_raw_j)})" if kt_j > 1
+                                      else "") + f") | {claim / ref:.2f} | {status}"
+              + ("" if ratio is None else " **under**" if ratio < 0.85 else "") + " |")
+        if ratio is not None:
             verdict.append((name, i, ratio))
     bad = [v for v in verdict if v[2] < 0.85]
-    print(f"\nRows whose claimed corner has a finite radius: {len(verdict)}; more than 15 % under "
-          f"FEM by the corner: {len(bad)} " + ", ".join(f"{n} s{i} ({r:.2f})" for n, i, r in bad))
+    print(f"\nRows judged (a finite corner radius, own or in the slab, FEM converged or not "
+          f"refined): {len(verdict)}; more "
+          f"than 15 % under FEM by the corner: {len(bad)} "
+          + ", ".join(f"{n} s{i} ({r:.2f})" for n, i, r in bad))
     return 0
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("step", choices=["fem", "table"])
-    ap.add_argument("--model", choices=sorted(MODELS), default=None)
+    ap.add_argument("--model", default=None, help="models, comma-separated (default: all)")
     ap.add_argument("--only", type=int, action="append", default=None, help="section index")
     ap.add_argument("--fine", type=float, default=3.0, help="fem: elements r/FINE (3, or 6)")
     ap.add_argument("--again", action="store_true")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--timeout", type=float, default=120.0, help="fem: gmsh's limit per attempt, s")
     ap.add_argument("--rig", default="/tmp/osteon_junction_rig")
     args = ap.parse_args(argv)
     return run_fem(args) if args.step == "fem" else table(args)

@@ -217,6 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--fem cross-check section stresses with gmsh + CalculiX.",
     )
     _add_common(pv)
+    add_notch_options(pv)
     pv.add_argument(
         "--fem",
         action="store_true",

@@ -154,7 +154,7 @@ def find_load_point(vertices, center, normal, moment_arm):
 #: what a section dict passes through to its report row (pick.py's keys)
 _PASSED = ("tier", "slenderness", "end_distance", "nodes", "elements", "surface", "clamp_distance",
            "junction", "osteon_cut_stress", "nominal_stress", "stress_concentration",
-           "notch_radius", "flags", "interval")
+           "notch_radius", "flags", "interval", "area")
 
 
 def _corner_reading(s, nodes, tets, S3, force, c, n, lp):

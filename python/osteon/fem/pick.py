@@ -66,9 +66,10 @@ def pick_sections(
 
     junction_bit = int(SECTION_FLAGS["junction"]) if junctions else 0
     if flags is not None and notch:
-        fl = np.asarray(flags)
+        fl = np.asarray(flags).astype(np.int64)
         nb = int(SECTION_FLAGS["notch"])
-        base &= ((fl & nb) != 0) & ((fl & ~(nb | int(SECTION_FLAGS["junction"]))) == 0)
+        base &= ((fl & nb) != 0) & ((fl | nb | int(SECTION_FLAGS["junction"]))
+                                    == nb | int(SECTION_FLAGS["junction"]))
     elif flags is not None:
         base &= np.asarray(flags) == junction_bit
     elif junctions or notch:
