@@ -167,6 +167,7 @@ def _corner_reading(s, nodes, tets, S3, force, c, n, lp):
         "fem_corner_peak_mpa": got["peak_mpa"],
         "fem_corner_peak_at_mm": got["peak_at_mm"],
         "fem_corner_offset_mm": got["peak_offset_mm"],
+        "fem_corner_angle_deg": got["peak_angle_deg"],
         "fem_corner_sigma_nn_mpa": got["sigma_nn_mpa"],
         "corner_slab_nodes": got["slab_nodes"],
     }

@@ -123,7 +123,8 @@ def corner_peak(nodes, tets, S3, center, normal, half_width, force, load_point=N
                 exclude_load=0.0, clamp=None, exclude_clamp=0.0):
     """FEM's corner reading of a section (module docstring): a dict with ``peak_mpa`` (largest
     principal stress, worst force direction, over the slab's nodes, × ``force``), ``peak_at_mm``
-    (where), ``peak_offset_mm`` (its signed distance from the plane along ``normal``),
+    (where), ``peak_offset_mm`` (its signed distance from the plane along ``normal``), ``peak_angle_deg``
+    (the angle between its principal direction and ``normal``, 0 = along the bone),
     ``sigma_nn_mpa`` (the largest |σ_nn| there, worst direction) and ``slab_nodes``. NaN values
     when the slab holds no node."""
     ids = slab_nodes(nodes, tets, center, normal, half_width, load_point, exclude_load, clamp,
@@ -131,6 +132,7 @@ def corner_peak(nodes, tets, S3, center, normal, half_width, force, load_point=N
     nan = float("nan")
     if len(ids) == 0:
         return {"peak_mpa": nan, "peak_at_mm": [nan] * 3, "peak_offset_mm": nan,
+                "peak_angle_deg": nan,
                 "sigma_nn_mpa": nan, "slab_nodes": 0}
     from .sections import _sigma_nn
 
@@ -141,7 +143,13 @@ def corner_peak(nodes, tets, S3, center, normal, half_width, force, load_point=N
     k = int(np.argmax(p))
     g = _sigma_nn(S3, n)  # (3, M)
     x = nodes[ids[k]]
+    # the peak's principal direction: v maximising ‖(vᵀS_k v)_k‖ at that node
+    V = _sphere(4000)
+    W = np.stack([V[:, 0] ** 2, V[:, 1] ** 2, V[:, 2] ** 2, 2 * V[:, 0] * V[:, 1],
+                  2 * V[:, 1] * V[:, 2], 2 * V[:, 2] * V[:, 0]], axis=1)
+    v = V[int(np.argmax(np.linalg.norm(W @ S3[:, k, :].T, axis=1)))]
     return {
+        "peak_angle_deg": float(np.degrees(np.arccos(min(1.0, abs(float(v @ n)))))),
         "peak_mpa": float(p[k] * force),
         "peak_at_mm": [float(v) for v in x],
         "peak_offset_mm": float((x - np.asarray(center, float)) @ n),
