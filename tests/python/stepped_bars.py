@@ -102,6 +102,7 @@ def mesh_shape(step, rel_r, dim, fine_div):
 
 
 def fem_peak(step, rel_r, fine_div, workdir):
+    from osteon.fem.peaks import max_principal
     from osteon.fem.solve import solve
 
     big, small = step * D_SMALL, D_SMALL
@@ -115,13 +116,7 @@ def fem_peak(step, rel_r, fine_div, workdir):
     rad = np.hypot(nodes[:, 0], nodes[:, 1])
     zone = ((nodes[:, 2] > -0.1 * radius) & (nodes[:, 2] < 1.1 * radius)
             & (rad < small / 2 + 1.1 * radius) & (rad > small / 2 - 0.05 * small))
-    tensors = np.zeros((zone.sum(), 3, 3))
-    s = S[zone]
-    tensors[:, 0, 0], tensors[:, 1, 1], tensors[:, 2, 2] = s[:, 0], s[:, 1], s[:, 2]
-    tensors[:, 0, 1] = tensors[:, 1, 0] = s[:, 3]
-    tensors[:, 1, 2] = tensors[:, 2, 1] = s[:, 4]
-    tensors[:, 0, 2] = tensors[:, 2, 0] = s[:, 5]
-    principal = np.linalg.eigvalsh(tensors)[:, -1]
+    principal = max_principal(S[zone])  # osteon.fem.peaks: the one reading code
     return float(principal.max()), len(nodes)
 
 

@@ -217,6 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--fem cross-check section stresses with gmsh + CalculiX.",
     )
     _add_common(pv)
+    add_notch_options(pv)
     pv.add_argument(
         "--fem",
         action="store_true",
@@ -234,6 +235,27 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="with --fem: test junction sections (a side branch cut, only the core counted; "
         "docs/junctions.md) instead of plain ones",
+    )
+    pv.add_argument(
+        "--notch",
+        action="store_true",
+        help="with --fem: test sections flagged notch (a corner, docs/notch.md) instead of "
+        "plain ones",
+    )
+    pv.add_argument(
+        "--section",
+        action="append",
+        metavar="ID",
+        help="with --fem: test this section, flagged or not: N (its index, as in the JSON's "
+        "section table) or BONE:N (checked to lie on BONE); repeatable; replaces the picking",
+    )
+    pv.add_argument(
+        "--fem-fine",
+        type=float,
+        default=3.0,
+        metavar="K",
+        help="with --fem: element size r/K within 3 r of each tested section (default 3; 6 "
+        "to check the mesh's convergence)",
     )
     pv.add_argument(
         "--mesh-size",

@@ -23,6 +23,7 @@ def cmd_validate(args, out):
             raise ValueError("--fem checks the solid part against FEM: use it without "
                              "--profile (or --profile solid)")
         common.check_outputs(args, "json", "png")
+        check_fem_options(args)
         allowable = settings.allowable_stress_mpa()
         model = common.load_model_of(args)
         common.print_warnings(model, args)
@@ -46,20 +47,10 @@ def cmd_validate(args, out):
 
             if not checks["watertight"]:
                 raise ValueError(f"{args.model}: the mesh is not closed; FEM needs a closed mesh")
+            secs_list = fem_sections(args, a, model)
             missing = fem.missing_tools_message("--fem")
             if missing is not None:
                 raise ValueError(missing)
-            # junctions sit near joints by nature: any distance from the bone's ends
-            junctions = getattr(args, "junctions", False)
-            tiers = ((0.0, 2.0),) if junctions else ((1.5, 3.0), (0.75, 2.0))
-            secs_list = fem.pick_sections(a, model.heads, model.tails, n=args.sections,
-                                          tiers=tiers, junctions=junctions)
-            if not secs_list:
-                raise ValueError(
-                    "no section suitable for the FEM check (all near joints, the held region, "
-                    "too stubby" + (", or no junction section with its load point >= 2 r off "
-                    "the plane)" if junctions else ")")
-                )
             t = time.perf_counter()
             fem_rep = fem.cross_check(
                 model.vertices,
@@ -70,6 +61,7 @@ def cmd_validate(args, out):
                 mesh_size=args.mesh_size,
                 threads=args.threads,
                 progress=prog.write,
+                fine_factor=args.fem_fine,
             )
             rep["fem"] = fem_rep.as_dict()
             for row in rep["fem"]["sections"] + rep["fem"]["failed_sections"]:
@@ -106,15 +98,61 @@ def cmd_validate(args, out):
     return 0
 
 
+def check_fem_options(args):
+    """One-line errors for FEM options that do not go together."""
+    chosen = getattr(args, "section", None)
+    junctions, notch = getattr(args, "junctions", False), getattr(args, "notch", False)
+    if (chosen or junctions or notch) and not args.fem:
+        raise ValueError("--section, --junctions and --notch choose the FEM check's sections: "
+                         "use them with --fem")
+    if chosen and (junctions or notch):
+        raise ValueError("--section chooses the sections itself: not with --junctions or --notch")
+    if junctions and notch:
+        raise ValueError("--junctions and --notch pick different sections: one at a time")
+    fine = getattr(args, "fem_fine", 3.0)
+    if not (np.isfinite(fine) and 1.0 <= fine <= 20.0):
+        raise ValueError(f"--fem-fine must be between 1 and 20, got {fine:g}")
+
+
+def fem_sections(args, a, model):
+    """The sections the FEM check tests: the chosen ones (``--section``), else picked."""
+    from .. import fem
+
+    chosen = getattr(args, "section", None)
+    if chosen:
+        return fem.chosen_sections(a, fem.parse_section_ids(chosen, list(a.bone_names)))
+    # junctions and corners sit near joints by nature: any distance from the bone's ends
+    junctions = getattr(args, "junctions", False)
+    notch = getattr(args, "notch", False)
+    tiers = ((0.0, 2.0),) if junctions or notch else ((1.5, 3.0), (0.75, 2.0))
+    secs_list = fem.pick_sections(a, model.heads, model.tails, n=args.sections, tiers=tiers,
+                                  junctions=junctions, notch=notch)
+    if not secs_list:
+        why = (", or no junction section with its load point >= 2 r off the plane)" if junctions
+               else ", or no notch section with its load point >= 2 r off the plane)" if notch
+               else ")")
+        raise ValueError("no section suitable for the FEM check (all near joints, the held "
+                         "region, too stubby" + why)
+    return secs_list
+
+
 def format_fem_table(rep, bone_names):
-    head = f"{'#':>2} {'bone':<22} {'arm mm':>7} {'osteon MPa':>11} {'FEM MPa':>9} {'error':>7}"
+    head = (f"{'#':>2} {'sec':>4} {'bone':<18} {'arm mm':>7} {'Kt':>5} {'osteon MPa':>11} "
+            f"{'FEM MPa':>9} {'error':>7} {'corner':>8} {'error':>7}")
     lines = [head, "-" * len(head)]
     for i, s in enumerate(rep.sections, 1):
         name = bone_names[s.bone] if 0 <= s.bone < len(bone_names) else str(s.bone)
+        peak = float(s.extra.get("fem_corner_peak_mpa", float("nan")))
+        corner = (f"{peak:>8.2f} {100 * (s.osteon_stress_mpa - peak) / peak:>+6.1f}%"
+                  if np.isfinite(peak) and peak > 0 else f"{'—':>8} {'':>7}")
         lines.append(
-            f"{i:>2} {name[:22]:<22} {s.moment_arm_mm:>7.1f} {s.osteon_stress_mpa:>11.2f} "
-            f"{s.fem_stress_mpa:>9.2f} {100 * s.rel_error:>+6.1f}%"
+            f"{i:>2} {s.index:>4} {name[:18]:<18} {s.moment_arm_mm:>7.1f} "
+            f"{s.extra.get('stress_concentration', 1.0):>5.2f} {s.osteon_stress_mpa:>11.2f} "
+            f"{s.fem_stress_mpa:>9.2f} {100 * s.rel_error:>+6.1f}% {corner}"
         )
+    lines.append("FEM = the worst σ_nn on the section's plane; corner = the largest principal "
+                 "stress within one interval of it (docs/validation.md); error = (osteon − FEM) "
+                 "/ FEM")
     for f in rep.failed:
         name = bone_names[f["bone"]] if 0 <= f["bone"] < len(bone_names) else str(f["bone"])
         lines.append(f" - {name[:22]:<22} FEM failed: {f['reason'][:60]}")

@@ -20,7 +20,9 @@ Units: mm, N, M
 
 Modules (one job each): ``tools`` (finding gmsh and ccx), ``mesh`` (tet meshing), ``crop``
 (cutting the body part around a section), ``solve`` (CalculiX), ``sections`` (σ_nn on a section
-plane), ``crosscheck`` (the pipeline and its report), ``pick`` (which sections to test).
+plane), ``crosscheck`` (the pipeline and its report), ``pick`` (which sections to test), ``peaks`` (FEM's
+peak by a corner, off the plane: the largest principal stress in the slab between the
+neighbour planes, worst force direction; docs/validation.md "Corners (issue 33)").
 """
 
 from .crop import crop_mesh
@@ -33,7 +35,8 @@ from .crosscheck import (
     surface_node_ids,
 )
 from .mesh import read_msh2, tet_mesh
-from .pick import hold_point, pick_sections
+from .peaks import corner_peak, max_principal, worst_principal
+from .pick import chosen_sections, hold_point, parse_section_ids, pick_sections, section_dict
 from .sections import section_cut
 from .solve import read_frd_stress, solve
 from .tools import find_tools, missing_tools_message
@@ -41,18 +44,24 @@ from .tools import find_tools, missing_tools_message
 __all__ = [
     "FemReport",
     "FemSection",
+    "chosen_sections",
+    "corner_peak",
     "crop_mesh",
     "cross_check",
     "find_load_point",
     "find_tools",
     "hold_point",
     "load_nodes",
+    "max_principal",
     "missing_tools_message",
+    "parse_section_ids",
     "pick_sections",
     "read_frd_stress",
     "read_msh2",
     "section_cut",
+    "section_dict",
     "solve",
     "surface_node_ids",
     "tet_mesh",
+    "worst_principal",
 ]

@@ -13,6 +13,7 @@ import numpy as np
 
 from .crop import crop_mesh
 from .mesh import tet_mesh
+from .peaks import corner_peak
 from .sections import section_cut
 from .solve import solve
 
@@ -150,6 +151,28 @@ def find_load_point(vertices, center, normal, moment_arm):
     return vertices[cand[0]]
 
 
+#: what a section dict passes through to its report row (pick.py's keys)
+_PASSED = ("tier", "slenderness", "end_distance", "nodes", "elements", "surface", "clamp_distance",
+           "junction", "osteon_cut_stress", "nominal_stress", "stress_concentration",
+           "notch_radius", "flags", "interval", "area")
+
+
+def _corner_reading(s, nodes, tets, S3, force, c, n, lp):
+    """FEM's corner reading (peaks.py's definition) in the slab of ±``s["interval"]`` mm."""
+    area = float(s.get("area") or 0.0)
+    r = float(np.sqrt(area / np.pi)) if area > 0 else 0.0
+    got = corner_peak(nodes, tets, S3, c, n, float(s["interval"]), force, load_point=lp,
+                      exclude_load=r, clamp=s.get("clamp_plane"), exclude_clamp=2.0 * r)
+    return {
+        "fem_corner_peak_mpa": got["peak_mpa"],
+        "fem_corner_peak_at_mm": got["peak_at_mm"],
+        "fem_corner_offset_mm": got["peak_offset_mm"],
+        "fem_corner_angle_deg": got["peak_angle_deg"],
+        "fem_corner_sigma_nn_mpa": got["sigma_nn_mpa"],
+        "corner_slab_nodes": got["slab_nodes"],
+    }
+
+
 def _finish_section(rep, k, s, nodes, tets, S3, force, keep_field=False):
     c = np.asarray(s["center"], float)
     n = np.asarray(s["normal"], float)
@@ -157,6 +180,9 @@ def _finish_section(rep, k, s, nodes, tets, S3, force, keep_field=False):
     P, G = section_cut(nodes, tets, c, n, S3)
     fem = float(np.max(np.linalg.norm(G, axis=0))) * force if G.shape[1] else float("nan")
     lp = np.asarray(s["load_point"], float)
+    extra = {k2: s[k2] for k2 in _PASSED if k2 in s}
+    if s.get("interval"):
+        extra.update(_corner_reading(s, nodes, tets, S3, force, c, n, lp))
     rep.sections.append(
         FemSection(
             index=int(s.get("index", k)),
@@ -169,21 +195,7 @@ def _finish_section(rep, k, s, nodes, tets, S3, force, keep_field=False):
             osteon_stress_mpa=float(s["osteon_stress"]),
             fem_stress_mpa=fem,
             cut_points=int(G.shape[1]),
-            extra={
-                k2: s[k2]
-                for k2 in (
-                    "tier",
-                    "slenderness",
-                    "end_distance",
-                    "nodes",
-                    "elements",
-                    "surface",
-                    "clamp_distance",
-                    "junction",
-                    "osteon_cut_stress",
-                )
-                if k2 in s
-            },
+            extra=extra,
         )
     )
     if keep_field:
@@ -376,7 +388,7 @@ def _cross_check_crop(rep, run: _Run, clamp_distance):
             continue
         finally:
             rep.solve_seconds += time.perf_counter() - t1
-        sec = dict(sec, nodes=len(nodes), elements=len(tets))
+        sec = dict(sec, nodes=len(nodes), elements=len(tets), clamp_plane=(origin, n))
         _finish_section(rep, k, sec, nodes, tets, S, run.force, run.keep_field)
         rep.mesh_size_mm = max(rep.mesh_size_mm, float(h))
 
