@@ -53,9 +53,9 @@ def _scaled_rows(s) -> bool:
 def row_columns(context, s) -> tuple[float, float, int]:
     """(name share of a result row, its width in px, number of number columns): the name
     gets what the fixed narrow number columns leave (stress / allowable, and the scale once
-    Correct has scaled a bone)."""
+    Correct has scaled a bone). The list lives in the Results sub-panel: its indent counts."""
     scale = widgets._scale(context)
-    width = widgets.text_width_px(context) - LIST_MARGIN * scale
+    width = widgets.text_width_px(context) - (LIST_MARGIN + widgets.SUBPANEL_INDENT) * scale
     ncols = 2 if _scaled_rows(s) else 1
     numbers = ncols * NUMBER_COLUMN * scale
     share = max(0.3, min(0.85, 1.0 - numbers / max(width, 1.0)))

@@ -7,6 +7,7 @@ LABEL_SPLIT = 0.35    # share of a labelled dropdown's row its label gets
 DEFAULT_WIDTH = 229   # px, the sidebar's default width at UI scale 1 (no region: headless)
 MARGINS = 54          # px at UI scale 1: tabs, panel borders and insets of the sidebar
 BOX_INSET = 12        # px at UI scale 1: a box's own borders
+SUBPANEL_INDENT = 4   # px at UI scale 1: a sub-panel's layout sits this much further in
 
 
 def labelled(layout, data, prop: str, label: str, search=None):
