@@ -111,17 +111,8 @@ constexpr double kMinTurn = 45.0 * kPi / 180.0;
 // generatrix and the thick side's surface beyond the fillet, in a meridian half-plane, is pi
 // less the largest turn of the profile's segments from radial over the concave run the fillet
 // lies in (chain_runs: a run ends where the profile has turned convex by more than kRunBreak in
-// total, the thick side's outer edge or a convex surface beyond; a convex vertex that the next
-// vertex turns back past, the zigzag an oblique cut makes through a faceted fillet, is not a
-// convex turn when under kZigzag). A 90-degree shoulder opens 90.
+// total, the thick side's outer edge or a convex surface beyond). A 90-degree shoulder opens 90.
 constexpr double kRunBreak = 5.0 * kPi / 180.0;
-// The largest convex turn at one vertex taken for the facets' zigzag when the next vertex turns
-// the profile back past it (chain_runs). Judgement: twice kRunBreak, above the 4.8-5.9 degree
-// kinks an oblique cut made through round 6's elliptic fillet (meshed at r/2), far under the
-// shoulder's 90-degree outer edge; a larger convex turn is the surface's, even if the profile
-// turns back after it (on the tests/data models, single convex turns of up to 107 degrees followed
-// by a larger concave one: creases and ridges of low-poly meshes, docs/notch.md "Round 7").
-constexpr double kZigzag = 2.0 * kRunBreak;
 // Openings under 85 degrees raise Kt - 1 by a factor interpolated linearly in the opening
 // between kAcuteTable's points (degrees, factor), continued below the last with the slope of
 // the last two, down to kAcuteMin. Fitted on FEM, not taken from a source (no published law
@@ -550,15 +541,8 @@ double vertex_turn(const CutSegment& s0, const CutSegment& s1) {
 
 // The concave runs of chain j, in order: a run ends where the profile has turned convex by more
 // than kRunBreak in total since its last concave vertex (the thick side's outer edge, or a
-// convex surface beyond the corner: a fine mesh turns it a little at each vertex). A convex
-// vertex turning under kZigzag followed by a concave one that turns the profile back past the
-// direction it had before the pair (net concave over the two) is the facets' zigzag inside a
-// fillet, not a convex turn:
-// a plane cutting a triangulated fillet obliquely crosses edges that fold either way, and on
-// round 6's elliptic branch (docs/notch.md "Round 7") single such kinks reached 5.9 degrees,
-// breaking the run inside the fillet on one mirror image of the model and not on the other (4.8
-// and 5.0 degrees there). A convex edge or surface does not turn back, so it still ends the run.
-// `run_of`: each segment's run; `run_flank`: each run's
+// convex surface beyond the corner: a fine mesh turns it a little at each vertex; the facets'
+// noise inside a fillet turns less). `run_of`: each segment's run; `run_flank`: each run's
 // largest segment turn from radial towards the thin side (radians; a segment's outward normal
 // (d_t, -d_a) / |d|, its turn atan2(-n_a, n_t)).
 void chain_runs(const std::vector<CutSegment>& seg, const Chains& chains, std::size_t j,
@@ -577,20 +561,10 @@ void chain_runs(const std::vector<CutSegment>& seg, const Chains& chains, std::s
   for (std::size_t k = chains.starts[j]; k < chains.starts[j + 1]; ++k) {
     const CutSegment& s = seg[chains.items[k]];
     if (k > chains.starts[j]) {
-      const CutSegment& before = seg[chains.items[k - 1]];
-      const double turn = vertex_turn(before, s);
-      // The zigzag (a convex vertex of under kZigzag turned back past by the next one) is tested
-      // only where it would end the run: the next vertex is concave and resets the sum anyway.
-      auto turned_back = [&] {
-        if (turn >= kZigzag || k + 1 >= chains.starts[j + 1]) return false;
-        const CutSegment& after = seg[chains.items[k + 1]];
-        const Vec2 d0 = before.point[1] - before.point[0], d1 = s.point[1] - s.point[0],
-                   d2 = after.point[1] - after.point[0];
-        return d1.x() * d2.y() - d1.y() * d2.x() < 0 && d0.x() * d2.y() - d0.y() * d2.x() < 0;
-      };
+      const double turn = vertex_turn(seg[chains.items[k - 1]], s);
       if (turn < 0) {
         convex = 0;
-      } else if (convex <= kRunBreak && (convex += turn) > kRunBreak && !turned_back()) {
+      } else if (convex <= kRunBreak && (convex += turn) > kRunBreak) {
         run_flank.push_back(-3.0);
         run_best.push_back(k);
       }
