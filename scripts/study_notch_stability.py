@@ -10,6 +10,22 @@ mesh a dict with ``v`` (mm), ``f``, ``heads``, ``tails`` (Blender units, as the 
 the (V, B) CSR weights. The add-on scales the skeleton by its mm per Blender unit
 (service.engine_skeleton); the dump does not hold it, so it is recovered from the weights (the
 sample's distance weights, blender_addon/osteon_blender/sample.py, reproduced to 3e-6).
+Made in the bpy wheel's venv (scripts/blender_setup.sh) with::
+
+    .venv-bpy/bin/python - <<'PY'
+    import pickle, sys, numpy as np
+    sys.path[:0] = ["blender_addon", "tests/blender"]
+    import bpy, osteon_blender
+    from conftest import empty_scene
+    from osteon_blender import sample, service
+    osteon_blender.register(); empty_scene(); obj, arm = sample.build()
+    bpy.context.view_layer.objects.active = obj
+    assert bpy.ops.osteon.analyze() == {"FINISHED"}
+    inp = service.LAST[bpy.context.scene.name]["inputs"]; sk = inp.skeleton
+    mesh = dict(v=np.asarray(inp.vertices_mm), f=np.asarray(inp.faces), heads=np.asarray(sk.heads),
+                tails=np.asarray(sk.tails), parents=np.asarray(sk.parents), names=list(sk.names))
+    pickle.dump((mesh, inp.params, inp.weights), open("/tmp/sample_inputs.pkl", "wb"))
+    PY
 
 Each build (a directory holding an ``osteon`` package) runs in its own child process (two
 pybind11 builds cannot share one; bench/compare_builds.py's OTHER_BUILD_IMPORT). Each child
