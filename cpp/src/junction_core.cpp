@@ -628,15 +628,17 @@ bool thin_piece(const Paths64& paths, double opening, const Scaler& s) {
   return thin;
 }
 
-// The trimmed material inside `band` (the part of the section worked on, `part`, less the
-// core): a piece clear of the band's edge is a whole piece of what the section loses, and
+// The trimmed material inside `band` (the part of the section worked on, `part`, less what the
+// neighbours cover, `covered`: that is part less the core, in one operation -- see
+// junction_core): a piece clear of the band's edge is a whole piece of what the section loses, and
 // goes into `merged` when thin; a piece reaching the edge is part of one, which is a stub when
 // the part already holds a disc of 1.1 x opening (see thin_piece: the thinned erosion keeps its
 // centre). Returns false when some edge piece is no sure stub: then the pieces must be taken
 // from the whole section.
-bool add_thin_band_pieces(const Paths64& part, const Paths64& core, const Clipper2Lib::Rect64& band,
-                          double opening, const Scaler& s, Paths64& merged) {
-  Paths64 clip = core;
+bool add_thin_band_pieces(const Paths64& part, const Paths64& covered,
+                          const Clipper2Lib::Rect64& band, double opening, const Scaler& s,
+                          Paths64& merged) {
+  Paths64 clip = covered;
   Clipper2Lib::Rect64 all_box = Clipper2Lib::GetBounds(part);
   all_box.left = std::min(all_box.left, band.left);
   all_box.right = std::max(all_box.right, band.right);
@@ -743,15 +745,21 @@ SectionGeometry junction_core(
   const Paths64 core = Clipper2Lib::Intersect(part, covered, FillRule::NonZero);
   // The trimmed-off material, piece by piece: a piece is a stub (left out whole) only when it is
   // wider than 2 * opening somewhere; a thin piece (the rim of a taper, a tilted bone's
-  // crescent) goes back into the core. With no opening every trimmed piece is a stub.
+  // crescent) goes back into the core. With no opening every trimmed piece is a stub. The pieces
+  // are the section less `covered` (the same set as less the core), in one Clipper2 operation:
+  // the core's vertices where `covered` crosses the section's edges are rounded to its integer
+  // grid, up to half a unit off those edges, and the section less the core kept slivers that
+  // narrow along them, which could join a thin rim to a stub at a vertex of the section as
+  // floating-point noise fell (issue 33/16: the sample figurine's thighs, 71.1 <-> 73.7 mm^2
+  // under +-1e-6 x its size; docs/junctions.md).
   Paths64 merged = core;
   bool whole_pieces = !local;
-  if (local && opening > 0 && !add_thin_band_pieces(part, core, band, opening, s, merged)) {
+  if (local && opening > 0 && !add_thin_band_pieces(part, covered, band, opening, s, merged)) {
     whole_pieces = true;
     merged = core;
   }
   if (whole_pieces) {
-    for (const Paths64& paths : difference_pieces(whole, core))
+    for (const Paths64& paths : difference_pieces(whole, covered))
       if (thin_piece(paths, opening, s)) merged.insert(merged.end(), paths.begin(), paths.end());
   }
   return region_around_origin(merged, origin, s);
