@@ -223,6 +223,17 @@ struct FilletPoint {
   std::size_t edge_begin = 0, edge_end = 0;  // its segments' squared lengths in FilletPoints::edges
 };
 
+// Counts fillet point p into sector sums q, first pass: the sums and the largest turns (the
+// deviations' products come in a second pass, from the means).
+void add_point(SectorSums& q, const FilletPoint& p) {
+  ++q.n;
+  q.ma += p.a;
+  q.mn += p.na;
+  q.mt += p.t;
+  q.turn = std::max(q.turn, p.turn);
+  q.flank = std::max(q.flank, p.flank);
+}
+
 // The fillet points of a corner and the squared lengths of their polyline segments (mm^2), one
 // run per point.
 struct FilletPoints {
@@ -664,12 +675,7 @@ SectorSums half_plane_sums(const std::vector<const FilletPoint*>& inside,
   lengths.clear();
   for (const FilletPoint* p : inside) {
     if (p->sector != h) continue;
-    ++q.n;
-    q.ma += p->a;
-    q.mn += p->na;
-    q.mt += p->t;
-    q.turn = std::max(q.turn, p->turn);
-    q.flank = std::max(q.flank, p->flank);
+    add_point(q, *p);
     lengths.insert(lengths.end(), fillet.edges.data() + p->edge_begin,
                    fillet.edges.data() + p->edge_end);
   }
@@ -730,13 +736,7 @@ Corner corner_in(const FilletPoints& fillet, double r_thin, double lo, double hi
   for (const FilletPoint* p : inside)
     for (int j = 0; j < kSectorSpan; ++j) {
       const int sector = sector_of(p, j);
-      SectorSums& q = sums[sector];
-      ++q.n;
-      q.ma += p->a;
-      q.mn += p->na;
-      q.mt += p->t;
-      q.turn = std::max(q.turn, p->turn);
-      q.flank = std::max(q.flank, p->flank);
+      add_point(sums[sector], *p);
       edge_at[sector + 1] += p->edge_end - p->edge_begin;
     }
   for (int s = 0; s < kSectors; ++s) {
