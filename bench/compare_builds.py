@@ -128,8 +128,8 @@ print(osteon.__file__)
 def child_arrays(code: str, other: str | None, out: str) -> dict:
     """The arrays a child process saves to `out` (.npz) running `code` (which starts with
     OTHER_BUILD_IMPORT and prints osteon's file last), with the other build imported when
-    `other` is given (checked: exits if that build was not the one imported). Shared by
-    compare_corners.py and identity_x64.py."""
+    `other` is given (checked: exits if that build was not the one imported). both_dumps runs it for
+    both builds."""
     import numpy as np
 
     env = dict(os.environ)
@@ -144,19 +144,36 @@ def child_arrays(code: str, other: str | None, out: str) -> dict:
         return {k: data[k] for k in data.files}
 
 
-def identity(other: str, keep: str | None) -> int:
-    """Both builds' identity dumps compared byte for byte: 0 when every array is equal."""
+def both_dumps(other: str, keep: str | None, prefix: str, code_for) -> dict:
+    """{"this": arrays, "other": arrays}: `code_for(out)` (a child's code saving to `out`) run
+    by child_arrays with this build and with `other`, the .npz files in `keep` (kept) or a
+    temporary folder (removed)."""
     import tempfile
-
-    from identity_dump import compare, largest_relative
 
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(keep or tmp)
         folder.mkdir(parents=True, exist_ok=True)
         dumps = {}
         for name, path in (("this", None), ("other", other)):
-            out = str(folder / f"identity_{name}.npz")
-            dumps[name] = child_arrays(IDENTITY_CHILD.format(here=str(HERE), out=out), path, out)
+            out = str(folder / f"{prefix}_{name}.npz")
+            dumps[name] = child_arrays(code_for(out), path, out)
+    return dumps
+
+
+def other_build_args(doc: str, argv=None) -> argparse.Namespace:
+    """The command line of the scripts that compare this build with another: OTHER, --keep."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("other", help="PYTHONPATH entry holding the other build's osteon package")
+    ap.add_argument("--keep", help="keep both dumps (.npz) in this folder")
+    return ap.parse_args(argv)
+
+
+def identity(other: str, keep: str | None) -> int:
+    """Both builds' identity dumps compared byte for byte: 0 when every array is equal."""
+    from identity_dump import compare, largest_relative
+
+    dumps = both_dumps(other, keep, "identity",
+                       lambda out: IDENTITY_CHILD.format(here=str(HERE), out=out))
     bad = compare(dumps["this"], dumps["other"])
     values = sum(a.size for a in dumps["this"].values())
     print(f"{len(dumps['this'])} arrays ({values} numbers) in this build, "

@@ -15,16 +15,14 @@ radius, D/d before and after). Exits 1 on any difference.
 
 from __future__ import annotations
 
-import argparse
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from compare_builds import OTHER_BUILD_IMPORT, child_arrays
+from compare_builds import OTHER_BUILD_IMPORT, both_dumps, other_build_args
 
 CHILD = OTHER_BUILD_IMPORT + """sys.path.insert(0, {tests!r})
 import numpy as np, osteon, compare_corners
@@ -85,21 +83,12 @@ def _same(x, y) -> bool:
     return x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes()
 
 
-def _run(path: str | None, folder: Path, name: str) -> dict:
-    out = str(folder / f"corners_{name}.npz")
-    code = CHILD.format(here=str(HERE), tests=str(HERE.parent / "tests" / "python"), out=out)
-    return child_arrays(code, path, out)
-
-
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("other", help="PYTHONPATH entry holding the other build's osteon package")
-    ap.add_argument("--keep", help="keep both dumps (.npz) in this folder")
-    args = ap.parse_args(argv)
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(args.keep or tmp)
-        folder.mkdir(parents=True, exist_ok=True)
-        this, other = _run(None, folder, "this"), _run(args.other, folder, "other")
+    args = other_build_args(__doc__, argv)
+    tests = str(HERE.parent / "tests" / "python")
+    dumps = both_dumps(args.other, args.keep, "corners",
+                       lambda out: CHILD.format(here=str(HERE), tests=tests, out=out))
+    this, other = dumps["this"], dumps["other"]
     bad = 0
     for label, dump in (("this", this), ("other", other)):
         threads = [k for k in dump if "|t1|" in k and not _same(dump[k], dump[k.replace(

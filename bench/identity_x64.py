@@ -12,15 +12,13 @@ between 1 and 2 threads of this build; exits 1 on any difference. ~3 minutes per
 
 from __future__ import annotations
 
-import argparse
 import sys
-import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 
 sys.path.insert(0, str(HERE))
-from compare_builds import OTHER_BUILD_IMPORT, child_arrays
+from compare_builds import OTHER_BUILD_IMPORT, both_dumps, other_build_args
 
 CHILD = OTHER_BUILD_IMPORT + """import numpy as np, osteon
 from identity_dump import _flatten
@@ -44,23 +42,14 @@ print(osteon.__file__)
 """
 
 
-def dump(other: str | None, out: str) -> dict:
-    return child_arrays(CHILD.format(here=str(HERE), out=out), other, out)
-
-
 def main(argv=None) -> int:
     sys.path.insert(0, str(HERE))
     from identity_dump import compare
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("other", help="PYTHONPATH entry holding the other build's osteon package")
-    ap.add_argument("--keep", help="keep both dumps (.npz) in this folder")
-    args = ap.parse_args(argv)
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(args.keep or tmp)
-        folder.mkdir(parents=True, exist_ok=True)
-        this = dump(None, str(folder / "x64_this.npz"))
-        other = dump(args.other, str(folder / "x64_other.npz"))
+    args = other_build_args(__doc__, argv)
+    dumps = both_dumps(args.other, args.keep, "x64",
+                       lambda out: CHILD.format(here=str(HERE), out=out))
+    this, other = dumps["this"], dumps["other"]
     bad = compare(this, other)
     print(f"{len(this)} arrays in this build, {len(other)} in the other; {len(bad)} differ")
     for k in bad[:20]:
